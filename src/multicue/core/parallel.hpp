@@ -1,0 +1,46 @@
+#pragma once
+/// \file Parallel helpers over TBB. The thread count is a parameter of each call (0 = all cores),
+/// applied locally through a task arena, never process-wide.
+
+#include <cstddef>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "multicue/core/exceptions.hpp"
+
+namespace multicue {
+
+/// Number of threads `num_threads` stands for (0 = all cores). Throws on negative values.
+int ResolveThreadCount(int num_threads);
+
+/// Calls body(begin, end) over disjoint chunks covering [0, n), with at most `num_threads` threads.
+/// Results must not depend on the chunking: write per index, never accumulate across chunks.
+template <typename Body>
+void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t grain = 1024) {
+    if (n == 0) return;
+    const int threads = ResolveThreadCount(num_threads);
+    if (threads == 1 || n <= grain) {
+        body(std::size_t{0}, n);
+        return;
+    }
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                          [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+    });
+}
+
+/// Calls body(i) for every i in [0, n).
+template <typename Body>
+void ParallelFor(std::size_t n, int num_threads, Body&& body, std::size_t grain = 1024) {
+    ParallelForChunks(
+        n, num_threads,
+        [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) body(i);
+        },
+        grain);
+}
+
+}  // namespace multicue

@@ -1,0 +1,72 @@
+#include "multicue/io/file_utils.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <fstream>
+#include <random>
+#include <system_error>
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include "multicue/core/exceptions.hpp"
+
+namespace multicue::io {
+
+std::string ReadFileBytes(const std::filesystem::path& path) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (ec || !std::filesystem::exists(status)) {
+        throw IoError(fmt::format("{}: no such file", path.string()));
+    }
+    if (std::filesystem::is_directory(status)) {
+        throw IoError(fmt::format("{}: is a directory, not a file", path.string()));
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(fmt::format("{}: cannot open for reading", path.string()));
+    std::string bytes;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!ec) bytes.reserve(static_cast<std::size_t>(size));
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (in.bad()) throw IoError(fmt::format("{}: read error", path.string()));
+    return bytes;
+}
+
+void WriteFileAtomically(const std::filesystem::path& path,
+                         const std::function<void(std::ostream&)>& write) {
+    static std::atomic<unsigned> counter{0};
+    const auto dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec)) {
+        throw IoError(fmt::format("{}: folder '{}' does not exist", path.string(), dir.string()));
+    }
+    const auto tmp = dir / fmt::format(".{}.tmp-{}-{}", path.filename().string(),
+                                       static_cast<long>(::getpid()), counter.fetch_add(1));
+    try {
+        {
+            std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+            if (!out) throw IoError(fmt::format("{}: cannot open for writing", path.string()));
+            write(out);
+            out.flush();
+            if (!out) throw IoError(fmt::format("{}: write failed (disk full?)", path.string()));
+        }
+        std::filesystem::rename(tmp, path, ec);
+        if (ec) {
+            throw IoError(fmt::format("{}: cannot replace file: {}", path.string(), ec.message()));
+        }
+    } catch (...) {
+        std::filesystem::remove(tmp, ec);
+        throw;
+    }
+}
+
+std::string LowerExtension(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    if (!ext.empty() && ext.front() == '.') ext.erase(0, 1);
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+}  // namespace multicue::io

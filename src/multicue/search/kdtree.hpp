@@ -1,0 +1,57 @@
+#pragma once
+/// \file k-d tree over the finite points of a cloud (nanoflann). Build it once and pass it to every
+/// algorithm that needs neighbours; queries are const and safe to run from many threads.
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/types.hpp"
+
+namespace multicue {
+
+struct KdTreeParams {
+    int leaf_size = 16;  ///< maximum points per leaf; 10-20 is a good range for 3D queries
+};
+
+class KdTree {
+public:
+    /// Indexes the finite points of `cloud` (NaN points are left out). The tree keeps its own
+    /// copy of the coordinates, so the cloud may change or go away afterwards.
+    explicit KdTree(const PointCloud& cloud, const KdTreeParams& params = {});
+    /// Indexes the given points of `cloud` only (non-finite ones are still left out).
+    KdTree(const PointCloud& cloud, const Indices& subset, const KdTreeParams& params = {});
+    ~KdTree();
+    KdTree(KdTree&&) noexcept;
+    KdTree& operator=(KdTree&&) noexcept;
+    KdTree(const KdTree&) = delete;
+    KdTree& operator=(const KdTree&) = delete;
+
+    /// Number of indexed points.
+    std::size_t size() const;
+    bool empty() const { return size() == 0; }
+
+    /// The k nearest indexed points to `query`, nearest first, as indices into the original cloud
+    /// with squared distances. Returns how many were found (fewer than k if the tree is smaller).
+    /// Throws InvalidArgument if k <= 0.
+    std::size_t SearchKnn(const Eigen::Vector3f& query, int k, Indices& indices,
+                          std::vector<float>& squared_distances) const;
+
+    /// All indexed points within `radius` of `query`, nearest first; if max_neighbors > 0 only the
+    /// nearest max_neighbors are kept. Throws InvalidArgument if radius <= 0 or not finite.
+    std::size_t SearchRadius(const Eigen::Vector3f& query, float radius, Indices& indices,
+                             std::vector<float>& squared_distances,
+                             std::size_t max_neighbors = 0) const;
+
+    /// Original cloud index of the single nearest point (or false if the tree is empty).
+    bool SearchNearest(const Eigen::Vector3f& query, Index& index, float& squared_distance) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace multicue

@@ -1,0 +1,110 @@
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/triangle_mesh.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+TEST(Color, PackMatchesPclLayout) {
+    const Color c{10, 20, 30, 255};
+    EXPECT_EQ(PackRgba(c), 0xff0a141eu);
+    EXPECT_EQ(UnpackRgba(0xff0a141eu), c);
+}
+
+TEST(PointCloud, HasChecksAndOrganization) {
+    PointCloud c;
+    EXPECT_TRUE(c.empty());
+    EXPECT_FALSE(c.HasNormals());
+    c.points.assign(6, Eigen::Vector3f::Zero());
+    c.width = 3;
+    c.height = 2;
+    EXPECT_TRUE(c.IsOrganized());
+    c.colors.resize(6);
+    EXPECT_TRUE(c.HasColors());
+    EXPECT_NO_THROW(c.Validate());
+    c.normals.resize(5);
+    EXPECT_THROW(c.Validate(), DataError);
+    c.normals.resize(6);
+    c.width = 4;
+    EXPECT_THROW(c.Validate(), DataError);
+}
+
+TEST(PointCloud, CountFiniteAndBounds) {
+    PointCloud c({{0, 0, 0}, {1, 2, 3}, {std::numeric_limits<float>::quiet_NaN(), 0, 0}});
+    EXPECT_EQ(c.CountFinite(), 2u);
+    Eigen::Vector3f lo, hi;
+    ASSERT_TRUE(ComputeBounds(c, lo, hi));
+    EXPECT_EQ(lo, Eigen::Vector3f(0, 0, 0));
+    EXPECT_EQ(hi, Eigen::Vector3f(1, 2, 3));
+    EXPECT_FALSE(ComputeBounds(PointCloud{}, lo, hi));
+}
+
+TEST(PointCloud, SelectByIndexCarriesAllFields) {
+    PointCloud c({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}});
+    c.labels = {7, 8, 9};
+    c.intensity = {0.1f, 0.2f, 0.3f};
+    ExtraField f{"ring", 'U', 2, 1, {}};
+    f.data = {1, 0, 2, 0, 3, 0};
+    c.extra_fields.push_back(f);
+    c.sensor_origin = {1, 2, 3};
+    const PointCloud s = SelectByIndex(c, {2, 0});
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_EQ(s.points[0].x(), 2.0f);
+    EXPECT_EQ(s.labels, (std::vector<std::uint32_t>{9, 7}));
+    EXPECT_FLOAT_EQ(s.intensity[1], 0.1f);
+    ASSERT_EQ(s.extra_fields.size(), 1u);
+    EXPECT_EQ(s.extra_fields[0].data, (std::vector<std::uint8_t>{3, 0, 1, 0}));
+    EXPECT_EQ(s.sensor_origin, c.sensor_origin);
+    EXPECT_NO_THROW(s.Validate());
+    EXPECT_THROW(SelectByIndex(c, {3}), InvalidArgument);
+    EXPECT_TRUE(SelectByIndex(c, {}).empty());
+}
+
+TEST(TriangleMesh, ValidateNormalsAppend) {
+    TriangleMesh m;
+    m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    m.triangles = {Triangle(0, 1, 2)};
+    EXPECT_NO_THROW(m.Validate());
+    const auto n = m.ComputeTriangleNormals();
+    EXPECT_NEAR(n[0].z(), 1.0f, 1e-6f);
+    TriangleMesh m2 = m;
+    m2.Append(m);
+    EXPECT_EQ(m2.vertices.size(), 6u);
+    EXPECT_EQ(m2.triangles[1], Triangle(3, 4, 5));
+    m.triangles.push_back(Triangle(0, 1, 3));
+    EXPECT_THROW(m.Validate(), DataError);
+}
+
+TEST(Parallel, SerialAndParallelAgree) {
+    std::vector<double> a(100000), b(100000);
+    ParallelFor(a.size(), 1, [&](std::size_t i) { a[i] = std::sqrt(static_cast<double>(i)); });
+    ParallelFor(b.size(), 0, [&](std::size_t i) { b[i] = std::sqrt(static_cast<double>(i)); });
+    EXPECT_EQ(a, b);
+    EXPECT_THROW(ResolveThreadCount(-1), InvalidArgument);
+    EXPECT_GE(ResolveThreadCount(0), 1);
+    EXPECT_EQ(ResolveThreadCount(3), 3);
+}
+
+TEST(Logging, LevelsAndSink) {
+    std::vector<std::string> seen;
+    SetLogSink([&](LogLevel, std::string_view m) { seen.emplace_back(m); });
+    SetLogLevel(LogLevel::kInfo);
+    LogDebug("hidden {}", 1);
+    LogInfo("shown {}", 2);
+    LogWarning("warn");
+    SetLogSink({});
+    SetLogLevel(LogLevel::kWarning);
+    EXPECT_EQ(seen, (std::vector<std::string>{"shown 2", "warn"}));
+    EXPECT_EQ(ParseLogLevel("debug"), LogLevel::kDebug);
+    EXPECT_THROW(ParseLogLevel("loud"), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace multicue

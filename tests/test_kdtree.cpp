@@ -1,0 +1,90 @@
+#include <algorithm>
+#include <limits>
+#include <numeric>
+
+#include <gtest/gtest.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/search/kdtree.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+// Brute-force oracle: indices of the k nearest finite points (ties broken by index).
+Indices BruteKnn(const PointCloud& c, const Eigen::Vector3f& q, std::size_t k) {
+    Indices idx;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        if (c.points[i].allFinite()) idx.push_back(static_cast<Index>(i));
+    }
+    std::sort(idx.begin(), idx.end(), [&](Index a, Index b) {
+        const float da = (c.points[a] - q).squaredNorm(), db = (c.points[b] - q).squaredNorm();
+        return da < db || (da == db && a < b);
+    });
+    idx.resize(std::min(k, idx.size()));
+    return idx;
+}
+
+TEST(KdTree, KnnMatchesBruteForce) {
+    PointCloud c = test::RandomCloud(3000, 7);
+    c.points[5] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    const KdTree tree(c);
+    EXPECT_EQ(tree.size(), 2999u);
+    const PointCloud queries = test::RandomCloud(50, 8);
+    Indices idx;
+    std::vector<float> d2;
+    for (const auto& q : queries.points) {
+        ASSERT_EQ(tree.SearchKnn(q, 10, idx, d2), 10u);
+        EXPECT_EQ(idx, BruteKnn(c, q, 10));
+        EXPECT_TRUE(std::is_sorted(d2.begin(), d2.end()));
+    }
+}
+
+TEST(KdTree, RadiusMatchesBruteForce) {
+    const PointCloud c = test::RandomCloud(3000, 9);
+    const KdTree tree(c);
+    Indices idx;
+    std::vector<float> d2;
+    for (int t = 0; t < 20; ++t) {
+        const Eigen::Vector3f q = c.points[static_cast<std::size_t>(t) * 37];
+        tree.SearchRadius(q, 0.2f, idx, d2);
+        Indices expected;
+        for (std::size_t i = 0; i < c.size(); ++i) {
+            if ((c.points[i] - q).squaredNorm() <= 0.04f) expected.push_back(static_cast<Index>(i));
+        }
+        Indices got = idx;
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, expected);
+        EXPECT_TRUE(std::is_sorted(d2.begin(), d2.end()));
+        tree.SearchRadius(q, 0.2f, idx, d2, 3);
+        EXPECT_EQ(idx.size(), std::min<std::size_t>(3, expected.size()));
+    }
+}
+
+TEST(KdTree, SubsetAndNearest) {
+    const PointCloud c({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}});
+    const KdTree tree(c, Indices{1, 3});
+    Index i = 0;
+    float d = 0;
+    ASSERT_TRUE(tree.SearchNearest({0.1f, 0, 0}, i, d));
+    EXPECT_EQ(i, 1u);
+    EXPECT_NEAR(d, 0.81f, 1e-6f);
+    EXPECT_THROW(KdTree(c, Indices{9}), InvalidArgument);
+}
+
+TEST(KdTree, EmptyAndBadParameters) {
+    const KdTree tree{PointCloud{}};
+    Indices idx;
+    std::vector<float> d2;
+    EXPECT_EQ(tree.SearchKnn({0, 0, 0}, 3, idx, d2), 0u);
+    EXPECT_EQ(tree.SearchRadius({0, 0, 0}, 1.0f, idx, d2), 0u);
+    Index i;
+    float d;
+    EXPECT_FALSE(tree.SearchNearest({0, 0, 0}, i, d));
+    EXPECT_THROW(tree.SearchKnn({0, 0, 0}, 0, idx, d2), InvalidArgument);
+    EXPECT_THROW(tree.SearchRadius({0, 0, 0}, -0.1f, idx, d2), InvalidArgument);
+    EXPECT_THROW(KdTree(test::RandomCloud(3), KdTreeParams{.leaf_size = 0}), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace multicue
