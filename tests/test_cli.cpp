@@ -1,1 +1,172 @@
-// tests follow
+// End-to-end tests of the multicue command-line tool: exit codes, one-line errors, outputs.
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include "multicue/io/pcd.hpp"
+#include "multicue/io/ply.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+struct RunResult {
+    int code = -1;
+    std::string output;  // stdout and stderr
+};
+
+RunResult Run(const std::string& args) {
+    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
+    RunResult r;
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (pipe == nullptr) return r;
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
+    const int status = ::pclose(pipe);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+int CountLines(const std::string& s) {
+    int n = 0;
+    for (char c : s) n += c == '\n';
+    return n;
+}
+
+PointCloud SmallCloud() {
+    PointCloud c = test::RandomCloud(2000, 3, 0.2f);
+    c.colors.assign(c.size(), Color{10, 20, 30, 255});
+    return c;
+}
+
+std::string ReadAll(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(Cli, InfoPrintsFieldsAndCounts) {
+    test::TempDir dir;
+    PointCloud c = SmallCloud();
+    c.points[3].x() = std::numeric_limits<float>::quiet_NaN();
+    io::WritePcd(dir / "a.pcd", c);
+    const auto r = Run("info --json " + (dir / "a.pcd").string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("\"points\":2000"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("\"nan\":1"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("\"rgba\""), std::string::npos) << r.output;
+    const auto t = Run("info " + (dir / "a.pcd").string());
+    ASSERT_EQ(t.code, 0) << t.output;
+    EXPECT_NE(t.output.find("organized:  no"), std::string::npos) << t.output;
+}
+
+TEST(Cli, ConvertPcdToPlyAndBack) {
+    test::TempDir dir;
+    const PointCloud c = SmallCloud();
+    io::WritePcd(dir / "a.pcd", c);
+    ASSERT_EQ(Run("convert " + (dir / "a.pcd").string() + " " + (dir / "a.ply").string() +
+                  " --format ascii")
+                  .code,
+              0);
+    ASSERT_EQ(Run("convert " + (dir / "a.ply").string() + " " + (dir / "b.pcd").string() +
+                  " --format compressed")
+                  .code,
+              0);
+    const PointCloud back = io::ReadPcd(dir / "b.pcd");
+    ASSERT_EQ(back.size(), c.size());
+    EXPECT_EQ(back.points[17], c.points[17]);
+    EXPECT_EQ(back.colors[17], c.colors[17]);
+}
+
+TEST(Cli, DownsampleNormalsOutliers) {
+    test::TempDir dir;
+    io::WritePcd(dir / "a.pcd", SmallCloud());
+    const auto a = (dir / "a.pcd").string();
+    ASSERT_EQ(Run("downsample " + a + " " + (dir / "d.pcd").string() + " --leaf 0.05").code, 0);
+    EXPECT_LT(io::ReadPcd(dir / "d.pcd").size(), 2000u);
+    ASSERT_EQ(Run("normals " + a + " " + (dir / "n.pcd").string() + " --k 10").code, 0);
+    EXPECT_TRUE(io::ReadPcd(dir / "n.pcd").HasNormals());
+    ASSERT_EQ(Run("-j 1 normals " + a + " " + (dir / "n2.pcd").string() + " --radius 0.05").code,
+              0);
+    ASSERT_EQ(Run("outliers " + a + " " + (dir / "o.pcd").string()).code, 0);
+    ASSERT_EQ(Run("outliers " + a + " " + (dir / "o2.pcd").string() +
+                  " --method radius --radius 0.05 --min-neighbors 2")
+                  .code,
+              0);
+}
+
+TEST(Cli, UsageErrorsExitWithTwoAndOneLine) {
+    test::TempDir dir;
+    io::WritePcd(dir / "a.pcd", SmallCloud());
+    const auto a = (dir / "a.pcd").string();
+    const auto out = (dir / "x.pcd").string();
+    for (const std::string& args :
+         {"", "frobnicate", "downsample " + a + " " + out + " --leaf -1",
+          "downsample " + a + " " + out + " --leaf 0", "normals " + a + " " + out + " --k -3",
+          "normals " + a + " " + out + " --radius -0.1",
+          "outliers " + a + " " + out + " --k 0", "convert " + a + " " + out + " --format zip",
+          "convert " + a + " " + a, "normals " + a + " " + out + " --organized",
+          "--threads -2 info " + a, "normals " + a + " " + out + " --viewpoint 1,2"}) {
+        const auto r = Run(args);
+        EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
+        EXPECT_EQ(CountLines(r.output), 1) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find("error"), std::string::npos) << args << "\n" << r.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(Cli, DataErrorsExitWithOneAndKeepExistingOutput) {
+    test::TempDir dir;
+    const auto out = dir / "out.pcd";
+    io::WritePcd(out, SmallCloud());
+    const std::string before = ReadAll(out);
+    {
+        std::ofstream(dir / "trunc.pcd") << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n"
+                                            "TYPE F F F\nCOUNT 1 1 1\nWIDTH 10\nHEIGHT 1\n"
+                                            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 10\nDATA binary\n"
+                                            "abc";
+        std::ofstream(dir / "garbage.pcd") << "hello world\n";
+        std::ofstream(dir / "garbage.ply") << "ply\nformat nonsense 1.0\n";
+    }
+    PointCloud nan_only;
+    nan_only.points.assign(5, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+    nan_only.SetUnorganized();
+    io::WritePcd(dir / "nan.pcd", nan_only);
+    io::WritePcd(dir / "empty.pcd", PointCloud{});
+    for (const std::string name :
+         {"missing.pcd", "trunc.pcd", "garbage.pcd", "garbage.ply", "nan.pcd", "empty.pcd"}) {
+        const auto in = (dir / name).string();
+        for (const std::string cmd : {"downsample", "normals", "outliers"}) {
+            const auto r = Run(cmd + " " + in + " " + out.string());
+            EXPECT_EQ(r.code, 1) << cmd << " " << name << "\n" << r.output;
+            EXPECT_EQ(CountLines(r.output), 1) << cmd << " " << name << "\n" << r.output;
+            EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
+        }
+    }
+    EXPECT_EQ(ReadAll(out), before);
+    const auto r = Run("info " + (dir / "missing.pcd").string());
+    EXPECT_EQ(r.code, 1);
+    const auto w = Run("convert " + (dir / "empty.pcd").string() + " /nonexistent/dir/x.pcd");
+    EXPECT_EQ(w.code, 1) << w.output;
+}
+
+TEST(Cli, DemoWritesItsOutputs) {
+    test::TempDir dir;
+    const auto r = Run("demo --out " + (dir / "demo").string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    for (const char* f : {"scene.pcd", "normals.pcd", "downsampled.pcd", "filtered.pcd"}) {
+        EXPECT_TRUE(std::filesystem::exists(dir / "demo" / f)) << f;
+    }
+    const PointCloud scene = io::ReadPcd(dir / "demo" / "scene.pcd");
+    EXPECT_TRUE(scene.IsOrganized());
+    EXPECT_TRUE(scene.HasLabels());
+    EXPECT_TRUE(io::ReadPcd(dir / "demo" / "normals.pcd").HasNormals());
+}
+
+}  // namespace
+}  // namespace multicue

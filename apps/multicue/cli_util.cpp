@@ -1,0 +1,49 @@
+#include "cli_util.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+
+namespace multicue::cli {
+
+PointCloud ReadNonEmptyCloud(const std::filesystem::path& path) {
+    PointCloud cloud = io::ReadPointCloud(path);
+    if (cloud.empty()) throw DataError(fmt::format("{}: cloud has no points", path.string()));
+    if (cloud.CountFinite() == 0) {
+        throw DataError(fmt::format("{}: all {} points are NaN", path.string(), cloud.size()));
+    }
+    return cloud;
+}
+
+CLI::Option* AddFormatOption(CLI::App& cmd, std::string& format) {
+    return cmd
+        .add_option("--format", format,
+                    "ascii, binary or compressed (PCD binary_compressed; PLY has no compression "
+                    "and writes binary)")
+        ->check(CLI::IsMember({"ascii", "binary", "compressed"}))
+        ->capture_default_str();
+}
+
+void CheckDistinctPaths(const std::filesystem::path& in, const std::filesystem::path& out) {
+    std::error_code ec;
+    if (std::filesystem::exists(out, ec) && std::filesystem::equivalent(in, out, ec)) {
+        throw InvalidArgument(
+            fmt::format("output '{}' is the input file; choose another path", out.string()));
+    }
+}
+
+Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option) {
+    std::istringstream in(text);
+    Eigen::Vector3f v;
+    char sep1 = 0, sep2 = 0;
+    if (!(in >> v.x() >> sep1 >> v.y() >> sep2 >> v.z()) || sep1 != ',' || sep2 != ',' ||
+        !(in >> std::ws).eof() || !v.allFinite()) {
+        throw InvalidArgument(fmt::format("{} must be three numbers x,y,z; got '{}'", option, text));
+    }
+    return v;
+}
+
+}  // namespace multicue::cli

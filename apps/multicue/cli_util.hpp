@@ -1,0 +1,27 @@
+#pragma once
+// Small helpers shared by the subcommands.
+
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/io/point_cloud_io.hpp"
+
+namespace multicue::cli {
+
+/// Reads a cloud and refuses clouds without a single finite point (data error naming the file).
+PointCloud ReadNonEmptyCloud(const std::filesystem::path& path);
+
+/// Adds `--format ascii|binary|compressed` to a subcommand.
+CLI::Option* AddFormatOption(CLI::App& cmd, std::string& format);
+
+/// Refuses to write the output over the input, which would lose the input on a failed run.
+void CheckDistinctPaths(const std::filesystem::path& in, const std::filesystem::path& out);
+
+/// Parses "x,y,z" into a vector; throws InvalidArgument naming the option otherwise.
+Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option);
+
+}  // namespace multicue::cli

@@ -1,0 +1,21 @@
+#pragma once
+// Subcommands of the multicue command-line tool. Each registers itself on the CLI11 app; the
+// callback runs the job and throws multicue exceptions that main() turns into exit codes.
+
+#include <CLI/CLI.hpp>
+
+namespace multicue::cli {
+
+/// Options shared by every subcommand (set on the top-level app).
+struct GlobalOptions {
+    int threads = 0;  ///< 0 = all cores
+};
+
+void AddInfoCommand(CLI::App& app, const GlobalOptions& global);
+void AddConvertCommand(CLI::App& app, const GlobalOptions& global);
+void AddDownsampleCommand(CLI::App& app, const GlobalOptions& global);
+void AddNormalsCommand(CLI::App& app, const GlobalOptions& global);
+void AddOutliersCommand(CLI::App& app, const GlobalOptions& global);
+void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
+
+}  // namespace multicue::cli
