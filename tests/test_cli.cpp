@@ -108,10 +108,10 @@ TEST(Cli, UsageErrorsExitWithTwoAndOneLine) {
     for (const std::string& args :
          {"", "frobnicate", "downsample " + a + " " + out + " --leaf -1",
           "downsample " + a + " " + out + " --leaf 0", "normals " + a + " " + out + " --k -3",
-          "normals " + a + " " + out + " --radius -0.1",
-          "outliers " + a + " " + out + " --k 0", "convert " + a + " " + out + " --format zip",
-          "convert " + a + " " + a, "normals " + a + " " + out + " --organized",
-          "--threads -2 info " + a, "normals " + a + " " + out + " --viewpoint 1,2"}) {
+          "normals " + a + " " + out + " --radius -0.1", "outliers " + a + " " + out + " --k 0",
+          "convert " + a + " " + out + " --format zip", "convert " + a + " " + a,
+          "normals " + a + " " + out + " --organized", "--threads -2 info " + a,
+          "normals " + a + " " + out + " --viewpoint 1,2"}) {
         const auto r = Run(args);
         EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
         EXPECT_EQ(CountLines(r.output), 1) << args << "\n" << r.output;

@@ -41,7 +41,8 @@ Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option)
     char sep1 = 0, sep2 = 0;
     if (!(in >> v.x() >> sep1 >> v.y() >> sep2 >> v.z()) || sep1 != ',' || sep2 != ',' ||
         !(in >> std::ws).eof() || !v.allFinite()) {
-        throw InvalidArgument(fmt::format("{} must be three numbers x,y,z; got '{}'", option, text));
+        throw InvalidArgument(
+            fmt::format("{} must be three numbers x,y,z; got '{}'", option, text));
     }
     return v;
 }

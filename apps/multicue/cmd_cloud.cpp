@@ -20,7 +20,8 @@
 namespace multicue::cli {
 namespace {
 
-/// Keeps the selected points. Organized clouds stay organized when asked: dropped points become NaN.
+/// Keeps the selected points. Organized clouds stay organized when asked: dropped points become
+/// NaN.
 PointCloud KeepPoints(const PointCloud& cloud, const Indices& keep, bool keep_organized) {
     if (!keep_organized || !cloud.IsOrganized()) return SelectByIndex(cloud, keep);
     PointCloud out = cloud;
@@ -97,9 +98,9 @@ void AddNormalsCommand(CLI::App& app, const GlobalOptions& global) {
         NormalsResult result;
         if (*organized) {
             if (!cloud.IsOrganized()) {
-                throw InvalidArgument(fmt::format(
-                    "--organized needs an organized cloud; {} is {}x{}", *in, cloud.width,
-                    cloud.height));
+                throw InvalidArgument(
+                    fmt::format("--organized needs an organized cloud; {} is {}x{}", *in,
+                                cloud.width, cloud.height));
             }
             OrganizedNormalParams p;
             p.viewpoint = vp;
@@ -122,8 +123,8 @@ void AddNormalsCommand(CLI::App& app, const GlobalOptions& global) {
 }
 
 void AddOutliersCommand(CLI::App& app, const GlobalOptions& global) {
-    auto* cmd = app.add_subcommand(
-        "outliers", "Statistical or radius outlier removal (drops NaN points too)");
+    auto* cmd = app.add_subcommand("outliers",
+                                   "Statistical or radius outlier removal (drops NaN points too)");
     auto in = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
     auto format = std::make_shared<std::string>("binary");
@@ -138,8 +139,7 @@ void AddOutliersCommand(CLI::App& app, const GlobalOptions& global) {
         ->capture_default_str();
     cmd->add_option("--k", stat->k, "statistical: neighbours for the mean distance")
         ->capture_default_str();
-    cmd->add_option("--std", stat->std_ratio,
-                    "statistical: keep points within mean + std * stddev")
+    cmd->add_option("--std", stat->std_ratio, "statistical: keep points within mean + std * stddev")
         ->capture_default_str();
     cmd->add_option("--radius", rad->radius, "radius: neighbourhood radius [m]")
         ->capture_default_str();

@@ -22,7 +22,7 @@ namespace multicue::cli {
 namespace {
 
 class Stopwatch {
-public:
+  public:
     double Lap() {
         const auto now = std::chrono::steady_clock::now();
         const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
@@ -30,7 +30,7 @@ public:
         return ms;
     }
 
-private:
+  private:
     std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
@@ -48,14 +48,15 @@ void RunDemo(const std::filesystem::path& out, int threads) {
     scan.T_world_camera = sim::DefaultCameraPose(scene);
     PointCloud cloud = sim::ScanTableTopScene(scene, scan);
     const std::size_t finite = cloud.CountFinite();
-    report += fmt::format("  scene     {}x{} organized frame, {} valid points, {} objects  ({:.1f} ms)\n",
-                          cloud.width, cloud.height, finite,
-                          scene.boxes.size() + scene.cylinders.size(), sw.Lap());
+    report += fmt::format(
+        "  scene     {}x{} organized frame, {} valid points, {} objects  ({:.1f} ms)\n",
+        cloud.width, cloud.height, finite, scene.boxes.size() + scene.cylinders.size(), sw.Lap());
     io::WritePcd(out / "scene.pcd", cloud);
     report += fmt::format("            -> {}\n", (out / "scene.pcd").string());
 
     sw.Lap();
-    SetNormals(cloud, EstimateNormalsOrganized(cloud, OrganizedNormalParams{.num_threads = threads}));
+    SetNormals(cloud,
+               EstimateNormalsOrganized(cloud, OrganizedNormalParams{.num_threads = threads}));
     report += fmt::format("  normals   organized fast path  ({:.1f} ms)\n", sw.Lap());
     io::WritePcd(out / "normals.pcd", cloud);
     report += fmt::format("            -> {}\n", (out / "normals.pcd").string());
@@ -77,9 +78,10 @@ void RunDemo(const std::filesystem::path& out, int threads) {
     io::WritePcd(out / "filtered.pcd", SelectByIndex(down, keep));
     report += fmt::format("            -> {}\n", (out / "filtered.pcd").string());
 
-    std::printf("multicue demo: synthetic table-top scene\n%sOutputs are in %s/ "
-                "(open them with `multicue info FILE` or any PCD viewer).\n",
-                report.c_str(), out.string().c_str());
+    std::printf(
+        "multicue demo: synthetic table-top scene\n%sOutputs are in %s/ "
+        "(open them with `multicue info FILE` or any PCD viewer).\n",
+        report.c_str(), out.string().c_str());
 }
 
 }  // namespace

@@ -15,11 +15,16 @@ LogSink g_sink;
 
 const char* LevelName(LogLevel level) {
     switch (level) {
-        case LogLevel::kDebug: return "debug";
-        case LogLevel::kInfo: return "info";
-        case LogLevel::kWarning: return "warning";
-        case LogLevel::kError: return "error";
-        case LogLevel::kOff: break;
+        case LogLevel::kDebug:
+            return "debug";
+        case LogLevel::kInfo:
+            return "info";
+        case LogLevel::kWarning:
+            return "warning";
+        case LogLevel::kError:
+            return "error";
+        case LogLevel::kOff:
+            break;
     }
     return "off";
 }
@@ -39,8 +44,8 @@ LogLevel ParseLogLevel(std::string_view name) {
                        LogLevel::kOff}) {
         if (name == LevelName(level)) return level;
     }
-    throw InvalidArgument(fmt::format(
-        "log level must be one of debug, info, warning, error, off; got '{}'", name));
+    throw InvalidArgument(
+        fmt::format("log level must be one of debug, info, warning, error, off; got '{}'", name));
 }
 
 namespace detail {

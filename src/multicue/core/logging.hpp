@@ -1,6 +1,7 @@
 #pragma once
 /// \file One logger with levels for the whole library. Library code never prints directly;
-/// applications choose the level and, if they want, their own sink. Never log inside parallel loops.
+/// applications choose the level and, if they want, their own sink. Never log inside parallel
+/// loops.
 
 #include <functional>
 #include <string>

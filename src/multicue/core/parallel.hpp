@@ -27,8 +27,9 @@ void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t 
     }
     tbb::task_arena arena(threads);
     arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
-                          [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, n, grain),
+            [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
     });
 }
 

@@ -14,8 +14,8 @@ namespace {
 template <typename T>
 void CheckFieldSize(const std::vector<T>& field, std::size_t n, const char* name) {
     if (!field.empty() && field.size() != n) {
-        throw DataError(
-            fmt::format("point cloud field '{}' has {} entries for {} points", name, field.size(), n));
+        throw DataError(fmt::format("point cloud field '{}' has {} entries for {} points", name,
+                                    field.size(), n));
     }
 }
 
@@ -75,8 +75,7 @@ void PointCloud::Validate() const {
         }
     }
     if (std::size_t{width} * height != n) {
-        throw DataError(
-            fmt::format("point cloud is {}x{} but holds {} points", width, height, n));
+        throw DataError(fmt::format("point cloud is {}x{} but holds {} points", width, height, n));
     }
 }
 

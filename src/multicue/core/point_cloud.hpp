@@ -84,7 +84,8 @@ struct PointCloud {
 };
 
 /// A new cloud with the given points (in the given order) and all their fields.
-/// The result is unorganized; the sensor pose is kept. Throws InvalidArgument on an out-of-range index.
+/// The result is unorganized; the sensor pose is kept. Throws InvalidArgument on an out-of-range
+/// index.
 PointCloud SelectByIndex(const PointCloud& cloud, const Indices& indices);
 
 /// Axis-aligned bounds of the finite points. Returns false (bounds untouched) if there are none.

@@ -1,7 +1,7 @@
 #include "multicue/core/triangle_mesh.hpp"
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <Eigen/Geometry>
 
 #include "multicue/core/exceptions.hpp"
 
@@ -11,8 +11,8 @@ void TriangleMesh::Validate() const {
     const std::size_t n = vertices.size();
     auto check = [n](std::size_t size, const char* name) {
         if (size != 0 && size != n) {
-            throw DataError(fmt::format("mesh field '{}' has {} entries for {} vertices", name,
-                                        size, n));
+            throw DataError(
+                fmt::format("mesh field '{}' has {} entries for {} vertices", name, size, n));
         }
     };
     check(vertex_normals.size(), "vertex_normals");

@@ -26,11 +26,13 @@ struct TriangleMesh {
     bool HasVertexLabels() const { return !vertex_labels.empty(); }
     bool empty() const { return vertices.empty(); }
 
-    /// Throws DataError if a per-vertex field has the wrong size or a triangle index is out of range.
+    /// Throws DataError if a per-vertex field has the wrong size or a triangle index is out of
+    /// range.
     void Validate() const;
     /// Unit normal of every triangle (zero for degenerate triangles).
     std::vector<Eigen::Vector3f> ComputeTriangleNormals() const;
-    /// Appends another mesh, offsetting its indices. Optional fields survive only if both have them.
+    /// Appends another mesh, offsetting its indices. Optional fields survive only if both have
+    /// them.
     void Append(const TriangleMesh& other);
 };
 

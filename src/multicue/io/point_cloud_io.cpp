@@ -50,8 +50,8 @@ TriangleMesh ReadTriangleMesh(const std::filesystem::path& path) {
     const std::string ext = LowerExtension(path);
     if (ext == "ply") return ReadPlyMesh(path);
     if (ext == "obj") return ReadObj(path).mesh;
-    throw IoError(fmt::format("{}: unknown mesh format '.{}' (expected .ply or .obj)",
-                              path.string(), ext));
+    throw IoError(
+        fmt::format("{}: unknown mesh format '.{}' (expected .ply or .obj)", path.string(), ext));
 }
 
 }  // namespace multicue::io

@@ -70,8 +70,8 @@ void IntersectBox(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Scen
 }
 
 // Ray against an upright closed cylinder (side and top cap; the bottom rests on the table).
-void IntersectCylinder(const Eigen::Vector3f& o, const Eigen::Vector3f& d,
-                       const SceneCylinder& cyl, float base, std::uint32_t label, Hit& best) {
+void IntersectCylinder(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const SceneCylinder& cyl,
+                       float base, std::uint32_t label, Hit& best) {
     const Eigen::Vector2f oc(o.x() - cyl.center_xy.x(), o.y() - cyl.center_xy.y());
     const Eigen::Vector2f dxy(d.x(), d.y());
     const float a = dxy.squaredNorm();
@@ -140,8 +140,7 @@ PointCloud ScanTableTopScene(const TableTopScene& scene, const ScanParams& param
         throw InvalidArgument(fmt::format("focal lengths must be > 0, got {} {}", cam.fx, cam.fy));
     }
     if (!(params.axial_noise >= 0.0f)) {
-        throw InvalidArgument(
-            fmt::format("axial_noise must be >= 0, got {}", params.axial_noise));
+        throw InvalidArgument(fmt::format("axial_noise must be >= 0, got {}", params.axial_noise));
     }
     if (!(params.min_range >= 0.0f) || !(params.max_range > params.min_range)) {
         throw InvalidArgument(fmt::format("range must satisfy 0 <= min < max, got {} .. {}",
@@ -183,8 +182,7 @@ PointCloud ScanTableTopScene(const TableTopScene& scene, const ScanParams& param
                 Consider(best, t_floor, Eigen::Vector3f::UnitZ(), kFloorLabel, scene.floor_color);
             }
             for (std::uint32_t b = 0; b < num_boxes; ++b) {
-                IntersectBox(eye, d, scene.boxes[b], scene.table_height, ObjectLabel(b + 1),
-                             best);
+                IntersectBox(eye, d, scene.boxes[b], scene.table_height, ObjectLabel(b + 1), best);
             }
             for (std::uint32_t c = 0; c < scene.cylinders.size(); ++c) {
                 IntersectCylinder(eye, d, scene.cylinders[c], scene.table_height,

@@ -1,0 +1,80 @@
+#pragma once
+/// \file Parameter files: one JSON object whose nested objects mirror the Params structs. Every key
+/// of the file must be consumed; an unknown key is an error naming its full path, so a typo never
+/// silently leaves a default in place.
+
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+namespace multicue::io {
+
+/// A view of one JSON object of a parameter file. Read values with Get(); absent keys leave the
+/// default untouched; keys of the wrong type throw InvalidArgument naming `section.key`.
+/// In dump mode (no file), Get() records the defaults instead, so the same code that reads a
+/// configuration also prints the default one.
+class ConfigSection {
+  public:
+    /// Reads a JSON object from `text`; `source` names it in error messages.
+    static ConfigSection Parse(const std::string& text, const std::string& source);
+    /// Reads a JSON parameter file. Throws IoError or InvalidArgument (malformed JSON).
+    static ConfigSection Load(const std::filesystem::path& path);
+    /// An empty section that records defaults (for `--dump`).
+    static ConfigSection Dump();
+
+    template <typename T>
+    void Get(const std::string& key, T& value, const std::string& help = "");
+    void Get(const std::string& key, Eigen::Vector3f& value, const std::string& help = "");
+
+    /// Nested section `key` (empty if absent).
+    ConfigSection Section(const std::string& key);
+
+    /// Throws InvalidArgument naming the first key that no Get()/Section() asked for.
+    void CheckAllUsed() const;
+
+    /// The recorded defaults (dump mode) as pretty JSON with help texts as "//" comments.
+    std::string DumpText() const;
+
+  private:
+    struct State;
+    ConfigSection(std::shared_ptr<State> state, std::string path);
+    const nlohmann::json* Lookup(const std::string& key);
+    void Record(const std::string& key, nlohmann::json value, const std::string& help);
+    /// The float as the double with the same shortest decimal form (0.02f dumps as 0.02).
+    static nlohmann::json FloatToJson(float value);
+    [[noreturn]] void TypeError(const std::string& key, const char* expected) const;
+
+    std::shared_ptr<State> state_;
+    std::string path_;  // "" for the root, "a.b" for nested sections
+};
+
+template <typename T>
+void ConfigSection::Get(const std::string& key, T& value, const std::string& help) {
+    if (const nlohmann::json* j = Lookup(key)) {
+        if constexpr (std::is_same_v<T, bool>) {
+            if (!j->is_boolean()) TypeError(key, "true or false");
+        } else if constexpr (std::is_integral_v<T>) {
+            if (!j->is_number_integer()) TypeError(key, "an integer");
+            if constexpr (std::is_unsigned_v<T>) {
+                if (j->get<long long>() < 0) TypeError(key, "a non-negative integer");
+            }
+        } else if constexpr (std::is_floating_point_v<T>) {
+            if (!j->is_number()) TypeError(key, "a number");
+        } else if constexpr (std::is_same_v<T, std::string>) {
+            if (!j->is_string()) TypeError(key, "a string");
+        }
+        value = j->get<T>();
+    } else if constexpr (std::is_same_v<T, float>) {
+        Record(key, FloatToJson(value), help);
+    } else {
+        Record(key, value, help);
+    }
+}
+
+}  // namespace multicue::io
