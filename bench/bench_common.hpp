@@ -1,15 +1,20 @@
 #pragma once
-/// \file Shared pieces of the benchmark program: the input scans, the thread counts and the naming
-/// scheme `<operation>/<input>/<library>/threads:<n>` that bench/ratios.py parses.
+/// \file Shared pieces of the benchmark program: the input scans, the thread counts, the common
+/// parameters and the naming scheme `<operation>/<input>/<library>/threads:<n>` that
+/// bench/ratios.py parses.
 ///
-/// Every operation is registered once per library (multicue, pcl, open3d), per input and per thread
-/// count, with the same parameters. Inputs are read once per library and cached outside the timed
-/// loop; each benchmark then times only the operation itself.
+/// Every operation is registered once per library (multicue, pcl, open3d), input and thread count,
+/// with the same parameters. A library supplies a setup function that runs outside the timed loop
+/// (reading and caching the input, converting it to the library's type) and returns the operation
+/// to time. The operation returns the size of its result (points read, voxels, normals, inliers),
+/// reported as the counter `out` so that runs of different libraries can be checked for doing the
+/// same work.
 
 #include <array>
+#include <cstddef>
 #include <filesystem>
 #include <functional>
-#include <string>
+#include <map>
 #include <string_view>
 #include <vector>
 
@@ -25,8 +30,8 @@ inline constexpr std::array<Input, 2> kInputs = {Input::kMosd, Input::kTableScen
 /// Short name used in benchmark names ("mosd", "table").
 std::string_view InputName(Input input);
 
-/// Full path of an input: $MULTICUE_DATA (or the shared data folder the build was configured with)
-/// followed by the scan's path inside it.
+/// Full path of an input: $MULTICUE_DATA (default: the shared data folder the build was configured
+/// with) followed by the scan's path inside it.
 std::filesystem::path InputPath(Input input);
 
 /// Checks that the input file exists; otherwise marks the benchmark as skipped with a message that
@@ -36,28 +41,45 @@ bool CheckInputExists(benchmark::State& state, Input input);
 /// Thread counts every operation is measured with: 1, 2 and all cores (duplicates removed).
 std::vector<int> ThreadCounts();
 
-/// Parameters shared by all three libraries, so that no implementation sees other values.
-inline constexpr float kVoxelLeaf = 0.005f;        ///< voxel grid leaf size [m]
-inline constexpr float kNormalRadius = 0.02f;      ///< normals neighbourhood radius [m]
-inline constexpr int kNormalK = 20;                ///< normals neighbours (query point included)
-inline constexpr int kOutlierK = 50;               ///< outlier removal neighbours (PCL tutorial)
-inline constexpr double kOutlierStdRatio = 1.0;    ///< outlier removal threshold in std devs
+// Parameters shared by all three libraries.
+/// Voxel grid leaf size [m].
+inline constexpr float kVoxelLeaf = 0.005f;
+/// Normals neighbourhood radius [m].
+inline constexpr float kNormalRadius = 0.02f;
+/// Normals neighbours, the query point included as in all three libraries [points].
+inline constexpr int kNormalK = 20;
+/// Outlier removal neighbours, the query point excluded as in PCL and multicue [points].
+inline constexpr int kOutlierK = 50;
+/// Outlier threshold: mean + kOutlierStdRatio * standard deviation of the mean distances.
+inline constexpr double kOutlierStdRatio = 1.0;
 
-using BenchFn = std::function<void(benchmark::State&, Input, int threads)>;
+/// The timed operation; returns the size of its result.
+using Operation = std::function<std::size_t()>;
+/// Untimed preparation for one run. Returns the operation, or an empty function after calling
+/// state.SkipWithError. Exceptions it throws also skip the benchmark with their message.
+using Setup = std::function<Operation(benchmark::State& state, Input input, int threads)>;
 
-/// Registers `<operation>/<input>/<library>/threads:<n>` for every input and thread count, in real
-/// time and milliseconds.
-void RegisterOperation(std::string_view operation, std::string_view library, BenchFn fn);
+/// The operations, in the order they run; each library supplies a Setup for every one of them.
+inline constexpr std::array<std::string_view, 5> kOperations = {
+    "load", "voxel_grid", "normals_radius", "normals_knn", "outlier_removal"};
 
-/// Runs `fn` once outside the timed loop with heap accounting on and reports the peak number of
-/// heap bytes it held above what was allocated before it started, as the counter `peak_heap_MB`.
-void ReportPeakHeap(benchmark::State& state, const std::function<void()>& fn);
+/// One library's implementations, keyed by operation name.
+struct Library {
+    std::string_view name;
+    std::map<std::string_view, Setup> setups;
+};
 
-/// Each library registers its benchmarks here; the peers are only defined when they are built in.
-void RegisterMulticueBenchmarks();
+/// Registers `<operation>/<input>/<library>/threads:<n>` for every operation, input, library and
+/// thread count, in that nesting, so that the libraries' runs of one operation on one input follow
+/// each other. Timed in real time and milliseconds; while a run lasts, TBB is limited to `threads`
+/// threads process-wide.
+void RegisterAll(const std::vector<Library>& libraries);
+
+/// The libraries; the peers exist only when they are built in.
+Library MulticueLibrary();
 #if MULTICUE_BENCH_PEERS
-void RegisterPclBenchmarks();
-void RegisterOpen3dBenchmarks();
+Library PclLibrary();
+Library Open3dLibrary();
 #endif
 
 }  // namespace multicue::bench

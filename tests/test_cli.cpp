@@ -21,7 +21,7 @@ struct RunResult {
     std::string output;  // stdout and stderr
 };
 
-RunResult Run(const std::string& args) {
+RunResult RunCli(const std::string& args) {
     const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
     RunResult r;
     FILE* pipe = ::popen(command.c_str(), "r");
@@ -55,12 +55,12 @@ TEST(Cli, InfoPrintsFieldsAndCounts) {
     PointCloud c = SmallCloud();
     c.points[3].x() = std::numeric_limits<float>::quiet_NaN();
     io::WritePcd(dir / "a.pcd", c);
-    const auto r = Run("info --json " + (dir / "a.pcd").string());
+    const auto r = RunCli("info --json " + (dir / "a.pcd").string());
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("\"points\":2000"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("\"nan\":1"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("\"rgba\""), std::string::npos) << r.output;
-    const auto t = Run("info " + (dir / "a.pcd").string());
+    const auto t = RunCli("info " + (dir / "a.pcd").string());
     ASSERT_EQ(t.code, 0) << t.output;
     EXPECT_NE(t.output.find("organized:  no"), std::string::npos) << t.output;
 }
@@ -69,12 +69,12 @@ TEST(Cli, ConvertPcdToPlyAndBack) {
     test::TempDir dir;
     const PointCloud c = SmallCloud();
     io::WritePcd(dir / "a.pcd", c);
-    ASSERT_EQ(Run("convert " + (dir / "a.pcd").string() + " " + (dir / "a.ply").string() +
-                  " --format ascii")
+    ASSERT_EQ(RunCli("convert " + (dir / "a.pcd").string() + " " + (dir / "a.ply").string() +
+                     " --format ascii")
                   .code,
               0);
-    ASSERT_EQ(Run("convert " + (dir / "a.ply").string() + " " + (dir / "b.pcd").string() +
-                  " --format compressed")
+    ASSERT_EQ(RunCli("convert " + (dir / "a.ply").string() + " " + (dir / "b.pcd").string() +
+                     " --format compressed")
                   .code,
               0);
     const PointCloud back = io::ReadPcd(dir / "b.pcd");
@@ -87,15 +87,15 @@ TEST(Cli, DownsampleNormalsOutliers) {
     test::TempDir dir;
     io::WritePcd(dir / "a.pcd", SmallCloud());
     const auto a = (dir / "a.pcd").string();
-    ASSERT_EQ(Run("downsample " + a + " " + (dir / "d.pcd").string() + " --leaf 0.05").code, 0);
+    ASSERT_EQ(RunCli("downsample " + a + " " + (dir / "d.pcd").string() + " --leaf 0.05").code, 0);
     EXPECT_LT(io::ReadPcd(dir / "d.pcd").size(), 2000u);
-    ASSERT_EQ(Run("normals " + a + " " + (dir / "n.pcd").string() + " --k 10").code, 0);
+    ASSERT_EQ(RunCli("normals " + a + " " + (dir / "n.pcd").string() + " --k 10").code, 0);
     EXPECT_TRUE(io::ReadPcd(dir / "n.pcd").HasNormals());
-    ASSERT_EQ(Run("-j 1 normals " + a + " " + (dir / "n2.pcd").string() + " --radius 0.05").code,
+    ASSERT_EQ(RunCli("-j 1 normals " + a + " " + (dir / "n2.pcd").string() + " --radius 0.05").code,
               0);
-    ASSERT_EQ(Run("outliers " + a + " " + (dir / "o.pcd").string()).code, 0);
-    ASSERT_EQ(Run("outliers " + a + " " + (dir / "o2.pcd").string() +
-                  " --method radius --radius 0.05 --min-neighbors 2")
+    ASSERT_EQ(RunCli("outliers " + a + " " + (dir / "o.pcd").string()).code, 0);
+    ASSERT_EQ(RunCli("outliers " + a + " " + (dir / "o2.pcd").string() +
+                     " --method radius --radius 0.05 --min-neighbors 2")
                   .code,
               0);
 }
@@ -105,14 +105,20 @@ TEST(Cli, UsageErrorsExitWithTwoAndOneLine) {
     io::WritePcd(dir / "a.pcd", SmallCloud());
     const auto a = (dir / "a.pcd").string();
     const auto out = (dir / "x.pcd").string();
-    for (const std::string& args :
-         {"", "frobnicate", "downsample " + a + " " + out + " --leaf -1",
-          "downsample " + a + " " + out + " --leaf 0", "normals " + a + " " + out + " --k -3",
-          "normals " + a + " " + out + " --radius -0.1", "outliers " + a + " " + out + " --k 0",
-          "convert " + a + " " + out + " --format zip", "convert " + a + " " + a,
-          "normals " + a + " " + out + " --organized", "--threads -2 info " + a,
-          "normals " + a + " " + out + " --viewpoint 1,2"}) {
-        const auto r = Run(args);
+    const std::vector<std::string> cases = {"",
+                                            "frobnicate",
+                                            "downsample " + a + " " + out + " --leaf -1",
+                                            "downsample " + a + " " + out + " --leaf 0",
+                                            "normals " + a + " " + out + " --k -3",
+                                            "normals " + a + " " + out + " --radius -0.1",
+                                            "outliers " + a + " " + out + " --k 0",
+                                            "convert " + a + " " + out + " --format zip",
+                                            "convert " + a + " " + a,
+                                            "normals " + a + " " + out + " --organized",
+                                            "--threads -2 info " + a,
+                                            "normals " + a + " " + out + " --viewpoint 1,2"};
+    for (const std::string& args : cases) {
+        const auto r = RunCli(args);
         EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
         EXPECT_EQ(CountLines(r.output), 1) << args << "\n" << r.output;
         EXPECT_NE(r.output.find("error"), std::string::npos) << args << "\n" << r.output;
@@ -142,30 +148,29 @@ TEST(Cli, DataErrorsExitWithOneAndKeepExistingOutput) {
          {"missing.pcd", "trunc.pcd", "garbage.pcd", "garbage.ply", "nan.pcd", "empty.pcd"}) {
         const auto in = (dir / name).string();
         for (const std::string cmd : {"downsample", "normals", "outliers"}) {
-            const auto r = Run(cmd + " " + in + " " + out.string());
+            const auto r = RunCli(cmd + " " + in + " " + out.string());
             EXPECT_EQ(r.code, 1) << cmd << " " << name << "\n" << r.output;
             EXPECT_EQ(CountLines(r.output), 1) << cmd << " " << name << "\n" << r.output;
             EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
         }
     }
     EXPECT_EQ(ReadAll(out), before);
-    const auto r = Run("info " + (dir / "missing.pcd").string());
+    const auto r = RunCli("info " + (dir / "missing.pcd").string());
     EXPECT_EQ(r.code, 1);
-    const auto w = Run("convert " + (dir / "empty.pcd").string() + " /nonexistent/dir/x.pcd");
+    const auto w = RunCli("convert " + (dir / "empty.pcd").string() + " /nonexistent/dir/x.pcd");
     EXPECT_EQ(w.code, 1) << w.output;
 }
 
 TEST(Cli, DemoWritesItsOutputs) {
     test::TempDir dir;
-    const auto r = Run("demo --out " + (dir / "demo").string());
+    const auto r = RunCli("demo --out " + (dir / "demo").string());
     ASSERT_EQ(r.code, 0) << r.output;
-    for (const char* f : {"scene.pcd", "normals.pcd", "downsampled.pcd", "filtered.pcd"}) {
+    for (const char* f : {"scene.pcd", "result.json", "labels.pcd", "models.ply"}) {
         EXPECT_TRUE(std::filesystem::exists(dir / "demo" / f)) << f;
     }
     const PointCloud scene = io::ReadPcd(dir / "demo" / "scene.pcd");
     EXPECT_TRUE(scene.IsOrganized());
     EXPECT_TRUE(scene.HasLabels());
-    EXPECT_TRUE(io::ReadPcd(dir / "demo" / "normals.pcd").HasNormals());
 }
 
 }  // namespace

@@ -1,1 +1,5 @@
-// tests follow
+#include <gtest/gtest.h>
+
+#include "multicue/surface/normals.hpp"
+
+TEST(Normals, Placeholder) {}

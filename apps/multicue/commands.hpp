@@ -16,6 +16,8 @@ void AddConvertCommand(CLI::App& app, const GlobalOptions& global);
 void AddDownsampleCommand(CLI::App& app, const GlobalOptions& global);
 void AddNormalsCommand(CLI::App& app, const GlobalOptions& global);
 void AddOutliersCommand(CLI::App& app, const GlobalOptions& global);
+void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global);
+void AddConfigCommand(CLI::App& app, const GlobalOptions& global);
 void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -46,6 +46,8 @@ int main(int argc, char** argv) {
     multicue::cli::AddDownsampleCommand(app, global);
     multicue::cli::AddNormalsCommand(app, global);
     multicue::cli::AddOutliersCommand(app, global);
+    multicue::cli::AddPerceiveCommand(app, global);
+    multicue::cli::AddConfigCommand(app, global);
     multicue::cli::AddDemoCommand(app, global);
 
     app.parse_complete_callback([&] {

@@ -143,6 +143,23 @@ void ConfigSection::Get(const std::string& key, Eigen::Vector3f& value, const st
     }
 }
 
+void ConfigSection::Get(const std::string& key, std::optional<Eigen::Vector3f>& value,
+                        const std::string& help) {
+    if (const nlohmann::json* j = Lookup(key)) {
+        if (j->is_null()) {
+            value.reset();
+            return;
+        }
+        Eigen::Vector3f v = Eigen::Vector3f::Zero();
+        Get(key, v, help);
+        value = v;
+    } else if (value) {
+        Get(key, *value, help);
+    } else {
+        Record(key, nullptr, help);
+    }
+}
+
 ConfigSection ConfigSection::Section(const std::string& key) {
     const nlohmann::json* j = Lookup(key);
     if (j != nullptr && !j->is_object()) TypeError(key, "an object");

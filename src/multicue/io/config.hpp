@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <type_traits>
@@ -31,6 +32,9 @@ class ConfigSection {
     template <typename T>
     void Get(const std::string& key, T& value, const std::string& help = "");
     void Get(const std::string& key, Eigen::Vector3f& value, const std::string& help = "");
+    /// An optional vector: `null` or absent leaves it empty.
+    void Get(const std::string& key, std::optional<Eigen::Vector3f>& value,
+             const std::string& help = "");
 
     /// Nested section `key` (empty if absent).
     ConfigSection Section(const std::string& key);

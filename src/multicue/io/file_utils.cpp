@@ -27,8 +27,15 @@ std::string ReadFileBytes(const std::filesystem::path& path) {
     if (!in) throw IoError(fmt::format("{}: cannot open for reading", path.string()));
     std::string bytes;
     const auto size = std::filesystem::file_size(path, ec);
-    if (!ec) bytes.reserve(static_cast<std::size_t>(size));
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (!ec) {
+        // One block read: reading through istreambuf_iterator goes byte by byte.
+        bytes.resize(static_cast<std::size_t>(size));
+        in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        bytes.resize(static_cast<std::size_t>(in.gcount()));
+    }
+    // Whatever is left: the whole file if its size is unknown, or what it grew by meanwhile.
+    if (!in.eof())
+        bytes.append(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     if (in.bad()) throw IoError(fmt::format("{}: read error", path.string()));
     return bytes;
 }

@@ -1,7 +1,8 @@
 #pragma once
 /// \file Wavefront OBJ mesh reader (v, vn, f with v, v/vt, v//vn, v/vt/vn and negative indices;
-/// polygons fan-triangulated; `o`/`g` names recorded as per-vertex labels).
+/// polygons fan-triangulated; `o`/`g` groups recorded per triangle).
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -18,7 +19,11 @@ struct ObjMesh {
     std::vector<std::uint32_t> triangle_groups;
 };
 
-/// Reads an OBJ file. Throws IoError / FormatError with the file name and line number.
+/// Reads an OBJ file. Per-vertex colours (`v x y z r g b`, 0..1; 0..255 if any value exceeds 1)
+/// are kept when every `v` line has them. Vertex normals are filled only when every face corner
+/// names a `vn` and each vertex gets a single normal (NaN for vertices used by no face); otherwise
+/// they are left empty. Texture coordinates, materials, lines and points are ignored.
+/// Throws IoError / FormatError with the file name and line number.
 ObjMesh ReadObj(const std::filesystem::path& path);
 
 }  // namespace multicue::io

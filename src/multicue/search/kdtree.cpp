@@ -1,70 +1,227 @@
 #include "multicue/search/kdtree.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include <fmt/format.h>
-#include <nanoflann.hpp>
 
 #include "multicue/core/exceptions.hpp"
 
 namespace multicue {
 
-struct KdTree::Impl {
-    // nanoflann adaptor over our own contiguous copy of the finite points.
-    struct Adaptor {
-        const std::vector<Eigen::Vector3f>* pts;
-        std::size_t kdtree_get_point_count() const { return pts->size(); }
-        float kdtree_get_pt(std::size_t i, std::size_t d) const { return (*pts)[i][d]; }
-        template <class Box>
-        bool kdtree_get_bbox(Box&) const {
-            return false;
+namespace {
+
+using Node = KdTree::Node;
+
+// A point and its cloud index, kept together while the build partitions them.
+struct Item {
+    Eigen::Vector3f p;
+    Index cloud;
+};
+
+// max(x, 0) without a branch: compilers turn max(x, 0)^2 into one, which mispredicts often in
+// the box tests of a search.
+inline float Positive(float x) { return 0.5f * (x + std::abs(x)); }
+
+// Squared distance from q to the nearest point of the node's box (0 inside).
+inline float BoxDistanceSquared(const Node& node, const Eigen::Vector3f& q) {
+    float d = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        const float g = Positive(node.min[a] - q[a]) + Positive(q[a] - node.max[a]);
+        d += g * g;
+    }
+    return d;
+}
+
+// The k best candidates seen so far, sorted by squared distance. A candidate enters if it is
+// strictly nearer than Bound(): the k-th best once full, else the initial bound.
+class KnnSet {
+  public:
+    KnnSet(std::size_t k, float initial_bound, Index* positions, float* distances)
+        : k_(k), bound_(initial_bound), pos_(positions), dist_(distances) {}
+
+    float Bound() const { return bound_; }
+    std::size_t size() const { return count_; }
+
+    void Add(float d, Index position) {
+        std::size_t i = count_ < k_ ? count_++ : k_ - 1;
+        // Insertion into the sorted prefix: k is small (tens), so this beats a heap.
+        while (i > 0 && dist_[i - 1] > d) {
+            dist_[i] = dist_[i - 1];
+            pos_[i] = pos_[i - 1];
+            --i;
         }
-    };
-    using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Adaptor>,
-                                                     Adaptor, 3, Index>;
+        dist_[i] = d;
+        pos_[i] = position;
+        if (count_ == k_) bound_ = dist_[k_ - 1];
+    }
 
-    std::vector<Eigen::Vector3f> points;  // finite points, tree order is by position here
-    Indices original;                      // points[i] is cloud point original[i]
-    Adaptor adaptor{&points};
-    std::unique_ptr<Tree> tree;
+  private:
+    std::size_t k_;
+    std::size_t count_ = 0;
+    float bound_;
+    Index* pos_;
+    float* dist_;
+};
 
-    void Build(int leaf_size) {
+// Median splits halve the points, so a tree of at most 2^31 points is at most 32 levels deep;
+// a traversal stack holds at most one entry per level (plus one).
+constexpr std::size_t kMaxDepth = 64;
+
+}  // namespace
+
+struct KdTree::Impl {
+    std::vector<Node> nodes;
+    std::vector<Eigen::Vector3f> points;  // tree order
+    Indices cloud_index;                  // points[i] is cloud point cloud_index[i]
+
+    void Build(std::vector<Item>& items, int leaf_size) {
         if (leaf_size <= 0) {
             throw InvalidArgument(fmt::format("k-d tree leaf_size must be > 0, got {}", leaf_size));
         }
-        tree = std::make_unique<Tree>(3, adaptor,
-                                      nanoflann::KDTreeSingleIndexAdaptorParams(
-                                          static_cast<std::size_t>(leaf_size)));
+        if (items.size() > std::numeric_limits<Index>::max() / 2) {
+            throw InvalidArgument(
+                fmt::format("a k-d tree holds at most 2^31 points, got {}", items.size()));
+        }
+        if (!items.empty()) {
+            // Leaves hold more than leaf_size / 2 points, so there are fewer than 4n / leaf_size +
+            // 2 nodes.
+            nodes.reserve(4 * items.size() / static_cast<std::size_t>(leaf_size) + 2);
+            BuildNode(items, 0, items.size(), static_cast<std::size_t>(leaf_size));
+        }
+        points.resize(items.size());
+        cloud_index.resize(items.size());
+        for (std::size_t i = 0; i < items.size(); ++i) {
+            points[i] = items[i].p;
+            cloud_index[i] = items[i].cloud;
+        }
+    }
+
+    Index BuildNode(std::vector<Item>& items, std::size_t begin, std::size_t end,
+                    std::size_t leaf_size) {
+        const auto id = static_cast<Index>(nodes.size());
+        nodes.emplace_back();
+        Eigen::Vector3f lo = items[begin].p, hi = items[begin].p;
+        for (std::size_t i = begin + 1; i < end; ++i) {
+            lo = lo.cwiseMin(items[i].p);
+            hi = hi.cwiseMax(items[i].p);
+        }
+        Index second = 0;
+        if (end - begin > leaf_size) {
+            int axis = 0;
+            (hi - lo).maxCoeff(&axis);
+            const std::size_t mid = begin + (end - begin) / 2;
+            std::nth_element(
+                items.begin() + static_cast<std::ptrdiff_t>(begin),
+                items.begin() + static_cast<std::ptrdiff_t>(mid),
+                items.begin() + static_cast<std::ptrdiff_t>(end),
+                [axis](const Item& a, const Item& b) { return a.p[axis] < b.p[axis]; });
+            BuildNode(items, begin, mid, leaf_size);
+            second = BuildNode(items, mid, end, leaf_size);
+        }
+        Node& node = nodes[id];
+        node.min = lo;
+        node.max = hi;
+        node.begin = static_cast<Index>(begin);
+        node.end = static_cast<Index>(end);
+        node.second_child = second;
+        return id;
+    }
+
+    // Best-first descent: the nearer child first, the other one only if its box can still hold
+    // a point nearer than the current bound.
+    void Knn(const Eigen::Vector3f& q, KnnSet& set) const {
+        if (nodes.empty()) return;
+        std::array<std::pair<Index, float>, kMaxDepth> stack;
+        std::size_t top = 0;
+        Index n = 0;
+        float d = BoxDistanceSquared(nodes[0], q);
+        for (;;) {
+            if (d < set.Bound()) {
+                const Node& node = nodes[n];
+                if (!node.IsLeaf()) {
+                    Index near = n + 1, far = node.second_child;
+                    float d_near = BoxDistanceSquared(nodes[near], q);
+                    float d_far = BoxDistanceSquared(nodes[far], q);
+                    if (d_far < d_near) {
+                        std::swap(near, far);
+                        std::swap(d_near, d_far);
+                    }
+                    if (d_far < set.Bound()) stack[top++] = {far, d_far};
+                    n = near;
+                    d = d_near;
+                    continue;
+                }
+                for (Index i = node.begin; i < node.end; ++i) {
+                    const float di = (points[i] - q).squaredNorm();
+                    if (di < set.Bound()) set.Add(di, i);
+                }
+            }
+            if (top == 0) return;
+            --top;
+            n = stack[top].first;
+            d = stack[top].second;
+        }
+    }
+
+    // Every point with squared distance <= r2, unordered, as (position, squared distance).
+    template <typename Out>
+    void Radius(const Eigen::Vector3f& q, float r2, Out&& out) const {
+        if (nodes.empty()) return;
+        std::array<Index, kMaxDepth> stack;
+        std::size_t top = 0;
+        stack[top++] = 0;
+        while (top > 0) {
+            const Node& node = nodes[stack[--top]];
+            if (BoxDistanceSquared(node, q) > r2) continue;
+            if (!node.IsLeaf()) {
+                stack[top++] = node.second_child;
+                stack[top++] = static_cast<Index>(&node - nodes.data()) + 1;
+                continue;
+            }
+            for (Index i = node.begin; i < node.end; ++i) {
+                const float di = (points[i] - q).squaredNorm();
+                if (di <= r2) out(i, di);
+            }
+        }
     }
 };
 
+namespace {
+
+void CheckRadius(float radius) {
+    if (!(radius > 0.0f) || !std::isfinite(radius)) {
+        throw InvalidArgument(fmt::format("radius must be > 0, got {}", radius));
+    }
+}
+
+}  // namespace
+
 KdTree::KdTree(const PointCloud& cloud, const KdTreeParams& params)
     : impl_(std::make_unique<Impl>()) {
-    impl_->points.reserve(cloud.size());
-    impl_->original.reserve(cloud.size());
+    std::vector<Item> items;
+    items.reserve(cloud.size());
     for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (!cloud.points[i].allFinite()) continue;
-        impl_->points.push_back(cloud.points[i]);
-        impl_->original.push_back(static_cast<Index>(i));
+        if (cloud.points[i].allFinite()) items.push_back({cloud.points[i], static_cast<Index>(i)});
     }
-    impl_->Build(params.leaf_size);
+    impl_->Build(items, params.leaf_size);
 }
 
 KdTree::KdTree(const PointCloud& cloud, const Indices& subset, const KdTreeParams& params)
     : impl_(std::make_unique<Impl>()) {
-    impl_->points.reserve(subset.size());
-    impl_->original.reserve(subset.size());
+    std::vector<Item> items;
+    items.reserve(subset.size());
     for (Index i : subset) {
         if (i >= cloud.size()) {
             throw InvalidArgument(
                 fmt::format("index {} is out of range for a cloud of {} points", i, cloud.size()));
         }
-        if (!cloud.points[i].allFinite()) continue;
-        impl_->points.push_back(cloud.points[i]);
-        impl_->original.push_back(i);
+        if (cloud.points[i].allFinite()) items.push_back({cloud.points[i], i});
     }
-    impl_->Build(params.leaf_size);
+    impl_->Build(items, params.leaf_size);
 }
 
 KdTree::~KdTree() = default;
@@ -73,6 +230,10 @@ KdTree& KdTree::operator=(KdTree&&) noexcept = default;
 
 std::size_t KdTree::size() const { return impl_->points.size(); }
 
+const std::vector<KdTree::Node>& KdTree::Nodes() const { return impl_->nodes; }
+const std::vector<Eigen::Vector3f>& KdTree::TreePoints() const { return impl_->points; }
+const Indices& KdTree::TreeToCloud() const { return impl_->cloud_index; }
+
 std::size_t KdTree::SearchKnn(const Eigen::Vector3f& query, int k, Indices& indices,
                               std::vector<float>& squared_distances) const {
     if (k <= 0) throw InvalidArgument(fmt::format("k must be > 0, got {}", k));
@@ -80,38 +241,49 @@ std::size_t KdTree::SearchKnn(const Eigen::Vector3f& query, int k, Indices& indi
     indices.resize(want);
     squared_distances.resize(want);
     if (want == 0) return 0;
-    nanoflann::KNNResultSet<float, Index> result(want);
-    result.init(indices.data(), squared_distances.data());
-    impl_->tree->findNeighbors(result, query.data(), nanoflann::SearchParams());
-    const std::size_t found = result.size();
+    KnnSet set(want, std::numeric_limits<float>::infinity(), indices.data(),
+               squared_distances.data());
+    impl_->Knn(query, set);
+    const std::size_t found = set.size();
     indices.resize(found);
     squared_distances.resize(found);
-    for (auto& i : indices) i = impl_->original[i];
+    for (auto& i : indices) i = impl_->cloud_index[i];
     return found;
 }
 
 std::size_t KdTree::SearchRadius(const Eigen::Vector3f& query, float radius, Indices& indices,
                                  std::vector<float>& squared_distances,
                                  std::size_t max_neighbors) const {
-    if (!(radius > 0.0f) || !std::isfinite(radius)) {
-        throw InvalidArgument(fmt::format("radius must be > 0, got {}", radius));
-    }
+    CheckRadius(radius);
     indices.clear();
     squared_distances.clear();
     if (empty()) return 0;
-    thread_local std::vector<std::pair<Index, float>> matches;
-    matches.clear();
-    impl_->tree->radiusSearch(query.data(), radius * radius, matches,
-                              nanoflann::SearchParams(32, 0.0f, true));
-    std::size_t n = matches.size();
-    if (max_neighbors > 0 && n > max_neighbors) n = max_neighbors;
-    indices.resize(n);
-    squared_distances.resize(n);
-    for (std::size_t j = 0; j < n; ++j) {
-        indices[j] = impl_->original[matches[j].first];
-        squared_distances[j] = matches[j].second;
+    const float r2 = radius * radius;
+    if (max_neighbors > 0) {
+        // The nearest max_neighbors within the radius: a k-nearest search whose bound starts at
+        // the radius (inclusive, hence the next float up).
+        const std::size_t want = std::min(max_neighbors, size());
+        indices.resize(want);
+        squared_distances.resize(want);
+        KnnSet set(want, std::nextafter(r2, std::numeric_limits<float>::infinity()), indices.data(),
+                   squared_distances.data());
+        impl_->Knn(query, set);
+        indices.resize(set.size());
+        squared_distances.resize(set.size());
+        for (auto& i : indices) i = impl_->cloud_index[i];
+        return indices.size();
     }
-    return n;
+    thread_local std::vector<std::pair<float, Index>> matches;
+    matches.clear();
+    impl_->Radius(query, r2, [&](Index i, float d) { matches.emplace_back(d, i); });
+    std::sort(matches.begin(), matches.end());
+    indices.resize(matches.size());
+    squared_distances.resize(matches.size());
+    for (std::size_t j = 0; j < matches.size(); ++j) {
+        indices[j] = impl_->cloud_index[matches[j].second];
+        squared_distances[j] = matches[j].first;
+    }
+    return matches.size();
 }
 
 bool KdTree::SearchNearest(const Eigen::Vector3f& query, Index& index,
@@ -119,10 +291,9 @@ bool KdTree::SearchNearest(const Eigen::Vector3f& query, Index& index,
     if (empty()) return false;
     Index i = 0;
     float d = 0.0f;
-    nanoflann::KNNResultSet<float, Index> result(1);
-    result.init(&i, &d);
-    impl_->tree->findNeighbors(result, query.data(), nanoflann::SearchParams());
-    index = impl_->original[i];
+    KnnSet set(1, std::numeric_limits<float>::infinity(), &i, &d);
+    impl_->Knn(query, set);
+    index = impl_->cloud_index[i];
     squared_distance = d;
     return true;
 }

@@ -1,6 +1,12 @@
 #pragma once
-/// \file k-d tree over the finite points of a cloud (nanoflann). Build it once and pass it to every
-/// algorithm that needs neighbours; queries are const and safe to run from many threads.
+/// \file k-d tree over the finite points of a cloud. Build it once and pass it to every algorithm
+/// that needs neighbours; queries are const and safe to run from many threads.
+///
+/// Layout: the tree keeps its own copy of the points, reordered so that every node covers one
+/// contiguous range of them (leaves hold at most leaf_size points). Nodes split their points at the
+/// median of the axis along which their tight bounding box is longest and are stored depth first.
+/// Algorithms that aggregate over whole subtrees (normal estimation sums per-node moments) read
+/// this layout through Nodes(), TreePoints() and TreeToCloud().
 
 #include <cstddef>
 #include <memory>
@@ -18,7 +24,18 @@ struct KdTreeParams {
 };
 
 class KdTree {
-public:
+  public:
+    /// A node of the tree. Nodes are stored depth first: the first child of the node at index i is
+    /// at i + 1, the second at `second_child`.
+    struct Node {
+        Eigen::Vector3f min;     ///< tight bounds of the node's points [m]
+        Eigen::Vector3f max;     ///< tight bounds of the node's points [m]
+        Index begin = 0;         ///< the node's points are TreePoints()[begin, end)
+        Index end = 0;           ///< one past the node's last point
+        Index second_child = 0;  ///< 0 for a leaf
+        bool IsLeaf() const { return second_child == 0; }
+    };
+
     /// Indexes the finite points of `cloud` (NaN points are left out). The tree keeps its own
     /// copy of the coordinates, so the cloud may change or go away afterwards.
     explicit KdTree(const PointCloud& cloud, const KdTreeParams& params = {});
@@ -40,8 +57,9 @@ public:
     std::size_t SearchKnn(const Eigen::Vector3f& query, int k, Indices& indices,
                           std::vector<float>& squared_distances) const;
 
-    /// All indexed points within `radius` of `query`, nearest first; if max_neighbors > 0 only the
-    /// nearest max_neighbors are kept. Throws InvalidArgument if radius <= 0 or not finite.
+    /// All indexed points within `radius` of `query` (distance <= radius), nearest first; if
+    /// max_neighbors > 0 only the nearest max_neighbors are kept. Throws InvalidArgument if
+    /// radius <= 0 or not finite.
     std::size_t SearchRadius(const Eigen::Vector3f& query, float radius, Indices& indices,
                              std::vector<float>& squared_distances,
                              std::size_t max_neighbors = 0) const;
@@ -49,7 +67,14 @@ public:
     /// Original cloud index of the single nearest point (or false if the tree is empty).
     bool SearchNearest(const Eigen::Vector3f& query, Index& index, float& squared_distance) const;
 
-private:
+    /// The nodes, root first (empty for an empty tree).
+    const std::vector<Node>& Nodes() const;
+    /// The indexed points in tree order: each node covers a contiguous range.
+    const std::vector<Eigen::Vector3f>& TreePoints() const;
+    /// Cloud index of every tree-ordered point.
+    const Indices& TreeToCloud() const;
+
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

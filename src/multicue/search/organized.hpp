@@ -5,8 +5,9 @@
 /// limited to a 3D radius around the centre point. On a 640x480 frame this is much faster than a
 /// k-d tree: no build, and a query touches only (2*half_window+1)^2 contiguous pixels.
 ///
-/// The queries allocate nothing once the output vectors have grown to the window size, check their
-/// arguments on entry (a few comparisons), and are safe to run from many threads at once.
+/// The queries allocate nothing once the output vectors (and, for the k-nearest search, one
+/// per-thread scratch buffer) have grown to the window size, check their arguments on entry (a few
+/// comparisons), and are safe to run from many threads at once.
 
 #include <cstddef>
 #include <limits>
@@ -55,10 +56,10 @@ float EstimateFocalLength(const PointCloud& cloud);
 /// Window half-size [pixels] that covers a sphere of `radius` [m] around a point at `depth` [m]
 /// for a camera of `focal_length` [pixels]: ceil(radius * focal_length / |depth|), at least 1.
 /// It is exact for points on the optical axis; towards the corners of a 640x480 frame with
-/// f = 525 the sphere spans up to about 1.3 times as many pixels, so callers that must not miss a
-/// neighbour (clustering) should scale the result or the radius accordingly. The result is
-/// clamped to 1'000'000. Throws InvalidArgument if radius or focal_length is not > 0 and finite
-/// or depth is zero or not finite.
+/// f = 525 the sphere spans up to 1.17 times as many pixels (the rays spread less per pixel off
+/// axis), so callers that must not miss a neighbour (clustering) should scale the result by 1.2.
+/// The result is clamped to 1'000'000. Throws InvalidArgument if radius or focal_length is not > 0
+/// and finite or depth is zero or not finite.
 int WindowHalfSizeForRadius(float radius, float depth, float focal_length);
 
 }  // namespace multicue

@@ -1,0 +1,158 @@
+#pragma once
+/// \file The geometric categories of the thesis (section 5.1.3, Table 5.1) and a rule-based
+/// categoriser for one object seen from a single viewpoint, standing on a support plane. It
+/// stands in for the learned part-graph classifier until one is trained.
+///
+/// Evidence, each in [0, 1] (CategorizeObject):
+/// - box: share of normals within axis_angle_deg of an axis of the upright box whose faces best
+///   match them ("axis_area" of the data README; in simulated scans 0.84-0.91 for boxes,
+///   0.36-0.41 for upright cans, 0.07 for a ball),
+///   averaged with the share of points in planar region-growing parts when parts are given;
+///   without a support plane the box's "up" is the direction shared by the most normals;
+/// - cylinder: RANSAC cylinder with normals (FitCylinder), upright (axis within upright_angle_deg
+///   of up) or lying (axis within lying_angle_deg of the plane); score = share of side points
+///   (within fit_threshold of the side, normal within inlier_normal_angle_deg of radial) + share
+///   of points on the visible cap(s), provided the side explains a real share of the points
+///   (min_side_ratio .. full_side_ratio), spans most of the object along the axis
+///   (min_coverage .. full_coverage: a ball's equator band also fits a cylinder) and the diameter
+///   matches the object's size (upright: the footprint's length; lying: the height;
+///   size_tolerance);
+/// - sphere: RANSAC sphere with normals (FitSphere); share of points on it (same test as the
+///   cylinder side), provided the diameter matches the object's largest extent;
+/// - plate: thin (thickness / largest extent) and round (hull area / minimum rectangle area
+///   across the thin axis: pi/4 for a disc, 1 for a slab). With a support plane only objects
+///   whose thin axis is up (lying plates) qualify: across a horizontal axis a single view shows
+///   too little of the outline to judge roundness;
+/// - box vs flat: the rule of the data README on the sorted extents e1 >= e2 >= e3 (flat if
+///   e2/e3 >= 2.5; box if e2/e3 < 2.0; in between flat if e1/e3 > 2.8), made soft near the
+///   boundaries so that the probabilities show how close the call was;
+/// - other: high when no category has strong evidence (below min_evidence).
+/// Category scores are raised to `sharpness` and normalised into probabilities; the category is
+/// the most probable one (ties go to the lower enum value).
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/types.hpp"
+
+namespace multicue {
+
+/// Geometric categories in the order of the output contract (result.json "categories").
+enum class Category : std::uint8_t { kNone = 0, kSphere, kBox, kFlat, kCylinder, kPlate, kOther };
+
+inline constexpr std::size_t kNumCategories = 7;
+
+/// Contract names, indexed by the enum value.
+inline constexpr std::array<std::string_view, kNumCategories> kCategoryNames = {
+    "none", "sphere", "box", "flat", "cylinder", "plate", "other"};
+
+/// The contract name of a category. Throws InvalidArgument for a value outside the enum.
+std::string_view CategoryName(Category category);
+
+/// The category with the given contract name (exact, lower case). Throws InvalidArgument naming
+/// the string otherwise.
+Category ParseCategory(std::string_view name);
+
+struct CategoryParams {
+    std::size_t min_points = 30;    ///< fewer usable points give kNone [points]; >= 1
+    std::size_t max_points = 2000;  ///< evidence uses at most this many points, an even stride
+                                    ///< through the object [points]; >= min_points
+    float axis_angle_deg = 10.0f;   ///< a normal this close to a box axis is box-like, (0, 45]
+                                    ///< [deg]
+    float planar_part_angle_deg = 10.0f;  ///< a part is planar if its normals deviate from their
+                                          ///< mean direction by less than this on average [deg]
+    float fit_threshold = 0.006f;  ///< inlier distance of the cylinder and sphere fits [m]; > 0
+    float normal_weight = 0.05f;   ///< normal_distance_weight of those fits, [0, 1] [-]
+    float inlier_normal_angle_deg = 30.0f;  ///< a point within fit_threshold of a fitted
+                                            ///< cylinder's side or sphere counts only with its
+                                            ///< normal this close to the surface normal, (0, 90]
+                                            ///< [deg]
+    float min_radius = 0.01f;               ///< smallest cylinder / sphere radius considered [m]
+    float max_radius = 0.25f;               ///< largest cylinder / sphere radius considered [m]
+    float upright_angle_deg = 15.0f;  ///< upright cylinder: axis within this angle of up [deg]
+    float lying_angle_deg = 20.0f;    ///< lying cylinder: axis within this angle of the plane
+                                      ///< [deg]
+    int max_iterations = 500;         ///< sample cap of each RANSAC fit [samples]; >= 1
+    float min_side_ratio = 0.1f;      ///< cylinder side inliers below this share score 0 [-]
+    float full_side_ratio = 0.3f;     ///< ... and count fully from this share [-]
+    float min_coverage = 0.5f;        ///< cylinder side points spanning less than this share of the
+                                      ///< object's extent along the axis score 0 [-]
+    float full_coverage = 0.8f;       ///< ... and count fully from this share [-]
+    float size_tolerance = 1.35f;     ///< a diameter within this factor of the matching extent is
+                                      ///< plausible, beyond size_tolerance^2 implausible [-]; > 1
+    float flat_ratio = 2.5f;          ///< flat if e2/e3 >= flat_ratio [-]
+    float box_ratio = 2.0f;        ///< box if e2/e3 < box_ratio; in between see flat_long_ratio [-]
+    float flat_long_ratio = 2.8f;  ///< flat in the band if e1/e3 > flat_long_ratio [-]
+    float boundary_softness = 8.0f;  ///< slope of the soft box/flat split per unit log-distance
+                                     ///< from the rule's boundary [-]; > 0
+    float plate_thin_ratio = 0.2f;   ///< thickness / diameter up to this is fully thin [-]
+    float plate_thick_ratio = 0.3f;  ///< ... and from this on not thin at all [-]
+    float round_fill = 0.86f;    ///< hull / rectangle area up to this is fully round (disc: 0.785)
+                                 ///< [-]
+    float square_fill = 0.94f;   ///< ... and from this on not round at all (rectangle: 1) [-]
+    float min_evidence = 0.45f;  ///< "other" wins when no other score reaches this, (0, 1) [-]
+    float sharpness = 2.0f;      ///< exponent applied to the scores before normalising [-]; > 0
+    std::uint64_t seed = 1;      ///< RANSAC seed; equal seeds give identical results [-]
+    int num_threads = 0;         ///< threads of the RANSAC fits (0 = all cores); never changes the
+                                 ///< result
+};
+
+struct CategoryResult {
+    Category category = Category::kNone;  ///< most probable category
+    /// Per category (indexed by the enum value), sum 1. Only kNone (probability 1) when the object
+    /// has fewer than min_points usable points.
+    std::array<float, kNumCategories> probabilities{};
+    std::array<float, kNumCategories> scores{};  ///< unnormalised category scores in [0, 1]
+    float confidence = 0.0f;                     ///< probability of `category` [-]
+
+    std::size_t points = 0;   ///< object points with finite position and normal [points]
+    std::size_t sampled = 0;  ///< of which the evidence was computed from [points]
+    bool upright = false;     ///< extents measured in the support-plane frame (else an approximate
+                              ///< minimum-volume box)
+    Eigen::Vector3f extents = Eigen::Vector3f::Zero();  ///< bounding-box extents sorted
+                                                        ///< e1 >= e2 >= e3 [m]
+    float height = 0.0f;     ///< highest point above the support plane (0 if unknown) [m]
+    float box_score = 0.0f;  ///< box-likeness: axis_area, or its mean with planar_part_ratio [-]
+    float axis_area = 0.0f;  ///< share of normals within axis_angle_deg of a box axis [-]
+    float planar_part_ratio = -1.0f;     ///< share of points in planar parts; -1 without parts [-]
+    float cylinder_inlier_ratio = 0.0f;  ///< share of points on the cylinder's side [-]
+    float cylinder_cap_ratio = 0.0f;     ///< share of points on its visible cap(s) [-]
+    float cylinder_coverage = 0.0f;      ///< share of the object's extent along the axis that the
+                                         ///< side points span [-]
+    float cylinder_radius = 0.0f;        ///< radius of the best cylinder, 0 if none [m]
+    Eigen::Vector3f cylinder_axis = Eigen::Vector3f::Zero();  ///< its unit axis, 0 if none
+    bool cylinder_upright = false;     ///< the best cylinder is the upright one
+    float sphere_inlier_ratio = 0.0f;  ///< share of points on the best sphere [-]
+    float sphere_radius = 0.0f;        ///< its radius, 0 if none [m]
+    float thickness_ratio = 0.0f;      ///< e3 / e1 [-]
+    float footprint_fill = 0.0f;  ///< convex hull area / rectangle area across the thinnest box
+                                  ///< axis: 1 rectangle, pi/4 disc [-]
+};
+
+/// Categorises one object: the points `object` of `cloud` (which needs one normal per point;
+/// their sign is ignored), its region-growing parts (may be empty; indices into `cloud`), and the
+/// support plane (a, b, c, d) with the normal pointing up, or the zero vector when unknown (the
+/// extents then come from an approximate minimum-volume box, "up" for the box score is the
+/// direction shared by the most normals, and cylinders may have any axis). Points with a
+/// non-finite position or normal are ignored.
+///
+/// An object with fewer than min_points usable points (an empty one included) gives kNone with
+/// probability 1. Deterministic for a fixed seed, whatever the thread count.
+/// Throws InvalidArgument for a parameter out of its domain (named in the message), a non-finite
+/// support plane or an index out of range; DataError if the cloud has no normals (unless the
+/// object is empty).
+CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
+                                const std::vector<Indices>& parts,
+                                const Eigen::Vector4f& support_plane,
+                                const CategoryParams& params = {});
+
+/// Throws InvalidArgument if a field of `params` is out of its domain.
+void ValidateCategoryParams(const CategoryParams& params);
+
+}  // namespace multicue

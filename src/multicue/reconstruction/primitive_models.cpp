@@ -1,0 +1,442 @@
+#include "multicue/reconstruction/primitive_models.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <Eigen/Eigenvalues>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/recognition/bounding_box.hpp"
+#include "multicue/reconstruction/cylinder_refinement.hpp"
+#include "multicue/segmentation/sac_cylinder.hpp"
+
+namespace multicue {
+namespace {
+
+constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
+
+template <typename... Args>
+void Require(bool ok, fmt::format_string<Args...> message, Args&&... args) {
+    if (!ok) throw InvalidArgument(fmt::format(message, std::forward<Args>(args)...));
+}
+
+void CheckIndices(const PointCloud& cloud, const Indices& indices) {
+    for (Index i : indices) {
+        Require(i < cloud.size(), "index {} out of range for a cloud of {} points", i,
+                cloud.size());
+    }
+}
+
+void ValidateBoxParams(const BoxFitParams& p) {
+    Require(p.inlier_threshold > 0.0f && std::isfinite(p.inlier_threshold),
+            "inlier_threshold must be > 0 and finite, got {}", p.inlier_threshold);
+    Require(p.face_angle_deg > 0.0f && p.face_angle_deg <= 45.0f,
+            "face_angle_deg must be in (0, 45], got {}", p.face_angle_deg);
+    Require(p.min_face_points >= 1, "min_face_points must be >= 1, got {}", p.min_face_points);
+    Require(p.edge_window >= 0.0f && std::isfinite(p.edge_window),
+            "edge_window must be >= 0 and finite, got {}", p.edge_window);
+}
+
+Indices FinitePoints(const PointCloud& cloud, const Indices& indices) {
+    Indices out;
+    out.reserve(indices.size());
+    for (Index i : indices) {
+        if (cloud.points[i].allFinite()) out.push_back(i);
+    }
+    return out;
+}
+
+// Median of a non-empty vector (upper median for even sizes: deterministic, no averaging).
+float Median(std::vector<float> v) {
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+}
+
+// Far edge of a region sampled with roughly even density along a coordinate, from its points'
+// coordinates s. The extreme point M lies beyond the edge by the largest of the noise values of
+// the points there (several sigma). Instead: the density rho inside, from the points in
+// [M - 2w, M - w], and the count n of points beyond M - w (the noise tail and the last strip)
+// place the edge at M - w + n / rho, which is unbiased for symmetric noise as long as w exceeds
+// the noise's reach. Falls back to M when the strip is empty.
+float FarEdge(const std::vector<float>& s, bool upper, float w) {
+    const float m =
+        upper ? *std::max_element(s.begin(), s.end()) : *std::min_element(s.begin(), s.end());
+    if (!(w > 0.0f)) return m;
+    std::size_t inner = 0, beyond = 0;
+    for (float x : s) {
+        const float depth = upper ? m - x : x - m;  // distance inside the extreme
+        if (depth <= w) {
+            ++beyond;
+        } else if (depth <= 2.0f * w) {
+            ++inner;
+        }
+    }
+    if (inner < 5) return m;
+    const float reach = w * static_cast<float>(beyond) / static_cast<float>(inner);
+    const float edge_depth = std::clamp(w - reach, 0.0f, w);
+    return upper ? m - edge_depth : m + edge_depth;
+}
+
+// Distance of p to the surface of a solid box.
+float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p) {
+    const Eigen::Vector3f q = (box.axes.transpose() * (p - box.center)).cwiseAbs();
+    const Eigen::Vector3f half = 0.5f * box.extents;
+    const Eigen::Vector3f outside = (q - half).cwiseMax(0.0f);
+    if (outside.squaredNorm() > 0.0f) return outside.norm();
+    return (half - q).minCoeff();
+}
+
+float BoxInlierRatio(const PointCloud& cloud, const Indices& finite, const BoxModel& box,
+                     float threshold) {
+    std::size_t inliers = 0;
+    for (Index i : finite) {
+        if (BoxSurfaceDistance(box, cloud.points[i]) <= threshold) ++inliers;
+    }
+    return static_cast<float>(inliers) / static_cast<float>(finite.size());
+}
+
+// Distance of p to the surface of a solid (capped) cylinder.
+float CylinderSurfaceDistance(const CylinderModel& c, const Eigen::Vector3f& p) {
+    const Eigen::Vector3f w = p - c.center;
+    const float t = std::abs(w.dot(c.axis));
+    const float rho = (w - w.dot(c.axis) * c.axis).norm();
+    const float half = 0.5f * c.height;
+    if (t <= half && rho <= c.radius) return std::min(c.radius - rho, half - t);
+    return std::hypot(std::max(rho - c.radius, 0.0f), std::max(t - half, 0.0f));
+}
+
+void ValidateCylinderParams(const CylinderModelParams& p) {
+    ValidateSacParams(p.sac);
+    Require(p.min_radius >= 0.0f && p.max_radius >= p.min_radius,
+            "radii must satisfy 0 <= min_radius <= max_radius, got {} and {}", p.min_radius,
+            p.max_radius);
+    Require(p.upright_angle_deg >= 0.0f && p.upright_angle_deg <= 90.0f,
+            "upright_angle_deg must be in [0, 90], got {}", p.upright_angle_deg);
+    Require(p.lying_angle_deg >= 0.0f && p.lying_angle_deg <= 90.0f,
+            "lying_angle_deg must be in [0, 90], got {}", p.lying_angle_deg);
+    Require(p.free_axis_gain >= 1.0f && std::isfinite(p.free_axis_gain),
+            "free_axis_gain must be >= 1 and finite, got {}", p.free_axis_gain);
+    Require(p.side_distance > 0.0f && std::isfinite(p.side_distance),
+            "side_distance must be > 0 and finite, got {}", p.side_distance);
+    Require(p.side_normal_angle_deg > 0.0f && p.side_normal_angle_deg <= 90.0f,
+            "side_normal_angle_deg must be in (0, 90], got {}", p.side_normal_angle_deg);
+    Require(p.refine_rounds >= 0, "refine_rounds must be >= 0, got {}", p.refine_rounds);
+    Require(p.cap_angle_deg > 0.0f && p.cap_angle_deg <= 45.0f,
+            "cap_angle_deg must be in (0, 45], got {}", p.cap_angle_deg);
+    Require(p.min_cap_points >= 1, "min_cap_points must be >= 1, got {}", p.min_cap_points);
+    Require(p.inlier_threshold > 0.0f && std::isfinite(p.inlier_threshold),
+            "inlier_threshold must be > 0 and finite, got {}", p.inlier_threshold);
+}
+
+// `v` with its largest-magnitude component positive (a direction without a natural sign).
+Eigen::Vector3f CanonicalAxis(const Eigen::Vector3f& v) {
+    int k = 0;
+    v.cwiseAbs().maxCoeff(&k);
+    return v[k] < 0.0f ? Eigen::Vector3f(-v) : v;
+}
+
+}  // namespace
+
+BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
+                       const Eigen::Vector4f& support_plane, const BoxFitParams& params) {
+    ValidateBoxParams(params);
+    const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
+    Require(plane.has_value(), "FitUprightBox needs a support plane, got the zero vector");
+    CheckIndices(cloud, indices);
+    const Indices finite = FinitePoints(cloud, indices);
+    BoxModel box;
+    if (finite.empty()) return box;
+
+    const Eigen::Vector3f up = plane->head<3>();
+    const float d = (*plane)[3];
+    // Footprint coordinates in a fixed basis (u, v) of the plane, u x v = up.
+    const Eigen::Vector3f u = up.unitOrthogonal(), v = up.cross(u);
+    std::vector<Eigen::Vector2d> q(finite.size());
+    std::vector<float> heights(finite.size());
+    for (std::size_t j = 0; j < finite.size(); ++j) {
+        const Eigen::Vector3f& p = cloud.points[finite[j]];
+        q[j] = Eigen::Vector2d(p.dot(u), p.dot(v));
+        heights[j] = up.dot(p) + d;
+    }
+    // Orientation: the side normals (AlignUprightAxes), else the minimum-area footprint rectangle.
+    const OrientedBox hull_box = UprightBoundingBox(cloud, finite, *plane);
+    Eigen::Vector2d dir(hull_box.axes.col(0).dot(u), hull_box.axes.col(0).dot(v));
+    const bool normals = params.use_normals && cloud.normals.size() == cloud.size();
+    const float face_angle = params.face_angle_deg * kDeg;
+    const float cos_face = std::cos(face_angle);
+    if (normals) {
+        const FaceAlignment fa =
+            AlignUprightAxes(cloud, finite, up, face_angle, params.min_face_points);
+        if (fa.found) dir = Eigen::Vector2d(fa.axes.col(0).dot(u), fa.axes.col(0).dot(v));
+    }
+    dir.normalize();
+
+    // Face membership of every point for the current orientation: 0/1 = faces across the first
+    // axis (low/high side), 2/3 = across the second, -1 = none; the side is taken from the
+    // position relative to the middle, so the normals' sign does not matter.
+    std::vector<int> face(finite.size(), -1);
+    auto classify = [&](const Eigen::Vector2d& a1) {
+        const Eigen::Vector2d a2(-a1.y(), a1.x());
+        double lo[2] = {std::numeric_limits<double>::infinity(),
+                        std::numeric_limits<double>::infinity()};
+        double hi[2] = {-lo[0], -lo[1]};
+        for (const auto& p : q) {
+            lo[0] = std::min(lo[0], p.dot(a1));
+            hi[0] = std::max(hi[0], p.dot(a1));
+            lo[1] = std::min(lo[1], p.dot(a2));
+            hi[1] = std::max(hi[1], p.dot(a2));
+        }
+        const Eigen::Vector3f a13 = static_cast<float>(a1.x()) * u + static_cast<float>(a1.y()) * v;
+        const Eigen::Vector3f a23 = up.cross(a13);
+        for (std::size_t j = 0; j < finite.size(); ++j) {
+            face[j] = -1;
+            if (!normals) continue;
+            const Eigen::Vector3f& n = cloud.normals[finite[j]];
+            if (!n.allFinite() || !(n.squaredNorm() > 0.0f)) continue;
+            const Eigen::Vector3f nn = n.normalized();
+            if (std::abs(nn.dot(a13)) >= cos_face) {
+                face[j] = q[j].dot(a1) >= 0.5 * (lo[0] + hi[0]) ? 1 : 0;
+            } else if (std::abs(nn.dot(a23)) >= cos_face) {
+                face[j] = q[j].dot(a2) >= 0.5 * (lo[1] + hi[1]) ? 3 : 2;
+            }
+        }
+    };
+    classify(dir);
+    // Refine the orientation with the seen sides: the least-squares rectangle orientation of their
+    // points. A side across the first axis a1 lies on a line with normal a1 and costs
+    // a1^T S a1 (S its scatter about its mean); one across a2 = R90 a1 costs a1^T R90^T S R90 a1;
+    // the sum is smallest for the eigenvector of the smallest eigenvalue of the summed matrices.
+    for (int round = 0; normals && round < 3; ++round) {
+        Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
+        bool any = false;
+        for (int f = 0; f < 4; ++f) {
+            Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+            std::size_t count = 0;
+            for (std::size_t j = 0; j < q.size(); ++j) {
+                if (face[j] == f) {
+                    mean += q[j];
+                    ++count;
+                }
+            }
+            if (count < params.min_face_points) continue;
+            mean /= static_cast<double>(count);
+            Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+            for (std::size_t j = 0; j < q.size(); ++j) {
+                if (face[j] == f) scatter += (q[j] - mean) * (q[j] - mean).transpose();
+            }
+            if (f >= 2) {
+                Eigen::Matrix2d r90;
+                r90 << 0.0, -1.0, 1.0, 0.0;
+                scatter = r90.transpose() * scatter * r90;
+            }
+            m += scatter;
+            any = true;
+        }
+        if (!any) break;
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(m);
+        Eigen::Vector2d next = solver.eigenvectors().col(0).normalized();
+        if (next.dot(dir) < 0.0) next = -next;
+        const bool stable = std::abs(next.dot(dir)) > 1.0 - 1e-12;
+        dir = next;
+        classify(dir);
+        if (stable) break;
+    }
+
+    // Sides: the median of a seen side's points, else the far edge of all points (FarEdge); top:
+    // the median height of the top face, else the highest point.
+    const Eigen::Vector2d dir2(-dir.y(), dir.x());
+    const Eigen::Vector3f a1 = static_cast<float>(dir.x()) * u + static_cast<float>(dir.y()) * v;
+    const Eigen::Vector3f a2 = up.cross(a1);
+    float lo[2] = {0.0f, 0.0f}, hi[2] = {0.0f, 0.0f};
+    for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2d axis = k == 0 ? dir : dir2;
+        std::vector<float> all(q.size()), face_lo, face_hi;
+        for (std::size_t j = 0; j < q.size(); ++j) {
+            all[j] = static_cast<float>(q[j].dot(axis));
+            if (face[j] == 2 * k) face_lo.push_back(all[j]);
+            if (face[j] == 2 * k + 1) face_hi.push_back(all[j]);
+        }
+        lo[k] = face_lo.size() >= params.min_face_points ? Median(face_lo)
+                                                         : FarEdge(all, false, params.edge_window);
+        hi[k] = face_hi.size() >= params.min_face_points ? Median(face_hi)
+                                                         : FarEdge(all, true, params.edge_window);
+    }
+    float top = *std::max_element(heights.begin(), heights.end());
+    if (normals) {
+        std::vector<float> top_heights;
+        for (std::size_t j = 0; j < finite.size(); ++j) {
+            const Eigen::Vector3f& n = cloud.normals[finite[j]];
+            if (n.allFinite() && n.squaredNorm() > 0.0f &&
+                std::abs(n.normalized().dot(up)) >= cos_face) {
+                top_heights.push_back(heights[j]);
+            }
+        }
+        if (top_heights.size() >= params.min_face_points) top = Median(top_heights);
+    }
+
+    Eigen::Vector3f ext(std::max(hi[0] - lo[0], 0.0f), std::max(hi[1] - lo[1], 0.0f),
+                        std::max(top, 0.0f));
+    box.center =
+        0.5f * (lo[0] + hi[0]) * a1 + 0.5f * (lo[1] + hi[1]) * a2 + (-d + 0.5f * ext.z()) * up;
+    if (ext.y() > ext.x()) {
+        // Longer side first; col(1) = up x col(0) keeps the frame right-handed.
+        box.axes.col(0) = a2;
+        box.axes.col(1) = up.cross(a2);
+        std::swap(ext.x(), ext.y());
+    } else {
+        box.axes.col(0) = a1;
+        box.axes.col(1) = up.cross(a1);
+    }
+    box.axes.col(2) = up;
+    box.extents = ext;
+    box.found = true;
+    box.inlier_ratio = BoxInlierRatio(cloud, finite, box, params.inlier_threshold);
+    return box;
+}
+
+BoxModel FitOrientedBoundingBox(const PointCloud& cloud, const Indices& indices,
+                                const BoxFitParams& params) {
+    ValidateBoxParams(params);
+    CheckIndices(cloud, indices);
+    const Indices finite = FinitePoints(cloud, indices);
+    BoxModel box;
+    if (finite.empty()) return box;
+    const OrientedBox obb = MinVolumeBoundingBox(cloud, finite);
+    box.center = obb.center;
+    box.axes = obb.axes;
+    box.extents = obb.extents;
+    box.found = true;
+    box.inlier_ratio = BoxInlierRatio(cloud, finite, box, params.inlier_threshold);
+    return box;
+}
+
+CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
+                                const Eigen::Vector4f& support_plane,
+                                const CylinderModelParams& params) {
+    ValidateCylinderParams(params);
+    const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
+    CheckIndices(cloud, indices);
+    CylinderModel model;
+    if (indices.empty()) return model;
+    if (cloud.normals.size() != cloud.size()) {
+        throw DataError(fmt::format("cylinder fitting needs one normal per point, got {} for {}",
+                                    cloud.normals.size(), cloud.size()));
+    }
+    const Indices finite = FinitePoints(cloud, indices);
+    Indices usable;
+    usable.reserve(finite.size());
+    for (Index i : finite) {
+        const Eigen::Vector3f& n = cloud.normals[i];
+        if (n.allFinite() && n.squaredNorm() > 0.0f) usable.push_back(i);
+    }
+    if (usable.size() < 2) return model;
+
+    // 1. Hypothesis.
+    CylinderFitParams cp{
+        .sac = params.sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
+    CylinderFit fit;
+    if (plane) {
+        cp.axis = plane->head<3>();
+        cp.max_angle = params.upright_angle_deg * kDeg;
+        fit = FitCylinder(cloud, usable, cp);
+        if (params.allow_free_axis) {
+            cp.axis = std::nullopt;
+            CylinderFit free = FitCylinder(cloud, usable, cp);
+            if (free.found && (!fit.found || static_cast<float>(free.inliers.size()) >=
+                                                 params.free_axis_gain *
+                                                     static_cast<float>(fit.inliers.size()))) {
+                fit = std::move(free);
+            }
+        }
+    } else {
+        fit = FitCylinder(cloud, usable, cp);
+    }
+    if (!fit.found || fit.inliers.empty()) return model;
+
+    // 2. Refinement on the side points, with the axis snapped to the support when asked.
+    detail::CylinderState x{fit.point.cast<double>(), fit.axis.cast<double>().normalized(),
+                            double{fit.radius}};
+    detail::AxisFreedom freedom = detail::AxisFreedom::kFree;
+    bool upright = false;
+    Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+    if (plane) {
+        up = plane->head<3>().cast<double>();
+        const double c = x.axis.dot(up);
+        upright = std::abs(c) >= std::cos(double{params.upright_angle_deg * kDeg}) - 1e-9;
+        if (upright && c < 0.0) x.axis = -x.axis;
+        const bool lying = std::abs(c) <= std::sin(double{params.lying_angle_deg * kDeg});
+        if (params.snap_to_support && upright) {
+            x.axis = up;
+            freedom = detail::AxisFreedom::kFixed;
+        } else if (params.snap_to_support && lying) {
+            x.axis = (x.axis - x.axis.dot(up) * up).normalized();
+            freedom = detail::AxisFreedom::kAboutUp;
+        }
+    }
+    const double side_cos = std::cos(double{params.side_normal_angle_deg * kDeg});
+    Indices side = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
+    for (int round = 0; round < params.refine_rounds && side.size() >= 5; ++round) {
+        detail::CylinderState refined = x;
+        if (!detail::RefineCylinder(cloud, side, up, freedom, refined)) break;
+        if (!(refined.radius >= params.min_radius && refined.radius <= params.max_radius)) break;
+        x = refined;
+        Indices next = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
+        const bool stable = next == side;
+        side = std::move(next);
+        if (stable) break;
+    }
+    if (side.empty()) side = fit.inliers;
+
+    // 3. Extent along the axis.
+    const Eigen::Vector3f axis = x.axis.cast<float>();
+    const Eigen::Vector3f p0 = x.point.cast<float>();
+    const auto radius = static_cast<float>(x.radius);
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (Index i : side) {
+        const float t = (cloud.points[i] - p0).dot(axis);
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+    }
+    // Visible caps: normals along the axis, inside the rim, near an end of the side's extent.
+    const float cos_cap = std::cos(params.cap_angle_deg * kDeg);
+    const float reach = 2.0f * params.side_distance;
+    std::vector<float> cap_lo, cap_hi;
+    for (Index i : usable) {
+        const Eigen::Vector3f w = cloud.points[i] - p0;
+        const float t = w.dot(axis);
+        if ((w - t * axis).norm() > radius + params.side_distance) continue;
+        if (std::abs(cloud.normals[i].normalized().dot(axis)) < cos_cap) continue;
+        if (std::abs(t - hi) <= reach) cap_hi.push_back(t);
+        if (std::abs(t - lo) <= reach) cap_lo.push_back(t);
+    }
+    if (cap_hi.size() >= params.min_cap_points) hi = Median(cap_hi);
+    if (cap_lo.size() >= params.min_cap_points) lo = Median(cap_lo);
+    if (plane && upright && params.extend_to_support) {
+        // Where the axis line meets the support plane.
+        const Eigen::Vector3f upf = plane->head<3>();
+        lo = -(upf.dot(p0) + (*plane)[3]) / upf.dot(axis);
+    }
+    if (hi < lo) std::swap(lo, hi);
+
+    model.found = true;
+    model.axis = axis;
+    if (!upright) model.axis = CanonicalAxis(axis);
+    model.radius = radius;
+    model.height = hi - lo;
+    model.center = p0 + 0.5f * (lo + hi) * axis;
+    std::size_t inliers = 0;
+    for (Index i : finite) {
+        if (CylinderSurfaceDistance(model, cloud.points[i]) <= params.inlier_threshold) ++inliers;
+    }
+    model.inlier_ratio = static_cast<float>(inliers) / static_cast<float>(finite.size());
+    return model;
+}
+
+}  // namespace multicue

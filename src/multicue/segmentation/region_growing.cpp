@@ -1,0 +1,283 @@
+#include "multicue/segmentation/region_growing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/segmentation/disjoint_sets.hpp"
+
+namespace multicue {
+namespace {
+
+void CheckParams(const RegionGrowingParams& params) {
+    if (!(params.radius > 0.0f) || !std::isfinite(params.radius)) {
+        throw InvalidArgument(
+            fmt::format("region growing radius must be > 0, got {}", params.radius));
+    }
+    if (params.k < 0) {
+        throw InvalidArgument(fmt::format("region growing k must be >= 0, got {}", params.k));
+    }
+    if (!(params.max_angle_deg > 0.0f && params.max_angle_deg <= 180.0f)) {
+        throw InvalidArgument(
+            fmt::format("max_angle_deg must be in (0, 180], got {}", params.max_angle_deg));
+    }
+}
+
+void CheckFields(const PointCloud& cloud) {
+    const std::size_t n = cloud.size();
+    if (!cloud.HasNormals()) throw DataError("region growing needs normals; the cloud has none");
+    if (!cloud.HasCurvature()) {
+        throw DataError("region growing needs curvature; the cloud has none");
+    }
+    if (cloud.normals.size() != n) {
+        throw DataError(
+            fmt::format("the cloud has {} normals for {} points", cloud.normals.size(), n));
+    }
+    if (cloud.curvature.size() != n) {
+        throw DataError(fmt::format("the cloud has {} curvature values for {} points",
+                                    cloud.curvature.size(), n));
+    }
+}
+
+// Neighbourhoods of the growth and merging phases: all points within the radius, or the k
+// nearest of them. Checks that the tree indexes the query point and belongs to this cloud.
+class Neighborhoods {
+  public:
+    Neighborhoods(const PointCloud& cloud, const KdTree& tree, const RegionGrowingParams& params)
+        : cloud_(cloud), tree_(tree), radius_(params.radius), k_(params.k) {}
+
+    /// Neighbours of point q (q included), nearest first; see indices() and squared_distances().
+    void Search(Index q) {
+        const Eigen::Vector3f& p = cloud_.points[q];
+        bool self_may_be_left_out = false;
+        if (k_ > 0) {
+            tree_.SearchKnn(p, k_, indices_, squared_distances_);
+            // With k or more copies of q, the k nearest may all be copies other than q itself.
+            self_may_be_left_out = indices_.size() == static_cast<std::size_t>(k_) &&
+                                   squared_distances_.back() == 0.0f;
+            const float radius_sq = radius_ * radius_;
+            std::size_t keep = 0;
+            while (keep < squared_distances_.size() && squared_distances_[keep] < radius_sq) ++keep;
+            indices_.resize(keep);
+            squared_distances_.resize(keep);
+        } else {
+            tree_.SearchRadius(p, radius_, indices_, squared_distances_);
+        }
+        bool found_self = self_may_be_left_out;
+        for (Index j : indices_) {
+            if (j >= cloud_.size()) {
+                throw InvalidArgument(
+                    fmt::format("the k-d tree holds point {}, but the cloud has only {} points", j,
+                                cloud_.size()));
+            }
+            found_self = found_self || j == q;
+        }
+        if (!found_self) {
+            throw InvalidArgument(
+                fmt::format("point {} is to be segmented but the k-d tree does not index it", q));
+        }
+    }
+    const Indices& indices() const { return indices_; }
+    const std::vector<float>& squared_distances() const { return squared_distances_; }
+
+  private:
+    const PointCloud& cloud_;
+    const KdTree& tree_;
+    float radius_;
+    int k_;
+    Indices indices_;
+    std::vector<float> squared_distances_;
+};
+
+// Marks the points with finite coordinates, normal and curvature in the subset (or cloud).
+std::size_t MarkPoints(const PointCloud& cloud, const Indices& subset,
+                       std::vector<std::uint8_t>& active) {
+    const std::size_t n = cloud.size();
+    active.assign(n, 0);
+    std::size_t count = 0;
+    auto mark = [&](std::size_t i) {
+        if (active[i] != 0) return;
+        const Eigen::Vector3f& normal = cloud.normals[i];
+        if (cloud.IsFinite(i) && normal.allFinite() && normal.squaredNorm() > 0.0f &&
+            std::isfinite(cloud.curvature[i])) {
+            active[i] = 1;
+            ++count;
+        }
+    };
+    if (subset.empty()) {
+        for (std::size_t i = 0; i < n; ++i) mark(i);
+        return count;
+    }
+    for (Index i : subset) {
+        if (i >= n) {
+            throw InvalidArgument(
+                fmt::format("subset index {} is out of range for a cloud of {} points", i, n));
+        }
+        mark(i);
+    }
+    return count;
+}
+
+}  // namespace
+
+RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
+                                  const RegionGrowingParams& params) {
+    CheckParams(params);
+    RegionGrowingResult result;
+    const std::size_t n = cloud.size();
+    if (n == 0) return result;
+    CheckFields(cloud);
+
+    std::vector<std::uint8_t> active;
+    result.num_points = MarkPoints(cloud, params.subset, active);
+    result.part_ids.assign(n, kNoPart);
+    std::vector<std::int32_t>& part_of = result.part_ids;
+    if (result.num_points == 0) return result;
+
+    // Seeds by lowest curvature, so that flat parts are found first (section 4.2.1).
+    Indices order;
+    order.reserve(result.num_points);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (active[i] != 0) order.push_back(static_cast<Index>(i));
+    }
+    std::sort(order.begin(), order.end(), [&](Index a, Index b) {
+        const float ca = cloud.curvature[a];
+        const float cb = cloud.curvature[b];
+        return ca != cb ? ca < cb : a < b;
+    });
+
+    const double max_angle_rad = double{params.max_angle_deg} * std::numbers::pi / 180.0;
+    const auto cos_max = static_cast<float>(std::cos(max_angle_rad));
+    Neighborhoods neighborhoods(cloud, tree, params);
+
+    // Growth: a part is the set of free points reachable from its seed through neighbours whose
+    // normal is within the angle of the seed normal (not of the neighbour's normal).
+    std::vector<Indices> parts;
+    Indices seeds;
+    for (Index seed : order) {
+        if (part_of[seed] != kNoPart) continue;
+        const auto id = static_cast<std::int32_t>(parts.size());
+        const Eigen::Vector3f seed_normal = cloud.normals[seed].normalized();
+        Indices part{seed};
+        part_of[seed] = id;
+        for (std::size_t head = 0; head < part.size(); ++head) {
+            neighborhoods.Search(part[head]);
+            for (Index j : neighborhoods.indices()) {
+                if (active[j] == 0 || part_of[j] != kNoPart) continue;
+                const Eigen::Vector3f& normal = cloud.normals[j];
+                float cosine = normal.dot(seed_normal) / normal.norm();
+                if (params.ignore_normal_sign) cosine = std::abs(cosine);
+                if (cosine > cos_max) {
+                    part_of[j] = id;
+                    part.push_back(j);
+                }
+            }
+        }
+        parts.push_back(std::move(part));
+        seeds.push_back(seed);
+    }
+    result.num_grown_parts = parts.size();
+
+    // Merging, phase 1: a small part joins, as a whole, the large part holding the point nearest
+    // to any of its points (within the neighbourhood; ties by point index). Rounds repeat so that
+    // chains of small parts reach a large part; decisions of a round use the state before it.
+    const std::size_t min_size = params.min_part_size;
+    const std::size_t num_parts = parts.size();
+    std::vector<std::uint8_t> is_large(num_parts, 0);
+    std::vector<std::int32_t> pending;  // small parts not merged yet, ascending
+    for (std::size_t p = 0; p < num_parts; ++p) {
+        if (parts[p].size() >= min_size) {
+            is_large[p] = 1;
+        } else {
+            pending.push_back(static_cast<std::int32_t>(p));
+        }
+    }
+    std::vector<std::pair<std::int32_t, std::int32_t>> merges;  // (small part, large part)
+    while (!pending.empty()) {
+        merges.clear();
+        for (std::int32_t s : pending) {
+            float best_sq = std::numeric_limits<float>::infinity();
+            Index best_point = 0;
+            std::int32_t best_part = kNoPart;
+            for (Index q : parts[static_cast<std::size_t>(s)]) {
+                neighborhoods.Search(q);
+                const Indices& nb = neighborhoods.indices();
+                const std::vector<float>& sq = neighborhoods.squared_distances();
+                for (std::size_t m = 0; m < nb.size(); ++m) {
+                    const std::int32_t t = part_of[nb[m]];
+                    if (t == kNoPart || is_large[static_cast<std::size_t>(t)] == 0) continue;
+                    if (sq[m] < best_sq || (sq[m] == best_sq && nb[m] < best_point)) {
+                        best_sq = sq[m];
+                        best_point = nb[m];
+                        best_part = t;
+                    }
+                }
+            }
+            if (best_part != kNoPart) merges.emplace_back(s, best_part);
+        }
+        if (merges.empty()) break;
+        for (const auto& [s, t] : merges) {
+            Indices& small = parts[static_cast<std::size_t>(s)];
+            for (Index i : small) part_of[i] = t;
+            Indices& large = parts[static_cast<std::size_t>(t)];
+            large.insert(large.end(), small.begin(), small.end());
+            small.clear();
+        }
+        result.num_merged_parts += merges.size();
+        std::erase_if(pending,
+                      [&](std::int32_t s) { return parts[static_cast<std::size_t>(s)].empty(); });
+    }
+
+    // Merging, phase 2: the remaining small parts have no large part nearby; group them by
+    // distance alone. A group keeps the id of its first part, so part order stays seed order.
+    detail::DisjointSets groups(num_parts);
+    for (std::int32_t s : pending) {
+        for (Index q : parts[static_cast<std::size_t>(s)]) {
+            neighborhoods.Search(q);
+            for (Index j : neighborhoods.indices()) {
+                const std::int32_t t = part_of[j];
+                if (t != kNoPart && t != s && is_large[static_cast<std::size_t>(t)] == 0) {
+                    groups.Unite(static_cast<Index>(s), static_cast<Index>(t));
+                }
+            }
+        }
+    }
+    for (std::int32_t s : pending) {
+        const Index root = groups.Find(static_cast<Index>(s));
+        if (root == static_cast<Index>(s)) continue;
+        Indices& member = parts[static_cast<std::size_t>(s)];
+        for (Index i : member) part_of[i] = static_cast<std::int32_t>(root);
+        Indices& group = parts[root];
+        group.insert(group.end(), member.begin(), member.end());
+        member.clear();
+        ++result.num_merged_parts;
+    }
+    for (std::int32_t s : pending) {
+        Indices& group = parts[static_cast<std::size_t>(s)];
+        if (group.empty() || group.size() >= min_size || !params.discard_small_parts) continue;
+        for (Index i : group) part_of[i] = kNoPart;
+        result.num_discarded_points += group.size();
+        group.clear();
+    }
+
+    // Compaction: surviving parts in seed order, points ascending.
+    std::vector<std::int32_t> new_id(num_parts, kNoPart);
+    for (std::size_t p = 0; p < num_parts; ++p) {
+        if (parts[p].empty()) continue;
+        new_id[p] = static_cast<std::int32_t>(result.parts.size());
+        std::sort(parts[p].begin(), parts[p].end());
+        result.parts.push_back(std::move(parts[p]));
+        result.seeds.push_back(seeds[p]);
+    }
+    for (auto& id : part_of) {
+        if (id != kNoPart) id = new_id[static_cast<std::size_t>(id)];
+    }
+    return result;
+}
+
+}  // namespace multicue

@@ -1,0 +1,72 @@
+#pragma once
+/// \file Normal-angle region growing: over-segmentation of a cloud into slightly curved parts
+/// (thesis section 4.2.1, used for part-based recognition in chapters 4 and 5).
+///
+/// A point joins a part when it is within `radius` of a point of the part and its normal is less
+/// than `max_angle_deg` from the normal of the part's *seed* (not of the neighbour that reached
+/// it), so a part never bends by more than 2 * max_angle_deg: a cylinder side splits into arcs of
+/// at most 80 degrees with the thesis values. Seeds are taken in order of lowest curvature, so
+/// flat parts are found first. Parts with fewer than `min_part_size` points are then merged as a
+/// whole into the nearest larger part within `radius`; small parts with no larger part nearby are
+/// grouped by distance alone, and groups still too small are discarded (or kept, see
+/// `discard_small_parts`).
+///
+/// The result depends only on the input, never on the order of neighbour lists: seeds with equal
+/// curvature are taken by ascending index, and a part is exactly the set of free points
+/// reachable from its seed through points that pass the angle test.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/types.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue {
+
+/// Part id of a point that belongs to no part.
+inline constexpr std::int32_t kNoPart = -1;
+
+struct RegionGrowingParams {
+    float radius = 0.05f;  ///< neighbourhood radius, thesis delta [m]; must be > 0
+    int k = 0;  ///< if > 0, only the k nearest neighbours within radius are used [points]
+    float max_angle_deg = 40.0f;      ///< max angle between a point's normal and its part's seed
+                                      ///< normal, thesis alpha [deg]; in (0, 180]
+    bool ignore_normal_sign = false;  ///< true for unoriented normals: n and -n are the same
+    std::size_t min_part_size = 10;   ///< smaller parts are merged into a neighbour [points]
+    bool discard_small_parts = true;  ///< drop parts still under min_part_size after merging;
+                                      ///< false keeps them as parts
+    Indices subset = {};  ///< points to segment (duplicates ignored); empty = all points
+};
+
+struct RegionGrowingResult {
+    /// Point indices of each part, ascending. Parts are ordered by their seed: lowest seed
+    /// curvature first, ties by seed index.
+    std::vector<Indices> parts;
+    /// The seed point of each part (for merged groups of small parts, the first seed among them).
+    Indices seeds;
+    /// One entry per cloud point: the position of its part in `parts`, or kNoPart (not segmented,
+    /// non-finite point, normal or curvature, or in a discarded small part).
+    std::vector<std::int32_t> part_ids;
+    std::size_t num_points = 0;            ///< points that were segmented
+    std::size_t num_grown_parts = 0;       ///< parts grown from seeds, before merging
+    std::size_t num_merged_parts = 0;      ///< small parts merged into a larger part
+    std::size_t num_discarded_points = 0;  ///< points of small parts that were dropped
+};
+
+/// Normal-angle region growing over the points of `params.subset` (all points when empty) with
+/// finite coordinates, normal and curvature; the other points get kNoPart. Zero-length normals
+/// count as non-finite.
+///
+/// `tree` must index every point to be segmented; it may index more (for example the whole cloud
+/// when segmenting a subset), those extra points are ignored.
+///
+/// Throws InvalidArgument if radius is not > 0 and finite, k < 0, max_angle_deg is not in
+/// (0, 180], a subset index is out of range, or the tree lacks a point to be segmented.
+/// Throws DataError if the (non-empty) cloud has no normals or no curvature, or their sizes differ
+/// from the number of points. An empty cloud gives an empty result.
+RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
+                                  const RegionGrowingParams& params);
+
+}  // namespace multicue

@@ -1,0 +1,108 @@
+#pragma once
+/// \file Helpers shared by the sample-consensus models (moments, bases, parameter checks, a small
+/// Levenberg-Marquardt solver). Internal to the segmentation module, not part of its API.
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <utility>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/types.hpp"
+#include "multicue/segmentation/sample_consensus.hpp"
+
+namespace multicue::sac_internal {
+
+/// Mean and covariance (divided by n) of the points `idx`, accumulated in double around the first
+/// point so that clouds far from the origin keep their precision.
+struct Moments {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+};
+Moments ComputeMoments(const PointCloud& cloud, std::span<const Index> idx);
+
+/// Unit vectors u, v such that (u, v, a) is orthonormal, for a unit vector a. A deterministic
+/// function of a, so a linearisation and the update that follows it use the same basis.
+void OrthonormalBasis(const Eigen::Vector3d& a, Eigen::Vector3d& u, Eigen::Vector3d& v);
+
+/// Unit-length copy of a constraint axis; throws InvalidArgument naming `what` unless the axis is
+/// finite and non-zero.
+Eigen::Vector3f NormalizedAxis(const Eigen::Vector3f& axis, const char* what);
+/// Throws InvalidArgument naming `what` unless max_angle is in [0, pi/2].
+void ValidateMaxAngle(float max_angle, const char* what);
+/// Throws InvalidArgument naming `what` unless 0 <= min_radius <= max_radius (max may be inf).
+void ValidateRadiusLimits(float min_radius, float max_radius, const char* what);
+
+/// True if r is finite and in [min_radius, max_radius].
+inline bool RadiusAccepted(double r, float min_radius, float max_radius) {
+    return std::isfinite(r) && r >= min_radius && r <= max_radius;
+}
+
+/// Sign-free angle between two unit vectors, in [0, pi/2] [rad].
+inline float UnsignedAngle(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    return std::acos(std::min(1.0f, std::abs(a.dot(b))));
+}
+
+/// `v` with the sign that makes its largest-magnitude component positive: a deterministic
+/// orientation for directions that have no natural one.
+Eigen::Vector3f CanonicalDirection(const Eigen::Vector3f& v);
+
+/// Copies the outcome fields of an engine result into a typed fit.
+template <typename Fit>
+void CopyOutcome(SacResult& r, Fit& fit) {
+    fit.found = r.found;
+    fit.inliers = std::move(r.inliers);
+    fit.iterations = r.iterations;
+    fit.converged = r.converged;
+    fit.rmse = r.rmse;
+}
+
+/// Levenberg-Marquardt on a local parameterisation with P parameters.
+/// `linearize(x, JtJ, Jtr)` returns the sum of squared residuals at x and fills the normal
+/// equations; `update(x, delta)` returns x moved by delta. Returns false if the start is not
+/// finite; otherwise x is the last accepted state (never worse than the start).
+template <int P, typename State, typename Linearize, typename Update>
+bool LevenbergMarquardt(State& x, Linearize&& linearize, Update&& update, int max_iterations = 50) {
+    using Mat = Eigen::Matrix<double, P, P>;
+    using Vec = Eigen::Matrix<double, P, 1>;
+    Mat jtj;
+    Vec jtr;
+    double cost = linearize(x, jtj, jtr);
+    if (!std::isfinite(cost)) return false;
+    double lambda = 1e-3;
+    Mat cand_jtj;
+    Vec cand_jtr;
+    for (int it = 0; it < max_iterations; ++it) {
+        bool accepted = false;
+        while (lambda < 1e12) {
+            Mat a = jtj;
+            a.diagonal() += lambda * (jtj.diagonal().array() + 1e-12).matrix();
+            const Vec delta = a.ldlt().solve(-jtr);
+            if (!delta.allFinite()) {
+                lambda *= 10.0;
+                continue;
+            }
+            State cand = update(x, delta);
+            const double cand_cost = linearize(cand, cand_jtj, cand_jtr);
+            if (std::isfinite(cand_cost) && cand_cost < cost) {
+                const bool tiny = cost - cand_cost <= 1e-12 * cost;
+                x = std::move(cand);
+                cost = cand_cost;
+                jtj = cand_jtj;
+                jtr = cand_jtr;
+                lambda = std::max(lambda * 0.1, 1e-12);
+                accepted = true;
+                if (tiny) return true;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if (!accepted) return true;  // no step lowers the cost: a minimum
+    }
+    return true;
+}
+
+}  // namespace multicue::sac_internal

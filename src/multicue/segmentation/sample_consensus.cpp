@@ -1,0 +1,328 @@
+#include "multicue/segmentation/sample_consensus.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
+
+namespace multicue {
+namespace {
+
+// Points per distance evaluation; keeps the buffers on the stack and the callbacks amortised.
+constexpr std::size_t kChunk = 256;
+// Below this many usable points a hypothesis is scored too fast for threads to pay off.
+constexpr std::size_t kMinPointsForThreads = 4096;
+
+struct Score {
+    double cost = 0.0;        // lower is better: outlier count (RANSAC) or truncated cost (MSAC)
+    std::size_t inliers = 0;  // points with d <= t
+};
+
+// Distances d of the usable points to one model, blended with the normal deviation when used.
+class Evaluator {
+  public:
+    Evaluator(const PointCloud& cloud, const Indices& points, const SacModel& model,
+              const SacParams& params, bool blend_normals)
+        : cloud_(cloud),
+          points_(points),
+          model_(model),
+          threshold_(params.distance_threshold),
+          weight_(blend_normals ? params.normal_distance_weight : 0.0f) {}
+
+    // Calls visit(k, d, euclidean) for the k-th usable point, in order.
+    template <typename Visit>
+    void ForEach(const SacCoefficients& c, Visit&& visit) const {
+        std::array<float, kChunk> dist{};
+        std::array<float, kChunk> angle{};
+        for (std::size_t begin = 0; begin < points_.size(); begin += kChunk) {
+            const std::size_t n = std::min(kChunk, points_.size() - begin);
+            const std::span<const Index> idx(points_.data() + begin, n);
+            model_.distances(cloud_, c, idx, std::span<float>(dist.data(), n));
+            if (weight_ > 0.0f) {
+                model_.normal_angles(cloud_, c, idx, std::span<float>(angle.data(), n));
+                for (std::size_t k = 0; k < n; ++k) {
+                    const float e = std::abs(dist[k]);
+                    visit(begin + k, (1.0f - weight_) * e + weight_ * angle[k], e);
+                }
+            } else {
+                for (std::size_t k = 0; k < n; ++k) {
+                    const float e = std::abs(dist[k]);
+                    visit(begin + k, e, e);
+                }
+            }
+        }
+    }
+
+    Score Evaluate(const SacCoefficients& c, SacMethod method) const {
+        Score s;
+        const double t2 = double{threshold_} * threshold_;
+        ForEach(c, [&](std::size_t, float d, float) {
+            // NaN distances (a model gone bad) count as outliers.
+            const bool inlier = d <= threshold_;
+            if (inlier) ++s.inliers;
+            if (method == SacMethod::kMsac) {
+                s.cost += inlier ? double{d} * d : t2;
+            }
+        });
+        if (method == SacMethod::kRansac) {
+            s.cost = static_cast<double>(points_.size() - s.inliers);
+        }
+        return s;
+    }
+
+    // Inliers of `c` (cloud indices, input order), their Euclidean sum of squares, and the
+    // truncated quadratic cost over all usable points.
+    void Inliers(const SacCoefficients& c, Indices& inliers, double& sum_sq,
+                 double& truncated) const {
+        inliers.clear();
+        sum_sq = 0.0;
+        truncated = 0.0;
+        const double t2 = double{threshold_} * threshold_;
+        ForEach(c, [&](std::size_t k, float d, float e) {
+            if (d <= threshold_) {
+                inliers.push_back(points_[k]);
+                sum_sq += double{e} * e;
+                truncated += double{d} * d;
+            } else {
+                truncated += t2;
+            }
+        });
+    }
+
+  private:
+    const PointCloud& cloud_;
+    const Indices& points_;
+    const SacModel& model_;
+    float threshold_;
+    float weight_;
+};
+
+// Uniform integer in [0, n) from a 64-bit engine, by rejection: unbiased and the same on every
+// standard library (std::uniform_int_distribution is not specified bit for bit).
+std::size_t UniformBelow(std::mt19937_64& rng, std::size_t n) {
+    const std::uint64_t range = n;
+    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
+                                std::numeric_limits<std::uint64_t>::max() % range;
+    std::uint64_t x = rng();
+    while (x >= limit) x = rng();
+    return static_cast<std::size_t>(x % range);
+}
+
+// Draws sample.size() distinct usable points.
+void DrawSample(std::mt19937_64& rng, const Indices& points, std::vector<std::size_t>& positions,
+                std::vector<Index>& sample) {
+    for (std::size_t j = 0; j < sample.size(); ++j) {
+        std::size_t pos = 0;
+        do {
+            pos = UniformBelow(rng, points.size());
+        } while (std::find(positions.begin(), positions.begin() + static_cast<std::ptrdiff_t>(j),
+                           pos) != positions.begin() + static_cast<std::ptrdiff_t>(j));
+        positions[j] = pos;
+        sample[j] = points[pos];
+    }
+}
+
+// The usable points: finite, inside the cloud, with a finite normal when normals are used.
+Indices UsablePoints(const PointCloud& cloud, const Indices& indices, bool use_normals) {
+    Indices points;
+    auto usable = [&](Index i) {
+        return cloud.points[i].allFinite() && (!use_normals || cloud.normals[i].allFinite());
+    };
+    if (indices.empty()) {
+        points.reserve(cloud.size());
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (usable(static_cast<Index>(i))) points.push_back(static_cast<Index>(i));
+        }
+        return points;
+    }
+    points.reserve(indices.size());
+    for (Index i : indices) {
+        if (i >= cloud.size()) {
+            throw InvalidArgument(
+                fmt::format("index {} is out of range for a cloud of {} points", i, cloud.size()));
+        }
+        if (usable(i)) points.push_back(i);
+    }
+    return points;
+}
+
+}  // namespace
+
+void ValidateSacParams(const SacParams& params) {
+    if (!(params.distance_threshold > 0.0f) || !std::isfinite(params.distance_threshold)) {
+        throw InvalidArgument(fmt::format("sample consensus distance_threshold must be > 0, got {}",
+                                          params.distance_threshold));
+    }
+    if (!(params.p_success > 0.0 && params.p_success < 1.0)) {
+        throw InvalidArgument(
+            fmt::format("sample consensus p_success must be in (0, 1), got {}", params.p_success));
+    }
+    if (params.max_iterations < 1) {
+        throw InvalidArgument(fmt::format("sample consensus max_iterations must be >= 1, got {}",
+                                          params.max_iterations));
+    }
+    if (params.max_refine_rounds < 0) {
+        throw InvalidArgument(fmt::format("sample consensus max_refine_rounds must be >= 0, got {}",
+                                          params.max_refine_rounds));
+    }
+    if (!(params.normal_distance_weight >= 0.0f && params.normal_distance_weight <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("sample consensus normal_distance_weight must be in [0, 1], got {}",
+                        params.normal_distance_weight));
+    }
+    ResolveThreadCount(params.num_threads);  // throws on negative values
+}
+
+int AdaptiveIterationCount(double p_success, double inlier_ratio, int sample_size) {
+    constexpr int kInfinite = std::numeric_limits<int>::max();
+    if (!(p_success > 0.0 && p_success < 1.0)) {
+        throw InvalidArgument(fmt::format("p_success must be in (0, 1), got {}", p_success));
+    }
+    if (sample_size < 1) {
+        throw InvalidArgument(fmt::format("sample_size must be >= 1, got {}", sample_size));
+    }
+    const double w = std::clamp(inlier_ratio, 0.0, 1.0);
+    const double p_good = std::pow(w, sample_size);
+    if (p_good >= 1.0) return 1;
+    const double log_bad = std::log1p(-p_good);  // log(1 - p_good), accurate for small p_good
+    if (!(log_bad < 0.0)) return kInfinite;
+    const double t = std::ceil(std::log1p(-p_success) / log_bad);
+    if (!(t < static_cast<double>(kInfinite))) return kInfinite;
+    return std::max(1, static_cast<int>(t));
+}
+
+SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, const SacModel& model,
+                             const SacParams& params) {
+    ValidateSacParams(params);
+    if (model.sample_size < 1) {
+        throw InvalidArgument(fmt::format("sample consensus model sample_size must be >= 1, got {}",
+                                          model.sample_size));
+    }
+    if (!model.fit_sample || !model.distances) {
+        throw InvalidArgument("sample consensus model needs fit_sample and distances");
+    }
+    SacResult result;
+    if (cloud.empty()) return result;
+
+    const bool blend_normals = params.normal_distance_weight > 0.0f && model.normal_angles;
+    const bool use_normals = model.needs_normals || blend_normals;
+    if (use_normals && cloud.normals.size() != cloud.size()) {
+        throw DataError(
+            fmt::format("sample consensus needs one normal per point (the model samples normals or "
+                        "normal_distance_weight = {} > 0), got {} normals for {} points",
+                        params.normal_distance_weight, cloud.normals.size(), cloud.size()));
+    }
+    const Indices points = UsablePoints(cloud, indices, use_normals);
+    const auto k = static_cast<std::size_t>(model.sample_size);
+    if (points.size() < k) return result;
+
+    const Evaluator evaluator(cloud, points, model, params, blend_normals);
+    const int threads = ResolveThreadCount(params.num_threads);
+    std::optional<tbb::task_arena> arena;
+    if (threads > 1 && points.size() >= kMinPointsForThreads) {
+        // More arena slots than cores only makes TBB complain; the batch size keeps `threads`.
+        arena.emplace(std::min(threads, tbb::info::default_concurrency()));
+    }
+    const std::size_t batch = arena ? 2 * static_cast<std::size_t>(threads) : 1;
+
+    std::mt19937_64 rng(params.seed);
+    std::vector<std::size_t> positions(k);
+    std::vector<Index> sample(k);
+    std::vector<SacCoefficients> hypotheses(batch);
+    std::vector<char> valid(batch, 0);
+    std::vector<Score> scores(batch);
+
+    bool have_best = false;
+    Score best;
+    SacCoefficients best_coefficients;
+    int needed = std::numeric_limits<int>::max();  // Eq. (4.6); unknown (infinite) at first
+    int iterations = 0;
+    while (iterations < std::min(needed, params.max_iterations)) {
+        // Draw (serially, in order) as many samples as the serial loop could still draw.
+        const auto remaining =
+            static_cast<std::size_t>(std::min(needed, params.max_iterations) - iterations);
+        const std::size_t n = std::min(batch, remaining);
+        for (std::size_t j = 0; j < n; ++j) {
+            DrawSample(rng, points, positions, sample);
+            valid[j] = model.fit_sample(cloud, sample, hypotheses[j]) ? 1 : 0;
+        }
+        auto score = [&](std::size_t j) {
+            if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], params.method);
+        };
+        if (arena && n > 1) {
+            arena->execute([&] {
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
+                                  [&](const tbb::blocked_range<std::size_t>& r) {
+                                      for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
+                                  });
+            });
+        } else {
+            for (std::size_t j = 0; j < n; ++j) score(j);
+        }
+        // Decide in drawing order, exactly as the serial loop does; samples drawn past its stop
+        // are discarded.
+        for (std::size_t j = 0; j < n; ++j) {
+            ++iterations;
+            if (valid[j] != 0 && (!have_best || scores[j].cost < best.cost)) {
+                have_best = true;
+                best = scores[j];
+                best_coefficients = hypotheses[j];
+                needed = AdaptiveIterationCount(
+                    params.p_success,
+                    static_cast<double>(best.inliers) / static_cast<double>(points.size()),
+                    model.sample_size);
+            }
+            if (iterations >= std::min(needed, params.max_iterations)) break;
+        }
+    }
+    result.iterations = iterations;
+    if (!have_best) return result;
+
+    // Least-squares refinement. Accepting a refit only when the truncated quadratic cost does not
+    // grow keeps the result at least as good as the sample's model; for an exact least-squares
+    // refit the cost cannot grow (old inliers: min(d^2, t^2) <= d^2 <= old d^2 summed; old
+    // outliers: at most t^2 each).
+    Indices inliers;
+    double sum_sq = 0.0;
+    double truncated = 0.0;
+    evaluator.Inliers(best_coefficients, inliers, sum_sq, truncated);
+    if (model.refine) {
+        Indices refit_inliers;
+        double refit_sum_sq = 0.0;
+        double refit_truncated = 0.0;
+        SacCoefficients refined;
+        for (int round = 0; round < params.max_refine_rounds; ++round) {
+            if (inliers.size() < k) break;
+            if (!model.refine(cloud, inliers, best_coefficients, refined)) break;
+            evaluator.Inliers(refined, refit_inliers, refit_sum_sq, refit_truncated);
+            if (!(refit_truncated <= truncated * (1.0 + 1e-6) + 1e-12)) break;
+            best_coefficients = refined;
+            truncated = refit_truncated;
+            sum_sq = refit_sum_sq;
+            const bool stable = refit_inliers == inliers;
+            inliers.swap(refit_inliers);
+            if (stable) break;
+        }
+    }
+    if (inliers.size() < k) return result;
+    result.found = true;
+    result.converged = iterations >= needed;
+    result.coefficients = std::move(best_coefficients);
+    result.rmse = static_cast<float>(std::sqrt(sum_sq / static_cast<double>(inliers.size())));
+    result.inliers = std::move(inliers);
+    return result;
+}
+
+}  // namespace multicue

@@ -1,0 +1,54 @@
+#pragma once
+/// \file The support plane of a table-top scene (thesis section 2.4): the largest near-horizontal
+/// plane nearest the viewpoint, its convex hull, and the prism above it as the region of interest.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/types.hpp"
+
+namespace multicue {
+
+/// Where "up" came from.
+enum class UpSource {
+    kGiven,      ///< SupportPlaneParams::up
+    kViewpoint,  ///< the cloud has a sensor pose, so it is in a world frame with z up
+    kCamera,     ///< sensor frame (identity VIEWPOINT): optical convention, up is roughly -y
+    kDominant,   ///< no hint: the dominant plane's normal, oriented towards the viewpoint
+};
+
+struct SupportPlaneParams {
+    std::optional<Eigen::Vector3f> up = std::nullopt;  ///< up in the cloud's frame; none = derive
+    float max_tilt_deg = 15.0f;     ///< table normal within this angle of a given or world up [deg]
+    float camera_tilt_deg = 70.0f;  ///< in the sensor frame: normal within this angle of -y [deg]
+    float distance_threshold = 0.012f;  ///< plane inlier distance [m]
+    int max_candidates = 4;             ///< planes extracted one after another before choosing
+    float min_inlier_fraction = 0.05f;  ///< a candidate holds at least this share of the points
+    /// Candidates with at least this share of the largest one's inliers compete on distance to
+    /// the viewpoint; the nearest wins ("largest plane nearest the viewpoint").
+    float size_ratio_to_compete = 0.5f;
+    std::size_t max_samples = 20000;  ///< points used for the robust fit (strided subsample)
+    float cluster_tolerance = 0.02f;  ///< the table is the largest connected patch of inliers [m]
+    std::uint64_t seed = 1;           ///< sample consensus seed
+    int num_threads = 0;              ///< 0 = all cores
+};
+
+struct SupportPlane {
+    bool found = false;
+    Eigen::Vector4f plane = Eigen::Vector4f::Zero();  ///< unit normal pointing up, a x+b y+c z+d=0
+    Indices inliers;                                  ///< the table's points, ascending
+    std::vector<Eigen::Vector3f> hull;  ///< convex hull of the inliers on the plane, CCW from up
+    Eigen::Vector3f up = Eigen::Vector3f::UnitZ();  ///< up used for the search (unit)
+    UpSource up_source = UpSource::kDominant;
+    int candidates = 0;  ///< planes extracted before choosing
+};
+
+/// Finds the support plane. A cloud without a suitable plane gives found = false (not an error).
+/// Throws InvalidArgument for bad parameters (non-positive threshold, zero up vector, ...).
+SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params);
+
+}  // namespace multicue

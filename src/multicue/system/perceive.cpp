@@ -1,0 +1,192 @@
+#include "multicue/system/perceive.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue {
+namespace {
+
+class StageTimer {
+  public:
+    explicit StageTimer(std::vector<std::pair<std::string, double>>& out) : out_(out) {}
+    void Done(const char* stage) {
+        const auto now = std::chrono::steady_clock::now();
+        out_.emplace_back(stage, std::chrono::duration<double, std::milli>(now - start_).count());
+        start_ = now;
+    }
+
+  private:
+    std::vector<std::pair<std::string, double>>& out_;
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+// Normals unless the input brings them; organized frames take the image-space path.
+void EnsureNormals(PointCloud& cloud, const PerceiveParams& params) {
+    if (cloud.HasNormals() && cloud.HasCurvature()) return;
+    NormalsResult normals;
+    if (cloud.IsOrganized()) {
+        OrganizedNormalParams p = params.organized_normals;
+        p.num_threads = params.num_threads;
+        normals = EstimateNormalsOrganized(cloud, p);
+    } else {
+        NormalParams p = params.normals;
+        p.num_threads = params.num_threads;
+        const KdTree tree(cloud);
+        normals = EstimateNormals(cloud, tree, p);
+    }
+    SetNormals(cloud, std::move(normals));
+}
+
+ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& roi,
+                                const PerceiveParams& params) {
+    if (cloud.IsOrganized()) {
+        OrganizedClusteringParams p;
+        p.tolerance = params.cluster_tolerance;
+        p.min_cluster_size = params.min_object_points;
+        p.max_cluster_size = params.max_object_points;
+        p.subset = roi;
+        p.half_window = params.organized_half_window;
+        return EuclideanClusteringOrganized(cloud, p);
+    }
+    const KdTree tree(cloud, roi);
+    EuclideanClusteringParams p;
+    p.tolerance = params.cluster_tolerance;
+    p.min_cluster_size = params.min_object_points;
+    p.max_cluster_size = params.max_object_points;
+    p.subset = roi;
+    return EuclideanClustering(cloud, tree, p);
+}
+
+Eigen::Vector3f Centroid(const PointCloud& cloud, const Indices& indices) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (Index i : indices) sum += cloud.points[i].cast<double>();
+    return (sum / std::max<std::size_t>(1, indices.size())).cast<float>();
+}
+
+// Model by category: boxes and flat boxes as boxes, cylinders and plates as cylinders when the fit
+// holds, everything else (and failed fits) as an oriented bounding box.
+ObjectModel FitModel(const PointCloud& cloud, const PerceivedObject& object,
+                     const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    ObjectModel model;
+    const Category c = object.category.category;
+    const bool upright_possible = plane.head<3>().norm() > 0.5f;
+    if ((c == Category::kCylinder || c == Category::kPlate)) {
+        CylinderModelParams p = params.cylinder;
+        p.sac.num_threads = 1;
+        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p);
+        if (cyl.found) {
+            model.mesh = CylinderMesh(cyl);
+            model.cylinder = cyl;
+            return model;
+        }
+    }
+    BoxModel box = (c == Category::kBox || c == Category::kFlat) && upright_possible
+                       ? FitUprightBox(cloud, object.indices, plane, params.box)
+                       : FitOrientedBoundingBox(cloud, object.indices, params.box);
+    if (!box.found) box = FitOrientedBoundingBox(cloud, object.indices, params.box);
+    model.mesh = BoxMesh(box);
+    model.box = box;
+    return model;
+}
+
+}  // namespace
+
+PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
+    input.Validate();
+    if (input.CountFinite() == 0) {
+        throw DataError(fmt::format("no valid points: all {} points are NaN or the cloud is empty",
+                                    input.size()));
+    }
+    ResolveThreadCount(params.num_threads);  // validates
+    PerceiveResult result;
+    result.points = input.size();
+    StageTimer timer(result.timings_ms);
+
+    PointCloud cloud = input;
+    EnsureNormals(cloud, params);
+    timer.Done("normals");
+
+    SupportPlaneParams sp = params.support;
+    sp.num_threads = params.num_threads;
+    result.support = FindSupportPlane(cloud, sp);
+    Indices roi;
+    if (result.support.found && result.support.hull.size() >= 3) {
+        roi = PolygonalPrism(cloud, result.support.plane, result.support.hull, params.prism);
+    } else {
+        // No table: every valid point may belong to an object.
+        result.support.found = false;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.IsFinite(i)) roi.push_back(static_cast<Index>(i));
+        }
+    }
+    timer.Done("support_plane");
+
+    ClusteringResult clusters = ClusterObjects(cloud, roi, params);
+    result.objects.resize(clusters.clusters.size());
+    for (std::size_t k = 0; k < clusters.clusters.size(); ++k) {
+        result.objects[k].id = static_cast<int>(k + 1);
+        result.objects[k].indices = std::move(clusters.clusters[k]);
+    }
+    timer.Done("clustering");
+
+    // Parts: normal-angle region growing inside each object, on one tree over the objects.
+    Indices object_points;
+    for (const auto& o : result.objects) {
+        object_points.insert(object_points.end(), o.indices.begin(), o.indices.end());
+    }
+    std::sort(object_points.begin(), object_points.end());
+    const KdTree object_tree(cloud, object_points);
+    ParallelFor(
+        result.objects.size(), params.num_threads,
+        [&](std::size_t k) {
+            RegionGrowingParams p = params.parts;
+            p.subset = result.objects[k].indices;
+            result.objects[k].parts = RegionGrowing(cloud, object_tree, p).parts;
+        },
+        1);
+    timer.Done("parts");
+
+    const Eigen::Vector4f plane =
+        result.support.found ? result.support.plane : Eigen::Vector4f::Zero();
+    ParallelFor(
+        result.objects.size(), params.num_threads,
+        [&](std::size_t k) {
+            auto& o = result.objects[k];
+            CategoryParams p = params.category;
+            p.num_threads = 1;
+            o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
+            o.centroid = Centroid(cloud, o.indices);
+        },
+        1);
+    timer.Done("categories");
+
+    ParallelFor(
+        result.objects.size(), params.num_threads,
+        [&](std::size_t k) {
+            result.objects[k].model = FitModel(cloud, result.objects[k], plane, params);
+        },
+        1);
+    timer.Done("models");
+
+    result.point_objects.assign(cloud.size(), 0);
+    result.point_categories.assign(cloud.size(), 0);
+    for (const auto& o : result.objects) {
+        const auto cat = static_cast<std::uint8_t>(o.category.category);
+        for (Index i : o.indices) {
+            result.point_objects[i] = static_cast<std::uint32_t>(o.id);
+            result.point_categories[i] = cat;
+        }
+    }
+    LogInfo("perceive: support {}, {} objects", result.support.found ? "found" : "none",
+            result.objects.size());
+    return result;
+}
+
+}  // namespace multicue

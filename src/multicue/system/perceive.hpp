@@ -1,0 +1,83 @@
+#pragma once
+/// \file The table-top perception pipeline behind `multicue perceive`: normals, support plane,
+/// object hypotheses above it, parts, first categories and primitive models (thesis sections 2.4,
+/// 3.2.1, 4.2.1). Every parameter lives in PerceiveParams; ReadPerceiveParams maps it to a
+/// parameter file.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/triangle_mesh.hpp"
+#include "multicue/io/config.hpp"
+#include "multicue/recognition/geometric_category.hpp"
+#include "multicue/reconstruction/primitive_models.hpp"
+#include "multicue/segmentation/euclidean_clustering.hpp"
+#include "multicue/segmentation/polygonal_prism.hpp"
+#include "multicue/segmentation/region_growing.hpp"
+#include "multicue/segmentation/support_plane.hpp"
+#include "multicue/surface/normals.hpp"
+
+namespace multicue {
+
+struct PerceiveParams {
+    /// Normals of organized frames (image-space fast path).
+    OrganizedNormalParams organized_normals{.half_window = 3,
+                                            .depth_dependent_window = false,
+                                            .max_depth_change = 0.02f,
+                                            .viewpoint = std::nullopt,
+                                            .num_threads = 0};
+    /// Normals of unorganized clouds (k-d tree).
+    NormalParams normals{.k = 20, .radius = 0.0f, .viewpoint = std::nullopt, .num_threads = 0};
+    SupportPlaneParams support{};
+    PrismParams prism{.min_height = 0.008f, .max_height = 0.5f};
+    float cluster_tolerance = 0.015f;        ///< object hypotheses: Euclidean tolerance [m]
+    std::size_t min_object_points = 150;     ///< smaller clusters are not objects [points]
+    std::size_t max_object_points = 200000;  ///< larger clusters are not objects [points]
+    int organized_half_window = 2;  ///< organized clustering reach; bridges 1-pixel gaps [px]
+    /// Over-segmentation into parts (section 4.2.1). The k cap keeps dense RGB-D objects cheap:
+    /// with thousands of points within 5 cm, the nearest ones already decide connectivity.
+    RegionGrowingParams parts{.k = 16};
+    CategoryParams category{};       ///< first, rule-based categories
+    BoxFitParams box{};              ///< box models of box and flat objects
+    CylinderModelParams cylinder{};  ///< cylinder models of cylindrical objects
+    int num_threads = 0;             ///< 0 = all cores; overrides the stages' own thread counts
+};
+
+/// Reads (or, with a dump section, records) every parameter.
+void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& params);
+
+/// The model of one object: exactly one of box / cylinder is set.
+struct ObjectModel {
+    std::optional<BoxModel> box;
+    std::optional<CylinderModel> cylinder;
+    TriangleMesh mesh;
+};
+
+struct PerceivedObject {
+    int id = 0;       ///< 1-based, as in labels.pcd's `object` field
+    Indices indices;  ///< the object's points, ascending
+    std::vector<Indices> parts;
+    CategoryResult category;
+    Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+    ObjectModel model;
+};
+
+struct PerceiveResult {
+    std::size_t points = 0;  ///< points of the input (NaN included)
+    SupportPlane support;    ///< support.found = false: no table, objects from the whole cloud
+    std::vector<PerceivedObject> objects;
+    std::vector<std::uint32_t> point_objects;    ///< per input point: object id or 0
+    std::vector<std::uint8_t> point_categories;  ///< per input point: category index or 0
+    std::vector<std::pair<std::string, double>> timings_ms;  ///< stage -> wall time, in order
+};
+
+/// Runs the pipeline. The cloud must hold at least one finite point (DataError otherwise); normals
+/// are computed unless the cloud has them. Throws InvalidArgument for bad parameters.
+PerceiveResult Perceive(const PointCloud& cloud, const PerceiveParams& params);
+
+}  // namespace multicue

@@ -1,0 +1,111 @@
+// Parameter file of the table-top pipeline: one section per stage, keys named as the fields.
+
+#include "multicue/system/perceive.hpp"
+
+namespace multicue {
+
+void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
+    config.Get("threads", p.num_threads, "worker threads, 0 = all cores");
+
+    auto normals = config.Section("normals");
+    normals.Get("k", p.normals.k, "unorganized clouds: neighbours of the PCA [points]");
+    normals.Get("radius", p.normals.radius,
+                "unorganized clouds: neighbourhood radius [m], 0 = use k only");
+    auto organized = normals.Section("organized");
+    organized.Get("half_window", p.organized_normals.half_window,
+                  "organized frames: half-size of the pixel window [px]");
+    organized.Get("depth_dependent_window", p.organized_normals.depth_dependent_window,
+                  "organized frames: scale the window with depth");
+    organized.Get("max_depth_change", p.organized_normals.max_depth_change,
+                  "organized frames: neighbours within this depth difference at 1 m [m]");
+
+    auto support = config.Section("support");
+    support.Get("up", p.support.up,
+                "up in the cloud's frame, null = from VIEWPOINT, the camera convention or the "
+                "dominant plane");
+    support.Get("max_tilt_deg", p.support.max_tilt_deg,
+                "table normal within this angle of a given or world up [deg]");
+    support.Get("camera_tilt_deg", p.support.camera_tilt_deg,
+                "in the sensor frame: table normal within this angle of -y [deg]");
+    support.Get("distance_threshold", p.support.distance_threshold, "plane inlier distance [m]");
+    support.Get("max_candidates", p.support.max_candidates, "planes extracted before choosing");
+    support.Get("min_inlier_fraction", p.support.min_inlier_fraction,
+                "a candidate plane holds at least this share of the points");
+    support.Get("size_ratio_to_compete", p.support.size_ratio_to_compete,
+                "planes this large relative to the largest compete on nearness to the viewpoint");
+    support.Get("max_samples", p.support.max_samples, "points used by the robust fit");
+    support.Get("cluster_tolerance", p.support.cluster_tolerance,
+                "the table is the largest connected patch of plane inliers [m]");
+    support.Get("seed", p.support.seed, "sample consensus seed");
+
+    auto prism = config.Section("prism");
+    prism.Get("min_height", p.prism.min_height, "lowest object point above the table [m]");
+    prism.Get("max_height", p.prism.max_height, "highest object point above the table [m]");
+
+    auto objects = config.Section("objects");
+    objects.Get("cluster_tolerance", p.cluster_tolerance, "Euclidean clustering tolerance [m]");
+    objects.Get("min_points", p.min_object_points, "smaller clusters are not objects");
+    objects.Get("max_points", p.max_object_points, "larger clusters are not objects");
+    objects.Get("organized_half_window", p.organized_half_window,
+                "organized clustering reach in pixels; 2 bridges one-pixel gaps");
+
+    auto parts = config.Section("parts");
+    parts.Get("radius", p.parts.radius, "region growing distance delta [m] (section 4.2.1)");
+    parts.Get("k", p.parts.k, "if > 0, at most k neighbours within the radius");
+    parts.Get("max_angle_deg", p.parts.max_angle_deg, "angle to the seed normal, alpha [deg]");
+    parts.Get("min_part_size", p.parts.min_part_size, "smaller parts are merged [points]");
+    parts.Get("discard_small_parts", p.parts.discard_small_parts,
+              "drop parts still too small after merging");
+
+    auto cat = config.Section("category");
+    auto& c = p.category;
+    cat.Get("min_points", c.min_points, "fewer usable points give category none");
+    cat.Get("max_points", c.max_points, "evidence uses at most this many points");
+    cat.Get("axis_angle_deg", c.axis_angle_deg, "normal this close to a box axis is box-like");
+    cat.Get("planar_part_angle_deg", c.planar_part_angle_deg, "planar part tolerance [deg]");
+    cat.Get("fit_threshold", c.fit_threshold, "cylinder and sphere inlier distance [m]");
+    cat.Get("normal_weight", c.normal_weight, "normal distance weight of those fits");
+    cat.Get("min_radius", c.min_radius, "smallest cylinder or sphere radius [m]");
+    cat.Get("max_radius", c.max_radius, "largest cylinder or sphere radius [m]");
+    cat.Get("upright_angle_deg", c.upright_angle_deg, "upright cylinder axis tolerance [deg]");
+    cat.Get("lying_angle_deg", c.lying_angle_deg, "lying cylinder axis tolerance [deg]");
+    cat.Get("max_iterations", c.max_iterations, "RANSAC sample cap");
+    cat.Get("min_side_ratio", c.min_side_ratio, "cylinder side share scoring 0");
+    cat.Get("full_side_ratio", c.full_side_ratio, "cylinder side share scoring fully");
+    cat.Get("size_tolerance", c.size_tolerance, "diameter vs extent tolerance factor");
+    cat.Get("flat_ratio", c.flat_ratio, "flat if e2/e3 >= this");
+    cat.Get("box_ratio", c.box_ratio, "box if e2/e3 < this");
+    cat.Get("flat_long_ratio", c.flat_long_ratio, "in between: flat if e1/e3 > this");
+    cat.Get("boundary_softness", c.boundary_softness, "slope of the soft box/flat split");
+    cat.Get("plate_thin_ratio", c.plate_thin_ratio, "thickness/diameter fully thin");
+    cat.Get("plate_thick_ratio", c.plate_thick_ratio, "thickness/diameter not thin");
+    cat.Get("round_fill", c.round_fill, "footprint fill up to this is round");
+    cat.Get("square_fill", c.square_fill, "footprint fill from this is square");
+    cat.Get("min_evidence", c.min_evidence, "other wins below this score");
+    cat.Get("sharpness", c.sharpness, "exponent on scores before normalising");
+    cat.Get("seed", c.seed, "RANSAC seed");
+
+    auto box = config.Section("box");
+    box.Get("inlier_threshold", p.box.inlier_threshold, "box surface inlier distance [m]");
+    box.Get("use_normals", p.box.use_normals, "orient boxes by their side faces' normals");
+    box.Get("face_angle_deg", p.box.face_angle_deg, "face point normal tolerance [deg]");
+    box.Get("min_face_points", p.box.min_face_points, "points needed to place a face");
+
+    auto cyl = config.Section("cylinder");
+    auto& y = p.cylinder;
+    cyl.Get("distance_threshold", y.sac.distance_threshold, "RANSAC inlier distance [m]");
+    cyl.Get("max_iterations", y.sac.max_iterations, "RANSAC sample cap");
+    cyl.Get("normal_distance_weight", y.sac.normal_distance_weight, "normal term weight");
+    cyl.Get("seed", y.sac.seed, "RANSAC seed");
+    cyl.Get("min_radius", y.min_radius, "smallest radius [m]");
+    cyl.Get("max_radius", y.max_radius, "largest radius [m]");
+    cyl.Get("upright_angle_deg", y.upright_angle_deg, "upright prior tolerance [deg]");
+    cyl.Get("allow_free_axis", y.allow_free_axis, "also try a free axis");
+    cyl.Get("free_axis_gain", y.free_axis_gain, "free axis must explain this factor more");
+    cyl.Get("extend_to_support", y.extend_to_support, "upright cylinders reach the table");
+    cyl.Get("cap_angle_deg", y.cap_angle_deg, "cap point normal tolerance [deg]");
+    cyl.Get("min_cap_points", y.min_cap_points, "points needed to place a cap");
+    cyl.Get("inlier_threshold", y.inlier_threshold, "surface distance for inlier_ratio [m]");
+}
+
+}  // namespace multicue

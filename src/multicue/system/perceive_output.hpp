@@ -1,0 +1,40 @@
+#pragma once
+/// \file Outputs of `multicue perceive` as ../shared/design/EVALUATION.md defines them:
+/// result.json, labels.pcd (per-point object and category, input order and layout) and
+/// models.ply (all models as one mesh, coloured per object).
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/triangle_mesh.hpp"
+#include "multicue/system/perceive.hpp"
+
+namespace multicue {
+
+/// The result.json object. `timings_ms` are appended after the pipeline's own stage timings.
+nlohmann::ordered_json PerceiveResultJson(
+    const std::string& input_name, const PerceiveResult& result,
+    const std::vector<std::pair<std::string, double>>& timings_ms = {});
+
+/// The labels cloud: the input's points and layout with fields object (uint32) and category
+/// (uint8).
+PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& result);
+
+/// All object models as one mesh, each coloured with the object's colour.
+TriangleMesh PerceiveModelsMesh(const PerceiveResult& result);
+
+/// A distinct colour per object id (1-based).
+Color ObjectColor(int id);
+
+/// Writes result.json, labels.pcd and models.ply into `dir` (created if missing). All three are
+/// written to a staging folder first and moved into place only when every one succeeded, so a
+/// failed run leaves an existing folder's files as they were. Throws IoError naming the path.
+void WritePerceiveOutputs(const std::filesystem::path& dir, const nlohmann::ordered_json& result,
+                          const PointCloud& labels, const TriangleMesh& models);
+
+}  // namespace multicue
