@@ -12,8 +12,9 @@ if(NOT TARGET multicue_bench_peers)
   endif()
   set(_peer_pcl_libraries "")
   # Dependents first, for static linkers; the shared libraries bring flann and lz4 themselves.
-  foreach(_lib IN ITEMS pcl_features pcl_filters pcl_search pcl_kdtree pcl_octree pcl_io
-                        pcl_io_ply pcl_common)
+  # pcl_segmentation and pcl_sample_consensus are for mosd_peers.
+  foreach(_lib IN ITEMS pcl_segmentation pcl_sample_consensus pcl_features pcl_filters pcl_search
+                        pcl_kdtree pcl_octree pcl_io pcl_io_ply pcl_common)
     string(TOUPPER ${_lib} _var)
     find_library(MULTICUE_${_var}_LIBRARY ${_lib})
     if(MULTICUE_${_var}_LIBRARY)

@@ -173,5 +173,49 @@ TEST(Cli, DemoWritesItsOutputs) {
     EXPECT_TRUE(scene.HasLabels());
 }
 
+TEST(Cli, PerceiveWritesTheContractAndRefusesBadInput) {
+    test::TempDir dir;
+    ASSERT_EQ(RunCli("demo --out " + (dir / "demo").string()).code, 0);
+    const auto scene = (dir / "demo" / "scene.pcd").string();
+    const auto out = dir / "out";
+    const auto r = RunCli("perceive " + scene + " --out " + out.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    for (const char* f : {"result.json", "labels.pcd", "models.ply"}) {
+        EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+    }
+    const std::string before = ReadAll(out / "result.json");
+    {
+        std::ofstream(dir / "typo.json") << R"({"objects": {"min_pionts": 3}})";
+        std::ofstream(dir / "bad.json") << "{ nope";
+    }
+    struct Case {
+        std::string args;
+        int code;
+    };
+    const std::vector<Case> cases = {
+        {"perceive " + (dir / "missing.pcd").string() + " --out " + out.string(), 1},
+        {"perceive " + scene + " --out " + out.string() + " --config " +
+             (dir / "typo.json").string(),
+         2},
+        {"perceive " + scene + " --out " + out.string() + " --config " +
+             (dir / "bad.json").string(),
+         2},
+        {"perceive " + scene + " --out " + out.string() + " --up 0,0", 2},
+        {"perceive " + scene + " --out /dev/null/out", 1},
+        {"perceive " + scene, 2},
+    };
+    for (const auto& c : cases) {
+        const auto e = RunCli(c.args);
+        EXPECT_EQ(e.code, c.code) << c.args << "\n" << e.output;
+        EXPECT_EQ(CountLines(e.output), 1) << c.args << "\n" << e.output;
+    }
+    EXPECT_EQ(ReadAll(out / "result.json"), before);
+    const auto dump = RunCli("config --dump");
+    ASSERT_EQ(dump.code, 0);
+    { std::ofstream(dir / "defaults.json") << dump.output; }
+    const auto check = RunCli("config --check " + (dir / "defaults.json").string());
+    EXPECT_EQ(check.code, 0) << check.output;
+}
+
 }  // namespace
 }  // namespace multicue

@@ -26,14 +26,17 @@ struct Item {
 // the box tests of a search.
 inline float Positive(float x) { return 0.5f * (x + std::abs(x)); }
 
+// Squared length summed in one fixed order, for point distances and box bounds alike: rounding
+// is monotonic, so a box bound never exceeds the distance of a point in the box.
+inline float SquaredLength(float x, float y, float z) { return x * x + (y * y + z * z); }
+inline float SquaredDistance(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    return SquaredLength(a.x() - b.x(), a.y() - b.y(), a.z() - b.z());
+}
+
 // Squared distance from q to the nearest point of the node's box (0 inside).
 inline float BoxDistanceSquared(const Node& node, const Eigen::Vector3f& q) {
-    float d = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-        const float g = Positive(node.min[a] - q[a]) + Positive(q[a] - node.max[a]);
-        d += g * g;
-    }
-    return d;
+    auto gap = [&](int a) { return Positive(node.min[a] - q[a]) + Positive(q[a] - node.max[a]); };
+    return SquaredLength(gap(0), gap(1), gap(2));
 }
 
 // The k best candidates seen so far, sorted by squared distance. A candidate enters if it is
@@ -66,6 +69,46 @@ class KnnSet {
     Index* pos_;
     float* dist_;
 };
+
+// Rearranges [first, last) like std::nth_element by coordinate `axis`: *nth is the element that
+// would be there if sorted, none before it is larger and none after it smaller. A quickselect
+// with a branch-free partition: on real scans which side an element goes to is a coin flip, and
+// std::nth_element's branches mispredict on about every other element.
+void SelectMedian(Item* first, Item* nth, Item* last, int axis) {
+    while (last - first > 16) {
+        // Pivot: median of three.
+        const float a = first->p[axis], b = first[(last - first) / 2].p[axis], c = last[-1].p[axis];
+        const float pivot = std::max(std::min(a, b), std::min(std::max(a, b), c));
+        // Lomuto partition without branches: [first, store) < pivot <= [store, it).
+        Item* store = first;
+        for (Item* it = first; it != last; ++it) {
+            const Item x = *it;
+            const bool less = x.p[axis] < pivot;
+            *it = *store;
+            *store = x;
+            store += less ? 1 : 0;
+        }
+        if (store == first) {
+            // The pivot is the minimum: split off the elements equal to it instead.
+            for (Item* it = first; it != last; ++it) {
+                const Item x = *it;
+                const bool equal = !(pivot < x.p[axis]);
+                *it = *store;
+                *store = x;
+                store += equal ? 1 : 0;
+            }
+            if (nth < store) return;  // all of [first, store) equal the pivot
+            first = store;
+            continue;
+        }
+        if (nth < store) {
+            last = store;
+        } else {
+            first = store;
+        }
+    }
+    std::sort(first, last, [axis](const Item& x, const Item& y) { return x.p[axis] < y.p[axis]; });
+}
 
 // Median splits halve the points, so a tree of at most 2^31 points is at most 32 levels deep;
 // a traversal stack holds at most one entry per level (plus one).
@@ -114,11 +157,7 @@ struct KdTree::Impl {
             int axis = 0;
             (hi - lo).maxCoeff(&axis);
             const std::size_t mid = begin + (end - begin) / 2;
-            std::nth_element(
-                items.begin() + static_cast<std::ptrdiff_t>(begin),
-                items.begin() + static_cast<std::ptrdiff_t>(mid),
-                items.begin() + static_cast<std::ptrdiff_t>(end),
-                [axis](const Item& a, const Item& b) { return a.p[axis] < b.p[axis]; });
+            SelectMedian(items.data() + begin, items.data() + mid, items.data() + end, axis);
             BuildNode(items, begin, mid, leaf_size);
             second = BuildNode(items, mid, end, leaf_size);
         }
@@ -156,7 +195,7 @@ struct KdTree::Impl {
                     continue;
                 }
                 for (Index i = node.begin; i < node.end; ++i) {
-                    const float di = (points[i] - q).squaredNorm();
+                    const float di = SquaredDistance(points[i], q);
                     if (di < set.Bound()) set.Add(di, i);
                 }
             }
@@ -183,7 +222,7 @@ struct KdTree::Impl {
                 continue;
             }
             for (Index i = node.begin; i < node.end; ++i) {
-                const float di = (points[i] - q).squaredNorm();
+                const float di = SquaredDistance(points[i], q);
                 if (di <= r2) out(i, di);
             }
         }

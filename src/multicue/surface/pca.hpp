@@ -22,6 +22,20 @@ struct Moments {
     double sx = 0.0, sy = 0.0, sz = 0.0;
     double xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0, zz = 0.0;
 
+    Moments& operator+=(const Moments& o) {
+        n += o.n;
+        sx += o.sx;
+        sy += o.sy;
+        sz += o.sz;
+        xx += o.xx;
+        xy += o.xy;
+        xz += o.xz;
+        yy += o.yy;
+        yz += o.yz;
+        zz += o.zz;
+        return *this;
+    }
+
     void Add(const Eigen::Vector3f& d) {
         const double x = d.x(), y = d.y(), z = d.z();
         n += 1.0;
@@ -52,10 +66,14 @@ inline Eigen::Vector3d SymmetricEigenvalues(const Eigen::Matrix3d& c) {
         (a * (b * d - c(1, 2) * c(1, 2)) - c(0, 1) * (c(0, 1) * d - c(1, 2) * c(0, 2)) +
          c(0, 2) * (c(0, 1) * c(1, 2) - b * c(0, 2))) /
         (2.0 * p * p * p);
-    const double phi = std::acos(std::clamp(half_det, -1.0, 1.0)) / 3.0;
-    constexpr double kThirdTurn = 2.0943951023931954923;  // 2 pi / 3
-    const double largest = mean + 2.0 * p * std::cos(phi);
-    const double smallest = mean + 2.0 * p * std::cos(phi + kThirdTurn);
+    // With phi = acos(half_det) / 3 in [0, pi / 3], the eigenvalues are mean + 2p cos(phi) and
+    // mean + 2p cos(phi +- 2 pi / 3); cos(phi + 2 pi / 3) = -(cos(phi) + sqrt(3) sin(phi)) / 2
+    // saves a second cosine.
+    const double cos_phi = std::cos(std::acos(std::clamp(half_det, -1.0, 1.0)) / 3.0);
+    const double sin_phi = std::sqrt(std::max(0.0, 1.0 - cos_phi * cos_phi));
+    constexpr double kSqrt3 = 1.7320508075688772935;
+    const double largest = mean + 2.0 * p * cos_phi;
+    const double smallest = mean - p * (cos_phi + kSqrt3 * sin_phi);
     return {smallest, 3.0 * mean - largest - smallest, largest};
 }
 
@@ -78,6 +96,31 @@ inline Eigen::Vector3d SymmetricEigenvector(const Eigen::Matrix3d& c, double lam
     if (!(rows > 0.0)) return Eigen::Vector3d::UnitZ();
     return r.unitOrthogonal();
 }
+
+/// The same in float, for a few dozen offsets of a few centimetres (k-NN neighbourhoods, image
+/// windows): float sums are exact enough there (relative rounding 1e-7 of terms of at most
+/// r^2) and cheaper.
+struct FloatMoments {
+    float n = 0.0f;
+    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+    float xx = 0.0f, xy = 0.0f, xz = 0.0f, yy = 0.0f, yz = 0.0f, zz = 0.0f;
+
+    void Add(const Eigen::Vector3f& d) { AddWeighted(d, 1.0f); }
+    void AddWeighted(const Eigen::Vector3f& d, float w) {
+        const float wx = w * d.x(), wy = w * d.y(), wz = w * d.z();
+        n += w;
+        sx += wx;
+        sy += wy;
+        sz += wz;
+        xx += wx * d.x();
+        xy += wx * d.y();
+        xz += wx * d.z();
+        yy += wy * d.y();
+        yz += wy * d.z();
+        zz += wz * d.z();
+    }
+    Moments ToDouble() const { return {n, sx, sy, sz, xx, xy, xz, yy, yz, zz}; }
+};
 
 /// Unit normal (unoriented) and surface variation of the neighbourhood described by `m`.
 /// Returns false, leaving the outputs untouched, for fewer than 3 points or coincident points.
@@ -113,6 +156,14 @@ inline void OrientTowards(Eigen::Vector3f& normal, const Eigen::Vector3f& p,
 }
 
 inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// condition ? a : b without a branch (compilers branch on float selects in loops, and these
+/// conditions are unpredictable).
+inline float Select(bool condition, float a, float b) {
+    const std::uint32_t mask = 0u - static_cast<std::uint32_t>(condition);
+    return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & mask) |
+                                (std::bit_cast<std::uint32_t>(b) & ~mask));
+}
 
 /// 1 if value <= limit, else 0 (both finite, or value infinite), computed from the sign bit of
 /// limit - value. Compilers turn `value <= limit ? 1.0f : 0.0f` into a branch when the weight

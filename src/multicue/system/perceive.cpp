@@ -1,7 +1,9 @@
 #include "multicue/system/perceive.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -119,9 +121,11 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     Indices roi;
     if (result.support.found && result.support.hull.size() >= 3) {
         roi = PolygonalPrism(cloud, result.support.plane, result.support.hull, params.prism);
-    } else {
-        // No table: every valid point may belong to an object.
-        result.support.found = false;
+    }
+    if (roi.empty()) {
+        // No table, or a plane that supports nothing (the top of a box in a cloud of objects):
+        // every valid point may belong to an object.
+        result.support = SupportPlane{};
         for (std::size_t i = 0; i < cloud.size(); ++i) {
             if (cloud.IsFinite(i)) roi.push_back(static_cast<Index>(i));
         }
@@ -129,28 +133,51 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     timer.Done("support_plane");
 
     ClusteringResult clusters = ClusterObjects(cloud, roi, params);
-    result.objects.resize(clusters.clusters.size());
-    for (std::size_t k = 0; k < clusters.clusters.size(); ++k) {
-        result.objects[k].id = static_cast<int>(k + 1);
-        result.objects[k].indices = std::move(clusters.clusters[k]);
-    }
     timer.Done("clustering");
 
-    // Parts: normal-angle region growing inside each object, on one tree over the objects.
-    Indices object_points;
-    for (const auto& o : result.objects) {
-        object_points.insert(object_points.end(), o.indices.begin(), o.indices.end());
+    // Parts: normal-angle region growing inside each hypothesis, on one tree over all of them;
+    // then hypotheses are split where their parts meet in concave creases.
+    Indices cluster_points;
+    for (const auto& c : clusters.clusters) {
+        cluster_points.insert(cluster_points.end(), c.begin(), c.end());
     }
-    std::sort(object_points.begin(), object_points.end());
-    const KdTree object_tree(cloud, object_points);
+    std::sort(cluster_points.begin(), cluster_points.end());
+    const KdTree cluster_tree(cloud, cluster_points);
+    std::vector<std::vector<PerceivedObject>> split(clusters.clusters.size());
     ParallelFor(
-        result.objects.size(), params.num_threads,
+        clusters.clusters.size(), params.num_threads,
         [&](std::size_t k) {
             RegionGrowingParams p = params.parts;
-            p.subset = result.objects[k].indices;
-            result.objects[k].parts = RegionGrowing(cloud, object_tree, p).parts;
+            p.subset = clusters.clusters[k];
+            std::vector<Indices> parts = RegionGrowing(cloud, cluster_tree, p).parts;
+            std::vector<Indices> groups;
+            if (params.split_concave) {
+                ConvexitySplitParams cp = params.convexity;
+                cp.min_object_points = params.min_object_points;
+                groups = SplitByConvexity(cloud, clusters.clusters[k], parts, cp).objects;
+            } else {
+                groups.push_back(clusters.clusters[k]);
+            }
+            for (auto& g : groups) {
+                PerceivedObject o;
+                o.indices = std::move(g);
+                for (auto& part : parts) {
+                    if (!part.empty() &&
+                        std::binary_search(o.indices.begin(), o.indices.end(), part.front())) {
+                        o.parts.push_back(part);
+                    }
+                }
+                split[k].push_back(std::move(o));
+            }
         },
         1);
+    for (auto& list : split) {
+        for (auto& o : list) {
+            if (o.indices.size() < params.min_object_points) continue;
+            o.id = static_cast<int>(result.objects.size() + 1);
+            result.objects.push_back(std::move(o));
+        }
+    }
     timer.Done("parts");
 
     const Eigen::Vector4f plane =

@@ -16,6 +16,7 @@
 #include "multicue/io/config.hpp"
 #include "multicue/recognition/geometric_category.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
+#include "multicue/segmentation/convexity_split.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "multicue/segmentation/region_growing.hpp"
@@ -42,6 +43,8 @@ struct PerceiveParams {
     /// Over-segmentation into parts (section 4.2.1). The k cap keeps dense RGB-D objects cheap:
     /// with thousands of points within 5 cm, the nearest ones already decide connectivity.
     RegionGrowingParams parts{.k = 16};
+    bool split_concave = true;  ///< split hypotheses along concave part borders (stacked objects)
+    ConvexitySplitParams convexity{};
     CategoryParams category{};       ///< first, rule-based categories
     BoxFitParams box{};              ///< box models of box and flat objects
     CylinderModelParams cylinder{};  ///< cylinder models of cylindrical objects

@@ -57,6 +57,16 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     parts.Get("discard_small_parts", p.parts.discard_small_parts,
               "drop parts still too small after merging");
 
+    auto convexity = config.Section("convexity");
+    convexity.Get("enabled", p.split_concave,
+                  "split hypotheses where their parts meet in concave creases");
+    convexity.Get("patch_size", p.convexity.patch_size, "voxel patch edge [m]");
+    convexity.Get("smooth_angle_deg", p.convexity.smooth_angle_deg,
+                  "patches with normals closer than this always join [deg]");
+    convexity.Get("min_convex_share", p.convexity.min_convex_share,
+                  "parts join when this share of their border is convex");
+    convexity.Get("min_border", p.convexity.min_border, "patch pairs needed to judge a border");
+
     auto cat = config.Section("category");
     auto& c = p.category;
     cat.Get("min_points", c.min_points, "fewer usable points give category none");

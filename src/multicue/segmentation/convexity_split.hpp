@@ -1,0 +1,38 @@
+#pragma once
+/// \file Splits an object hypothesis where its surface folds inwards: stacked and touching objects
+/// meet in concave creases, while the faces of one object meet convexly. Parts (from normal-angle
+/// region growing, section 4.2.1) are joined when most of the small surface patches along their
+/// common border meet convexly, in the spirit of locally convex connected patches (Stein et al.,
+/// 2014); each connected group of parts is one object.
+
+#include <cstddef>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/types.hpp"
+
+namespace multicue {
+
+struct ConvexitySplitParams {
+    float patch_size = 0.015f;  ///< edge of the voxel patches whose centroids and normals meet [m]
+    float smooth_angle_deg = 12.0f;  ///< patches whose normals differ less always join [deg]
+    float min_convex_share = 0.5f;   ///< parts join when this share of border patches is convex
+    std::size_t min_border = 2;      ///< patch pairs on a border needed to judge it [pairs]
+    std::size_t min_object_points = 150;  ///< smaller groups join their best-connected neighbour
+};
+
+struct ConvexitySplitResult {
+    std::vector<Indices> objects;     ///< the object's points split into groups, largest first
+    std::size_t convex_borders = 0;   ///< part borders judged convex (joined)
+    std::size_t concave_borders = 0;  ///< part borders judged concave (cut)
+};
+
+/// Splits `object` (indices into `cloud`, which must have normals oriented towards the sensor)
+/// along concave borders between its `parts` (each a subset of `object`). Points of the object in
+/// no part follow the patch they fall into, or the largest group. With fewer than two parts the
+/// object comes back whole. Throws DataError without normals, InvalidArgument for bad params.
+ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& object,
+                                      const std::vector<Indices>& parts,
+                                      const ConvexitySplitParams& params);
+
+}  // namespace multicue

@@ -1,0 +1,236 @@
+// The table-top pipeline on synthetic scenes with exact ground truth, and its output contract.
+
+#include <fstream>
+#include <limits>
+#include <map>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/io/config.hpp"
+#include "multicue/io/file_utils.hpp"
+#include "multicue/io/pcd.hpp"
+#include "multicue/io/ply.hpp"
+#include "multicue/sim/tabletop_scene.hpp"
+#include "multicue/system/perceive.hpp"
+#include "multicue/system/perceive_output.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+struct Scene {
+    sim::TableTopScene scene;
+    PointCloud cloud;
+};
+
+const Scene& DemoScene() {
+    static const Scene s = [] {
+        Scene r;
+        r.scene = sim::MakeDemoScene();
+        sim::ScanParams p;
+        p.T_world_camera = sim::DefaultCameraPose(r.scene);
+        r.cloud = sim::ScanTableTopScene(r.scene, p);
+        return r;
+    }();
+    return s;
+}
+
+// Best F-measure of each ground-truth object against the predicted objects.
+std::map<std::uint32_t, double> BestOverlap(const PointCloud& truth, const PerceiveResult& r) {
+    std::map<std::uint32_t, std::map<std::uint32_t, double>> inter;
+    std::map<std::uint32_t, double> gsize, psize;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+        const std::uint32_t g = truth.labels[i] >= 20 ? truth.labels[i] / 10 : 0;
+        const std::uint32_t p = r.point_objects[i];
+        if (g > 0) gsize[g] += 1;
+        if (p > 0) psize[p] += 1;
+        if (g > 0 && p > 0) inter[g][p] += 1;
+    }
+    std::map<std::uint32_t, double> best;
+    for (const auto& [g, n] : gsize) {
+        best[g] = 0.0;
+        for (const auto& [p, c] : inter[g]) {
+            const double prec = c / psize[p], rec = c / n;
+            best[g] = std::max(best[g], 2 * prec * rec / (prec + rec));
+        }
+    }
+    return best;
+}
+
+TEST(Perceive, DemoSceneObjectsCategoriesAndModels) {
+    const auto& s = DemoScene();
+    const PerceiveResult r = Perceive(s.cloud, PerceiveParams{});
+    ASSERT_TRUE(r.support.found);
+    ASSERT_EQ(r.objects.size(), 5u);
+    // The support plane is the table: its normal is world up seen in the camera frame.
+    const Eigen::Vector3f up_cam =
+        sim::DefaultCameraPose(s.scene).linear().transpose() * Eigen::Vector3f::UnitZ();
+    EXPECT_GT(r.support.plane.head<3>().dot(up_cam), std::cos(2.0f * M_PI / 180.0f));
+    for (const auto& [g, f] : BestOverlap(s.cloud, r)) EXPECT_GT(f, 0.9) << "object " << g;
+    // Every predicted object: boxes (objects 1-3) box or flat, cylinders (4-5) cylinder.
+    for (const auto& o : r.objects) {
+        std::map<std::uint32_t, int> votes;
+        for (Index i : o.indices) votes[s.cloud.labels[i] / 10]++;
+        const auto truth = std::max_element(votes.begin(), votes.end(),
+                                            [](auto& a, auto& b) { return a.second < b.second; })
+                               ->first -
+                           1;
+        const Category c = o.category.category;
+        if (truth <= s.scene.boxes.size()) {
+            EXPECT_TRUE(c == Category::kBox || c == Category::kFlat) << CategoryName(c);
+            EXPECT_TRUE(o.model.box.has_value());
+        } else {
+            EXPECT_EQ(c, Category::kCylinder);
+            ASSERT_TRUE(o.model.cylinder.has_value());
+            const auto& cyl = s.scene.cylinders[truth - s.scene.boxes.size() - 1];
+            EXPECT_NEAR(o.model.cylinder->radius, cyl.radius, 0.006f);
+        }
+        EXPECT_FALSE(o.model.mesh.triangles.empty());
+    }
+}
+
+TEST(Perceive, NoTableGivesNullSupportAndObjectsFromTheWholeCloud) {
+    const auto& s = DemoScene();
+    Indices objects_only;
+    for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+        if (s.cloud.labels[i] >= 20) objects_only.push_back(static_cast<Index>(i));
+    }
+    const PointCloud c = SelectByIndex(s.cloud, objects_only);
+    const PerceiveResult r = Perceive(c, PerceiveParams{});
+    EXPECT_FALSE(r.support.found);
+    EXPECT_GE(r.objects.size(), 3u);
+    const auto j = PerceiveResultJson("x.pcd", r);
+    EXPECT_TRUE(j["support"].is_null());
+}
+
+TEST(Perceive, DeterministicAndThreadIndependent) {
+    const auto& s = DemoScene();
+    PerceiveParams one;
+    one.num_threads = 1;
+    PerceiveParams two;
+    two.num_threads = 2;
+    const PerceiveResult a = Perceive(s.cloud, one);
+    const PerceiveResult b = Perceive(s.cloud, two);
+    const PerceiveResult c = Perceive(s.cloud, one);
+    EXPECT_EQ(a.point_objects, b.point_objects);
+    EXPECT_EQ(a.point_categories, b.point_categories);
+    EXPECT_EQ(a.point_objects, c.point_objects);
+    ASSERT_EQ(a.objects.size(), b.objects.size());
+    for (std::size_t k = 0; k < a.objects.size(); ++k) {
+        EXPECT_EQ(a.objects[k].category.probabilities, b.objects[k].category.probabilities);
+    }
+}
+
+TEST(Perceive, BadInput) {
+    EXPECT_THROW(Perceive(PointCloud{}, {}), DataError);
+    PointCloud nan_only;
+    nan_only.points.assign(10, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+    nan_only.SetUnorganized();
+    EXPECT_THROW(Perceive(nan_only, {}), DataError);
+    PerceiveParams bad;
+    bad.cluster_tolerance = -1.0f;
+    EXPECT_THROW(Perceive(DemoScene().cloud, bad), InvalidArgument);
+    bad = {};
+    bad.num_threads = -3;
+    EXPECT_THROW(Perceive(DemoScene().cloud, bad), InvalidArgument);
+}
+
+TEST(PerceiveOutput, FilesFollowTheContract) {
+    test::TempDir dir;
+    const auto& s = DemoScene();
+    const PerceiveResult r = Perceive(s.cloud, PerceiveParams{});
+    WritePerceiveOutputs(dir.path(), PerceiveResultJson("scene.pcd", r),
+                         PerceiveLabelsCloud(s.cloud, r), PerceiveModelsMesh(r));
+    const auto j = nlohmann::json::parse(io::ReadFileBytes(dir / "result.json"));
+    EXPECT_EQ(j["format"], "multicue.result/1");
+    EXPECT_EQ(j["points"], s.cloud.size());
+    const std::vector<std::string> names = j["categories"];
+    EXPECT_EQ(names, (std::vector<std::string>{"none", "sphere", "box", "flat", "cylinder", "plate",
+                                               "other"}));
+    EXPECT_EQ(j["support"]["plane"].size(), 4u);
+    EXPECT_GE(j["support"]["hull"].size(), 3u);
+    EXPECT_TRUE(j["timings_ms"].contains("normals"));
+
+    // labels.pcd: the input's layout, NaN points kept, ids and categories as in result.json.
+    const PointCloud labels = io::ReadPcd(dir / "labels.pcd");
+    ASSERT_EQ(labels.width, s.cloud.width);
+    ASSERT_EQ(labels.height, s.cloud.height);
+    const ExtraField* object = labels.FindExtraField("object");
+    const ExtraField* category = labels.FindExtraField("category");
+    ASSERT_NE(object, nullptr);
+    ASSERT_NE(category, nullptr);
+    EXPECT_EQ(object->type, 'U');
+    EXPECT_EQ(object->size, 4);
+    EXPECT_EQ(category->size, 1);
+    std::map<std::uint32_t, std::size_t> counts;
+    std::map<std::uint32_t, std::uint8_t> cats;
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+        EXPECT_EQ(labels.IsFinite(i), s.cloud.IsFinite(i));
+        std::uint32_t id = 0;
+        std::memcpy(&id, object->data.data() + 4 * i, 4);
+        if (id == 0) {
+            EXPECT_EQ(category->data[i], 0);
+            continue;
+        }
+        counts[id]++;
+        cats[id] = category->data[i];
+    }
+    ASSERT_EQ(counts.size(), j["objects"].size());
+    for (const auto& o : j["objects"]) {
+        const std::uint32_t id = o["id"];
+        EXPECT_EQ(counts[id], o["points"].get<std::size_t>());
+        EXPECT_EQ(names[cats[id]], o["category"]);
+        double sum = 0;
+        for (const auto& [name, p] : o["probabilities"].items()) sum += p.get<double>();
+        EXPECT_NEAR(sum, 1.0, 1e-3);
+    }
+    const TriangleMesh models = io::ReadPlyMesh(dir / "models.ply");
+    EXPECT_FALSE(models.triangles.empty());
+    EXPECT_TRUE(models.HasVertexColors());
+}
+
+TEST(PerceiveOutput, FailedWriteKeepsExistingFiles) {
+    test::TempDir dir;
+    { std::ofstream(dir / "result.json") << "old"; }
+    const PerceiveResult r = Perceive(DemoScene().cloud, PerceiveParams{});
+    PointCloud broken = PerceiveLabelsCloud(DemoScene().cloud, r);
+    broken.extra_fields[0].data.resize(3);  // inconsistent: the labels write fails
+    EXPECT_THROW(
+        WritePerceiveOutputs(dir.path(), PerceiveResultJson("x", r), broken, PerceiveModelsMesh(r)),
+        Error);
+    EXPECT_EQ(io::ReadFileBytes(dir / "result.json"), "old");
+    EXPECT_FALSE(std::filesystem::exists(dir / "labels.pcd"));
+    std::size_t entries = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir.path())) {
+        ++entries;
+    }
+    EXPECT_EQ(entries, 1u);  // no staging folder left behind
+}
+
+TEST(PerceiveConfig, DumpParsesBackAndUnknownKeysFail) {
+    auto dump = io::ConfigSection::Dump();
+    PerceiveParams defaults;
+    ReadPerceiveParams(dump, defaults);
+    auto again = io::ConfigSection::Parse(dump.DumpText(), "dump");
+    PerceiveParams p;
+    ReadPerceiveParams(again, p);
+    EXPECT_NO_THROW(again.CheckAllUsed());
+    EXPECT_EQ(p.min_object_points, defaults.min_object_points);
+    EXPECT_FALSE(p.support.up.has_value());
+
+    auto typo = io::ConfigSection::Parse(R"({"objects": {"min_pionts": 5}})", "t.json");
+    ReadPerceiveParams(typo, p);
+    EXPECT_THROW(typo.CheckAllUsed(), InvalidArgument);
+    auto set = io::ConfigSection::Parse(
+        R"({"support": {"up": [0, -1, 0]}, "objects": {"min_points": 42}})", "t.json");
+    ReadPerceiveParams(set, p);
+    set.CheckAllUsed();
+    EXPECT_EQ(p.min_object_points, 42u);
+    ASSERT_TRUE(p.support.up.has_value());
+    EXPECT_EQ(*p.support.up, Eigen::Vector3f(0, -1, 0));
+}
+
+}  // namespace
+}  // namespace multicue
