@@ -591,6 +591,28 @@ TEST(OrganizedNormals, ThreadCountDoesNotChangeResults) {
     }
 }
 
+TEST(OrganizedNormals, MaskComputesTheSameNormalsForItsPixelsOnly) {
+    const Truth t =
+        OrganizedView(160, 120, 0.0015f, 0.05f, 28, SphereHit({0.0f, 0.0f, 0.8f}, 0.2f));
+    for (const bool grow : {false, true}) {
+        OrganizedNormalParams p{.depth_dependent_window = grow};
+        const NormalsResult all = EstimateNormalsOrganized(t.cloud, p);
+        p.mask.assign(t.cloud.size(), 0);
+        for (std::size_t i = 0; i < t.cloud.size(); i += 3) p.mask[i] = 1;
+        const NormalsResult some = EstimateNormalsOrganized(t.cloud, p);
+        for (std::size_t i = 0; i < t.cloud.size(); ++i) {
+            if (p.mask[i] != 0 && std::isfinite(all.curvature[i])) {
+                EXPECT_EQ(some.normals[i], all.normals[i]);
+                EXPECT_EQ(some.curvature[i], all.curvature[i]);
+            } else {
+                EXPECT_TRUE(std::isnan(some.curvature[i]));
+            }
+        }
+        p.mask.resize(5);
+        EXPECT_THROW(EstimateNormalsOrganized(t.cloud, p), InvalidArgument);
+    }
+}
+
 TEST(OrganizedNormals, ContractEmptyAndNaNOnly) {
     EXPECT_TRUE(EstimateNormalsOrganized(PointCloud{}, {}).normals.empty());
     PointCloud nan_only(std::vector<Eigen::Vector3f>(12, Eigen::Vector3f::Constant(kNaN)));

@@ -112,6 +112,11 @@ NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
             "size), got {}x{} for {} points",
             organized.width, organized.height, organized.size()));
     }
+    if (!params.mask.empty() && params.mask.size() != organized.size()) {
+        throw InvalidArgument(fmt::format("mask has {} entries for {} pixels", params.mask.size(),
+                                          organized.size()));
+    }
+    const bool masked = !params.mask.empty();
     const int width = static_cast<int>(organized.width);
     const int height = static_cast<int>(organized.height);
     const int pad = params.depth_dependent_window ? 3 * params.half_window : params.half_window;
@@ -136,6 +141,7 @@ NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
             [&](std::size_t row) {
                 const int v = static_cast<int>(row);
                 for (int u = 0; u < width; ++u) {
+                    if (masked && params.mask[row * organized.width + u] == 0) continue;
                     const std::size_t c = planes.At(u, v);
                     const float depth = planes.depth[c];
                     if (depth == std::numeric_limits<float>::infinity()) continue;
@@ -167,6 +173,13 @@ NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
             [&](std::size_t row) {
                 const int v = static_cast<int>(row);
                 for (int u0 = 0; u0 < width; u0 += kLanes) {
+                    if (masked) {
+                        bool any = false;
+                        for (int l = 0; l < kLanes && u0 + l < width; ++l) {
+                            any = any || params.mask[row * organized.width + u0 + l] != 0;
+                        }
+                        if (!any) continue;
+                    }
                     const std::size_t c = planes.At(u0, v);
                     std::array<float, kLanes> cx, cy, cz, cd, limit;
                     for (int l = 0; l < kLanes; ++l) {
@@ -205,6 +218,7 @@ NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
                     }
                     for (int l = 0; l < kLanes && u0 + l < width; ++l) {
                         if (cd[l] == std::numeric_limits<float>::infinity()) continue;
+                        if (masked && params.mask[row * organized.width + u0 + l] == 0) continue;
                         store(
                             row * organized.width + u0 + l, {cx[l], cy[l], cz[l]},
                             {n[l], sx[l], sy[l], sz[l], xx[l], xy[l], xz[l], yy[l], yz[l], zz[l]});

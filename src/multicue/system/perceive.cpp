@@ -29,13 +29,16 @@ class StageTimer {
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
-// Normals unless the input brings them; organized frames take the image-space path.
-void EnsureNormals(PointCloud& cloud, const PerceiveParams& params) {
+// Normals unless the input brings them; organized frames take the image-space path and compute
+// them for the region of interest only.
+void EnsureNormals(PointCloud& cloud, const Indices& roi, const PerceiveParams& params) {
     if (cloud.HasNormals() && cloud.HasCurvature()) return;
     NormalsResult normals;
     if (cloud.IsOrganized()) {
         OrganizedNormalParams p = params.organized_normals;
         p.num_threads = params.num_threads;
+        p.mask.assign(cloud.size(), 0);
+        for (Index i : roi) p.mask[i] = 1;
         normals = EstimateNormalsOrganized(cloud, p);
     } else {
         NormalParams p = params.normals;
@@ -112,9 +115,6 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     StageTimer timer(result.timings_ms);
 
     PointCloud cloud = input;
-    EnsureNormals(cloud, params);
-    timer.Done("normals");
-
     SupportPlaneParams sp = params.support;
     sp.num_threads = params.num_threads;
     result.support = FindSupportPlane(cloud, sp);
@@ -131,6 +131,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
         }
     }
     timer.Done("support_plane");
+
+    EnsureNormals(cloud, roi, params);
+    timer.Done("normals");
 
     ClusteringResult clusters = ClusterObjects(cloud, roi, params);
     timer.Done("clustering");

@@ -14,6 +14,8 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     auto organized = normals.Section("organized");
     organized.Get("half_window", p.organized_normals.half_window,
                   "organized frames: half-size of the pixel window [px]");
+    organized.Get("stride", p.organized_normals.stride,
+                  "organized frames: step between the pixels read, 0 = automatic [px]");
     organized.Get("depth_dependent_window", p.organized_normals.depth_dependent_window,
                   "organized frames: scale the window with depth");
     organized.Get("max_depth_change", p.organized_normals.max_depth_change,
