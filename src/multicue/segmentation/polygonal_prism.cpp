@@ -1,7 +1,9 @@
 #include "multicue/segmentation/polygonal_prism.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 #include <Eigen/Geometry>
@@ -33,6 +35,40 @@ double Cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Ve
     return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
 }
 
+// Akl-Toussaint pre-filter: points strictly inside the polygon of the extreme points in eight
+// directions cannot be hull vertices. On a table of 150k points it leaves a few thousand to sort.
+void DiscardInteriorPoints(std::vector<Eigen::Vector2d>& pts) {
+    if (pts.size() < 64) return;
+    const std::array<Eigen::Vector2d, 8> dirs = {Eigen::Vector2d(1, 0),  Eigen::Vector2d(1, 1),
+                                                 Eigen::Vector2d(0, 1),  Eigen::Vector2d(-1, 1),
+                                                 Eigen::Vector2d(-1, 0), Eigen::Vector2d(-1, -1),
+                                                 Eigen::Vector2d(0, -1), Eigen::Vector2d(1, -1)};
+    std::array<Eigen::Vector2d, 8> extreme;
+    std::array<double, 8> best;
+    best.fill(-std::numeric_limits<double>::infinity());
+    for (const auto& p : pts) {
+        for (std::size_t d = 0; d < dirs.size(); ++d) {
+            const double v = dirs[d].dot(p);
+            if (v > best[d]) {
+                best[d] = v;
+                extreme[d] = p;
+            }
+        }
+    }
+    // The extremes in increasing angle of their directions form a convex, counter-clockwise
+    // polygon (some may coincide, which only makes a test stricter).
+    auto strictly_inside = [&](const Eigen::Vector2d& q) {
+        for (std::size_t k = 0; k < extreme.size(); ++k) {
+            const Eigen::Vector2d& a = extreme[k];
+            const Eigen::Vector2d& b = extreme[(k + 1) % extreme.size()];
+            if (a == b) continue;
+            if (Cross(a, b, q) <= 0.0) return false;
+        }
+        return true;
+    };
+    std::erase_if(pts, strictly_inside);
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indices& subset,
@@ -61,6 +97,7 @@ std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indi
             add(i);
         }
     }
+    DiscardInteriorPoints(pts);
     std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) {
         return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
     });

@@ -60,7 +60,7 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
     ClusteringResult clusters;
     if (cloud.IsOrganized()) {
         clusters = EuclideanClusteringOrganized(
-            cloud, {.tolerance = tolerance, .subset = inliers, .half_window = 2});
+            cloud, {.tolerance = tolerance, .subset = inliers, .half_window = 1});
     } else {
         const KdTree tree(cloud, inliers);
         clusters = EuclideanClustering(cloud, tree, {.tolerance = tolerance, .subset = inliers});
