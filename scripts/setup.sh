@@ -16,7 +16,7 @@ done
 
 packages=(
     build-essential cmake ninja-build ccache pkg-config git
-    libeigen3-dev libnanoflann-dev liblzf-dev libtbb-dev
+    libeigen3-dev liblzf-dev libtbb-dev
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     clang-format
