@@ -91,6 +91,25 @@ TEST(Perceive, DemoSceneObjectsCategoriesAndModels) {
     }
 }
 
+TEST(Perceive, OccludedBoxIsOneObject) {
+    // A wide box behind a tall thin one that splits it in two in the image: clustering sees two
+    // fragments, the occlusion merge joins them.
+    sim::TableTopScene scene;
+    scene.boxes = {
+        {{0.00f, 0.15f}, 0.0f, {0.30f, 0.08f, 0.12f}, {200, 60, 40, 255}},
+        {{0.00f, -0.05f}, 0.0f, {0.05f, 0.05f, 0.26f}, {60, 170, 80, 255}},
+    };
+    sim::ScanParams sp;
+    sp.T_world_camera = sim::DefaultCameraPose(scene);
+    const PointCloud cloud = sim::ScanTableTopScene(scene, sp);
+    PerceiveParams off;
+    off.merge_occluded = false;
+    EXPECT_EQ(Perceive(cloud, off).objects.size(), 3u);
+    const PerceiveResult r = Perceive(cloud, PerceiveParams{});
+    ASSERT_EQ(r.objects.size(), 2u);
+    for (const auto& [g, f] : BestOverlap(cloud, r)) EXPECT_GT(f, 0.9) << "object " << g;
+}
+
 TEST(Perceive, NoTableGivesNullSupportAndObjectsFromTheWholeCloud) {
     const auto& s = DemoScene();
     Indices objects_only;

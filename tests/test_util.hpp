@@ -21,11 +21,12 @@ inline bool HasSharedData() { return std::filesystem::is_directory(MULTICUE_SHAR
 
 /// A fresh, empty temporary folder, removed when the object goes out of scope.
 class TempDir {
-public:
+  public:
     TempDir() {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
         std::string name = "multicue-test";
-        if (info != nullptr) name += std::string("-") + info->test_suite_name() + "-" + info->name();
+        if (info != nullptr)
+            name += std::string("-") + info->test_suite_name() + "-" + info->name();
         for (auto& c : name) {
             if (c == '/') c = '_';
         }
@@ -42,7 +43,7 @@ public:
     const std::filesystem::path& path() const { return path_; }
     std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 

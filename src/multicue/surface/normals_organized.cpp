@@ -113,8 +113,8 @@ NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
             organized.width, organized.height, organized.size()));
     }
     if (!params.mask.empty() && params.mask.size() != organized.size()) {
-        throw InvalidArgument(fmt::format("mask has {} entries for {} pixels", params.mask.size(),
-                                          organized.size()));
+        throw InvalidArgument(
+            fmt::format("mask has {} entries for {} pixels", params.mask.size(), organized.size()));
     }
     const bool masked = !params.mask.empty();
     const int width = static_cast<int>(organized.width);

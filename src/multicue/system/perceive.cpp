@@ -101,6 +101,40 @@ ObjectModel FitModel(const PointCloud& cloud, const PerceivedObject& object,
     return model;
 }
 
+// Fragments of one object split by a nearer occluder become one object (MergeOccludedFragments);
+// ids are renumbered in the order of the merged objects' first fragments.
+std::vector<PerceivedObject> MergeOccluded(const PointCloud& cloud,
+                                           std::vector<PerceivedObject> objects,
+                                           const Eigen::Vector4f& plane,
+                                           const PerceiveParams& params) {
+    std::vector<Indices> indices;
+    std::vector<std::vector<Indices>> parts;
+    indices.reserve(objects.size());
+    parts.reserve(objects.size());
+    for (const auto& o : objects) {
+        indices.push_back(o.indices);
+        parts.push_back(o.parts);
+    }
+    const OcclusionMergeResult merged =
+        MergeOccludedFragments(cloud, indices, parts, plane, params.occlusion);
+    if (merged.merges == 0) return objects;
+    std::vector<PerceivedObject> out;
+    out.reserve(merged.groups.size());
+    for (const auto& group : merged.groups) {
+        PerceivedObject o = std::move(objects[group.front()]);
+        for (std::size_t k = 1; k < group.size(); ++k) {
+            auto& other = objects[group[k]];
+            o.indices.insert(o.indices.end(), other.indices.begin(), other.indices.end());
+            for (auto& part : other.parts) o.parts.push_back(std::move(part));
+        }
+        std::sort(o.indices.begin(), o.indices.end());
+        o.id = static_cast<int>(out.size() + 1);
+        out.push_back(std::move(o));
+    }
+    LogDebug("perceive: {} occluded fragments joined", merged.merges);
+    return out;
+}
+
 }  // namespace
 
 PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
@@ -185,6 +219,11 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
 
     const Eigen::Vector4f plane =
         result.support.found ? result.support.plane : Eigen::Vector4f::Zero();
+    if (params.merge_occluded && result.objects.size() >= 2) {
+        result.objects = MergeOccluded(cloud, std::move(result.objects), plane, params);
+    }
+    timer.Done("occlusion");
+
     ParallelFor(
         result.objects.size(), params.num_threads,
         [&](std::size_t k) {

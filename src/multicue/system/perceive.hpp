@@ -18,6 +18,7 @@
 #include "multicue/reconstruction/primitive_models.hpp"
 #include "multicue/segmentation/convexity_split.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
+#include "multicue/segmentation/occlusion_merge.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "multicue/segmentation/region_growing.hpp"
 #include "multicue/segmentation/support_plane.hpp"
@@ -43,16 +44,18 @@ struct PerceiveParams {
     RegionGrowingParams parts{.k = 16};
     bool split_concave = true;  ///< split hypotheses along concave part borders (stacked objects)
     ConvexitySplitParams convexity{};
+    bool merge_occluded = true;  ///< join fragments of objects split by a nearer occluder
+    OcclusionMergeParams occlusion{};
     /// First, rule-based categories; fewer samples than the defaults of a one-off call, which
     /// keeps a frame within budget at the same accuracy on mOSD.
     CategoryParams category{.max_points = 1500, .max_iterations = 400};
-    BoxFitParams box{};              ///< box models of box and flat objects
+    BoxFitParams box{};                  ///< box models of box and flat objects
     CylinderModelParams cylinder = [] {  ///< cylinder models of cylindrical objects
         CylinderModelParams p;
         p.sac.max_iterations = 800;
         return p;
     }();
-    int num_threads = 0;             ///< 0 = all cores; overrides the stages' own thread counts
+    int num_threads = 0;  ///< 0 = all cores; overrides the stages' own thread counts
 };
 
 /// Reads (or, with a dump section, records) every parameter.

@@ -69,6 +69,26 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
                   "parts join when this share of their border is convex");
     convexity.Get("min_border", p.convexity.min_border, "patch pairs needed to judge a border");
 
+    auto occlusion = config.Section("occlusion");
+    auto& o = p.occlusion;
+    occlusion.Get("enabled", p.merge_occluded,
+                  "join fragments of an object that a nearer object cuts in two");
+    occlusion.Get("depth_margin", o.depth_margin, "gap pixels this much nearer than both [m]");
+    occlusion.Get("min_near_share", o.min_near_share, "share of nearer pixels in an occluded row");
+    occlusion.Get("min_occluded_share", o.min_occluded_share,
+                  "share of the shared rows that must be occluded");
+    occlusion.Get("min_rows", o.min_rows, "fewest occluded rows for a merge");
+    occlusion.Get("max_gap", o.max_gap, "largest median 3D distance across the gap [m]");
+    occlusion.Get("min_height_overlap", o.min_height_overlap,
+                  "overlap of the height ranges over the smaller one");
+    occlusion.Get("surface_distance", o.surface_distance, "surface continuation distance [m]");
+    occlusion.Get("surface_angle_deg", o.surface_angle_deg, "surface continuation angle [deg]");
+    occlusion.Get("min_explained_share", o.min_explained_share,
+                  "share of a fragment the other's surface must explain");
+    occlusion.Get("min_cylinder_radius", o.min_cylinder_radius, "smallest cylinder radius [m]");
+    occlusion.Get("max_cylinder_radius", o.max_cylinder_radius, "largest cylinder radius [m]");
+    occlusion.Get("cylinder_iterations", o.cylinder_iterations, "cylinder RANSAC sample cap");
+
     auto cat = config.Section("category");
     auto& c = p.category;
     cat.Get("min_points", c.min_points, "fewer usable points give category none");
