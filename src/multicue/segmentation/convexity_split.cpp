@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <unordered_map>
 
@@ -40,13 +41,33 @@ void Validate(const PointCloud& cloud, const ConvexitySplitParams& p) {
         throw InvalidArgument(
             fmt::format("min_convex_share must be in [0, 1], got {}", p.min_convex_share));
     }
+    if (!(p.bend_angle_deg >= 0.0f && p.bend_angle_deg <= 180.0f)) {
+        throw InvalidArgument(
+            fmt::format("bend_angle_deg must be in [0, 180], got {}", p.bend_angle_deg));
+    }
+    if (!(p.max_top_difference >= 0.0f) || !std::isfinite(p.max_top_difference)) {
+        throw InvalidArgument(
+            fmt::format("max_top_difference must be >= 0, got {}", p.max_top_difference));
+    }
+}
+
+struct Border {
+    std::size_t convex = 0;
+    std::vector<float> angles;  // between the normals of each patch pair [deg]
+};
+
+float Median(std::vector<float> values) {
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    return *mid;
 }
 
 }  // namespace
 
 ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& object,
                                       const std::vector<Indices>& parts,
-                                      const ConvexitySplitParams& params) {
+                                      const ConvexitySplitParams& params,
+                                      const Eigen::Vector4f& support_plane) {
     Validate(cloud, params);
     ConvexitySplitResult result;
     if (object.empty()) return result;
@@ -103,7 +124,8 @@ ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& ob
     // Border votes between parts: convex when n1.d > n2.d for d = c1 - c2 (the patches bend away
     // from each other, seen from the sensor), or when the normals hardly differ.
     const float smooth_cos = std::cos(params.smooth_angle_deg * static_cast<float>(M_PI) / 180.0f);
-    std::map<std::pair<int, int>, std::pair<std::size_t, std::size_t>> borders;  // convex, total
+    const float rad_to_deg = 180.0f / static_cast<float>(M_PI);
+    std::map<std::pair<int, int>, Border> borders;
     for (std::size_t v = 0; v < patches.size(); ++v) {
         const Patch& a = patches[v];
         if (a.part < 0) continue;
@@ -119,8 +141,9 @@ ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& ob
                     const bool convex =
                         a.normal.dot(b.normal) >= smooth_cos || a.normal.dot(d) > b.normal.dot(d);
                     auto& border = borders[{std::min(a.part, b.part), std::max(a.part, b.part)}];
-                    border.first += convex ? 1 : 0;
-                    border.second += 1;
+                    border.convex += convex ? 1 : 0;
+                    border.angles.push_back(
+                        std::acos(std::clamp(a.normal.dot(b.normal), -1.0f, 1.0f)) * rad_to_deg);
                 }
             }
         }
@@ -132,15 +155,50 @@ ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& ob
     auto unite = [&sets](std::size_t a, std::size_t b) {
         sets.Unite(static_cast<Index>(a), static_cast<Index>(b));
     };
-    for (const auto& [pair, votes_ab] : borders) {
-        if (votes_ab.second < params.min_border) continue;
+    std::vector<std::pair<std::size_t, std::size_t>> bends;  // concave borders that bend gently
+    for (const auto& [pair, border] : borders) {
+        if (border.angles.size() < params.min_border) continue;
+        const auto a = static_cast<std::size_t>(pair.first);
+        const auto b = static_cast<std::size_t>(pair.second);
         const float share =
-            static_cast<float>(votes_ab.first) / static_cast<float>(votes_ab.second);
+            static_cast<float>(border.convex) / static_cast<float>(border.angles.size());
         if (share >= params.min_convex_share) {
-            unite(static_cast<std::size_t>(pair.first), static_cast<std::size_t>(pair.second));
+            unite(a, b);
             ++result.convex_borders;
         } else {
             ++result.concave_borders;
+            if (Median(border.angles) < params.bend_angle_deg) bends.emplace_back(a, b);
+        }
+    }
+
+    // Hollow objects: a gentle concave bend between groups whose tops are level is the inside of
+    // one object meeting its outer wall or another stretch of its inside. A crease between stacked
+    // objects may look gentle too once normals are smoothed over it, but there the upper group
+    // rises above the lower one by its own height.
+    if (!bends.empty() && support_plane.head<3>().norm() > 0.5f) {
+        const Eigen::Vector3f up = support_plane.head<3>();
+        std::vector<float> top(parts.size(), -std::numeric_limits<float>::infinity());
+        for (std::size_t k = 0; k < parts.size(); ++k) {
+            for (Index i : parts[k]) {
+                const Eigen::Vector3f& p = cloud.points[i];
+                if (p.allFinite()) top[k] = std::max(top[k], up.dot(p) + support_plane.w());
+            }
+        }
+        std::vector<float> group_top(parts.size(), -std::numeric_limits<float>::infinity());
+        for (std::size_t k = 0; k < parts.size(); ++k) {
+            group_top[find(k)] = std::max(group_top[find(k)], top[k]);
+        }
+        for (const auto& [a, b] : bends) {
+            const std::size_t ga = find(a);
+            const std::size_t gb = find(b);
+            if (ga == gb ||
+                !(std::abs(group_top[ga] - group_top[gb]) < params.max_top_difference)) {
+                continue;
+            }
+            const float joined_top = std::max(group_top[ga], group_top[gb]);
+            unite(ga, gb);
+            group_top[find(ga)] = joined_top;
+            ++result.bend_joins;
         }
     }
 
@@ -153,11 +211,11 @@ ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& ob
             const std::size_t g = find(k);
             if (g != k || group_size[g] >= params.min_object_points) continue;
             std::map<std::size_t, std::size_t> links;
-            for (const auto& [pair, votes_ab] : borders) {
+            for (const auto& [pair, border] : borders) {
                 const std::size_t ga = find(static_cast<std::size_t>(pair.first));
                 const std::size_t gb = find(static_cast<std::size_t>(pair.second));
-                if (ga == g && gb != g) links[gb] += votes_ab.second;
-                if (gb == g && ga != g) links[ga] += votes_ab.second;
+                if (ga == g && gb != g) links[gb] += border.angles.size();
+                if (gb == g && ga != g) links[ga] += border.angles.size();
             }
             if (links.empty()) continue;
             const auto best =

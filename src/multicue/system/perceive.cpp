@@ -191,7 +191,10 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
             if (params.split_concave) {
                 ConvexitySplitParams cp = params.convexity;
                 cp.min_object_points = params.min_object_points;
-                groups = SplitByConvexity(cloud, clusters.clusters[k], parts, cp).objects;
+                groups = SplitByConvexity(
+                             cloud, clusters.clusters[k], parts, cp,
+                             result.support.found ? result.support.plane : Eigen::Vector4f::Zero())
+                             .objects;
             } else {
                 groups.push_back(clusters.clusters[k]);
             }

@@ -68,6 +68,10 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     convexity.Get("min_convex_share", p.convexity.min_convex_share,
                   "parts join when this share of their border is convex");
     convexity.Get("min_border", p.convexity.min_border, "patch pairs needed to judge a border");
+    convexity.Get("bend_angle_deg", p.convexity.bend_angle_deg,
+                  "concave borders with a median patch angle below this are bends [deg]; 0 = off");
+    convexity.Get("max_top_difference", p.convexity.max_top_difference,
+                  "groups across a bend join when their tops differ less than this [m]");
 
     auto occlusion = config.Section("occlusion");
     auto& o = p.occlusion;
