@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/segmentation/cylinder_least_squares.hpp"
 #include "multicue/segmentation/sac_circle.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
 #include "multicue/segmentation/sac_line.hpp"
@@ -301,6 +302,72 @@ TEST(SampleConsensus, RecoversCylinderFromPointsWithNormals) {
     EXPECT_LT(DistanceToLine(kCylPoint, fit.point, fit.axis), 0.003f);
     EXPECT_LT((fit.point - kCylPoint).norm(), 0.02f);  // middle of the inliers
     ExpectInliersCloseToTruth(fit.inliers, s.num_true, 30);
+}
+
+// A lying cylinder (axis along x, on a table with normal z) refined from a start with the axis
+// turned 5 degrees within the table: each freedom moves only what it allows.
+TEST(SampleConsensus, CylinderRefinementRespectsTheAxisFreedom) {
+    Generator g(7);
+    PointCloud c;
+    const Eigen::Vector3f point(0.2f, -0.1f, 0.5f);
+    AddCylinder(g, c, 600, point, Eigen::Vector3f::UnitX(), 0.04f, 0.3f);
+    c.SetUnorganized();
+    Indices all(c.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<Index>(i);
+    const double turn = 5.0 * std::numbers::pi / 180.0;
+    const Eigen::Vector3d start_axis(std::cos(turn), std::sin(turn), 0.0);
+    const CylinderEstimate start{point.cast<double>() + Eigen::Vector3d(0.0, 0.005, -0.004),
+                                 start_axis, 0.035};
+
+    CylinderEstimate free = start;
+    ASSERT_TRUE(RefineCylinder(c, all, {.freedom = CylinderAxisFreedom::kFree}, free));
+    EXPECT_LT(LineAngleDeg(free.axis.cast<float>(), Eigen::Vector3f::UnitX()), 0.5f);
+    EXPECT_NEAR(free.radius, 0.04, 0.002);
+    EXPECT_LT(DistanceToLine(point, free.point.cast<float>(), free.axis.cast<float>()), 0.002f);
+
+    CylinderEstimate about_up = start;
+    ASSERT_TRUE(RefineCylinder(
+        c, all, {.freedom = CylinderAxisFreedom::kAboutUp, .up = Eigen::Vector3d::UnitZ()},
+        about_up));
+    EXPECT_NEAR(about_up.axis.z(), 0.0, 1e-12);  // still level
+    EXPECT_LT(LineAngleDeg(about_up.axis.cast<float>(), Eigen::Vector3f::UnitX()), 0.5f);
+    EXPECT_NEAR(about_up.radius, 0.04, 0.002);
+
+    CylinderEstimate fixed = start;
+    ASSERT_TRUE(RefineCylinder(c, all, {.freedom = CylinderAxisFreedom::kFixed}, fixed));
+    EXPECT_EQ(fixed.axis, start_axis);
+    // The best cylinder with a wrong axis still lowers the cost below the start's.
+    auto cost = [&](const CylinderEstimate& x) {
+        double sum = 0.0;
+        for (Index i : all) {
+            const Eigen::Vector3d w = c.points[i].cast<double>() - x.point;
+            const double e = (w - w.dot(x.axis) * x.axis).norm() - x.radius;
+            sum += e * e;
+        }
+        return sum;
+    };
+    EXPECT_LT(cost(fixed), cost(start));
+    EXPECT_LT(cost(free), cost(fixed));
+}
+
+TEST(SampleConsensus, CylinderRefinementContract) {
+    const Scene s = CylinderScene(50, 0);
+    const CylinderEstimate start{kCylPoint.cast<double>(), kCylAxis.cast<double>(), kCylRadius};
+    CylinderEstimate x = start;
+    const Indices some{0, 1, 2, 3, 4, 5};
+    EXPECT_THROW(RefineCylinder(s.cloud, some, {.max_iterations = -1}, x), InvalidArgument);
+    EXPECT_THROW(RefineCylinder(
+                     s.cloud, some,
+                     {.freedom = CylinderAxisFreedom::kAboutUp, .up = Eigen::Vector3d::Zero()}, x),
+                 InvalidArgument);
+    EXPECT_THROW(RefineCylinder(s.cloud, Indices{0, 50}, {}, x), InvalidArgument);
+    // No points: nothing to improve. A non-finite start is refused and left as it is.
+    EXPECT_TRUE(RefineCylinder(s.cloud, Indices{}, {}, x));
+    EXPECT_EQ(x.point, start.point);
+    EXPECT_EQ(x.radius, start.radius);
+    x.radius = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_FALSE(RefineCylinder(s.cloud, some, {}, x));
+    EXPECT_TRUE(std::isnan(x.radius));
 }
 
 TEST(SampleConsensus, CylinderAxisConstraintAndRadiusLimits) {

@@ -361,30 +361,30 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     if (!fit.found || fit.inliers.empty()) return model;
 
     // 2. Refinement on the side points, with the axis snapped to the support when asked.
-    detail::CylinderState x{fit.point.cast<double>(), fit.axis.cast<double>().normalized(),
-                            double{fit.radius}};
-    detail::AxisFreedom freedom = detail::AxisFreedom::kFree;
+    CylinderEstimate x{fit.point.cast<double>(), fit.axis.cast<double>().normalized(),
+                       double{fit.radius}};
+    CylinderRefineParams refine{.freedom = CylinderAxisFreedom::kFree};
     bool upright = false;
-    Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
     if (plane) {
-        up = plane->head<3>().cast<double>();
+        const Eigen::Vector3d up = plane->head<3>().cast<double>();
         const double c = x.axis.dot(up);
         upright = std::abs(c) >= std::cos(double{params.upright_angle_deg * kDeg}) - 1e-9;
         if (upright && c < 0.0) x.axis = -x.axis;
         const bool lying = std::abs(c) <= std::sin(double{params.lying_angle_deg * kDeg});
         if (params.snap_to_support && upright) {
             x.axis = up;
-            freedom = detail::AxisFreedom::kFixed;
+            refine = {.freedom = CylinderAxisFreedom::kFixed};
         } else if (params.snap_to_support && lying) {
             x.axis = (x.axis - x.axis.dot(up) * up).normalized();
-            freedom = detail::AxisFreedom::kAboutUp;
+            refine = {.freedom = CylinderAxisFreedom::kAboutUp, .up = up};
         }
     }
     const double side_cos = std::cos(double{params.side_normal_angle_deg * kDeg});
     Indices side = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
     for (int round = 0; round < params.refine_rounds && side.size() >= 5; ++round) {
-        detail::CylinderState refined = x;
-        if (!detail::RefineCylinder(cloud, side, up, freedom, refined)) break;
+        CylinderEstimate refined = x;
+        detail::CentreOnPoints(cloud, side, refined);
+        if (!RefineCylinder(cloud, side, refine, refined)) break;
         if (!(refined.radius >= params.min_radius && refined.radius <= params.max_radius)) break;
         x = refined;
         Indices next = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);

@@ -2,16 +2,11 @@
 
 #include <cmath>
 
+#include "multicue/segmentation/cylinder_least_squares.hpp"
 #include "multicue/segmentation/sac_internal.hpp"
 
 namespace multicue {
 namespace {
-
-struct CylinderState {
-    Eigen::Vector3d point;  // on the axis
-    Eigen::Vector3d axis;   // unit
-    double radius = 0.0;
-};
 
 struct CylinderLimits {
     float min_radius = 0.0f;
@@ -86,51 +81,11 @@ SacModel MakeCylinderModel(const CylinderLimits& limits) {
     };
     m.refine = [limits](const PointCloud& cloud, std::span<const Index> inliers,
                         const SacCoefficients& current, SacCoefficients& refined) {
-        // Residual e = rho - r, rho = |q|, q = w - (w.a) a, w = p - p0. Local parameters: the
-        // axis tilted by d0 u + d1 v, the axis point moved by d2 u + d3 v (moving it along the
-        // axis changes nothing), dr. With q^ = q / rho (orthogonal to a):
-        // de/dd0 = -(w.a)(q^.u), de/dd2 = -q^.u (same for v), de/dr = -1.
-        using Mat5 = Eigen::Matrix<double, 5, 5>;
-        using Vec5 = Eigen::Matrix<double, 5, 1>;
-        CylinderState x{current.head<3>().cast<double>(),
-                        current.segment<3>(3).cast<double>().normalized(), double{current[6]}};
-        auto linearize = [&](const CylinderState& st, Mat5& jtj, Vec5& jtr) {
-            Eigen::Vector3d u;
-            Eigen::Vector3d v;
-            sac_internal::OrthonormalBasis(st.axis, u, v);
-            jtj.setZero();
-            jtr.setZero();
-            double cost = 0.0;
-            for (Index i : inliers) {
-                const Eigen::Vector3d w = cloud.points[i].cast<double>() - st.point;
-                const double along = w.dot(st.axis);
-                const Eigen::Vector3d q = w - along * st.axis;
-                const double rho = q.norm();
-                const double e = rho - st.radius;
-                Vec5 j = Vec5::Zero();
-                j[4] = -1.0;
-                if (rho > 0.0) {
-                    const Eigen::Vector3d qhat = q / rho;
-                    j[0] = -along * qhat.dot(u);
-                    j[1] = -along * qhat.dot(v);
-                    j[2] = -qhat.dot(u);
-                    j[3] = -qhat.dot(v);
-                }
-                jtj += j * j.transpose();
-                jtr += j * e;
-                cost += e * e;
-            }
-            return cost;
-        };
-        auto update = [](const CylinderState& st, const Vec5& delta) {
-            Eigen::Vector3d u;
-            Eigen::Vector3d v;
-            sac_internal::OrthonormalBasis(st.axis, u, v);
-            return CylinderState{st.point + delta[2] * u + delta[3] * v,
-                                 (st.axis + delta[0] * u + delta[1] * v).normalized(),
-                                 st.radius + delta[4]};
-        };
-        if (!sac_internal::LevenbergMarquardt<5>(x, linearize, update)) return false;
+        CylinderEstimate x{current.head<3>().cast<double>(),
+                           current.segment<3>(3).cast<double>().normalized(), double{current[6]}};
+        if (!RefineCylinder(cloud, inliers, {.freedom = CylinderAxisFreedom::kFree}, x)) {
+            return false;
+        }
         const Eigen::Vector3f axis_f = x.axis.cast<float>();
         if (!x.point.allFinite() || !axis_f.allFinite() || !limits.Accepts(axis_f, x.radius)) {
             return false;
