@@ -128,4 +128,19 @@ void RegisterAll(const std::vector<Library>& libraries) {
     }
 }
 
+Library MakeLibrary(std::string_view name, Setup load, Setup voxel_grid, NormalsSetup normals,
+                    Setup outlier_removal) {
+    Library library{name, {}};
+    library.setups["load"] = std::move(load);
+    library.setups["voxel_grid"] = std::move(voxel_grid);
+    library.setups["normals_radius"] = [normals](benchmark::State& s, Input i, int t) {
+        return normals(s, i, t, true);
+    };
+    library.setups["normals_knn"] = [normals](benchmark::State& s, Input i, int t) {
+        return normals(s, i, t, false);
+    };
+    library.setups["outlier_removal"] = std::move(outlier_removal);
+    return library;
+}
+
 }  // namespace multicue::bench

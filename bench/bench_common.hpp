@@ -76,6 +76,14 @@ struct Library {
 void RegisterAll(const std::vector<Library>& libraries);
 
 /// The libraries; the peers exist only when they are built in.
+/// Normals setup of one library; `radius` picks the radius (else the k-NN) variant.
+using NormalsSetup =
+    std::function<Operation(benchmark::State& state, Input input, int threads, bool radius)>;
+
+/// A library's table of operations, named as bench/ratios.py expects.
+Library MakeLibrary(std::string_view name, Setup load, Setup voxel_grid, NormalsSetup normals,
+                    Setup outlier_removal);
+
 Library MulticueLibrary();
 #if MULTICUE_BENCH_PEERS
 Library PclLibrary();

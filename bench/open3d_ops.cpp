@@ -116,17 +116,7 @@ Operation OutlierRemoval(benchmark::State& state, Input input, int threads) {
 
 Library Open3dLibrary() {
     open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Warning);
-    Library library{"open3d", {}};
-    library.setups["load"] = Load;
-    library.setups["voxel_grid"] = VoxelDownsample;
-    library.setups["normals_radius"] = [](benchmark::State& s, Input i, int t) {
-        return Normals(s, i, t, true);
-    };
-    library.setups["normals_knn"] = [](benchmark::State& s, Input i, int t) {
-        return Normals(s, i, t, false);
-    };
-    library.setups["outlier_removal"] = OutlierRemoval;
-    return library;
+    return MakeLibrary("open3d", Load, VoxelDownsample, Normals, OutlierRemoval);
 }
 
 }  // namespace multicue::bench

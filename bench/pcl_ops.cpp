@@ -147,19 +147,7 @@ Operation OutlierRemoval(benchmark::State& state, Input input, int /*threads*/) 
 
 }  // namespace
 
-Library PclLibrary() {
-    Library library{"pcl", {}};
-    library.setups["load"] = Load;
-    library.setups["voxel_grid"] = VoxelDownsample;
-    library.setups["normals_radius"] = [](benchmark::State& s, Input i, int t) {
-        return Normals(s, i, t, true);
-    };
-    library.setups["normals_knn"] = [](benchmark::State& s, Input i, int t) {
-        return Normals(s, i, t, false);
-    };
-    library.setups["outlier_removal"] = OutlierRemoval;
-    return library;
-}
+Library PclLibrary() { return MakeLibrary("pcl", Load, VoxelDownsample, Normals, OutlierRemoval); }
 
 }  // namespace multicue::bench
 

@@ -92,6 +92,17 @@ TEST(Parallel, SerialAndParallelAgree) {
     EXPECT_EQ(ResolveThreadCount(3), 3);
 }
 
+TEST(Parallel, MoreThreadsThanCoresIsQuietAndGivesTheSameResult) {
+    EXPECT_EQ(ArenaThreadCount(1), 1);
+    EXPECT_LE(ArenaThreadCount(1000), ResolveThreadCount(0));
+    std::vector<double> a(100000), b(100000);
+    ParallelFor(a.size(), 1, [&](std::size_t i) { a[i] = std::sqrt(static_cast<double>(i)); });
+    ::testing::internal::CaptureStderr();
+    ParallelFor(b.size(), 64, [&](std::size_t i) { b[i] = std::sqrt(static_cast<double>(i)); });
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+    EXPECT_EQ(a, b);
+}
+
 TEST(Logging, LevelsAndSink) {
     std::vector<std::string> seen;
     SetLogSink([&](LogLevel, std::string_view m) { seen.emplace_back(m); });

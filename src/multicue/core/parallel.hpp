@@ -15,12 +15,16 @@ namespace multicue {
 /// Number of threads `num_threads` stands for (0 = all cores). Throws on negative values.
 int ResolveThreadCount(int num_threads);
 
+/// Threads an arena can really use for `num_threads`: ResolveThreadCount capped at the cores
+/// present (asking TBB for more only makes it print a warning). Results never depend on it.
+int ArenaThreadCount(int num_threads);
+
 /// Calls body(begin, end) over disjoint chunks covering [0, n), with at most `num_threads` threads.
 /// Results must not depend on the chunking: write per index, never accumulate across chunks.
 template <typename Body>
 void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t grain = 1024) {
     if (n == 0) return;
-    const int threads = ResolveThreadCount(num_threads);
+    const int threads = ArenaThreadCount(num_threads);
     if (threads == 1 || n <= grain) {
         body(std::size_t{0}, n);
         return;

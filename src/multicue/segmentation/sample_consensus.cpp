@@ -10,7 +10,6 @@
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
-#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -232,8 +231,7 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
     const int threads = ResolveThreadCount(params.num_threads);
     std::optional<tbb::task_arena> arena;
     if (threads > 1 && points.size() >= kMinPointsForThreads) {
-        // More arena slots than cores only makes TBB complain; the batch size keeps `threads`.
-        arena.emplace(std::min(threads, tbb::info::default_concurrency()));
+        arena.emplace(ArenaThreadCount(threads));
     }
     const std::size_t batch = arena ? 2 * static_cast<std::size_t>(threads) : 1;
 
