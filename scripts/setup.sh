@@ -18,8 +18,11 @@ packages=(
     build-essential cmake ninja-build ccache pkg-config git
     libeigen3-dev liblzf-dev libtbb-dev
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
+    libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev liboctomap-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     clang-format
+    # The report page's viewer is bundled from npm; its browser test drives Debian's Chromium.
+    nodejs chromium chromium-driver
 )
 if [[ $minimal -eq 0 ]]; then
     # Peers for oracle tests and side-by-side benchmarks; never linked into the library.
@@ -30,6 +33,8 @@ missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# Debian ships npm as its own package; other Node.js builds bring it along.
+if ! command -v npm >/dev/null 2>&1; then missing+=(npm); fi
 
 if [[ ${#missing[@]} -eq 0 ]]; then
     echo "setup.sh: all ${#packages[@]} packages already installed"
