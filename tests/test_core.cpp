@@ -6,6 +6,7 @@
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/core/point_cloud.hpp"
+#include "multicue/core/progress.hpp"
 #include "multicue/core/triangle_mesh.hpp"
 #include "test_util.hpp"
 
@@ -119,3 +120,16 @@ TEST(Logging, LevelsAndSink) {
 
 }  // namespace
 }  // namespace multicue
+
+TEST(Progress, CountsFromSeveralThreadsAndStaysSilentByDefault) {
+    multicue::Progress progress;
+    multicue::ParallelFor(1000, 0, [&](std::size_t) { progress.Advance(); }, 16);
+    EXPECT_EQ(progress.done(), 1000u);
+}
+
+TEST(Progress, InterruptFlagCanBeSetAndCleared) {
+    multicue::RequestInterrupt(true);
+    EXPECT_TRUE(multicue::InterruptRequested());
+    multicue::RequestInterrupt(false);
+    EXPECT_FALSE(multicue::InterruptRequested());
+}
