@@ -460,6 +460,20 @@ std::int64_t ObjectDatabase::AddObjectWithView(ObjectRecord object, ObjectView v
     return id;
 }
 
+void ObjectDatabase::UpdateLastSeen(std::int64_t id, double time, const Eigen::Matrix4d& pose) {
+    Transaction([&] {
+        Statement s(impl_->db,
+                    "UPDATE objects SET last_seen=?, last_pose=? WHERE id=? AND last_seen<?",
+                    impl_->path);
+        const std::string blob = PoseBlob(pose);
+        s.Bind(1, time).BindBlob(2, blob.data(), blob.size()).Bind(3, id).Bind(4, time);
+        s.Step();
+        if (sqlite3_changes(impl_->db) == 0 && !GetObject(id)) {
+            throw DataError("object database: no object with id " + std::to_string(id));
+        }
+    });
+}
+
 void ObjectDatabase::UpdateObject(const ObjectRecord& object) {
     Transaction([&] {
         Statement s(impl_->db, "UPDATE objects SET name=?, category=? WHERE id=?", impl_->path);

@@ -78,6 +78,9 @@ class ObjectDatabase {
     std::int64_t AddView(ObjectView view);
     /// Adds a new object together with its first view in one transaction; returns the object's id.
     std::int64_t AddObjectWithView(ObjectRecord object, ObjectView view);
+    /// Records that an object was seen at `pose` at `time` without learning a view (ignored when
+    /// an equal or newer sighting is stored). DataError if there is no such object.
+    void UpdateLastSeen(std::int64_t id, double time, const Eigen::Matrix4d& pose);
     /// Renames or recategorises an object.
     void UpdateObject(const ObjectRecord& object);
     /// Removes an object and its views. Returns false if there was none.
