@@ -20,5 +20,6 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global);
 void AddConfigCommand(CLI::App& app, const GlobalOptions& global);
 void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
 void AddDbCommand(CLI::App& app, const GlobalOptions& global);
+void AddRunCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddConfigCommand(app, global);
     multicue::cli::AddDemoCommand(app, global);
     multicue::cli::AddDbCommand(app, global);
+    multicue::cli::AddRunCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));

@@ -1,0 +1,256 @@
+// `multicue run TASK.yaml`: the perception executive over a sequence of frames, identifying what it
+// sees against the object model database and learning from it.
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/io/config.hpp"
+#include "multicue/io/file_utils.hpp"
+#include "multicue/system/executive.hpp"
+
+namespace multicue::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json YamlToJson(const YAML::Node& node) {
+    switch (node.Type()) {
+        case YAML::NodeType::Map: {
+            nlohmann::json object = nlohmann::json::object();
+            for (const auto& item : node)
+                object[item.first.as<std::string>()] = YamlToJson(item.second);
+            return object;
+        }
+        case YAML::NodeType::Sequence: {
+            nlohmann::json array = nlohmann::json::array();
+            for (const auto& item : node) array.push_back(YamlToJson(item));
+            return array;
+        }
+        case YAML::NodeType::Scalar: {
+            const std::string text = node.Scalar();
+            if (node.Tag() == "!") return text;  // quoted
+            if (text == "true" || text == "false") return text == "true";
+            if (text == "null" || text == "~") return nullptr;
+            try {
+                std::size_t used = 0;
+                const double v = std::stod(text, &used);
+                if (used == text.size()) return v;
+            } catch (const std::exception&) {
+            }
+            return text;
+        }
+        default:
+            return nullptr;
+    }
+}
+
+struct TaskFile {
+    Task task;
+    fs::path database;
+    fs::path output;
+    fs::path params;
+    std::vector<Frame> frames;  // clouds loaded lazily: names and poses only
+    std::vector<fs::path> files;
+};
+
+Eigen::Isometry3d PoseFromList(const nlohmann::json& value, const std::string& where) {
+    if (!value.is_array() || value.size() != 16) {
+        throw InvalidArgument(where + ": pose must be 16 numbers (row-major 4x4)");
+    }
+    Eigen::Matrix4d m;
+    for (int i = 0; i < 16; ++i) {
+        if (!value[static_cast<std::size_t>(i)].is_number()) {
+            throw InvalidArgument(where + ": pose must be numbers");
+        }
+        m(i / 4, i % 4) = value[static_cast<std::size_t>(i)].get<double>();
+    }
+    Eigen::Isometry3d T;
+    T.matrix() = m;
+    return T;
+}
+
+void CheckKeys(const nlohmann::json& object, const std::set<std::string>& allowed,
+               const std::string& where) {
+    for (const auto& [key, value] : object.items()) {
+        if (allowed.count(key) == 0) throw InvalidArgument(where + ": unknown key '" + key + "'");
+    }
+}
+
+TaskFile ReadTaskFile(const fs::path& path) {
+    const std::string text = io::ReadFileBytes(path);
+    nlohmann::json j;
+    try {
+        j = YamlToJson(YAML::Load(text));
+    } catch (const YAML::Exception& e) {
+        throw FormatError(path.string() + ": malformed YAML (" + e.what() + ")");
+    }
+    const std::string where = path.string();
+    if (!j.is_object()) throw FormatError(where + ": a task file is a mapping of keys");
+    CheckKeys(j,
+              {"task", "target", "database", "learn", "region", "possible_objects", "frames",
+               "output", "params"},
+              where);
+    const fs::path base = path.parent_path();
+    auto resolve = [&](const std::string& p) {
+        return p.empty() || fs::path(p).is_absolute() ? fs::path(p) : base / p;
+    };
+    TaskFile t;
+    try {
+        t.task.kind = ParseTaskKind(j.value("task", std::string("enumerate")));
+        if (j.contains("target")) {
+            t.task.target =
+                j["target"].is_string() ? j["target"].get<std::string>() : j["target"].dump();
+        }
+        t.task.learn = j.value("learn", true);
+        for (const auto& name : j.value("possible_objects", nlohmann::json::array())) {
+            t.task.possible_objects.push_back(name.is_string() ? name.get<std::string>()
+                                                               : name.dump());
+        }
+        if (j.contains("region")) {
+            const auto& r = j["region"];
+            CheckKeys(r, {"min", "max"}, where + " region");
+            const auto lo = r.at("min").get<std::vector<double>>();
+            const auto hi = r.at("max").get<std::vector<double>>();
+            if (lo.size() != 3 || hi.size() != 3)
+                throw InvalidArgument(where + ": region min/max need 3 numbers");
+            t.task.region = Eigen::AlignedBox3d(Eigen::Vector3d(lo[0], lo[1], lo[2]),
+                                                Eigen::Vector3d(hi[0], hi[1], hi[2]));
+        }
+        t.database = resolve(j.value("database", std::string()));
+        t.output = resolve(j.value("output", std::string()));
+        t.params = resolve(j.value("params", std::string()));
+        if (!j.contains("frames") || !j["frames"].is_array() || j["frames"].empty()) {
+            throw InvalidArgument(where + ": 'frames' must list at least one frame");
+        }
+        std::size_t index = 0;
+        for (const auto& f : j["frames"]) {
+            const std::string fw = fmt::format("{} frame {}", where, index + 1);
+            Frame frame;
+            std::string file;
+            if (f.is_string()) {
+                file = f.get<std::string>();
+            } else {
+                CheckKeys(f, {"file", "pose", "time"}, fw);
+                file = f.at("file").get<std::string>();
+                if (f.contains("pose")) frame.T_world_sensor = PoseFromList(f["pose"], fw);
+                frame.time = f.value("time", static_cast<double>(index));
+            }
+            if (!f.is_object()) frame.time = static_cast<double>(index);
+            frame.name = file;
+            t.files.push_back(resolve(file));
+            t.frames.push_back(std::move(frame));
+            ++index;
+        }
+    } catch (const nlohmann::json::exception& e) {
+        throw InvalidArgument(where + ": " + e.what());
+    }
+    return t;
+}
+
+nlohmann::ordered_json HypothesisJson(const Hypothesis& h, const ObjectDatabase* db) {
+    nlohmann::ordered_json j;
+    j["id"] = h.id;
+    j["object_id"] = h.object_id;
+    if (db != nullptr && h.object_id > 0) {
+        if (const auto o = db->GetObject(h.object_id)) j["object"] = o->name;
+    }
+    j["novel"] = h.novel;
+    j["by_position"] = h.by_position;
+    j["category"] = h.Category();
+    j["categories"] = h.categories;
+    nlohmann::ordered_json identities = nlohmann::ordered_json::object();
+    for (const auto& [id, p] : h.identities) identities[std::to_string(id)] = p;
+    j["identities"] = identities;
+    j["position"] = {h.position.x(), h.position.y(), h.position.z()};
+    j["extents"] = {h.extents.x(), h.extents.y(), h.extents.z()};
+    j["points"] = h.indices.size();
+    j["model"] = h.model;
+    j["provenance"] = h.provenance;
+    return j;
+}
+
+}  // namespace
+
+void AddRunCommand(CLI::App& app, const GlobalOptions& global) {
+    auto* cmd = app.add_subcommand(
+        "run", "run a perception task (enumerate, find, model) over a sequence of frames");
+    auto path = std::make_shared<std::string>();
+    auto out = std::make_shared<std::string>();
+    cmd->add_option("TASK", *path, "task file (.yaml or .json)")->required();
+    cmd->add_option("--out", *out, "result JSON (default: the task file's 'output', else stdout)");
+    cmd->callback([path, out, &global] {
+        TaskFile t = ReadTaskFile(*path);
+        ExecutiveParams params;
+        if (!t.params.empty()) {
+            auto config = io::ConfigSection::Load(t.params);
+            ReadPerceiveParams(config, params.perceive);
+            config.CheckAllUsed();
+        }
+        if (global.threads != 0) params.perceive.num_threads = global.threads;
+        std::optional<ObjectDatabase> db;
+        if (!t.database.empty())
+            db = ObjectDatabase::Open(t.database, DatabaseMode::kCreateOrWrite);
+        PerceptionExecutive executive(db ? &*db : nullptr, params);
+        const auto plan = executive.Plan(t.task);
+
+        InstallInterruptHandler();
+        Progress progress("run", t.frames.size());
+        nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+        for (std::size_t i = 0; i < t.frames.size() && !InterruptRequested(); ++i) {
+            Frame& frame = t.frames[i];
+            frame.cloud = ReadNonEmptyCloud(t.files[i]);
+            const FrameReport report = executive.Run(frame, t.task);
+            frame.cloud = PointCloud();
+            nlohmann::ordered_json jf;
+            jf["frame"] = report.frame;
+            jf["time"] = report.time;
+            jf["methods"] = report.methods;
+            jf["learnt_objects"] = report.learnt_objects;
+            jf["learnt_views"] = report.learnt_views;
+            if (t.task.kind == Task::Kind::kFind) {
+                jf["found"] = report.found
+                                  ? nlohmann::ordered_json(report.hypotheses[*report.found].id)
+                                  : nlohmann::ordered_json(nullptr);
+            }
+            nlohmann::ordered_json hyps = nlohmann::ordered_json::array();
+            for (const auto& h : report.hypotheses)
+                hyps.push_back(HypothesisJson(h, db ? &*db : nullptr));
+            jf["hypotheses"] = hyps;
+            nlohmann::ordered_json timings = nlohmann::ordered_json::object();
+            for (const auto& [stage, ms] : report.timings_ms) timings[stage] = ms;
+            jf["timings_ms"] = timings;
+            frames.push_back(std::move(jf));
+            progress.Advance();
+        }
+        progress.Finish();
+        nlohmann::ordered_json result;
+        result["task"] = *path;
+        result["plan"] = plan;
+        result["interrupted"] = InterruptRequested();
+        result["frames"] = frames;
+        const fs::path target = !out->empty() ? fs::path(*out) : t.output;
+        const std::string text = result.dump(1) + "\n";
+        if (target.empty()) {
+            std::fwrite(text.data(), 1, text.size(), stdout);
+        } else {
+            io::WriteFileAtomically(target, [&](std::ostream& o) { o << text; });
+            std::fprintf(stderr, "run: %zu frames, result in %s\n", frames.size(), target.c_str());
+        }
+        if (InterruptRequested())
+            throw DataError("interrupted; the frames done so far were written");
+    });
+}
+
+}  // namespace multicue::cli
