@@ -19,6 +19,7 @@ packages=(
     libeigen3-dev liblzf-dev libtbb-dev
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
     libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev liboctomap-dev
+    libyaml-cpp-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     clang-format
     # The report page's viewer is bundled from npm; its browser test drives Debian's Chromium.

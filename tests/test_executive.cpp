@@ -1,3 +1,5 @@
+#include <set>
+
 #include <gtest/gtest.h>
 
 #include "multicue/core/exceptions.hpp"
@@ -124,6 +126,28 @@ TEST(Executive, WithoutADatabaseEverythingIsNovelAndNothingIsStored) {
     EXPECT_EQ(report.hypotheses.size(), 5u);
     EXPECT_EQ(CountNovel(report), 5u);
     EXPECT_EQ(report.learnt_objects, 0u);
+}
+
+TEST(Executive, HierarchicFilteringAgreesOnDistinctObjects) {
+    test::TempDir dir;
+    auto db = ObjectDatabase::Open(dir / "objects.db", DatabaseMode::kCreateOrWrite);
+    ExecutiveParams params;
+    params.parallel_merge = false;
+    params.same_place_radius = 0.0;  // identity from the descriptors alone
+    PerceptionExecutive executive(&db, params);
+    const auto scene = sim::MakeDemoScene();
+    ASSERT_EQ(executive.Run(View(scene, 0.0f, 1.0, 1), Task{}).learnt_objects, 5u);
+    Task look;
+    look.learn = false;
+    const auto report = executive.Run(View(scene, 0.3f, 2.0, 2), look);
+    ASSERT_EQ(report.hypotheses.size(), 5u);
+    std::set<std::int64_t> ids;
+    for (const auto& h : report.hypotheses) {
+        EXPECT_FALSE(h.novel);
+        EXPECT_FALSE(h.by_position);
+        ids.insert(h.object_id);
+    }
+    EXPECT_EQ(ids.size(), 5u);  // five different objects
 }
 
 TEST(Executive, DescriptorDistancesAreBoundedAndRefuseMismatchedSizes) {
