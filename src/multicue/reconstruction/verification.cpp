@@ -1,0 +1,198 @@
+#include "multicue/reconstruction/verification.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+
+namespace multicue {
+namespace {
+
+enum : std::uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
+
+struct Grid {
+    Eigen::Vector3f origin;  // corner of cell (0, 0, 0)
+    float size = 0.0f;
+    Eigen::Vector3i dims;
+    std::vector<std::uint8_t> cells;
+
+    bool Inside(const Eigen::Vector3i& c) const {
+        return (c.array() >= 0).all() && (c.array() < dims.array()).all();
+    }
+    std::size_t Index(const Eigen::Vector3i& c) const {
+        return (static_cast<std::size_t>(c.z()) * static_cast<std::size_t>(dims.y()) +
+                static_cast<std::size_t>(c.y())) *
+                   static_cast<std::size_t>(dims.x()) +
+               static_cast<std::size_t>(c.x());
+    }
+    Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
+        return ((p - origin) / size).array().floor().cast<int>();
+    }
+};
+
+/// Clips the segment o + t d, t in [0, 1], to the box; false if it misses.
+bool ClipToBox(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eigen::Vector3f& lo,
+               const Eigen::Vector3f& hi, float& t0, float& t1) {
+    t0 = 0.0f;
+    t1 = 1.0f;
+    for (int k = 0; k < 3; ++k) {
+        if (std::abs(d[k]) < 1e-12f) {
+            if (o[k] < lo[k] || o[k] > hi[k]) return false;
+            continue;
+        }
+        float a = (lo[k] - o[k]) / d[k];
+        float b = (hi[k] - o[k]) / d[k];
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+/// Marks the cells the ray from o to p crosses (within the grid) free, the cell of p occupied.
+void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p) {
+    const Eigen::Vector3f d = p - o;
+    const Eigen::Vector3f lo = grid.origin;
+    const Eigen::Vector3f hi = grid.origin + grid.size * grid.dims.cast<float>();
+    float t0 = 0.0f, t1 = 1.0f;
+    if (!ClipToBox(o, d, lo, hi, t0, t1)) return;
+    const Eigen::Vector3i end = grid.Cell(p);
+    const Eigen::Vector3f start_point = o + t0 * d;
+    Eigen::Vector3i cell =
+        grid.Cell(start_point).cwiseMax(0).cwiseMin(grid.dims - Eigen::Vector3i::Ones());
+    Eigen::Vector3i step;
+    Eigen::Vector3f t_max, t_delta;
+    for (int k = 0; k < 3; ++k) {
+        if (d[k] > 0.0f) {
+            step[k] = 1;
+            const float boundary = grid.origin[k] + grid.size * static_cast<float>(cell[k] + 1);
+            t_max[k] = (boundary - o[k]) / d[k];
+            t_delta[k] = grid.size / d[k];
+        } else if (d[k] < 0.0f) {
+            step[k] = -1;
+            const float boundary = grid.origin[k] + grid.size * static_cast<float>(cell[k]);
+            t_max[k] = (boundary - o[k]) / d[k];
+            t_delta[k] = -grid.size / d[k];
+        } else {
+            step[k] = 0;
+            t_max[k] = std::numeric_limits<float>::infinity();
+            t_delta[k] = std::numeric_limits<float>::infinity();
+        }
+    }
+    const int max_steps = grid.dims.sum() + 3;
+    for (int s = 0; s < max_steps && grid.Inside(cell); ++s) {
+        if (cell == end) break;
+        auto& c = grid.cells[grid.Index(cell)];
+        if (c == kUnknown) c = kFree;
+        int k = 0;
+        if (t_max[1] < t_max[k]) k = 1;
+        if (t_max[2] < t_max[k]) k = 2;
+        if (t_max[k] > t1) break;
+        cell[k] += step[k];
+        t_max[k] += t_delta[k];
+    }
+    if (grid.Inside(end)) grid.cells[grid.Index(end)] = kOccupied;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3f> SampleMeshSurface(const TriangleMesh& mesh, float spacing) {
+    if (!(spacing > 0.0f))
+        throw InvalidArgument(fmt::format("sample spacing must be > 0, got {}", spacing));
+    mesh.Validate();
+    std::vector<Eigen::Vector3f> samples;
+    for (const auto& t : mesh.triangles) {
+        const Eigen::Vector3f& a = mesh.vertices[t[0]];
+        const Eigen::Vector3f& b = mesh.vertices[t[1]];
+        const Eigen::Vector3f& c = mesh.vertices[t[2]];
+        const float longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+        const int k = std::max(1, static_cast<int>(std::ceil(longest / spacing)));
+        for (int i = 0; i <= k; ++i) {
+            for (int j = 0; i + j <= k; ++j) {
+                // Interior lattice points and one vertex per triangle; shared edges are sampled by
+                // both triangles, which only weights them twice.
+                const float u = static_cast<float>(i) / k, v = static_cast<float>(j) / k;
+                samples.push_back(a + u * (b - a) + v * (c - a));
+            }
+        }
+    }
+    return samples;
+}
+
+VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan,
+                               const Eigen::Vector3f& sensor_origin,
+                               const VerificationParams& params) {
+    if (!(params.voxel_size > 0.0f)) {
+        throw InvalidArgument(
+            fmt::format("verification: voxel_size must be > 0, got {}", params.voxel_size));
+    }
+    if (!(params.margin >= 0.0f)) throw InvalidArgument("verification: margin must be >= 0");
+    if (params.tolerance_voxels < 0)
+        throw InvalidArgument("verification: tolerance_voxels must be >= 0");
+    if (!(params.max_invalid_ratio >= 0.0f && params.max_invalid_ratio <= 1.0f)) {
+        throw InvalidArgument("verification: max_invalid_ratio must be in [0, 1]");
+    }
+    if (!sensor_origin.allFinite())
+        throw InvalidArgument("verification: sensor origin must be finite");
+    VerificationResult result;
+    result.samples = SampleMeshSurface(model, params.sample_spacing);
+    if (result.samples.empty()) return result;
+
+    Eigen::Vector3f lo = result.samples.front(), hi = lo;
+    for (const auto& s : result.samples) {
+        lo = lo.cwiseMin(s);
+        hi = hi.cwiseMax(s);
+    }
+    lo.array() -= params.margin;
+    hi.array() += params.margin;
+    Grid grid;
+    grid.origin = lo;
+    grid.size = params.voxel_size;
+    grid.dims = ((hi - lo) / params.voxel_size).array().ceil().cast<int>().cwiseMax(1);
+    const double cells = static_cast<double>(grid.dims.x()) * grid.dims.y() * grid.dims.z();
+    if (cells > static_cast<double>(params.max_cells)) {
+        throw InvalidArgument(fmt::format(
+            "verification: a {}x{}x{} grid exceeds max_cells ({}); use a larger voxel_size",
+            grid.dims.x(), grid.dims.y(), grid.dims.z(), params.max_cells));
+    }
+    grid.cells.assign(static_cast<std::size_t>(cells), kUnknown);
+    for (const auto& p : scan.points) {
+        if (p.allFinite()) CastRay(grid, sensor_origin, p);
+    }
+
+    result.states.resize(result.samples.size());
+    std::size_t counts[3] = {0, 0, 0};
+    const int r = params.tolerance_voxels;
+    for (std::size_t i = 0; i < result.samples.size(); ++i) {
+        const Eigen::Vector3i c = grid.Cell(result.samples[i]);
+        bool occupied_near = false;
+        for (int dz = -r; dz <= r && !occupied_near; ++dz) {
+            for (int dy = -r; dy <= r && !occupied_near; ++dy) {
+                for (int dx = -r; dx <= r && !occupied_near; ++dx) {
+                    const Eigen::Vector3i n = c + Eigen::Vector3i(dx, dy, dz);
+                    occupied_near = grid.Inside(n) && grid.cells[grid.Index(n)] == kOccupied;
+                }
+            }
+        }
+        SurfaceState state = SurfaceState::kOccluded;
+        if (occupied_near) {
+            state = SurfaceState::kVerified;
+        } else if (grid.Inside(c) && grid.cells[grid.Index(c)] == kFree) {
+            state = SurfaceState::kInvalid;
+        }
+        result.states[i] = state;
+        ++counts[static_cast<int>(state)];
+    }
+    const float n = static_cast<float>(result.samples.size());
+    result.verified_ratio = counts[0] / n;
+    result.occluded_ratio = counts[1] / n;
+    result.invalid_ratio = counts[2] / n;
+    result.accepted = result.invalid_ratio <= params.max_invalid_ratio;
+    return result;
+}
+
+}  // namespace multicue
