@@ -355,7 +355,9 @@ function start() {
         const el = document.getElementById('mc-data');
         const container = document.getElementById('mc-view');
         if (!el || !container) return;
+        const t0 = performance.now();
         const data = JSON.parse(el.textContent);
+        const t1 = performance.now();
         state.objects = data.objects.map((o) => o.id);
         if (!data.cloud) {
             container.classList.add('mc-no-view');
@@ -363,6 +365,8 @@ function start() {
             state.viewer = new ReportViewer(data, container);
         }
         state.loadMs = performance.now();
+        // Where the time goes: page parsing until this script ran, JSON, building and first frame.
+        state.timings = {before_script: t0, json: t1 - t0, viewer: state.loadMs - t1};
         state.ready = true;
     } catch (err) {
         state.error = String(err);

@@ -76,7 +76,7 @@ try {
     const wallMs = Date.now() - t0;
     const state = await page.evaluate(() => ({
         error: window.multicueReport.error, loadMs: window.multicueReport.loadMs,
-        objects: window.multicueReport.objects,
+        objects: window.multicueReport.objects, timings: window.multicueReport.timings,
     }));
     check(!state.error, `viewer started${state.error ? ': ' + state.error : ''}`);
 
@@ -152,6 +152,7 @@ try {
     console.log(`report: ${reportPath}`);
     console.log(`report size: ${sizeMiB.toFixed(2)} MiB, ${result.points} points in the scene`);
     console.log(`load time: ${state.loadMs.toFixed(0)} ms to the first frame (page clock), ${wallMs} ms navigation to ready (wall)`);
+    console.log(`  of which: ${Object.entries(state.timings).map(([k, v]) => `${k} ${v.toFixed(0)} ms`).join(', ')}`);
     console.log(`screenshot: ${shot}`);
 } finally {
     await browser.close();
