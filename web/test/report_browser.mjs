@@ -44,7 +44,7 @@ function check(ok, what) {
 const out = resolve(args.out);
 mkdirSync(out, {recursive: true});
 const demoDir = join(out, 'demo');
-execFileSync(args.multicue, ['--threads', '2', 'demo', '--out', demoDir], {stdio: 'inherit'});
+execFileSync(resolve(args.multicue), ['--threads', '2', 'demo', '--out', 'demo'], {cwd: out, stdio: 'inherit'});
 const reportPath = join(demoDir, 'report.html');
 const result = JSON.parse(readFileSync(join(demoDir, 'result.json'), 'utf8'));
 const html = readFileSync(reportPath, 'utf8');
@@ -149,6 +149,10 @@ try {
 
     const shot = resolve(args.screenshot || join(out, 'report.png'));
     await page.screenshot({path: shot});
+    // A smaller picture for the documentation (docs/images/report.png).
+    await page.setViewportSize({width: 960, height: 600});
+    await page.waitForTimeout(200);
+    await page.screenshot({path: shot.replace(/\.png$/, '-small.png')});
     console.log(`report: ${reportPath}`);
     console.log(`report size: ${sizeMiB.toFixed(2)} MiB, ${result.points} points in the scene`);
     console.log(`load time: ${state.loadMs.toFixed(0)} ms to the first frame (page clock), ${wallMs} ms navigation to ready (wall)`);
