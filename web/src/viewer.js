@@ -11,11 +11,14 @@ import {
     BufferAttribute,
     BufferGeometry,
     Color,
+    ColorManagement,
     DirectionalLight,
     DoubleSide,
     Group,
+    HemisphereLight,
     LineBasicMaterial,
     LineLoop,
+    LinearSRGBColorSpace,
     Mesh,
     MeshBasicMaterial,
     MeshLambertMaterial,
@@ -31,6 +34,9 @@ import {
 import {OrbitControls} from 'three/examples/jsm/controls/OrbitControls.js';
 
 const BACKGROUND = 0x1b1f24;
+// Colours are shown as given (sensor RGB, the object colours of models.ply, the legend's): no
+// sRGB-to-linear round trip, which would wash out the sensor's colours and the dimming.
+ColorManagement.enabled = false;
 const NO_OBJECT_GREY = [0.55, 0.56, 0.58];
 
 function decode(b64, Type) {
@@ -65,12 +71,17 @@ class ReportViewer {
 
         this.renderer = new WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
         this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+        this.renderer.outputColorSpace = LinearSRGBColorSpace;
         this.renderer.setClearColor(BACKGROUND, 1);
         container.appendChild(this.renderer.domElement);
 
         this.scene = new Scene();
-        this.scene.add(new AmbientLight(0xffffff, 1.4));
-        this.light = new DirectionalLight(0xffffff, 1.6);
+        // Ambient, a sky light from above (placed along up in placeCamera) and a head light, so that
+        // the tops and the sides of the models both read.
+        this.scene.add(new AmbientLight(0xffffff, 0.9));
+        this.sky = new HemisphereLight(0xffffff, 0x444444, 1.2);
+        this.scene.add(this.sky);
+        this.light = new DirectionalLight(0xffffff, 1.2);
         this.scene.add(this.light);
 
         this.buildCloud();
@@ -178,6 +189,7 @@ class ReportViewer {
         eye.addScaledVector(up, 0.25 * dist);
         this.camera = new PerspectiveCamera(50, 1, Math.max(dist * 0.01, 1e-3), dist * 50 + 10);
         this.camera.up.copy(up);
+        this.sky.position.copy(up);
         this.camera.position.copy(eye);
         this.controls = new OrbitControls(this.camera, this.renderer.domElement);
         this.controls.target.copy(target);
