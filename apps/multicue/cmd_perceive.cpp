@@ -77,7 +77,7 @@ std::string Summary(const PerceiveResult& result, const std::filesystem::path& o
     s += "\n";
     if (report.enabled && !ReportViewerAvailable()) {
         s += "note: this build has no 3D viewer; report.html shows the tables only (run "
-             "scripts/setup.sh and rebuild)\n";
+             "scripts/setup.sh, then configure and build again)\n";
     }
     return s;
 }
