@@ -242,7 +242,9 @@ class ReportViewer {
         }
         this.cloud.geometry.attributes.color.needsUpdate = true;
         for (const [id, mesh] of this.modelMeshes) {
-            mesh.material.opacity = !sel ? 0.55 : id === sel ? 0.85 : 0.12;
+            // Lighter over the sensor's colours, which the models would otherwise tint.
+            const base = this.mode === 'rgb' ? 0.3 : 0.55;
+            mesh.material.opacity = !sel ? base : id === sel ? 0.85 : 0.12;
         }
         this.render();
     }
