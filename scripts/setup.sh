@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs every Debian package that multicue's build, tests and benchmarks need.
-# Idempotent and non-interactive; runs `apt-get update` once.
+# Installs every Debian package that multicue's build, tests and benchmarks need, then the npm
+# packages of the report viewer (web/, `npm ci` from web/package-lock.json).
+# Idempotent and non-interactive; runs `apt-get update` once, `npm ci` only when the lock changed.
 #   scripts/setup.sh            library, CLI, tests, benchmarks and the PCL/Open3D peers
 #   scripts/setup.sh --minimal  library, CLI and tests only (no PCL/Open3D)
 set -euo pipefail
@@ -39,13 +40,26 @@ if ! command -v npm >/dev/null 2>&1; then missing+=(npm); fi
 
 if [[ ${#missing[@]} -eq 0 ]]; then
     echo "setup.sh: all ${#packages[@]} packages already installed"
-    exit 0
+else
+    SUDO=""
+    if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    echo "setup.sh: installing ${#missing[@]} packages: ${missing[*]}"
+    $SUDO apt-get update -qq
+    $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-SUDO=""
-if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-echo "setup.sh: installing ${#missing[@]} packages: ${missing[*]}"
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# The report viewer's npm packages (three.js, esbuild, playwright-core for the browser test),
+# exactly as web/package-lock.json pins them. The build bundles them offline; nothing else is
+# downloaded at build or run time. Skipped while node_modules matches the lock file.
+web="$(cd "$(dirname "$0")/.." && pwd)/web"
+stamp="$web/node_modules/.multicue-lock-sha256"
+lock_sum="$(sha256sum "$web/package-lock.json" | cut -d' ' -f1)"
+if [[ -f "$stamp" && "$(cat "$stamp")" == "$lock_sum" ]]; then
+    echo "setup.sh: web/node_modules is up to date"
+else
+    echo "setup.sh: npm ci in web/"
+    (cd "$web" && npm ci --no-audit --no-fund --prefer-offline --loglevel=error)
+    echo "$lock_sum" > "$stamp"
+fi
 echo "setup.sh: done"

@@ -217,5 +217,38 @@ TEST(Cli, PerceiveWritesTheContractAndRefusesBadInput) {
     EXPECT_EQ(check.code, 0) << check.output;
 }
 
+TEST(Cli, PerceiveReportOnByDefaultAndOptional) {
+    test::TempDir dir;
+    ASSERT_EQ(RunCli("demo --no-report --out " + (dir / "demo").string()).code, 0);
+    EXPECT_FALSE(std::filesystem::exists(dir / "demo" / "report.html"));
+    const auto scene = (dir / "demo" / "scene.pcd").string();
+    const auto r = RunCli("perceive " + scene + " --out " + (dir / "a").string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string html = ReadAll(dir / "a" / "report.html");
+    EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+    EXPECT_NE(html.find("data-object=\"1\""), std::string::npos);
+    EXPECT_NE(r.output.find("report.html"), std::string::npos);
+
+    const auto q = RunCli("perceive " + scene + " --no-report -q --out " + (dir / "b").string());
+    ASSERT_EQ(q.code, 0) << q.output;
+    EXPECT_TRUE(q.output.empty()) << q.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "b" / "result.json"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "b" / "report.html"));
+    {
+        std::ofstream(dir / "off.json") << R"({"report": {"enabled": false}})";
+        std::ofstream(dir / "typo.json") << R"({"report": {"max_pionts": 10}})";
+    }
+    ASSERT_EQ(RunCli("perceive " + scene + " -q --config " + (dir / "off.json").string() +
+                     " --out " + (dir / "c").string())
+                  .code,
+              0);
+    EXPECT_FALSE(std::filesystem::exists(dir / "c" / "report.html"));
+    const auto typo = RunCli("perceive " + scene + " --config " + (dir / "typo.json").string() +
+                             " --out " + (dir / "d").string());
+    EXPECT_EQ(typo.code, 2);
+    EXPECT_NE(typo.output.find("max_pionts"), std::string::npos) << typo.output;
+    EXPECT_EQ(CountLines(typo.output), 1) << typo.output;
+}
+
 }  // namespace
 }  // namespace multicue

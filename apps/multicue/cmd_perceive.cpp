@@ -16,6 +16,7 @@
 #include "multicue/sim/tabletop_scene.hpp"
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
+#include "multicue/system/perceive_report.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -25,29 +26,41 @@ double MsSince(std::chrono::steady_clock::time_point start) {
         .count();
 }
 
-PerceiveParams LoadParams(const std::string& config_path, const std::string& up, int threads) {
-    PerceiveParams params;
+/// Everything a parameter file sets: the pipeline and the report.
+struct PerceiveOptions {
+    PerceiveParams pipeline;
+    ReportParams report;
+};
+
+PerceiveOptions LoadParams(const std::string& config_path, const std::string& up, int threads) {
+    PerceiveOptions options;
     if (!config_path.empty()) {
         auto config = io::ConfigSection::Load(config_path);
-        ReadPerceiveParams(config, params);
+        ReadPerceiveParams(config, options.pipeline);
+        ReadReportParams(config, options.report);
         config.CheckAllUsed();
     }
-    if (!up.empty()) params.support.up = ParseVector3(up, "--up");
-    if (threads != 0) params.num_threads = threads;
-    return params;
+    if (!up.empty()) options.pipeline.support.up = ParseVector3(up, "--up");
+    if (threads != 0) options.pipeline.num_threads = threads;
+    return options;
 }
 
 /// Runs the pipeline on `cloud` and writes the outputs; returns the result for a summary.
 PerceiveResult RunPerceive(const PointCloud& cloud, const std::string& input_name,
-                           const std::filesystem::path& out, const PerceiveParams& params,
+                           const std::filesystem::path& out, const PerceiveOptions& options,
                            double load_ms) {
-    const PerceiveResult result = Perceive(cloud, params);
+    const PerceiveResult result = Perceive(cloud, options.pipeline);
     const auto json = PerceiveResultJson(input_name, result, {{"load", load_ms}});
-    WritePerceiveOutputs(out, json, PerceiveLabelsCloud(cloud, result), PerceiveModelsMesh(result));
+    const std::string report =
+        options.report.enabled ? PerceiveReportPage(cloud, result, json, options.report).Render()
+                               : std::string();
+    WritePerceiveOutputs(out, json, PerceiveLabelsCloud(cloud, result), PerceiveModelsMesh(result),
+                         report);
     return result;
 }
 
-std::string Summary(const PerceiveResult& result, const std::filesystem::path& out) {
+std::string Summary(const PerceiveResult& result, const std::filesystem::path& out,
+                    const ReportParams& report) {
     std::string s = fmt::format("support plane: {}\nobjects: {}\n",
                                 result.support.found ? "found" : "none", result.objects.size());
     for (const auto& o : result.objects) {
@@ -57,9 +70,15 @@ std::string Summary(const PerceiveResult& result, const std::filesystem::path& o
     }
     double total = 0;
     for (const auto& [stage, ms] : result.timings_ms) total += ms;
-    s += fmt::format("pipeline: {:.1f} ms\noutputs: {}, {}, {}\n", total,
+    s += fmt::format("pipeline: {:.1f} ms\noutputs: {}, {}, {}", total,
                      (out / "result.json").string(), (out / "labels.pcd").string(),
                      (out / "models.ply").string());
+    if (report.enabled) s += ", " + (out / "report.html").string();
+    s += "\n";
+    if (report.enabled && !ReportViewerAvailable()) {
+        s += "note: this build has no 3D viewer; report.html shows the tables only (run "
+             "scripts/setup.sh, then configure and build again)\n";
+    }
     return s;
 }
 
@@ -74,19 +93,24 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
     auto config = std::make_shared<std::string>();
     auto up = std::make_shared<std::string>();
     auto quiet = std::make_shared<bool>(false);
+    auto no_report = std::make_shared<bool>(false);
     cmd->add_option("INPUT", *in, "point cloud (.pcd or .ply), organized or not")->required();
-    cmd->add_option("--out", *out, "output folder: result.json, labels.pcd, models.ply")
+    cmd->add_option("--out", *out,
+                    "output folder: result.json, labels.pcd, models.ply, report.html")
         ->required();
     cmd->add_option("--config", *config, "JSON parameter file (see `multicue config --dump`)");
     cmd->add_option("--up", *up, "x,y,z up direction in the cloud's frame");
+    cmd->add_flag("--no-report", *no_report,
+                  "do not write report.html (same as \"report\": {\"enabled\": false})");
     cmd->add_flag("-q,--quiet", *quiet, "print nothing on success");
     cmd->callback([=, &global] {
-        const PerceiveParams params = LoadParams(*config, *up, global.threads);
+        PerceiveOptions options = LoadParams(*config, *up, global.threads);
+        if (*no_report) options.report.enabled = false;
         const auto start = std::chrono::steady_clock::now();
         const PointCloud cloud = ReadNonEmptyCloud(*in);
         const double load_ms = MsSince(start);
-        const PerceiveResult result = RunPerceive(cloud, *in, *out, params, load_ms);
-        if (!*quiet) std::fputs(Summary(result, *out).c_str(), stdout);
+        const PerceiveResult result = RunPerceive(cloud, *in, *out, options, load_ms);
+        if (!*quiet) std::fputs(Summary(result, *out, options.report).c_str(), stdout);
     });
 }
 
@@ -105,8 +129,9 @@ void AddConfigCommand(CLI::App& app, const GlobalOptions& /*global*/) {
         }
         if (!*dump) throw InvalidArgument("config: give --dump or --check FILE");
         auto section = io::ConfigSection::Dump();
-        PerceiveParams params;
-        ReadPerceiveParams(section, params);
+        PerceiveOptions options;
+        ReadPerceiveParams(section, options.pipeline);
+        ReadReportParams(section, options.report);
         std::fputs(section.DumpText().c_str(), stdout);
     });
 }
@@ -115,8 +140,10 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
     auto* cmd = app.add_subcommand(
         "demo", "Build a synthetic table-top scene, run perceive on it and write the results");
     auto out = std::make_shared<std::string>("multicue-demo");
+    auto no_report = std::make_shared<bool>(false);
     cmd->add_option("--out", *out, "output folder (created if missing)")->capture_default_str();
-    cmd->callback([out, &global] {
+    cmd->add_flag("--no-report", *no_report, "do not write report.html");
+    cmd->callback([out, no_report, &global] {
         const std::filesystem::path dir = *out;
         const sim::TableTopScene scene = sim::MakeDemoScene();
         sim::ScanParams scan;
@@ -128,15 +155,16 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
             throw IoError(fmt::format("{}: cannot create output folder", dir.string()));
         }
         io::WritePcd(dir / "scene.pcd", cloud);
-        PerceiveParams params;
-        params.num_threads = global.threads;
+        PerceiveOptions options;
+        options.pipeline.num_threads = global.threads;
+        options.report.enabled = !*no_report;
         const PerceiveResult result =
-            RunPerceive(cloud, (dir / "scene.pcd").string(), dir, params, 0.0);
+            RunPerceive(cloud, (dir / "scene.pcd").string(), dir, options, 0.0);
         std::printf(
             "multicue demo: synthetic table-top scene with %zu boxes and %zu cylinders, "
             "%ux%u RGB-D frame -> %s\n%s",
             scene.boxes.size(), scene.cylinders.size(), cloud.width, cloud.height,
-            (dir / "scene.pcd").string().c_str(), Summary(result, dir).c_str());
+            (dir / "scene.pcd").string().c_str(), Summary(result, dir, options.report).c_str());
     });
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -161,7 +162,8 @@ TriangleMesh PerceiveModelsMesh(const PerceiveResult& result) {
 }
 
 void WritePerceiveOutputs(const std::filesystem::path& dir, const nlohmann::ordered_json& result,
-                          const PointCloud& labels, const TriangleMesh& models) {
+                          const PointCloud& labels, const TriangleMesh& models,
+                          std::string_view report_html) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (!std::filesystem::is_directory(dir)) {
@@ -174,13 +176,18 @@ void WritePerceiveOutputs(const std::filesystem::path& dir, const nlohmann::orde
         throw IoError(fmt::format("{}: output folder is not writable{}", dir.string(),
                                   ec ? ": " + ec.message() : ""));
     }
-    const char* names[] = {"result.json", "labels.pcd", "models.ply"};
+    std::vector<const char*> names = {"result.json", "labels.pcd", "models.ply"};
+    if (!report_html.empty()) names.push_back("report.html");
     try {
         const std::string text = result.dump(1) + "\n";
         io::WriteFileAtomically(staging / names[0], [&](std::ostream& out) { out << text; });
         // Uncompressed: LZF would cost more time than the 4 MB it saves on a 640x480 frame.
         io::WritePcd(staging / names[1], labels, {.encoding = io::PcdEncoding::kBinary});
         io::WritePlyMesh(staging / names[2], models);
+        if (!report_html.empty()) {
+            io::WriteFileAtomically(staging / names[3],
+                                    [&](std::ostream& out) { out << report_html; });
+        }
         for (const char* name : names) {
             std::filesystem::rename(staging / name, dir / name, ec);
             if (ec) {

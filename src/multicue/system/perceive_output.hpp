@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -31,10 +32,12 @@ TriangleMesh PerceiveModelsMesh(const PerceiveResult& result);
 /// A distinct colour per object id (1-based).
 Color ObjectColor(int id);
 
-/// Writes result.json, labels.pcd and models.ply into `dir` (created if missing). All three are
-/// written to a staging folder first and moved into place only when every one succeeded, so a
-/// failed run leaves an existing folder's files as they were. Throws IoError naming the path.
+/// Writes result.json, labels.pcd, models.ply and, when `report_html` is not empty, report.html
+/// into `dir` (created if missing). All are written to a staging folder first and moved into place
+/// only when every one succeeded, so a failed run leaves an existing folder's files as they were.
+/// Throws IoError naming the path.
 void WritePerceiveOutputs(const std::filesystem::path& dir, const nlohmann::ordered_json& result,
-                          const PointCloud& labels, const TriangleMesh& models);
+                          const PointCloud& labels, const TriangleMesh& models,
+                          std::string_view report_html = {});
 
 }  // namespace multicue
