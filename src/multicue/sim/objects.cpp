@@ -14,6 +14,8 @@
 namespace multicue::sim {
 namespace {
 
+constexpr float kMinTipAngle = 12.0f * static_cast<float>(M_PI) / 180.0f;
+
 float Cross(const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
     return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
@@ -31,18 +33,22 @@ bool StableAlong(const PartMesh& pm, const Eigen::Vector3f& centroid, const Eige
     const Eigen::Vector3f e1 = down.unitOrthogonal(), e2 = down.cross(e1);
     std::vector<Eigen::Vector2f> contact;
     for (const auto& v : V) {
-        if (v.dot(down) >= lowest - 2e-3f) contact.emplace_back(v.dot(e1), v.dot(e2));
+        if (v.dot(down) >= lowest - 5e-4f) contact.emplace_back(v.dot(e1), v.dot(e2));
     }
     const auto hull = ConvexHull2D(contact);
     if (hull.size() < 3) return false;
     const Eigen::Vector2f c(centroid.dot(e1), centroid.dot(e2));
+    float inside = std::numeric_limits<float>::infinity();  // distance to the nearest hull edge
     for (std::size_t i = 0; i < hull.size(); ++i) {
         const Eigen::Vector2f& a = hull[i];
         const Eigen::Vector2f& b = hull[(i + 1) % hull.size()];
-        // Inside with a 1 mm margin (counter-clockwise hull: the inside is on the left).
-        if (Cross(a, b, c) / std::max((b - a).norm(), 1e-9f) < 1e-3f) return false;
+        // Counter-clockwise hull: the inside is on the left of every edge.
+        inside = std::min(inside, Cross(a, b, c) / std::max((b - a).norm(), 1e-9f));
     }
-    return true;
+    // Stable when tipping over needs at least kMinTipAngle: excludes rolling (cylinders on their
+    // side, balls) and poses a touch would topple (a bottle on its cap, a book on its edge).
+    const float height = lowest - centroid.dot(down);
+    return inside > 0.0f && std::atan2(inside, std::max(height, 1e-6f)) >= kMinTipAngle;
 }
 
 }  // namespace

@@ -55,8 +55,9 @@ class ObjectSource {
 /// Rotations (object -> world, before yaw) under which the mesh rests stably on a horizontal
 /// plane: candidate "down" directions are the object's +-x, +-y, +-z and +-principal axes; a
 /// direction is stable when the projection of the surface centroid lies inside the convex hull of
-/// the vertices within 2 mm of the lowest point. The first entry is the upright pose (object -z
-/// down) when it is stable. Never empty: falls back to the upright pose.
+/// the vertices within 0.5 mm of the lowest point, far enough that tipping over needs at least
+/// 12 degrees (so no rolling cylinders, balls, or bottles on their caps). The first entry is the
+/// upright pose (object -z down) when it is stable. Never empty: falls back to the upright pose.
 std::vector<Eigen::Matrix3f> StableRotations(const PartMesh& mesh);
 
 /// Convex hull (counter-clockwise) of 2D points (Andrew's monotone chain).

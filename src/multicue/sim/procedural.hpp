@@ -44,6 +44,6 @@ struct ProfilePoint {
 /// Surface of revolution of `profile` about the z axis with `segments` sectors; profile points
 /// with r == 0 become single pole vertices.
 PartMesh MakeRevolutionMesh(const std::vector<ProfilePoint>& profile,
-                            const std::vector<std::string>& parts, int segments = 32);
+                            const std::vector<std::string>& parts, int segments = 48);
 
 }  // namespace multicue::sim
