@@ -144,6 +144,88 @@ bool RayCaster::Occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& d
     return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
 }
 
+void RayCaster::IntersectBatch(const Eigen::Vector3f& origin, const Eigen::Vector3f* dirs,
+                               std::size_t n, float t_near, float t_far, RayHit* hits) const {
+    for (std::size_t b = 0; b < n; b += 8) {
+        const std::size_t m = std::min<std::size_t>(8, n - b);
+        alignas(32) int valid[8];
+        alignas(32) RTCRayHit8 rh;
+        for (std::size_t k = 0; k < 8; ++k) {
+            const bool on = k < m;
+            valid[k] = on ? -1 : 0;
+            const Eigen::Vector3f& d = dirs[b + (on ? k : 0)];
+            rh.ray.org_x[k] = origin.x();
+            rh.ray.org_y[k] = origin.y();
+            rh.ray.org_z[k] = origin.z();
+            rh.ray.dir_x[k] = d.x();
+            rh.ray.dir_y[k] = d.y();
+            rh.ray.dir_z[k] = d.z();
+            rh.ray.tnear[k] = t_near;
+            rh.ray.tfar[k] = t_far;
+            rh.ray.time[k] = 0.0f;
+            rh.ray.mask[k] = 0xffffffffu;
+            rh.ray.id[k] = static_cast<unsigned>(k);
+            rh.ray.flags[k] = 0;
+            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        rtcIntersect8(valid, impl_->top, &context, &rh);
+        for (std::size_t k = 0; k < m; ++k) {
+            RayHit& hit = hits[b + k];
+            hit = RayHit{};
+            if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+            hit.object = rh.hit.instID[0][k];
+            hit.triangle = rh.hit.primID[k];
+            hit.t = rh.ray.tfar[k];
+            hit.u = rh.hit.u[k];
+            hit.v = rh.hit.v[k];
+            Eigen::Vector3f nrm =
+                impl_->rotations[hit.object] * (*impl_->normals[hit.object])[hit.triangle];
+            if (nrm.dot(dirs[b + k]) > 0.0f) nrm = -nrm;
+            hit.normal = nrm;
+        }
+    }
+}
+
+void RayCaster::OccludedBatch(const Eigen::Vector3f* origins, const Eigen::Vector3f* dirs,
+                              const float* t_far, const bool* active, std::size_t n, float t_near,
+                              bool* occluded) const {
+    for (std::size_t b = 0; b < n; b += 8) {
+        const std::size_t m = std::min<std::size_t>(8, n - b);
+        alignas(32) int valid[8];
+        alignas(32) RTCRay8 ray;
+        bool any = false;
+        for (std::size_t k = 0; k < 8; ++k) {
+            const bool on = k < m && active[b + k];
+            any = any || on;
+            valid[k] = on ? -1 : 0;
+            const std::size_t i = b + (k < m ? k : 0);
+            ray.org_x[k] = origins[i].x();
+            ray.org_y[k] = origins[i].y();
+            ray.org_z[k] = origins[i].z();
+            ray.dir_x[k] = dirs[i].x();
+            ray.dir_y[k] = dirs[i].y();
+            ray.dir_z[k] = dirs[i].z();
+            ray.tnear[k] = t_near;
+            ray.tfar[k] = t_far[i];
+            ray.time[k] = 0.0f;
+            ray.mask[k] = 0xffffffffu;
+            ray.id[k] = static_cast<unsigned>(k);
+            ray.flags[k] = 0;
+        }
+        if (any) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            rtcOccluded8(valid, impl_->top, &context, &ray);
+        }
+        for (std::size_t k = 0; k < m; ++k) {
+            occluded[b + k] = any && valid[k] != 0 && ray.tfar[k] < 0.0f;
+        }
+    }
+}
+
 Color RayCaster::HitColor(const RayHit& hit) const {
     const SceneObject& obj = scene_.objects[hit.object];
     if (!obj.use_vertex_colors || !obj.mesh->mesh.HasVertexColors()) return obj.color;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -121,29 +122,43 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
                                (static_cast<float>(v) - p.cy) / p.fy, 1.0f);
     };
 
-    // Pass 1: noise-free hits. With ray_cam.z = 1 the ray parameter t is the depth z.
+    // Pass 1: noise-free hits, one image row per batch of packets. With ray_cam.z = 1 the ray
+    // parameter t is the depth z.
     std::vector<PixelHit> px(n);
     ParallelForChunks(
         H, p.num_threads,
         [&](std::size_t v0, std::size_t v1) {
+            std::vector<Eigen::Vector3f> dirs(W), to(W), from(W, projector);
+            std::vector<RayHit> hits(W);
+            std::vector<float> t_far(W);
+            std::unique_ptr<bool[]> active(new bool[W]), shadowed(new bool[W]);
             for (std::size_t v = v0; v < v1; ++v) {
                 for (std::uint32_t u = 0; u < W; ++u) {
-                    const Eigen::Vector3f d = R * ray_cam(u, static_cast<std::uint32_t>(v));
+                    dirs[u] = R * ray_cam(u, static_cast<std::uint32_t>(v));
+                }
+                caster.IntersectBatch(eye, dirs.data(), W, 0.0f, p.max_range, hits.data());
+                for (std::uint32_t u = 0; u < W; ++u) {
+                    const RayHit& h = hits[u];
+                    active[u] = h.Valid() && h.t >= p.min_range &&
+                                std::abs(h.normal.dot(dirs[u].normalized())) >= cos_max;
+                    shadowed[u] = false;
+                    if (!active[u] || !p.projector_shadow) continue;
+                    // The projector must see the point too (the second ray of the stereo pair).
+                    const Eigen::Vector3f d = eye + h.t * dirs[u] - projector;
+                    const float dist = d.norm();
+                    const float margin = std::max(1e-3f, 1e-3f * dist);
+                    to[u] = d / dist;
+                    t_far[u] = dist - margin;
+                    if (!(t_far[u] > 0.0f)) active[u] = false;
+                }
+                if (p.projector_shadow) {
+                    caster.OccludedBatch(from.data(), to.data(), t_far.data(), active.get(), W,
+                                         0.0f, shadowed.get());
+                }
+                for (std::uint32_t u = 0; u < W; ++u) {
                     PixelHit& out = px[v * W + u];
-                    out.hit = caster.Intersect(eye, d, 0.0f, p.max_range);
-                    if (!out.hit.Valid() || out.hit.t < p.min_range) continue;
-                    if (std::abs(out.hit.normal.dot(d.normalized())) < cos_max) continue;
-                    if (p.projector_shadow) {
-                        const Eigen::Vector3f P = eye + out.hit.t * d;
-                        const Eigen::Vector3f to = P - projector;
-                        const float dist = to.norm();
-                        const float margin = std::max(1e-3f, 1e-3f * dist);
-                        if (dist > margin &&
-                            caster.Occluded(projector, to / dist, 0.0f, dist - margin)) {
-                            continue;
-                        }
-                    }
-                    out.valid = true;
+                    out.hit = hits[u];
+                    out.valid = active[u] && !shadowed[u];
                 }
             }
         },
@@ -171,8 +186,8 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
                     StreamRng rng(seed ^ kKinectSalt, i);
                     std::size_t src = i;
                     if (p.lateral_noise_px > 0.0f && IsEdge(px, W, H, u, v, p.edge_jump, depth)) {
-                        const long du = std::lround(rng.Gaussian() * p.lateral_noise_px);
-                        const long dv = std::lround(rng.Gaussian() * p.lateral_noise_px);
+                        const long du = std::lround(rng.FastGaussian() * p.lateral_noise_px);
+                        const long dv = std::lround(rng.FastGaussian() * p.lateral_noise_px);
                         const long su = std::clamp<long>(u + du, 0, W - 1);
                         const long sv = std::clamp<long>(v + dv, 0, H - 1);
                         src = static_cast<std::size_t>(sv) * W + static_cast<std::size_t>(su);
@@ -190,9 +205,10 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
                     if (z_noisy < p.min_range || z_noisy > p.max_range) continue;
                     cloud.points[i] = ray_cam(u, v) * z_noisy;
                     const Color c = caster.HitColor(h.hit);
-                    cloud.colors[i] = Color{NoisyChannel(c.r, rng.Gaussian() * p.color_noise),
-                                            NoisyChannel(c.g, rng.Gaussian() * p.color_noise),
-                                            NoisyChannel(c.b, rng.Gaussian() * p.color_noise), 255};
+                    cloud.colors[i] =
+                        Color{NoisyChannel(c.r, rng.FastGaussian() * p.color_noise),
+                              NoisyChannel(c.g, rng.FastGaussian() * p.color_noise),
+                              NoisyChannel(c.b, rng.FastGaussian() * p.color_noise), 255};
                     truth.Set(i, caster, h.hit);
                 }
             }
