@@ -66,6 +66,16 @@ TEST(SimMesh, LoadsPlyWithVertexColours) {
     EXPECT_EQ(m.mesh.vertex_colors[0].g, 0);
 }
 
+TEST(SimMesh, LoadsStl) {
+    test::TempDir dir;
+    WriteText(dir / "tri.stl",
+              "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 100 0 0\n"
+              "vertex 0 50 0\nendloop\nendfacet\nendsolid t\n");
+    const PartMesh m = LoadMesh(dir / "tri.stl", {.scale = 0.001f});
+    EXPECT_EQ(m.mesh.triangles.size(), 1u);
+    EXPECT_NEAR(m.Bounds().sizes().x(), 0.1f, 1e-6f);
+}
+
 TEST(SimMesh, BadMeshesAreRefusedOrSkipped) {
     test::TempDir dir;
     WriteText(dir / "cube.obj", kCubeObj);
