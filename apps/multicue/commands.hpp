@@ -21,5 +21,6 @@ void AddConfigCommand(CLI::App& app, const GlobalOptions& global);
 void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
 void AddDbCommand(CLI::App& app, const GlobalOptions& global);
 void AddRunCommand(CLI::App& app, const GlobalOptions& global);
+void AddSimulateCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli
