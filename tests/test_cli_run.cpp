@@ -67,6 +67,24 @@ TEST(CliRun, EnumeratesFramesLearnsObjectsAndListsThem) {
     EXPECT_NE(imported.output.find("imported 5 objects"), std::string::npos) << imported.output;
 }
 
+TEST(CliRun, ReadsFramesAndPosesFromASimulatorManifest) {
+    test::TempDir dir;
+    const auto sim = test::RunCli("simulate scenes --out " + (dir / "sim").string() +
+                                  " --scenes 1 --views 2 --objects 3,3 --seed 5 -q");
+    ASSERT_EQ(sim.code, 0) << sim.output;
+    std::ofstream(dir / "task.yaml") << "task: enumerate\noutput: run.json\n"
+                                     << "frames: {manifest: sim/manifest.json, scenes: [0]}\n";
+    const auto r = test::RunCli("run " + (dir / "task.yaml").string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto result = nlohmann::json::parse(test::ReadTextFile((dir / "run.json").string()));
+    ASSERT_EQ(result["frames"].size(), 2u);
+    EXPECT_EQ(result["frames"][0]["frame"], "scene_0000_view_00.pcd");
+    EXPECT_GE(result["frames"][0]["hypotheses"].size(), 2u);
+
+    std::ofstream(dir / "none.yaml") << "frames: {manifest: sim/manifest.json, scenes: [7]}\n";
+    EXPECT_EQ(test::RunCli("run " + (dir / "none.yaml").string()).code, 2);
+}
+
 TEST(CliRun, BadTaskFilesGiveOneLineErrors) {
     test::TempDir dir;
     std::ofstream(dir / "unknown.yaml") << "task: enumerate\nframes: [a.pcd]\ncolour: blue\n";

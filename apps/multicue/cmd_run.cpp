@@ -88,6 +88,47 @@ void CheckKeys(const nlohmann::json& object, const std::set<std::string>& allowe
     }
 }
 
+/// Frames of a simulator manifest (`multicue simulate`): every frame of the listed scenes (all by
+/// default) in file order, with the sensor poses; times count frames.
+template <typename Resolve>
+void ReadManifestFrames(const nlohmann::json& spec, const Resolve& resolve,
+                        const std::string& where, TaskFile& t) {
+    CheckKeys(spec, {"manifest", "scenes"}, where + " frames");
+    const fs::path manifest_path = resolve(spec.at("manifest").get<std::string>());
+    nlohmann::json manifest;
+    try {
+        manifest = nlohmann::json::parse(io::ReadFileBytes(manifest_path));
+    } catch (const nlohmann::json::parse_error& e) {
+        throw FormatError(manifest_path.string() + ": malformed JSON (" + e.what() + ")");
+    }
+    if (!manifest.is_object() || !manifest.contains("scenes") || !manifest["scenes"].is_array()) {
+        throw FormatError(manifest_path.string() + ": not a simulator manifest (no 'scenes')");
+    }
+    std::set<long long> wanted;
+    for (const auto& id : spec.value("scenes", nlohmann::json::array()))
+        wanted.insert(id.get<long long>());
+    const fs::path base = manifest_path.parent_path();
+    for (const auto& scene : manifest["scenes"]) {
+        const long long id = scene.value("id", -1LL);
+        if (!wanted.empty() && wanted.count(id) == 0) continue;
+        for (const auto& f : scene.value("frames", nlohmann::json::array())) {
+            Frame frame;
+            const std::string file = f.at("file").get<std::string>();
+            const auto& rows = f.at("T_world_sensor");
+            nlohmann::json flat = nlohmann::json::array();
+            for (const auto& row : rows) {
+                for (const auto& v : row) flat.push_back(v);
+            }
+            frame.T_world_sensor = PoseFromList(flat, manifest_path.string() + " " + file);
+            frame.time = static_cast<double>(t.frames.size());
+            frame.name = file;
+            t.files.push_back(base / file);
+            t.frames.push_back(std::move(frame));
+        }
+    }
+    if (t.frames.empty()) throw InvalidArgument(where + ": the manifest names no frames");
+}
+
 TaskFile ReadTaskFile(const fs::path& path) {
     const std::string text = io::ReadFileBytes(path);
     nlohmann::json j;
@@ -131,27 +172,32 @@ TaskFile ReadTaskFile(const fs::path& path) {
         t.database = resolve(j.value("database", std::string()));
         t.output = resolve(j.value("output", std::string()));
         t.params = resolve(j.value("params", std::string()));
-        if (!j.contains("frames") || !j["frames"].is_array() || j["frames"].empty()) {
-            throw InvalidArgument(where + ": 'frames' must list at least one frame");
-        }
-        std::size_t index = 0;
-        for (const auto& f : j["frames"]) {
-            const std::string fw = fmt::format("{} frame {}", where, index + 1);
-            Frame frame;
-            std::string file;
-            if (f.is_string()) {
-                file = f.get<std::string>();
-            } else {
-                CheckKeys(f, {"file", "pose", "time"}, fw);
-                file = f.at("file").get<std::string>();
-                if (f.contains("pose")) frame.T_world_sensor = PoseFromList(f["pose"], fw);
-                frame.time = f.value("time", static_cast<double>(index));
+        if (j.contains("frames") && j["frames"].is_object()) {
+            ReadManifestFrames(j["frames"], resolve, where, t);
+        } else {
+            if (!j.contains("frames") || !j["frames"].is_array() || j["frames"].empty()) {
+                throw InvalidArgument(where +
+                                      ": 'frames' must list at least one frame or name a manifest");
             }
-            if (!f.is_object()) frame.time = static_cast<double>(index);
-            frame.name = file;
-            t.files.push_back(resolve(file));
-            t.frames.push_back(std::move(frame));
-            ++index;
+            std::size_t index = 0;
+            for (const auto& f : j["frames"]) {
+                const std::string fw = fmt::format("{} frame {}", where, index + 1);
+                Frame frame;
+                std::string file;
+                frame.time = static_cast<double>(index);
+                if (f.is_string()) {
+                    file = f.get<std::string>();
+                } else {
+                    CheckKeys(f, {"file", "pose", "time"}, fw);
+                    file = f.at("file").get<std::string>();
+                    if (f.contains("pose")) frame.T_world_sensor = PoseFromList(f["pose"], fw);
+                    frame.time = f.value("time", frame.time);
+                }
+                frame.name = file;
+                t.files.push_back(resolve(file));
+                t.frames.push_back(std::move(frame));
+                ++index;
+            }
         }
     } catch (const nlohmann::json::exception& e) {
         throw InvalidArgument(where + ": " + e.what());

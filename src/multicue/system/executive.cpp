@@ -40,7 +40,14 @@ class SegmentationMethod final : public ExaminationMethod {
             Hypothesis h;
             h.id = object.id;
             h.indices = object.indices;
-            h.position = T * object.centroid.cast<double>();
+            // The model's centre moves less between viewpoints than the centroid of the seen side.
+            Eigen::Vector3f center = object.centroid;
+            if (object.model.box && object.model.box->found) {
+                center = object.model.box->center;
+            } else if (object.model.cylinder && object.model.cylinder->found) {
+                center = object.model.cylinder->center;
+            }
+            h.position = T * center.cast<double>();
             h.extents = Extents(cloud, object);
             for (std::size_t c = 1; c < kNumCategories; ++c) {
                 const float p = object.category.probabilities[c];
