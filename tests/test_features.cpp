@@ -104,7 +104,7 @@ TEST(Rsd, PclOrderGivesCapTimesFactorsOnAPlane) {
     const PointCloud plane = test::Plane(0.1f, 0.8f, 0.004f);
     const KdTree tree(plane);
     const FeatureMatrix ours = ComputeRsd(plane, tree, {});
-    const FeatureMatrix pcl = ComputeRsd(plane, tree, {.pcl_order = true});
+    const FeatureMatrix pcl = ComputeRsd(plane, tree, {.pcl_compatible = true});
     EXPECT_FLOAT_EQ(ours(0, 0), 0.2f);
     EXPECT_FLOAT_EQ(ours(0, 1), 0.2f);
     EXPECT_NEAR(pcl(0, 0), 0.18f, 1e-6f);
@@ -234,10 +234,12 @@ TEST(GrsdMinus, AdditiveUpToTheSharedBoundary) {
     EXPECT_EQ(GrsdMinusBoundaryCorrection(voxels, left, right).cwiseAbs().sum(), 0.0f);
     EXPECT_TRUE(GrsdMinusOfVoxels(voxels, both)
                     .isApprox(GrsdMinusOfVoxels(voxels, left) + GrsdMinusOfVoxels(voxels, right)));
-    // Every defined voxel contributes 26 counts; the empty-empty bin stays 0.
+    // Every defined voxel contributes 26 counts, the diagonal twice; the empty-empty bin stays 0.
     std::size_t defined = 0;
     for (auto t : voxels.types) defined += t != SurfaceType::kUndefined ? 1 : 0;
-    EXPECT_FLOAT_EQ(hab.sum(), 26.0f * static_cast<float>(defined));
+    float diagonal = 0.0f;
+    for (int t = 0; t < kNumSurfaceTypes; ++t) diagonal += hab[GrsdBin(t, t)];
+    EXPECT_FLOAT_EQ(hab.sum() - 0.5f * diagonal, 26.0f * static_cast<float>(defined));
     EXPECT_EQ(hab[GrsdBin(5, 5)], 0.0f);
     EXPECT_EQ(ComputeGrsdMinus(scene), hab);
     EXPECT_THROW(GrsdMinusOfVoxels(voxels, std::vector<std::uint32_t>{0, 0}), InvalidArgument);

@@ -63,6 +63,9 @@ std::unordered_map<std::uint64_t, std::uint32_t> IndexSubset(const VoxelRsdResul
     return map;
 }
 
+// One count T(i, j) in the folded bin T(i, j) + T(j, i): it appears twice on the diagonal.
+float FoldWeight(int a, int b) { return a == b ? 2.0f : 1.0f; }
+
 int TypeOf(const VoxelRsdResult& voxels, std::uint32_t v) {
     return static_cast<int>(voxels.types[v]);
 }
@@ -150,8 +153,7 @@ FeatureVector GrsdMinusOfVoxels(const VoxelRsdResult& voxels,
         for (const Eigen::Vector3i& o : NeighbourOffsets()) {
             const auto found = members.find(Key(voxels.coordinates[v] + o));
             const int target = found == members.end() ? kEmpty : TypeOf(voxels, found->second);
-            // T(source, target) lands in bin(source, target), the fold T(i,j) + T(j,i).
-            hist[GrsdBin(source, target)] += 1.0f;
+            hist[GrsdBin(source, target)] += FoldWeight(source, target);
         }
     }
     return hist;
@@ -171,7 +173,7 @@ FeatureVector GrsdMinusBoundaryCorrection(const VoxelRsdResult& voxels,
             const auto found = members_b.find(Key(voxels.coordinates[v] + o));
             if (found == members_b.end()) continue;
             const int tb = TypeOf(voxels, found->second);
-            correction[GrsdBin(ta, tb)] += 2.0f;
+            correction[GrsdBin(ta, tb)] += 2.0f * FoldWeight(ta, tb);
             correction[GrsdBin(ta, kEmpty)] -= 1.0f;
             correction[GrsdBin(tb, kEmpty)] -= 1.0f;
         }

@@ -6,24 +6,26 @@
 /// voxel) and count transitions between classes c in {edge 0, plane 1, cylinder 2, sphere 3,
 /// rim 4, empty 5}. A 6 x 6 count matrix T is folded into 21 bins, the upper triangle with the
 /// diagonal: bin(i, j) for i <= j in the order (0,0) (0,1) .. (0,5) (1,1) .. (1,5) .. (5,5), holds
-/// T(i, j) + T(j, i) (PCL's GRSDSignature21 layout). Bins are raw counts, not normalised: the
-/// thesis sums the histograms "instead of computing their distribution", and only raw counts can
-/// be additive.
+/// T(i, j) + T(j, i) (PCL's GRSDSignature21 layout; a count on the diagonal appears twice).
+/// Bins are raw counts, not normalised: the thesis sums the histograms "instead of computing
+/// their distribution", and only raw counts can be additive.
 ///
 /// GRSD- (Kanezaki et al., 2011c): for every occupied voxel a of the set and each of its 26
 /// neighbour cells b, T(type(a), class(b)) += 1, where class(b) is type(b) if b is an occupied
-/// voxel of the same set and 5 (empty) otherwise. Every voxel therefore contributes exactly 26 to
-/// T, and bin (5,5) is always 0 (20 informative dimensions, as Table 2.2 counts them). Voxels with
-/// an undefined type (no finite normal near them) are treated as empty.
+/// voxel of the same set and 5 (empty) otherwise. Every voxel contributes 26 counts to T, so the
+/// bins sum to 26 V + (same-type neighbour pairs, counted from both sides); bin (5,5) is always 0
+/// (20 informative dimensions, as Table 2.2 counts them). Voxels with an undefined type (no
+/// finite normal near them) are treated as empty. This is PCL's GRSDEstimation construction.
 ///
 /// Additivity. For two voxel sets A and B without common voxels, with labels taken from one
 /// voxel map (VoxelRsdResult of the scene or object they belong to):
 ///     H(A u B) = H(A) + H(B) + sum over 26-adjacent pairs (a in A, b in B) of
-///                [ 2 e(type a, type b) - e(type a, 5) - e(type b, 5) ]
-/// with e(i, j) the unit vector of bin(i, j): in A u B the two voxels see each other instead of
-/// empty space. So the descriptor of a union of parts is the sum of the parts' descriptors up to
-/// the voxels on their shared boundary, and the correction is exactly computable
-/// (GrsdMinusBoundaryCorrection).
+///                [ 2 w e(type a, type b) - e(type a, 5) - e(type b, 5) ]
+/// with e(i, j) the unit vector of bin(i, j) and w = 2 for equal types, else 1: in A u B the
+/// two voxels see each other instead of empty space. So the descriptor of a union of parts is
+/// the sum of the parts' descriptors up to the voxels on their shared boundary, and the
+/// correction is exactly computable (GrsdMinusBoundaryCorrection); parts that do not touch
+/// (no 26-adjacent voxels) add exactly.
 ///
 /// GRSD (ray cast): free space is found by casting a ray from the viewpoint to every point of the
 /// cluster through a voxel grid over the cluster's voxels grown by one cell on each side (a 3D

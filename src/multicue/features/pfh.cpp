@@ -20,6 +20,12 @@ int AngleBin(float f1, int bins) {
     return detail::ClampedBin(bins * ((f1 + M_PI) * kInvTwoPi), bins);
 }
 int UnitBin(float f, int bins) { return detail::ClampedBin(bins * ((f + 1.0) * 0.5), bins); }
+// PFHRGB computes the same in float (pfhrgb.hpp), which rounds differently at bin borders that
+// colour ratios of small integers hit exactly.
+int UnitBinF(float f, int bins) {
+    const float v = static_cast<float>(bins) * ((f + 1.0f) * 0.5f);
+    return detail::ClampedBin(v, bins);
+}
 
 void CheckInput(const PointCloud& cloud, const KdTree& tree, const PairFeatureParams& params,
                 const char* feature) {
@@ -190,10 +196,11 @@ FeatureMatrix ComputePfhRgb(const PointCloud& cloud, const KdTree& tree,
                     const Color c2 = cloud.colors[b];
                     const int geo =
                         AngleBin(f1, kPfhSplit) +
-                        kPfhSplit * (UnitBin(f2, kPfhSplit) + kPfhSplit * UnitBin(f3, kPfhSplit));
-                    const int col = UnitBin(ratio(c1.r, c2.r), kPfhSplit) +
-                                    kPfhSplit * (UnitBin(ratio(c1.g, c2.g), kPfhSplit) +
-                                                 kPfhSplit * UnitBin(ratio(c1.b, c2.b), kPfhSplit));
+                        kPfhSplit * (UnitBinF(f2, kPfhSplit) + kPfhSplit * UnitBinF(f3, kPfhSplit));
+                    const int col =
+                        UnitBinF(ratio(c1.r, c2.r), kPfhSplit) +
+                        kPfhSplit * (UnitBinF(ratio(c1.g, c2.g), kPfhSplit) +
+                                     kPfhSplit * UnitBinF(ratio(c1.b, c2.b), kPfhSplit));
                     hist[geo] += incr;
                     hist[kPfhSize + col] += incr;
                 }

@@ -69,14 +69,15 @@ Eigen::Vector2f RadiiFromNeighbours(const PointCloud& cloud, const Eigen::Vector
     const double min_factor = params.correct_bias ? 1.1 : 1.0;
     const double max_factor = params.correct_bias ? 0.9 : 1.0;
     float r_min, r_max;
-    if (params.pcl_order) {
-        // pcl::computeRSD: cap, then scale (a plane gives 1.1 and 0.9 times the cap).
-        r_min = aa_max == 0.0 ? static_cast<float>(plane)
-                              : static_cast<float>(std::min(ad_max / aa_max, plane));
+    if (params.pcl_compatible) {
+        // pcl::computeRSD: cap, then scale; its 1.1 lands on the radius of the smallest angles
+        // (the larger radius) and 0.9 on that of the largest angles.
         r_max = aa_min == 0.0 ? static_cast<float>(plane)
                               : static_cast<float>(std::min(ad_min / aa_min, plane));
-        r_min *= static_cast<float>(min_factor);
-        r_max *= static_cast<float>(max_factor);
+        r_min = aa_max == 0.0 ? static_cast<float>(plane)
+                              : static_cast<float>(std::min(ad_max / aa_max, plane));
+        r_max *= 1.1f;
+        r_min *= 0.9f;
     } else {
         r_min = aa_max == 0.0 ? static_cast<float>(plane)
                               : static_cast<float>(std::min(min_factor * ad_max / aa_max, plane));
@@ -187,9 +188,10 @@ VoxelRsdResult ComputeVoxelRsd(const PointCloud& cloud, const KdTree& tree,
                     continue;
                 }
                 const Index ref = nn[best];
-                const Eigen::Vector2f r =
-                    RadiiFromNeighbours(cloud, cloud.points[ref], cloud.normals[ref], nn.data(),
-                                        nn.size(), rsd.radius, rsd);
+                // Distances from the centroid (the query), angles against the normal of the
+                // nearest point, as PCL's GRSDEstimation measures them.
+                const Eigen::Vector2f r = RadiiFromNeighbours(
+                    cloud, centroid, cloud.normals[ref], nn.data(), nn.size(), rsd.radius, rsd);
                 result.radii(row, 0) = r[0];
                 result.radii(row, 1) = r[1];
                 result.types[v] = ClassifySurface(r[0], r[1], params.thresholds);

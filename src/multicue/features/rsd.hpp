@@ -8,19 +8,24 @@
 /// bin, paired with the bin's centre distance, give two least-squares lines through the origin
 /// whose slopes are r_max (smallest angles) and r_min (largest angles):
 ///     r = sum_b f_b alpha_b / sum_b alpha_b^2,   f_b = (b + 0.5) radius / num_bins.
-/// The reference point itself lies in bin 0 with angle 0. A radius is capped at `plane_radius`
-/// (a plane: all angles 0 gives plane_radius).
+/// Distances are measured from the query point, angles against the reference normal (the query
+/// point's own; for voxels that of the point nearest to the voxel centroid). The reference lies
+/// in bin 0 with angle 0. A radius is capped at `plane_radius` (all angles 0, a plane, gives
+/// plane_radius).
 ///
 /// Bias correction (section 2.5.1: "r_min is typically under- and r_max over-estimated"): the
 /// largest angle of a bin belongs to its far end but is paired with the bin centre, so on a
 /// sphere of radius R the fit gives r_min = R sum_b (b+0.5)(b+1) / sum_b (b+1)^2 = 0.864 R for
-/// 5 bins, and r_max = R sum_b (b+0.5) b / sum_b b^2 = 1.167 R. With `correct_bias` the radii
-/// are scaled by 1.1 and 0.9 (PCL's factors; 0.95 R and 1.05 R remain), then capped at
-/// plane_radius, so a plane gives (plane_radius, plane_radius). pcl::computeRSD caps first and
-/// scales afterwards (a plane gives 0.9 and 1.1 times the cap); `pcl_order` reproduces that.
+/// 5 bins, and r_max = R sum_b (b+0.5) b / sum_b b^2 = 1.167 R. With `correct_bias` r_min is
+/// scaled by 1.1 and r_max by 0.9 (0.95 R and 1.05 R remain), then both are capped at
+/// plane_radius, so a plane gives (plane_radius, plane_radius).
+///
+/// PCL compatibility: pcl::computeRSD uses the same two factors but applies 1.1 to the radius of
+/// the smallest angles (the larger one) and 0.9 to that of the largest angles, so it scales r_max
+/// up and r_min down, and it caps before scaling (a plane gives r_min = 0.18, r_max = 0.22 for a
+/// 0.2 cap; a sphere r_min = 0.78 R). `pcl_compatible` reproduces PCL step by step (the oracle
+/// test checks it); the default corrects in the direction section 2.5.1 describes.
 /// The two radii are swapped if r_min > r_max.
-/// This follows pcl::computeRSD step by step, so with the same neighbourhoods both agree (see
-/// docs/features.md for the small differences in binning at exact bin borders).
 ///
 /// Layout: FeatureMatrix n x 2, columns (r_min, r_max) [m], one row per point; NaN rows for
 /// points that are not finite or have no finite normal. A point without any other neighbour gets
@@ -38,11 +43,11 @@ struct RsdParams {
     /// Neighbourhood radius [m]. 2 cm keeps the angles of the 2 cm spheres of section 2.5.1
     /// below pi/2 and matches the 2.5 cm voxels of section 2.5.2 (their half diagonal is 2.17 cm).
     float radius = 0.02f;
-    int num_bins = 5;           ///< distance bins (section 2.5.1 uses 5), >= 1
-    float plane_radius = 0.2f;  ///< cap on both radii [m] (Figure 2.23 caps at 0.2 m)
-    bool correct_bias = true;   ///< scale r_min by 1.1 and r_max by 0.9 (see above)
-    bool pcl_order = false;     ///< cap before scaling, exactly as pcl::computeRSD
-    int num_threads = 0;        ///< 0 = all cores; never changes the result
+    int num_bins = 5;             ///< distance bins (section 2.5.1 uses 5), >= 1
+    float plane_radius = 0.2f;    ///< cap on both radii [m] (Figure 2.23 caps at 0.2 m)
+    bool correct_bias = true;     ///< scale r_min by 1.1 and r_max by 0.9 (see above)
+    bool pcl_compatible = false;  ///< PCL's factor assignment and order (see above)
+    int num_threads = 0;          ///< 0 = all cores; never changes the result
 };
 
 /// RSD of every point of `cloud` (with normals) from neighbourhoods in `tree` (built from this
@@ -50,9 +55,8 @@ struct RsdParams {
 /// num_bins < 1 or num_threads < 0. An empty cloud gives a 0 x 2 matrix.
 FeatureMatrix ComputeRsd(const PointCloud& cloud, const KdTree& tree, const RsdParams& params);
 
-/// Radii of one neighbourhood: `reference` is the point the distances and angles are measured
-/// from; `neighbours` are cloud indices (the reference may be among them). Exposed for the voxel
-/// variant and the tests.
+/// Radii of one neighbourhood: distances are measured from `reference`, angles against
+/// `reference_normal`; `neighbours` are cloud indices.
 Eigen::Vector2f RsdOfNeighbourhood(const PointCloud& cloud, const Eigen::Vector3f& reference,
                                    const Eigen::Vector3f& reference_normal,
                                    const Indices& neighbours, const RsdParams& params);
@@ -82,7 +86,8 @@ struct VoxelRsdResult {
 
 /// RSD per voxel: the cloud's finite points are grouped into voxels (in the order of
 /// VoxelHashMap, ascending (y, x, z)); each voxel's radii are those of the neighbourhood of its
-/// centroid, measured from the cloud point nearest to the centroid (the reference), as PCL's
+/// centroid (distances from the centroid, angles against the normal of the cloud point nearest
+/// to it), as PCL's
 /// GRSDEstimation computes them. Costs one neighbourhood per voxel instead of one per point.
 /// Same errors as ComputeRsd, and InvalidArgument if voxel_size is not > 0.
 VoxelRsdResult ComputeVoxelRsd(const PointCloud& cloud, const KdTree& tree,

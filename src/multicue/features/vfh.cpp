@@ -44,7 +44,11 @@ FeatureVector ComputeVfh(const PointCloud& cluster, const VfhParams& params) {
     }
     const float incr = 100.0f / static_cast<float>(n - 1);
     const float size_incr = params.size_component ? incr : 0.0f;
-    const Eigen::Vector3f to_view = (viewpoint - centroid).normalized();
+    Eigen::Vector3f to_view = (viewpoint - centroid).normalized();
+    if (params.pcl_compatible) {
+        to_view = (viewpoint - centroid) / std::sqrt((viewpoint - centroid).squaredNorm() + 1.0f);
+        max_distance = std::sqrt(max_distance * max_distance + 1.0f);
+    }
     const double view_incr = 100.0 / static_cast<double>(n);
     for (std::size_t i = 0; i < cluster.size(); ++i) {
         if (!detail::IsUsable(cluster, i)) continue;
@@ -59,8 +63,13 @@ FeatureVector ComputeVfh(const PointCloud& cluster, const VfhParams& params) {
             continue;
         }
         hist[detail::ClampedBin(kBins * ((f1 + M_PI) * kInvTwoPi), kBins)] += incr;
-        hist[kBins + detail::ClampedBin(kBins * ((f2 + 1.0) * 0.5), kBins)] += incr;
-        hist[2 * kBins + detail::ClampedBin(kBins * ((f3 + 1.0) * 0.5), kBins)] += incr;
+        if (params.pcl_compatible) {
+            hist[kBins + detail::ClampedBin(kBins * ((f2 + M_PI) * kInvTwoPi), kBins)] += incr;
+            hist[2 * kBins + detail::ClampedBin(kBins * ((f3 + M_PI) * kInvTwoPi), kBins)] += incr;
+        } else {
+            hist[kBins + detail::ClampedBin(kBins * ((f2 + 1.0) * 0.5), kBins)] += incr;
+            hist[2 * kBins + detail::ClampedBin(kBins * ((f3 + 1.0) * 0.5), kBins)] += incr;
+        }
         const int d_bin =
             params.normalize_distances && max_distance > 0.0f
                 ? detail::ClampedBin(kBins * (f4 / max_distance), kBins)

@@ -29,6 +29,14 @@ struct VfhParams {
     std::optional<Eigen::Vector3f> viewpoint = std::nullopt;
     bool normalize_distances = false;  ///< f4 bins over [0, max distance] instead of 1 cm bins
     bool size_component = false;       ///< fill the f4 block (PCL's setFillSizeComponent)
+    /// Reproduce PCL 1.13's VFHEstimation, quirks included: (1) f2 and f3 are binned like the
+    /// angle f1, floor(45 (f + pi) / (2 pi)), so their values in [-1, 1] fill only bins 15-29
+    /// of their blocks; (2) the centroid's homogeneous coordinate 1 enters two norms: the
+    /// viewpoint direction is (v - c) / sqrt(|v - c|^2 + 1) (so n . v spans less than [-1, 1],
+    /// in a way that depends on the unit of length) and the distance normalisation is
+    /// sqrt(d_max^2 + 1). Off (default): 45 bins over [-1, 1] for f2 and f3, a unit viewpoint
+    /// direction and d_max.
+    bool pcl_compatible = false;
 };
 
 /// VFH of the whole cloud (one cluster). Throws InvalidArgument if the cloud has no normals
