@@ -17,3 +17,24 @@ if(NOT TARGET multicue_pcl_io)
                           Eigen3::Eigen)
   endif()
 endif()
+
+# PCL's feature estimators and what they search with, for the feature oracle tests. Defines the
+# INTERFACE target multicue_pcl_features (on top of multicue_pcl_io) when all are installed.
+if(TARGET multicue_pcl_io AND NOT TARGET multicue_pcl_features)
+  find_library(MULTICUE_PCL_FEATURES_LIBRARY pcl_features)
+  find_library(MULTICUE_PCL_FILTERS_LIBRARY pcl_filters)
+  find_library(MULTICUE_PCL_SEARCH_LIBRARY pcl_search)
+  find_library(MULTICUE_PCL_KDTREE_LIBRARY pcl_kdtree)
+  find_library(MULTICUE_PCL_OCTREE_LIBRARY pcl_octree)
+  find_path(MULTICUE_FLANN_INCLUDE_DIR flann/flann.hpp)
+  if(MULTICUE_PCL_FEATURES_LIBRARY AND MULTICUE_PCL_FILTERS_LIBRARY AND MULTICUE_PCL_SEARCH_LIBRARY
+     AND MULTICUE_PCL_KDTREE_LIBRARY AND MULTICUE_PCL_OCTREE_LIBRARY AND MULTICUE_FLANN_INCLUDE_DIR)
+    add_library(multicue_pcl_features INTERFACE)
+    target_include_directories(multicue_pcl_features SYSTEM INTERFACE
+                               ${MULTICUE_FLANN_INCLUDE_DIR})
+    target_link_libraries(multicue_pcl_features INTERFACE ${MULTICUE_PCL_FEATURES_LIBRARY}
+                          ${MULTICUE_PCL_FILTERS_LIBRARY} ${MULTICUE_PCL_SEARCH_LIBRARY}
+                          ${MULTICUE_PCL_KDTREE_LIBRARY} ${MULTICUE_PCL_OCTREE_LIBRARY}
+                          multicue_pcl_io)
+  endif()
+endif()

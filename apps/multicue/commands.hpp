@@ -22,5 +22,6 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
 void AddDbCommand(CLI::App& app, const GlobalOptions& global);
 void AddRunCommand(CLI::App& app, const GlobalOptions& global);
 void AddSimulateCommand(CLI::App& app, const GlobalOptions& global);
+void AddFeaturesCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddDbCommand(app, global);
     multicue::cli::AddRunCommand(app, global);
     multicue::cli::AddSimulateCommand(app, global);
+    multicue::cli::AddFeaturesCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));
