@@ -36,9 +36,12 @@ void Validate(const SupportPlaneParams& p) {
             fmt::format("support plane: max_candidates must be >= 1, got {}", p.max_candidates));
     }
     if (!(p.min_inlier_fraction >= 0.0f && p.min_inlier_fraction <= 1.0f) ||
-        !(p.size_ratio_to_compete >= 0.0f && p.size_ratio_to_compete <= 1.0f)) {
+        !(p.size_ratio_to_compete >= 0.0f && p.size_ratio_to_compete <= 1.0f) ||
+        !(p.raised_ratio >= 0.0f && p.raised_ratio <= 1.0f)) {
         throw InvalidArgument("support plane: fractions must be in [0, 1]");
     }
+    if (!std::isfinite(p.raised_gap))
+        throw InvalidArgument("support plane: raised_gap must be finite");
     if (p.max_samples < 3) {
         throw InvalidArgument(
             fmt::format("support plane: max_samples must be >= 3, got {}", p.max_samples));
@@ -138,6 +141,23 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
         if (best == nullptr || d < best_distance) {
             best = &c;
             best_distance = d;
+        }
+    }
+    if (params.raised_gap > 0.0f) {
+        const PlaneFit* chosen = best;
+        const float floor_distance = best_distance;
+        for (const auto& c : candidates) {
+            if (&c == chosen || static_cast<float>(c.inliers.size()) <
+                                    params.raised_ratio * static_cast<float>(largest)) {
+                continue;
+            }
+            const float d = std::abs(c.plane.head<3>().dot(cloud.sensor_origin) + c.plane.w());
+            const bool parallel = std::abs(c.plane.head<3>().dot(chosen->plane.head<3>())) > 0.95f;
+            if (parallel && d <= floor_distance - params.raised_gap &&
+                (best == chosen || d < best_distance)) {
+                best = &c;
+                best_distance = d;
+            }
         }
     }
     Eigen::Vector4f plane = best->plane;

@@ -31,6 +31,12 @@ struct SupportPlaneParams {
     /// Candidates with at least this share of the largest one's inliers compete on distance to
     /// the viewpoint; the nearest wins ("largest plane nearest the viewpoint").
     float size_ratio_to_compete = 0.5f;
+    /// A smaller candidate at least raised_gap nearer to the viewpoint than that choice, holding
+    /// raised_ratio of the largest one's inliers, is a table standing on the chosen floor: the
+    /// nearest such candidate wins (a robot sees the floor around a small table). Box tops are
+    /// lower above a table than a table is above the floor. raised_gap <= 0 turns this off.
+    float raised_gap = 0.3f;          ///< [m]
+    float raised_ratio = 0.08f;       ///< [-]
     std::size_t max_samples = 20000;  ///< points used for the robust fit (strided subsample)
     float cluster_tolerance = 0.02f;  ///< the table is the largest connected patch of inliers [m]
     std::uint64_t seed = 1;           ///< sample consensus seed

@@ -35,6 +35,11 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
                 "a candidate plane holds at least this share of the points");
     support.Get("size_ratio_to_compete", p.support.size_ratio_to_compete,
                 "planes this large relative to the largest compete on nearness to the viewpoint");
+    support.Get("raised_gap", p.support.raised_gap,
+                "a smaller plane this much nearer to the viewpoint than the largest is a table on "
+                "the floor and wins (0 = off) [m]");
+    support.Get("raised_ratio", p.support.raised_ratio,
+                "... if it holds this share of the largest plane's inliers [-]");
     support.Get("max_samples", p.support.max_samples, "points used by the robust fit");
     support.Get("cluster_tolerance", p.support.cluster_tolerance,
                 "the table is the largest connected patch of plane inliers [m]");
