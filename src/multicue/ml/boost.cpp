@@ -85,7 +85,10 @@ FeatureMatrix BoostClassifier::RawResponses(const FeaturesRef& x) const {
     FeatureMatrix raw(x.rows(), static_cast<Eigen::Index>(models_->per_class.size()));
     for (std::size_t c = 0; c < models_->per_class.size(); ++c) {
         cv::Mat out;
-        models_->per_class[c]->predict(samples, out, cv::ml::StatModel::RAW_OUTPUT);
+        // PREDICT_SUM: without it OpenCV returns the class label even with RAW_OUTPUT.
+        models_->per_class[c]->predict(samples, out,
+                                       static_cast<int>(cv::ml::StatModel::RAW_OUTPUT) |
+                                           static_cast<int>(cv::ml::DTrees::PREDICT_SUM));
         for (Eigen::Index r = 0; r < x.rows(); ++r) {
             raw(r, static_cast<Eigen::Index>(c)) = out.at<float>(static_cast<int>(r));
         }
@@ -94,9 +97,14 @@ FeatureMatrix BoostClassifier::RawResponses(const FeaturesRef& x) const {
 }
 
 FeatureMatrix BoostClassifier::PredictImpl(const FeaturesRef& x) const {
-    FeatureMatrix raw = RawResponses(x);
-    // Real AdaBoost's f(x) estimates half the log-odds of the class (Friedman et al., 1998).
-    return (1.0f / (1.0f + (-2.0f * raw.array()).exp())).matrix();
+    // Each f_c(x) estimates half the log-odds of class c against the rest (Friedman et al.,
+    // 1998); the symmetric multi-class link p_c = exp(2 f_c) / sum_k exp(2 f_k) keeps classes
+    // apart even where the per-class logistic saturates at 1 for several classes.
+    FeatureMatrix raw = 2.0f * RawResponses(x);
+    for (Eigen::Index r = 0; r < raw.rows(); ++r) {
+        raw.row(r).array() = (raw.row(r).array() - raw.row(r).maxCoeff()).exp();
+    }
+    return raw;
 }
 
 void BoostClassifier::WriteModel(ByteWriter& w) const {

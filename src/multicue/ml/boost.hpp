@@ -1,8 +1,8 @@
 #pragma once
 /// \file One-against-all boosting of decision trees (OpenCV's cv::ml::Boost; Friedman et al.,
 /// 1998; sections 3.1.4 and 3.3): Real, Gentle, Logit and Discrete AdaBoost. One binary model
-/// per class; its summed weak responses f_c(x) give the class confidence
-/// p_c = 1 / (1 + exp(-2 f_c(x))) (the logistic link of Real AdaBoost), normalised over classes.
+/// per class; its summed weak responses f_c(x) (half the log-odds of the class for Real
+/// AdaBoost) give the class confidences p_c = exp(2 f_c) / sum_k exp(2 f_k).
 
 #include <memory>
 #include <string>
