@@ -19,5 +19,7 @@ void AddOutliersCommand(CLI::App& app, const GlobalOptions& global);
 void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global);
 void AddConfigCommand(CLI::App& app, const GlobalOptions& global);
 void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
+/// `dataset`, `classifier` and `ensemble` (cmd_ml.cpp).
+void AddMlCommands(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -28,6 +28,7 @@ class BoostClassifier : public Classifier {
     ~BoostClassifier() override;
     std::string type() const override { return "boost"; }
     std::string spec() const override;
+    std::size_t FitSteps(std::size_t num_classes) const override { return num_classes; }
     /// Summed weak responses f_c(x), rows x classes (before the logistic link).
     FeatureMatrix RawResponses(const FeaturesRef& x) const;
 

@@ -56,6 +56,12 @@ class Classifier {
     std::string Serialize() const;
     void Save(const std::filesystem::path& path) const;
 
+    /// Progress steps Fit advances for `num_classes` classes (to size a Progress).
+    virtual std::size_t FitSteps(std::size_t num_classes) const {
+        (void)num_classes;
+        return 1;
+    }
+
     /// Seed of every random choice in training.
     std::uint32_t seed = 1;
 

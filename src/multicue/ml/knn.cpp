@@ -236,7 +236,7 @@ void KnnClassifier::FitImpl(const FeaturesRef& x, const std::vector<int>& y, int
     labels_ = y;
     num_classes_ = num_classes;
     BuildIndex();
-    if (progress != nullptr) progress->Advance(progress->total());
+    if (progress != nullptr) progress->Advance();
 }
 
 void KnnClassifier::SearchMapped(const float* q, std::vector<Neighbour>& out,

@@ -44,6 +44,12 @@ class SvmClassifier : public Classifier {
     ~SvmClassifier() override;
     std::string type() const override { return "svm"; }
     std::string spec() const override;
+    std::size_t FitSteps(std::size_t) const override {
+        return 1 + (params_.grid_search
+                        ? params_.grid_c.size() *
+                              (params_.kernel == SvmKernel::kRbf ? params_.grid_gamma.size() : 1)
+                        : 0);
+    }
     const SvmParams& params() const { return params_; }
     /// Filled by a training run with grid_search.
     const std::vector<SvmGridPoint>& grid() const { return grid_; }
