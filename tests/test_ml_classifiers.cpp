@@ -87,7 +87,11 @@ TEST(MlKnn, NeighboursMatchDirectFormulas) {
     std::uniform_real_distribution<float> u(0.0f, 5.0f);
     for (auto metric : {KnnMetric::kL1, KnnMetric::kL2, KnnMetric::kHellinger, KnnMetric::kChi2,
                         KnnMetric::kJm}) {
-        for (auto index : {KnnIndex::kAuto, KnnIndex::kBrute}) {
+        for (auto index : {KnnIndex::kAuto, KnnIndex::kKdTree, KnnIndex::kBrute}) {
+            if (index == KnnIndex::kKdTree && metric != KnnMetric::kL2 &&
+                metric != KnnMetric::kHellinger) {
+                continue;
+            }
             KnnClassifier knn({.k = 7, .metric = metric, .index = index, .leaf_size = 4});
             knn.Fit(d);
             for (int trial = 0; trial < 20; ++trial) {

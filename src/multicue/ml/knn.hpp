@@ -2,9 +2,10 @@
 /// \file Exact k-nearest-neighbour classification (section 2.5, Tables 2.2 and 2.3; section 3.1.4)
 /// with the L1, L2, Hellinger, chi-squared and Jeffries-Matusita distances.
 ///
-/// Hellinger is L2 on the square roots of the features, so L2 and Hellinger search a k-d tree;
-/// the others scan all rows with a vectorised loop. Hellinger, chi-squared and Jeffries-Matusita
-/// are histogram distances and need non-negative features (DataError otherwise).
+/// Hellinger is L2 on the square roots of the features, so L2 and Hellinger can search a k-d
+/// tree; every metric can scan all rows with a vectorised loop over feature columns. Hellinger,
+/// chi-squared and Jeffries-Matusita are histogram distances and need non-negative features
+/// (DataError otherwise).
 
 #include <cstdint>
 #include <span>
@@ -25,8 +26,11 @@ enum class KnnMetric : std::uint32_t {
 std::string ToString(KnnMetric m);
 KnnMetric ParseKnnMetric(const std::string& name);
 
+/// Largest feature dimension for which KnnIndex::kAuto picks the k-d tree.
+inline constexpr Eigen::Index kKdTreeMaxAutoDims = 12;
+
 enum class KnnIndex : std::uint32_t {
-    kAuto = 0,    ///< k-d tree for L2 and Hellinger, brute force otherwise
+    kAuto = 0,    ///< k-d tree for L2 and Hellinger up to kKdTreeMaxAutoDims, else the scan
     kKdTree = 1,  ///< only valid for L2 and Hellinger
     kBrute = 2
 };
