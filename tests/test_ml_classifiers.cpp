@@ -141,6 +141,16 @@ TEST(MlKnn, NeighboursMatchDirectFormulas) {
     }
 }
 
+TEST(MlKnn, ParallelAndSerialPredictionsAgree) {
+    const Dataset d = test::Blobs(3, 10, 20, 6, 1.0f, 8);
+    const Dataset q = test::Blobs(3, 4, 20, 6, 1.0f, 9);
+    KnnClassifier serial({.k = 4, .metric = KnnMetric::kChi2, .num_threads = 1});
+    KnnClassifier parallel({.k = 4, .metric = KnnMetric::kChi2, .num_threads = 2});
+    serial.Fit(d);
+    parallel.Fit(d);
+    EXPECT_EQ(serial.PredictProba(q), parallel.PredictProba(q));
+}
+
 TEST(MlKnn, HistogramMetricsRefuseNegativeFeatures) {
     Dataset d = Dataset::WithColumns(2);
     d.AppendRow(std::vector<float>{-1, 0}, "a");
