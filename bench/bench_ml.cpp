@@ -3,7 +3,8 @@
 // and SVM / boosting / random forest prediction times per row.
 //
 // Data: 51 classes (as the RGB-D object dataset), Gaussian clusters in [0, 1]^20 with a few
-// instances per class, non-negative so that every histogram metric applies.
+// instances per class, non-negative so that every histogram metric applies. BM_KnnQueryFar asks
+// for points of other clusters: the k-d tree's worst case.
 
 #include <random>
 #include <string>
@@ -18,7 +19,10 @@ namespace {
 
 using namespace multicue::ml;
 
+// The cluster centres are the same for every call (fixed seed); `seed` draws the noise, so
+// queries come from the objects the training rows describe, as new scans of known instances do.
 Dataset Features(std::size_t rows, int dims, int classes, std::uint32_t seed) {
+    std::mt19937 centres_rng(1);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> centre(0.0f, 1.0f);
     std::normal_distribution<float> noise(0.0f, 0.05f);
@@ -27,7 +31,7 @@ Dataset Features(std::size_t rows, int dims, int classes, std::uint32_t seed) {
     std::vector<std::vector<float>> centres(static_cast<std::size_t>(classes * kInstances));
     for (auto& c : centres) {
         c.resize(static_cast<std::size_t>(dims));
-        for (auto& v : c) v = centre(rng);
+        for (auto& v : c) v = centre(centres_rng);
     }
     std::vector<float> row(static_cast<std::size_t>(dims));
     for (std::size_t r = 0; r < rows; ++r) {
@@ -49,24 +53,38 @@ const Dataset& Queries() {
     static const Dataset d = Features(1000, 20, 51, 2);
     return d;
 }
+const Dataset& FarQueries() {
+    static const Dataset d = [] {
+        std::mt19937 rng(5);
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        Dataset q = Dataset::WithColumns(20, "grsd");
+        std::vector<float> row(20);
+        for (int r = 0; r < 1000; ++r) {
+            for (auto& v : row) v = u(rng);
+            q.AppendRow(row, "c0");
+        }
+        return q;
+    }();
+    return d;
+}
 
 void BM_KnnQuery(benchmark::State& state) {
     const auto metric = static_cast<KnnMetric>(state.range(0));
     const auto index = static_cast<KnnIndex>(state.range(1));
     KnnClassifier knn({.k = 5, .metric = metric, .index = index, .num_threads = 1});
     knn.Fit(Train());
-    const auto q = Queries().features();
+    const auto q = (state.range(2) != 0 ? FarQueries() : Queries()).features();
     Eigen::Index i = 0;
     for (auto _ : state) {
         benchmark::DoNotOptimize(knn.PredictProba(q.row(i)));
         i = (i + 1) % q.rows();
     }
-    state.SetLabel(ToString(metric) + (index == KnnIndex::kBrute ? " scan" : " k-d tree"));
+    state.SetLabel(ToString(metric) + (index == KnnIndex::kBrute ? " scan" : " k-d tree") +
+                   (state.range(2) != 0 ? ", far queries" : ""));
 }
 BENCHMARK(BM_KnnQuery)
-    ->ArgsProduct({{0, 1, 2, 3, 4}, {static_cast<long>(KnnIndex::kBrute)}})
-    ->Args({1, static_cast<long>(KnnIndex::kKdTree)})
-    ->Args({2, static_cast<long>(KnnIndex::kKdTree)})
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {static_cast<long>(KnnIndex::kBrute)}, {0}})
+    ->ArgsProduct({{1, 2}, {static_cast<long>(KnnIndex::kKdTree)}, {0, 1}})
     ->Unit(benchmark::kMicrosecond);
 
 void BM_PredictPerRow(benchmark::State& state, const std::string& spec, std::size_t train_rows) {

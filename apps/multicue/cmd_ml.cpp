@@ -2,6 +2,7 @@
 // tools, the classifier manager and the ensembles of sections 3.1.4 and 3.3 as composable
 // commands (files in, files out), so experiments are shell scripts over these primitives.
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -202,6 +203,7 @@ void AddDatasetCommands(CLI::App& app, const GlobalOptions& global) {
         auto k = std::make_shared<std::size_t>(5);
         auto seed = std::make_shared<std::uint32_t>(1);
         auto ext = std::make_shared<std::string>("mcd");
+        auto shuffle = std::make_shared<bool>(false);
         cmd->add_option("IN", *in, "input dataset")->required();
         cmd->add_option("-o,--output", *prefix, "output prefix (PREFIX_train.mcd, ...)")
             ->required();
@@ -212,6 +214,8 @@ void AddDatasetCommands(CLI::App& app, const GlobalOptions& global) {
         cmd->add_option("--k", *k, "folds")->capture_default_str();
         cmd->add_option("--seed", *seed, "random seed")->capture_default_str();
         cmd->add_option("--format", *ext, "mcd or csv")->capture_default_str();
+        cmd->add_flag("--shuffle", *shuffle,
+                      "three-way: shuffle instances with --seed (default: ascending group id)");
         cmd->callback([=] {
             if (*ext != "mcd" && *ext != "csv")
                 throw InvalidArgument("--format must be mcd or csv");
@@ -229,7 +233,7 @@ void AddDatasetCommands(CLI::App& app, const GlobalOptions& global) {
             } else if (*method == "logo") {
                 splits = LeaveOneGroupOut(d);
             } else if (*method == "three-way") {
-                const auto t = SplitThreeWay(d, *seed == 1 ? 0 : *seed);
+                const auto t = SplitThreeWay(d, *shuffle ? std::max<std::uint32_t>(*seed, 1) : 0);
                 write(t.level0_train, "_level0");
                 write(t.level1_train, "_level1");
                 write(t.test, "_test");

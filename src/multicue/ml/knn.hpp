@@ -26,11 +26,8 @@ enum class KnnMetric : std::uint32_t {
 std::string ToString(KnnMetric m);
 KnnMetric ParseKnnMetric(const std::string& name);
 
-/// Largest feature dimension for which KnnIndex::kAuto picks the k-d tree.
-inline constexpr Eigen::Index kKdTreeMaxAutoDims = 12;
-
 enum class KnnIndex : std::uint32_t {
-    kAuto = 0,    ///< k-d tree for L2 and Hellinger up to kKdTreeMaxAutoDims, else the scan
+    kAuto = 0,    ///< k-d tree for L2 and Hellinger, the column scan otherwise
     kKdTree = 1,  ///< only valid for L2 and Hellinger
     kBrute = 2
 };
