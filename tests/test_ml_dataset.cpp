@@ -99,6 +99,33 @@ TEST(MlDataset, AppendRowChecksAndResumeBySource) {
     EXPECT_EQ(TruncateLabelPath("box", 2), "box");
 }
 
+// How an extraction tool resumes: load the partial file, skip sources already present, append,
+// save; the result equals an uninterrupted run.
+TEST(MlDataset, ResumedAppendingEqualsOneRun) {
+    test::TempDir dir;
+    const std::vector<std::string> files = {"box/a.pcd", "box/b.pcd", "cylinder/mug/c.pcd",
+                                            "cylinder/mug/d.pcd"};
+    auto extract = [&](Dataset& d, std::size_t upto) {
+        const auto done = d.Sources();
+        for (std::size_t i = 0; i < upto; ++i) {
+            if (done.count(files[i])) continue;
+            const float v = static_cast<float>(i);
+            d.AppendRow(std::vector<float>{v, 2 * v}, LabelPathFromFile("", files[i]),
+                        static_cast<std::int64_t>(i / 2), static_cast<std::int64_t>(i % 2),
+                        files[i]);
+        }
+    };
+    Dataset full = Dataset::WithColumns(2);
+    extract(full, files.size());
+    Dataset part = Dataset::WithColumns(2);
+    extract(part, 2);
+    SaveDataset(part, dir / "part.mcd");
+    Dataset resumed = LoadDataset(dir / "part.mcd");
+    extract(resumed, files.size());
+    ExpectSame(full, resumed);
+    EXPECT_EQ(resumed.class_names, (std::vector<std::string>{"box", "cylinder/mug"}));
+}
+
 TEST(MlDataset, SelectDropConcatRelabel) {
     const Dataset d = test::Blobs(4, 2, 1, 6, 0.5f, 3, 2);  // blocks b0 b1 b2
     const Dataset sel = SelectBlocks(d, {"b2", "b0"});
