@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddRunCommand(app, global);
     multicue::cli::AddSimulateCommand(app, global);
     multicue::cli::AddFeaturesCommand(app, global);
+    multicue::cli::AddMlCommands(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));
