@@ -13,7 +13,10 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/config.hpp"
 #include "multicue/io/pcd.hpp"
-#include "multicue/sim/tabletop_scene.hpp"
+#include "multicue/sim/mesh.hpp"
+#include "multicue/sim/rng.hpp"
+#include "multicue/sim/scene_gen.hpp"
+#include "multicue/sim/sensors.hpp"
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
@@ -145,10 +148,16 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_flag("--no-report", *no_report, "do not write report.html");
     cmd->callback([out, no_report, &global] {
         const std::filesystem::path dir = *out;
-        const sim::TableTopScene scene = sim::MakeDemoScene();
-        sim::ScanParams scan;
-        scan.T_world_camera = sim::DefaultCameraPose(scene);
-        const PointCloud cloud = sim::ScanTableTopScene(scene, scan);
+        // Scene 3 of `multicue simulate scenes --objects 5,5 --clutter 0 --seed 1`: five
+        // procedural objects of five categories on a table, one simulated Kinect view.
+        sim::TableSceneParams table;
+        table.min_objects = table.max_objects = 5;
+        table.clutter = 0.0f;
+        const std::uint64_t seed = sim::SubSeed(1, 3);
+        const sim::Scene scene = sim::MakeTableScene(table, seed);
+        const auto pose = sim::TableViewpoints(scene, 1, {}, seed).front();
+        const PointCloud cloud =
+            sim::ScanKinect(scene, pose, sim::KinectParams{}, sim::SubSeed(seed, 100));
         std::error_code ec;
         std::filesystem::create_directories(dir, ec);
         if (!std::filesystem::is_directory(dir)) {
@@ -160,10 +169,15 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
         options.report.enabled = !*no_report;
         const PerceiveResult result =
             RunPerceive(cloud, (dir / "scene.pcd").string(), dir, options, 0.0);
+        std::string objects;
+        for (const auto& o : scene.objects) {
+            if (o.label < sim::ObjectLabel(1)) continue;
+            objects += (objects.empty() ? "" : ", ") + o.source;
+        }
         std::printf(
-            "multicue demo: synthetic table-top scene with %zu boxes and %zu cylinders, "
-            "%ux%u RGB-D frame -> %s\n%s",
-            scene.boxes.size(), scene.cylinders.size(), cloud.width, cloud.height,
+            "multicue demo: simulated Kinect view (%ux%u) of a table with %zu objects (%s) "
+            "-> %s\n%s",
+            cloud.width, cloud.height, scene.NumObjects(), objects.c_str(),
             (dir / "scene.pcd").string().c_str(), Summary(result, dir, options.report).c_str());
     });
 }

@@ -154,7 +154,7 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
             const float d = std::abs(c.plane.head<3>().dot(cloud.sensor_origin) + c.plane.w());
             const bool parallel = std::abs(c.plane.head<3>().dot(chosen->plane.head<3>())) > 0.95f;
             if (parallel && d <= floor_distance - params.raised_gap &&
-                (best == chosen || d < best_distance)) {
+                (best == chosen || c.inliers.size() > best->inliers.size())) {
                 best = &c;
                 best_distance = d;
             }

@@ -33,8 +33,8 @@ struct SupportPlaneParams {
     float size_ratio_to_compete = 0.5f;
     /// A smaller candidate at least raised_gap nearer to the viewpoint than that choice, holding
     /// raised_ratio of the largest one's inliers, is a table standing on the chosen floor: the
-    /// nearest such candidate wins (a robot sees the floor around a small table). Box tops are
-    /// lower above a table than a table is above the floor. raised_gap <= 0 turns this off.
+    /// largest such candidate wins (a robot sees the floor around a small table; box tops on the
+    /// table are smaller than the table). raised_gap <= 0 turns this off.
     float raised_gap = 0.3f;          ///< [m]
     float raised_ratio = 0.08f;       ///< [-]
     std::size_t max_samples = 20000;  ///< points used for the robust fit (strided subsample)
