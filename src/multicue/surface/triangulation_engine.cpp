@@ -1,0 +1,615 @@
+#include "multicue/surface/triangulation_engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <numeric>
+#include <optional>
+#include <unordered_set>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue::detail {
+
+// ---------------------------------------------------------------------------------- MeshState
+
+void MeshState::AddVertex(const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
+    pos.push_back(p);
+    nrm.push_back(n);
+    nrm_in.push_back(n);
+    oriented.push_back(0);
+    processed.push_back(0);
+    comp.push_back(kNone);
+    head.push_back(kNone);
+}
+
+void MeshState::AddTriangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    const auto t = static_cast<std::uint32_t>(tris.size());
+    tris.emplace_back(a, b, c);
+    const std::uint32_t v[3] = {a, b, c};
+    for (std::uint32_t k = 0; k < 3; ++k) {
+        next_corner.push_back(head[v[k]]);
+        head[v[k]] = 3 * t + k;
+    }
+}
+
+bool MeshState::HasDirected(std::uint32_t a, std::uint32_t b) const {
+    for (std::uint32_t c = head[a]; c != kNone; c = next_corner[c]) {
+        const Triangle& t = tris[c / 3];
+        if (t[(c % 3 + 1) % 3] == b) return true;
+    }
+    return false;
+}
+
+bool MeshState::IsInterior(std::uint32_t v) const {
+    if (head[v] == kNone) return false;
+    // Interior iff the fan's x's and y's are the same multiset (every edge has both sides).
+    std::uint32_t xs[32], ys[32];
+    std::size_t n = 0;
+    bool overflow = false;
+    ForEachFan(v, [&](std::uint32_t x, std::uint32_t y) {
+        if (n == 32) {
+            overflow = true;
+            return;
+        }
+        xs[n] = x;
+        ys[n] = y;
+        ++n;
+    });
+    if (overflow) return false;
+    std::sort(xs, xs + n);
+    std::sort(ys, ys + n);
+    return std::equal(xs, xs + n, ys);
+}
+
+MeshState StateFromMesh(const TriangleMesh& mesh) {
+    MeshState s;
+    const std::size_t n = mesh.vertices.size();
+    std::vector<Eigen::Vector3f> normals(n, Eigen::Vector3f::Zero());
+    for (const Triangle& t : mesh.triangles) {
+        const Eigen::Vector3f a = mesh.vertices[t[1]] - mesh.vertices[t[0]];
+        const Eigen::Vector3f b = mesh.vertices[t[2]] - mesh.vertices[t[0]];
+        const Eigen::Vector3f area = a.cross(b);  // area-weighted
+        for (int k = 0; k < 3; ++k) normals[t[k]] += area;
+    }
+    s.pos.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        Eigen::Vector3f nn = Eigen::Vector3f::UnitZ();
+        if (mesh.HasVertexNormals() && mesh.vertex_normals[i].allFinite() &&
+            mesh.vertex_normals[i].squaredNorm() > 0.0f) {
+            nn = mesh.vertex_normals[i].normalized();
+        } else if (normals[i].squaredNorm() > 0.0f) {
+            nn = normals[i].normalized();
+        }
+        s.AddVertex(mesh.vertices[i], nn);
+        s.oriented[i] = 1;
+        s.processed[i] = 1;
+        s.comp[i] = 0;
+    }
+    for (const Triangle& t : mesh.triangles) s.AddTriangle(t[0], t[1], t[2]);
+    return s;
+}
+
+namespace {
+
+// ------------------------------------------------------------------------------- 2D helpers
+
+inline float Cross2(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+    return a.x() * b.y() - a.y() * b.x();
+}
+
+/// Proper crossing of segments ab and cd (touching at an end does not count).
+bool SegmentsCross(const Eigen::Vector2f& a, const Eigen::Vector2f& b, const Eigen::Vector2f& c,
+                   const Eigen::Vector2f& d) {
+    const float d1 = Cross2(b - a, c - a), d2 = Cross2(b - a, d - a);
+    const float d3 = Cross2(d - c, a - c), d4 = Cross2(d - c, b - c);
+    return ((d1 > 0.0f && d2 < 0.0f) || (d1 < 0.0f && d2 > 0.0f)) &&
+           ((d3 > 0.0f && d4 < 0.0f) || (d3 < 0.0f && d4 > 0.0f));
+}
+
+struct Frame {
+    Eigen::Vector3f origin, u, v;
+    explicit Frame(const Eigen::Vector3f& o, const Eigen::Vector3f& n)
+        : origin(o), u(n.unitOrthogonal()), v(n.cross(n.unitOrthogonal())) {}
+    Eigen::Vector2f operator()(const Eigen::Vector3f& p) const {
+        const Eigen::Vector3f d = p - origin;
+        return {d.dot(u), d.dot(v)};
+    }
+};
+
+constexpr float kTwoPi = 6.28318530717958647692f;
+
+inline float Wrap(float a) {
+    while (a < 0.0f) a += kTwoPi;
+    while (a >= kTwoPi) a -= kTwoPi;
+    return a;
+}
+
+// --------------------------------------------------------------------------------- the growth
+
+struct Edge {
+    std::uint32_t a, b;
+};
+
+class Grower {
+  public:
+    Grower(MeshState& m, const Indices& working, const GrowSettings& s)
+        : m_(m), working_(working), s_(s) {
+        PointCloud local;
+        local.points.reserve(working.size());
+        for (std::uint32_t g : working) local.points.push_back(m.pos[g]);
+        local.SetUnorganized();
+        tree_.emplace(local);
+    }
+
+    void Process(std::uint32_t p, bool fan) {
+        if (!Neighbourhood(p)) return;
+        OrientSource(p);
+        Candidates(p);
+        if (fan) Fan(p);
+        CloseGaps(p);
+    }
+
+    void Push(std::uint32_t v) {
+        if (!m_.processed[v]) queue_.push_back(v);
+    }
+    bool Pop(std::uint32_t& v) {
+        while (!queue_.empty()) {
+            v = queue_.front();
+            queue_.pop_front();
+            if (!m_.processed[v]) return true;
+        }
+        return false;
+    }
+
+    GrowStats stats;
+
+  private:
+    /// Neighbours within mu * d0 (at most search_radius), self and duplicates excluded.
+    bool Neighbourhood(std::uint32_t p) {
+        tree_->SearchRadius(m_.pos[p], s_.search_radius, idx_, d2_,
+                            static_cast<std::size_t>(s_.max_neighbors) + 1);
+        nb_.clear();
+        const float eps2 = 1e-12f * s_.search_radius * s_.search_radius;
+        float d0_2 = -1.0f;
+        for (std::size_t j = 0; j < idx_.size(); ++j) {
+            if (d2_[j] <= eps2) continue;
+            if (d0_2 < 0.0f) d0_2 = d2_[j];
+            const float r = s_.mu * s_.mu * d0_2;
+            if (d2_[j] > r) break;
+            const std::uint32_t g = working_[idx_[j]];
+            if (g != p) nb_.push_back(g);
+        }
+        return !nb_.empty();
+    }
+
+    /// A source without an orientation takes it from its nearest oriented compatible neighbour,
+    /// or starts a new component (a seed).
+    void OrientSource(std::uint32_t p) {
+        if (m_.oriented[p]) return;
+        for (std::uint32_t c : nb_) {
+            if (!m_.oriented[c]) continue;
+            const float d = m_.nrm[p].dot(m_.nrm[c]);
+            if (std::abs(d) < s_.cos_surface) continue;
+            if (d < 0.0f) m_.nrm[p] = -m_.nrm[p];
+            m_.oriented[p] = 1;
+            m_.comp[p] = m_.comp[c];
+            return;
+        }
+        m_.oriented[p] = 1;
+        m_.comp[p] = NewComponent();
+        ++stats.seeds;
+    }
+
+    std::uint32_t NewComponent() {
+        const auto id = static_cast<std::uint32_t>(parent_.size());
+        parent_.push_back(id);
+        return id;
+    }
+
+  public:
+    std::uint32_t Find(std::uint32_t c) {
+        while (parent_[c] != c) c = parent_[c] = parent_[parent_[c]];
+        return c;
+    }
+    std::size_t ComponentCount() const { return parent_.size(); }
+    void InitComponents(std::uint32_t count) {
+        parent_.resize(count);
+        std::iota(parent_.begin(), parent_.end(), 0u);
+    }
+
+  private:
+    /// Neighbours that may still get triangles and whose normals are compatible with p's; the
+    /// front edges around them; p's tangent frame.
+    void Candidates(std::uint32_t p) {
+        cand_.clear();
+        const Eigen::Vector3f& n = m_.nrm[p];
+        for (std::uint32_t c : nb_) {
+            const float d = n.dot(m_.nrm[c]);
+            if ((m_.oriented[c] ? d : std::abs(d)) < s_.cos_surface) continue;
+            if (m_.IsInterior(c)) continue;
+            cand_.push_back(c);
+        }
+        front_.clear();
+        auto collect = [&](std::uint32_t v) {
+            m_.ForEachFan(v, [&](std::uint32_t x, std::uint32_t y) {
+                if (!m_.HasDirected(x, v)) front_.push_back({v, x});
+                if (!m_.HasDirected(v, y)) front_.push_back({y, v});
+            });
+        };
+        collect(p);
+        for (std::uint32_t c : nb_) collect(c);
+        frame_.emplace(m_.pos[p], n);
+    }
+
+    /// Local Delaunay fan of p in its tangent plane: clips a square by the bisectors of the
+    /// candidates, nearest first, and connects consecutive neighbours of the cell's edges.
+    void Fan(std::uint32_t p) {
+        const float r = s_.search_radius;
+        poly_.assign({{{-r, -r}, kNone}, {{r, -r}, kNone}, {{r, r}, kNone}, {{-r, r}, kNone}});
+        float cell2 = 2.0f * r * r;
+        for (std::uint32_t c : cand_) {
+            const Eigen::Vector2f q = (*frame_)(m_.pos[c]);
+            const float q2 = q.squaredNorm();
+            if (q2 < 1e-20f) continue;
+            if (q2 * 0.25f > cell2) break;  // candidates come nearest first
+            Clip(q, 0.5f * q2, c);
+            cell2 = 0.0f;
+            for (const auto& v : poly_) cell2 = std::max(cell2, v.first.squaredNorm());
+        }
+        const std::size_t k = poly_.size();
+        fan_.clear();
+        for (std::size_t i = 0; i < k; ++i) {
+            const std::uint32_t a = poly_[i].second, b = poly_[(i + 1) % k].second;
+            if (a != kNone && b != kNone && a != b) fan_.push_back({a, b});
+        }
+        for (const Edge& e : fan_) TryTriangle(p, e.a, e.b, false);
+    }
+
+    /// Keeps the part of the cell with x . q <= h; the new edge is labelled with c.
+    void Clip(const Eigen::Vector2f& q, float h, std::uint32_t c) {
+        clipped_.clear();
+        const std::size_t k = poly_.size();
+        for (std::size_t i = 0; i < k; ++i) {
+            const auto& [pi, li] = poly_[i];
+            const auto& pj = poly_[(i + 1) % k].first;
+            const float fi = pi.dot(q) - h, fj = pj.dot(q) - h;
+            const bool in_i = fi <= 0.0f, in_j = fj <= 0.0f;
+            if (in_i) clipped_.push_back({pi, li});
+            if (in_i != in_j) {
+                const Eigen::Vector2f x = pi + (fi / (fi - fj)) * (pj - pi);
+                clipped_.push_back({x, in_i ? c : li});
+            }
+        }
+        poly_.swap(clipped_);
+    }
+
+    /// Does the triangle (v, s, e) overlap, around v, the triangles already at v?
+    bool SectorOverlaps(std::uint32_t v, std::uint32_t s, std::uint32_t e) const {
+        if (!m_.HasTriangles(v)) return false;
+        const Frame f(m_.pos[v], m_.nrm[v]);
+        auto angle = [&](std::uint32_t w) {
+            const Eigen::Vector2f q = f(m_.pos[w]);
+            return std::atan2(q.y(), q.x());
+        };
+        const float as = angle(s);
+        const float w1 = Wrap(angle(e) - as);
+        constexpr float kEps = 1e-4f;
+        bool overlap = false;
+        m_.ForEachFan(v, [&](std::uint32_t x, std::uint32_t y) {
+            if (overlap) return;
+            const float ax = Wrap(angle(x) - as);
+            const float w2 = Wrap(angle(y) - angle(x));
+            if (ax < w1 - kEps || ax + w2 > kTwoPi + kEps) overlap = true;
+        });
+        return overlap;
+    }
+
+    bool Oriented(std::uint32_t v, const Eigen::Vector3f& ref, Eigen::Vector3f& n) const {
+        n = m_.nrm[v];
+        if (!m_.oriented[v] && n.dot(ref) < 0.0f) n = -n;
+        return true;
+    }
+
+    /// Writes triangle (a, b, c), a being the source, if it passes every test.
+    bool TryTriangle(std::uint32_t a, std::uint32_t b, std::uint32_t c, bool gap) {
+        const Eigen::Vector3f &pa = m_.pos[a], &pb = m_.pos[b], &pc = m_.pos[c];
+        const Eigen::Vector3f ab = pb - pa, ac = pc - pa, bc = pc - pb;
+        const float lab = ab.norm(), lac = ac.norm(), lbc = bc.norm();
+        if (!(lab > 0.0f && lac > 0.0f && lbc > 0.0f)) return false;
+        if (lbc > s_.search_radius || lab > s_.search_radius || lac > s_.search_radius)
+            return false;
+        const float ca = ab.dot(ac) / (lab * lac);
+        const float cb = -ab.dot(bc) / (lab * lbc);
+        const float cc = ac.dot(bc) / (lac * lbc);
+        for (float cs : {ca, cb, cc})
+            if (cs > s_.cos_min_angle || cs < s_.cos_max_angle) return false;
+        const Eigen::Vector3f nt = ab.cross(ac).normalized();
+        const Eigen::Vector3f& na = m_.nrm[a];
+        Eigen::Vector3f nb, nc;
+        Oriented(b, na, nb);
+        Oriented(c, na, nc);
+        if (!(nt.dot(na) > 0.0f && nt.dot(nb) > 0.0f && nt.dot(nc) > 0.0f)) return false;
+        if (m_.HasDirected(a, b) || m_.HasDirected(b, c) || m_.HasDirected(c, a)) return false;
+        if (SectorOverlaps(a, b, c) || SectorOverlaps(b, c, a) || SectorOverlaps(c, a, b))
+            return false;
+        const Frame& f = *frame_;
+        const Eigen::Vector2f qa = f(pa), qb = f(pb), qc = f(pc);
+        const std::pair<std::uint32_t, std::uint32_t> sides[3] = {{a, b}, {b, c}, {c, a}};
+        const Eigen::Vector2f qs[3][2] = {{qa, qb}, {qb, qc}, {qc, qa}};
+        for (const Edge& e : front_) {
+            const Eigen::Vector2f fa = f(m_.pos[e.a]), fb = f(m_.pos[e.b]);
+            for (int k = 0; k < 3; ++k) {
+                const auto [s0, s1] = sides[k];
+                if (e.a == s0 || e.a == s1 || e.b == s0 || e.b == s1) continue;
+                if (SegmentsCross(qs[k][0], qs[k][1], fa, fb)) return false;
+            }
+        }
+        // Accepted: b and c join a's orientation component.
+        for (std::uint32_t v : {b, c}) {
+            if (!m_.oriented[v]) {
+                if (m_.nrm[v].dot(na) < 0.0f) m_.nrm[v] = -m_.nrm[v];
+                m_.oriented[v] = 1;
+                m_.comp[v] = m_.comp[a];
+            } else if (Find(m_.comp[v]) != Find(m_.comp[a])) {
+                parent_[Find(m_.comp[v])] = Find(m_.comp[a]);
+            }
+        }
+        m_.AddTriangle(a, b, c);
+        front_.push_back({a, b});
+        front_.push_back({b, c});
+        front_.push_back({c, a});
+        ++stats.triangles;
+        if (gap) ++stats.gap_triangles;
+        Push(b);
+        Push(c);
+        return true;
+    }
+
+    /// Closes the gaps around p between an incoming front edge y -> p and the next outgoing one
+    /// p -> x counter-clockwise (fronts touching in p, Figure 2.10), when the gap is narrower than
+    /// max_angle and holds no unconnected candidate.
+    void CloseGaps(std::uint32_t p) {
+        if (!m_.HasTriangles(p)) return;
+        const Frame f(m_.pos[p], m_.nrm[p]);
+        for (int round = 0; round < 8; ++round) {
+            ins_.clear();
+            outs_.clear();
+            m_.ForEachFan(p, [&](std::uint32_t x, std::uint32_t y) {
+                if (!m_.HasDirected(x, p)) outs_.push_back(x);
+                if (!m_.HasDirected(p, y)) ins_.push_back(y);
+            });
+            if (ins_.empty() || outs_.empty()) return;
+            bool changed = false;
+            for (std::uint32_t y : ins_) {
+                const Eigen::Vector2f qy = f(m_.pos[y]);
+                const float ay = std::atan2(qy.y(), qy.x());
+                std::uint32_t best = kNone;
+                float best_gap = s_.max_angle;
+                for (std::uint32_t x : outs_) {
+                    if (x == y) continue;
+                    const Eigen::Vector2f qx = f(m_.pos[x]);
+                    const float gap = Wrap(std::atan2(qx.y(), qx.x()) - ay);
+                    if (gap > 0.0f && gap < best_gap) {
+                        best_gap = gap;
+                        best = x;
+                    }
+                }
+                if (best == kNone || HoldsCandidate(f, p, y, best)) continue;
+                if (TryTriangle(p, y, best, true)) {
+                    changed = true;
+                    break;
+                }
+            }
+            if (!changed) return;
+        }
+    }
+
+    /// Is an unconnected candidate strictly inside the projected triangle (p, a, b)?
+    bool HoldsCandidate(const Frame& f, std::uint32_t p, std::uint32_t a, std::uint32_t b) const {
+        const Eigen::Vector2f qp = f(m_.pos[p]), qa = f(m_.pos[a]), qb = f(m_.pos[b]);
+        for (std::uint32_t c : cand_) {
+            if (c == a || c == b || m_.HasTriangles(c)) continue;
+            const Eigen::Vector2f q = f(m_.pos[c]);
+            if (Cross2(qa - qp, q - qp) > 0.0f && Cross2(qb - qa, q - qa) > 0.0f &&
+                Cross2(qp - qb, q - qb) > 0.0f)
+                return true;
+        }
+        return false;
+    }
+
+    MeshState& m_;
+    const Indices& working_;
+    const GrowSettings& s_;
+    std::optional<KdTree> tree_;
+    std::deque<std::uint32_t> queue_;
+    std::vector<std::uint32_t> parent_;
+    Indices idx_;
+    std::vector<float> d2_;
+    std::vector<std::uint32_t> nb_, cand_, ins_, outs_;
+    std::vector<Edge> front_, fan_;
+    std::vector<std::pair<Eigen::Vector2f, std::uint32_t>> poly_, clipped_;
+    std::optional<Frame> frame_;
+};
+
+}  // namespace
+
+GrowStats Grow(MeshState& m, const Indices& working, const Indices& first,
+               const GrowSettings& settings, std::uint32_t first_new_comp) {
+    if (working.empty()) return {};
+    Grower g(m, working, settings);
+    g.InitComponents(first_new_comp);
+    auto drain = [&] {
+        std::uint32_t v;
+        while (g.Pop(v)) {
+            m.processed[v] = 1;
+            g.Process(v, true);
+        }
+    };
+    for (std::uint32_t v : first) {
+        // Existing boundary vertices: close gaps and extend their fans into the new points.
+        g.Process(v, true);
+        drain();
+    }
+    for (std::uint32_t v : working) {
+        if (m.processed[v]) continue;
+        m.processed[v] = 1;
+        g.Process(v, true);
+        drain();
+    }
+    // Gaps opened at vertices after they were processed.
+    for (std::uint32_t v : working)
+        if (m.HasTriangles(v) && !m.IsInterior(v)) g.Process(v, false);
+
+    // Orientation vote per component (new components only): the mesh faces the way most of the
+    // given normals do.
+    const std::size_t components = g.ComponentCount();
+    std::vector<std::uint32_t> root_of(working.size(), kNone);
+    for (std::size_t i = 0; i < working.size(); ++i) {
+        const std::uint32_t c = m.comp[working[i]];
+        if (c != kNone && c < components) root_of[i] = g.Find(c);
+    }
+    std::vector<long> votes(components, 0);
+    std::vector<std::uint8_t> anchored(components, 0);
+    for (std::uint32_t c = 0; c < first_new_comp && c < components; ++c) anchored[g.Find(c)] = 1;
+    for (std::size_t i = 0; i < working.size(); ++i) {
+        if (root_of[i] == kNone || !m.HasTriangles(working[i])) continue;
+        const std::uint32_t v = working[i];
+        votes[root_of[i]] += m.nrm[v].dot(m.nrm_in[v]) >= 0.0f ? 1 : -1;
+    }
+    std::vector<std::uint8_t> flip(votes.size(), 0);
+    for (std::size_t c = 0; c < votes.size(); ++c) flip[c] = !anchored[c] && votes[c] < 0;
+    if (std::find(flip.begin(), flip.end(), 1) != flip.end()) {
+        std::vector<std::uint8_t> flip_vertex(m.size(), 0);
+        for (std::size_t i = 0; i < working.size(); ++i) {
+            if (root_of[i] != kNone && flip[root_of[i]]) {
+                flip_vertex[working[i]] = 1;
+                m.nrm[working[i]] = -m.nrm[working[i]];
+            }
+        }
+        for (auto& t : m.tris)
+            if (flip_vertex[t[0]]) std::swap(t[1], t[2]);
+        // Corner lists stay valid: a corner's vertex moved with its slot swap; relink fully.
+        std::fill(m.head.begin(), m.head.end(), kNone);
+        m.next_corner.assign(3 * m.tris.size(), kNone);
+        for (std::uint32_t t = 0; t < m.tris.size(); ++t) {
+            for (std::uint32_t k = 0; k < 3; ++k) {
+                m.next_corner[3 * t + k] = m.head[m.tris[t][k]];
+                m.head[m.tris[t][k]] = 3 * t + k;
+            }
+        }
+    }
+    return g.stats;
+}
+
+// ------------------------------------------------------------------------------ hole filling
+
+namespace {
+
+inline std::uint64_t EdgeKey(std::uint32_t a, std::uint32_t b) {
+    return (std::uint64_t{a} << 32) | b;
+}
+
+/// Ear clipping of one loop given in fill order (consecutive vertices are the new directed
+/// edges). Returns the number of triangles added.
+std::size_t FillLoop(MeshState& m, std::vector<std::uint32_t> poly, const Eigen::Vector3f& n) {
+    std::size_t added = 0;
+    const Eigen::Vector3f u = n.unitOrthogonal(), w = n.cross(u);
+    auto q = [&](std::uint32_t v) { return Eigen::Vector2f(m.pos[v].dot(u), m.pos[v].dot(w)); };
+    while (poly.size() >= 3) {
+        const std::size_t k = poly.size();
+        std::size_t best = k;
+        float best_score = -1.0f;
+        for (std::size_t i = 0; i < k; ++i) {
+            const std::uint32_t a = poly[(i + k - 1) % k], b = poly[i], c = poly[(i + 1) % k];
+            if (a == c) continue;
+            const Eigen::Vector2f qa = q(a), qb = q(b), qc = q(c);
+            if (!(Cross2(qb - qa, qc - qb) > 0.0f)) continue;  // reflex or flat
+            if (k > 3 && (m.HasDirected(c, a) || m.HasDirected(a, c))) continue;
+            if (k == 3 && (m.HasDirected(a, b) || m.HasDirected(b, c) || m.HasDirected(c, a)))
+                continue;
+            bool inside = false;
+            for (std::uint32_t o : poly) {
+                if (o == a || o == b || o == c) continue;
+                const Eigen::Vector2f qo = q(o);
+                if (Cross2(qb - qa, qo - qa) > 0.0f && Cross2(qc - qb, qo - qb) > 0.0f &&
+                    Cross2(qa - qc, qo - qc) > 0.0f) {
+                    inside = true;
+                    break;
+                }
+            }
+            if (inside) continue;
+            // Quality: the smallest angle of the ear.
+            const Eigen::Vector3f pa = m.pos[a], pb = m.pos[b], pc = m.pos[c];
+            auto ang = [](const Eigen::Vector3f& x, const Eigen::Vector3f& y) {
+                return std::acos(std::clamp(x.normalized().dot(y.normalized()), -1.0f, 1.0f));
+            };
+            const float score =
+                std::min({ang(pb - pa, pc - pa), ang(pa - pb, pc - pb), ang(pa - pc, pb - pc)});
+            if (score > best_score) {
+                best_score = score;
+                best = i;
+            }
+        }
+        if (best == k) break;
+        const std::uint32_t a = poly[(best + k - 1) % k], b = poly[best], c = poly[(best + 1) % k];
+        m.AddTriangle(a, b, c);
+        ++added;
+        poly.erase(poly.begin() + static_cast<std::ptrdiff_t>(best));
+        if (k == 3) break;
+    }
+    return added;
+}
+
+}  // namespace
+
+std::size_t FillHoles(MeshState& m, const Indices& around, int max_edges) {
+    if (max_edges < 3) return 0;
+    std::unordered_set<std::uint64_t> visited;
+    std::size_t added = 0;
+    std::vector<std::uint32_t> loop;
+    for (std::uint32_t start : around) {
+        if (!m.HasTriangles(start)) continue;
+        // Boundary edges leaving `start`: start -> x with no x -> start.
+        std::vector<std::uint32_t> outs;
+        m.ForEachFan(start, [&](std::uint32_t x, std::uint32_t) {
+            if (!m.HasDirected(x, start)) outs.push_back(x);
+        });
+        for (std::uint32_t first : outs) {
+            if (!visited.insert(EdgeKey(start, first)).second) continue;
+            loop.assign({start, first});
+            bool closed = false;
+            while (static_cast<int>(loop.size()) <= max_edges + 1) {
+                const std::uint32_t b = loop.back();
+                std::uint32_t next = kNone;
+                m.ForEachFan(b, [&](std::uint32_t x, std::uint32_t) {
+                    if (next == kNone && !m.HasDirected(x, b) && !visited.count(EdgeKey(b, x)))
+                        next = x;
+                });
+                if (next == kNone) break;
+                visited.insert(EdgeKey(b, next));
+                if (next == start) {
+                    closed = true;
+                    break;
+                }
+                loop.push_back(next);
+            }
+            if (!closed || static_cast<int>(loop.size()) > max_edges) continue;
+            // Normal of the surrounding surface and of the loop in fill (reversed) order.
+            Eigen::Vector3f around_n = Eigen::Vector3f::Zero();
+            for (std::uint32_t v : loop) around_n += m.nrm[v];
+            std::vector<std::uint32_t> fill(loop.rbegin(), loop.rend());
+            Eigen::Vector3f newell = Eigen::Vector3f::Zero();
+            for (std::size_t i = 0; i < fill.size(); ++i)
+                newell += m.pos[fill[i]].cross(m.pos[fill[(i + 1) % fill.size()]]);
+            if (!(newell.dot(around_n) > 0.0f)) continue;  // the outer rim, not a hole
+            added += FillLoop(m, std::move(fill), around_n.normalized());
+        }
+    }
+    return added;
+}
+
+}  // namespace multicue::detail
