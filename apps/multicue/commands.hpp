@@ -19,5 +19,6 @@ void AddOutliersCommand(CLI::App& app, const GlobalOptions& global);
 void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global);
 void AddConfigCommand(CLI::App& app, const GlobalOptions& global);
 void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
+void AddMeshCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddPerceiveCommand(app, global);
     multicue::cli::AddConfigCommand(app, global);
     multicue::cli::AddDemoCommand(app, global);
+    multicue::cli::AddMeshCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));
