@@ -23,6 +23,7 @@ void MeshState::AddVertex(const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
     oriented.push_back(0);
     processed.push_back(0);
     comp.push_back(kNone);
+    closed.push_back(0);
     head.push_back(kNone);
 }
 
@@ -170,15 +171,28 @@ class Grower {
   private:
     /// Neighbours within mu * d0 (at most search_radius), self and duplicates excluded.
     bool Neighbourhood(std::uint32_t p) {
-        tree_->SearchRadius(m_.pos[p], s_.search_radius, idx_, d2_,
-                            static_cast<std::size_t>(s_.max_neighbors) + 1);
-        nb_.clear();
+        // d0 first, then only the ball of radius mu * d0, which usually holds far fewer points
+        // than one of search_radius (k-nearest queries for large k cost more than the two).
         const float eps2 = 1e-12f * s_.search_radius * s_.search_radius;
+        float radius = s_.search_radius;
+        const std::size_t found = tree_->SearchKnn(m_.pos[p], 3, idx_, d2_);
+        std::size_t first = 0;
+        while (first < found && d2_[first] <= eps2) ++first;
+        if (first < found) radius = std::min(radius, 1.0001f * s_.mu * std::sqrt(d2_[first]));
+        // Unbounded radius search, then the nearest max_neighbors (+ p itself): for the few
+        // dozen points of the ball this beats a bounded k-nearest search.
+        tree_->SearchRadius(m_.pos[p], radius, idx_, d2_);
+        const auto keep = static_cast<std::size_t>(s_.max_neighbors) + 1;
+        if (idx_.size() > keep) {
+            idx_.resize(keep);
+            d2_.resize(keep);
+        }
+        nb_.clear();
         float d0_2 = -1.0f;
         for (std::size_t j = 0; j < idx_.size(); ++j) {
             if (d2_[j] <= eps2) continue;
             if (d0_2 < 0.0f) d0_2 = d2_[j];
-            const float r = s_.mu * s_.mu * d0_2;
+            const float r = std::min(s_.mu * s_.mu * d0_2, s_.search_radius * s_.search_radius);
             if (d2_[j] > r) break;
             const std::uint32_t g = working_[idx_[j]];
             if (g != p) nb_.push_back(g);
@@ -230,15 +244,20 @@ class Grower {
         for (std::uint32_t c : nb_) {
             const float d = n.dot(m_.nrm[c]);
             if ((m_.oriented[c] ? d : std::abs(d)) < s_.cos_surface) continue;
-            if (m_.IsInterior(c)) continue;
+            if (m_.IsClosed(c)) continue;
             cand_.push_back(c);
         }
         front_.clear();
         auto collect = [&](std::uint32_t v) {
-            m_.ForEachFan(v, [&](std::uint32_t x, std::uint32_t y) {
-                if (!m_.HasDirected(x, v)) front_.push_back({v, x});
-                if (!m_.HasDirected(v, y)) front_.push_back({y, v});
-            });
+            if (m_.closed[v]) return;
+            m_.ForEachFrontEdge(
+                v,
+                [&](std::uint32_t x) {
+                    front_.push_back({v, x});
+                },
+                [&](std::uint32_t y) {
+                    front_.push_back({y, v});
+                });
         };
         collect(p);
         for (std::uint32_t c : nb_) collect(c);
@@ -291,19 +310,24 @@ class Grower {
     bool SectorOverlaps(std::uint32_t v, std::uint32_t s, std::uint32_t e) const {
         if (!m_.HasTriangles(v)) return false;
         const Frame f(m_.pos[v], m_.nrm[v]);
+        // Pseudo-angles in [0, 4): monotonic in the angle and much cheaper than atan2; sums of
+        // differences modulo 4 go round the circle as angles do.
         auto angle = [&](std::uint32_t w) {
             const Eigen::Vector2f q = f(m_.pos[w]);
-            return std::atan2(q.y(), q.x());
+            const float r = q.x() / (std::abs(q.x()) + std::abs(q.y()) + 1e-30f);
+            return q.y() >= 0.0f ? 1.0f - r : 3.0f + r;
         };
+        auto wrap4 = [](float a) { return a < 0.0f ? a + 4.0f : (a >= 4.0f ? a - 4.0f : a); };
         const float as = angle(s);
-        const float w1 = Wrap(angle(e) - as);
-        constexpr float kEps = 1e-4f;
+        const float w1 = wrap4(angle(e) - as);
+        constexpr float kEps = 1e-5f;
         bool overlap = false;
         m_.ForEachFan(v, [&](std::uint32_t x, std::uint32_t y) {
             if (overlap) return;
-            const float ax = Wrap(angle(x) - as);
-            const float w2 = Wrap(angle(y) - angle(x));
-            if (ax < w1 - kEps || ax + w2 > kTwoPi + kEps) overlap = true;
+            const float px = angle(x);
+            const float ax = wrap4(px - as);
+            const float w2 = wrap4(angle(y) - px);
+            if (ax < w1 - kEps || ax + w2 > 4.0f + kEps) overlap = true;
         });
         return overlap;
     }
@@ -316,6 +340,8 @@ class Grower {
 
     /// Writes triangle (a, b, c), a being the source, if it passes every test.
     bool TryTriangle(std::uint32_t a, std::uint32_t b, std::uint32_t c, bool gap) {
+        // Cheapest first: most fan triangles of a point inside the mesh exist already.
+        if (m_.HasDirected(a, b) || m_.HasDirected(b, c) || m_.HasDirected(c, a)) return false;
         const Eigen::Vector3f &pa = m_.pos[a], &pb = m_.pos[b], &pc = m_.pos[c];
         const Eigen::Vector3f ab = pb - pa, ac = pc - pa, bc = pc - pb;
         const float lab = ab.norm(), lac = ac.norm(), lbc = bc.norm();
@@ -333,7 +359,6 @@ class Grower {
         Oriented(b, na, nb);
         Oriented(c, na, nc);
         if (!(nt.dot(na) > 0.0f && nt.dot(nb) > 0.0f && nt.dot(nc) > 0.0f)) return false;
-        if (m_.HasDirected(a, b) || m_.HasDirected(b, c) || m_.HasDirected(c, a)) return false;
         if (SectorOverlaps(a, b, c) || SectorOverlaps(b, c, a) || SectorOverlaps(c, a, b))
             return false;
         const Frame& f = *frame_;
@@ -378,10 +403,9 @@ class Grower {
         for (int round = 0; round < 8; ++round) {
             ins_.clear();
             outs_.clear();
-            m_.ForEachFan(p, [&](std::uint32_t x, std::uint32_t y) {
-                if (!m_.HasDirected(x, p)) outs_.push_back(x);
-                if (!m_.HasDirected(p, y)) ins_.push_back(y);
-            });
+            m_.ForEachFrontEdge(
+                p, [&](std::uint32_t x) { outs_.push_back(x); },
+                [&](std::uint32_t y) { ins_.push_back(y); });
             if (ins_.empty() || outs_.empty()) return;
             bool changed = false;
             for (std::uint32_t y : ins_) {

@@ -27,6 +27,7 @@ struct MeshState {
     std::vector<std::uint8_t> oriented;   ///< orientation fixed by the front (or a seed)
     std::vector<std::uint8_t> processed;  ///< the vertex has been the source of a fan
     std::vector<std::uint32_t> comp;      ///< orientation component, kNone before orienting
+    std::vector<std::uint8_t> closed;     ///< known to be interior (see IsClosed)
     std::vector<Triangle> tris;
     std::vector<std::uint32_t> head;
     std::vector<std::uint32_t> next_corner;
@@ -49,6 +50,33 @@ struct MeshState {
     }
     /// Every edge at v has a triangle on both sides.
     bool IsInterior(std::uint32_t v) const;
+    /// The same, remembered once true (triangles are never removed, so it stays true).
+    bool IsClosed(std::uint32_t v) {
+        if (closed[v]) return true;
+        closed[v] = IsInterior(v) ? 1 : 0;
+        return closed[v] != 0;
+    }
+    /// Calls out(x) for every front edge v -> x and in(y) for every front edge y -> v (edges
+    /// with a triangle on one side only). The twin of an edge at v is always in v's own fan.
+    template <typename Out, typename In>
+    void ForEachFrontEdge(std::uint32_t v, Out&& out, In&& in) const {
+        std::uint32_t xs[48], ys[48];
+        std::size_t n = 0;
+        for (std::uint32_t c = head[v]; c != kNone && n < 48; c = next_corner[c], ++n) {
+            const Triangle& t = tris[c / 3];
+            xs[n] = t[(c % 3 + 1) % 3];
+            ys[n] = t[(c % 3 + 2) % 3];
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            bool twin_out = false, twin_in = false;
+            for (std::size_t j = 0; j < n; ++j) {
+                twin_out |= ys[j] == xs[i];
+                twin_in |= xs[j] == ys[i];
+            }
+            if (!twin_out) out(xs[i]);
+            if (!twin_in) in(ys[i]);
+        }
+    }
 };
 
 struct GrowSettings {
