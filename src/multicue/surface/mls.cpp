@@ -150,6 +150,30 @@ void Orient(const PointCloud& cloud, Index source, const Eigen::Vector3f& viewpo
     }
 }
 
+/// Tree positions of the points within sqrt(r2) of q, in tree order (MLS needs no sorting).
+void RadiusUnsorted(const KdTree& tree, const Eigen::Vector3f& q, float r2, Indices& out,
+                    Indices& stack) {
+    out.clear();
+    const auto& nodes = tree.Nodes();
+    const auto& pts = tree.TreePoints();
+    if (nodes.empty()) return;
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+        const KdTree::Node& n = nodes[stack.back()];
+        const Index i = stack.back();
+        stack.pop_back();
+        const Eigen::Vector3f d = (n.min - q).cwiseMax(Eigen::Vector3f::Zero()).cwiseMax(q - n.max);
+        if (d.squaredNorm() > r2) continue;
+        if (n.IsLeaf()) {
+            for (Index t = n.begin; t < n.end; ++t)
+                if ((pts[t] - q).squaredNorm() <= r2) out.push_back(t);
+            continue;
+        }
+        stack.push_back(n.second_child);
+        stack.push_back(i + 1);
+    }
+}
+
 std::uint64_t PointSeed(std::uint64_t seed, std::size_t i) {
     return seed * 0xd1b54a32d192ed03ull + static_cast<std::uint64_t>(i) * 0x9e3779b97f4a7c15ull +
            0x632be59bd9b4e019ull;
@@ -174,18 +198,28 @@ MlsResult MovingLeastSquares(const PointCloud& cloud, const KdTree& tree, const 
         starts.size(), params.num_threads,
         [&](std::size_t begin, std::size_t end) {
             detail::MlsScratch scratch;
-            Indices idx;
-            std::vector<float> d2;
+            Indices idx, stack;
+            const auto& to_cloud = tree.TreeToCloud();
+            const auto& tree_points = tree.TreePoints();
+            const float r2 = params.radius * params.radius;
             for (std::size_t i = begin; i < end; ++i) {
                 Slot& slot = slots[i];
                 const Eigen::Vector3f& q = starts[i];
-                tree.SearchRadius(q, params.radius, idx, d2);
+                RadiusUnsorted(tree, q, r2, idx, stack);
                 slot.neighbours = static_cast<int>(idx.size());
                 if (idx.empty()) continue;
-                slot.source = idx[0];
+                // Tree order is a fixed order, so results stay deterministic.
                 scratch.offsets.resize(idx.size());
-                for (std::size_t j = 0; j < idx.size(); ++j)
-                    scratch.offsets[j] = cloud.points[idx[j]] - q;
+                float nearest = std::numeric_limits<float>::infinity();
+                for (std::size_t j = 0; j < idx.size(); ++j) {
+                    scratch.offsets[j] = tree_points[idx[j]] - q;
+                    const float d = scratch.offsets[j].squaredNorm();
+                    if (d < nearest) {
+                        nearest = d;
+                        slot.source = to_cloud[idx[j]];
+                    }
+                    idx[j] = to_cloud[idx[j]];
+                }
                 detail::SplitMix64 rng(PointSeed(params.seed, i));
                 detail::MlsFit fit;
                 if (!detail::FitMls(scratch, settings, rng, fit)) continue;

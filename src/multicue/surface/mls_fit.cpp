@@ -67,14 +67,14 @@ bool WeightedRansac(MlsScratch& s, const MlsFitSettings& settings, SplitMix64& r
         if (!(len > 1e-12f)) continue;
         normal /= len;
         const float off = normal.dot(s.offsets[a]);
-        double score = 0.0;
+        float score_f = 0.0f;
         std::size_t count = 0;
         for (std::uint32_t i = 0; i < n; ++i) {
-            if (std::abs(normal.dot(s.offsets[i]) - off) <= t) {
-                score += s.weights[i];
-                ++count;
-            }
+            const bool in = std::abs(normal.dot(s.offsets[i]) - off) <= t;  // branch-free
+            score_f += in ? s.weights[i] : 0.0f;
+            count += in;
         }
+        const double score = score_f;
         if (score > best_score) {
             best_score = score;
             best_n = normal;
@@ -110,6 +110,17 @@ inline void Basis(double u, double v, int terms, double* b) {
     b[7] = u * v * v;
     b[8] = u * u * u;
     b[9] = v * v * v;
+}
+
+/// Fixed-size LDLT solve of the top-left N x N normal equations (no allocation per point).
+template <int N>
+bool Solve(const Eigen::Matrix<double, 10, 10>& ata, const Eigen::Matrix<double, 10, 1>& atb,
+           Eigen::Matrix<double, 10, 1>& coef) {
+    const Eigen::LDLT<Eigen::Matrix<double, N, N>> ldlt(ata.topLeftCorner<N, N>());
+    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return false;
+    coef.setZero();
+    coef.head<N>() = ldlt.solve(atb.head<N>());
+    return coef.allFinite();
 }
 
 }  // namespace
@@ -174,11 +185,11 @@ bool FitMls(MlsScratch& s, const MlsFitSettings& settings, SplitMix64& rng, MlsF
     }
     for (int r = 0; r < terms; ++r)
         for (int c = r + 1; c < terms; ++c) ata(r, c) = ata(c, r);
-    const auto a = ata.topLeftCorner(terms, terms);
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
-    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return true;
-    const Eigen::VectorXd coef = ldlt.solve(atb.head(terms));
-    if (!coef.allFinite() || std::abs(coef(0)) > 1.0) return true;  // > radius: not trustworthy
+    Eigen::Matrix<double, 10, 1> coef;
+    const bool solved = terms == 3   ? Solve<3>(ata, atb, coef)
+                        : terms == 6 ? Solve<6>(ata, atb, coef)
+                                     : Solve<10>(ata, atb, coef);
+    if (!solved || std::abs(coef(0)) > 1.0) return true;  // > radius: not trustworthy
 
     // Eq. (2.4): tangents U + h_u N and V + h_v N at (0, 0); their cross product is
     // N - h_u U - h_v V (h_u, h_v in metres per metre: the 1 / radius scales cancel).
