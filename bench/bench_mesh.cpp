@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -75,7 +76,6 @@ Model Prepare(PointCloud cloud, bool pca) {
     Model m;
     m.cloud = SelectByIndex(cloud, finite);
     m.cloud.colors.clear();
-    m.cloud.labels.clear();
     m.cloud.intensity.clear();
     m.cloud.confidence.clear();
     m.cloud.extra_fields.clear();
@@ -304,6 +304,24 @@ void Incremental(benchmark::State& state, const std::string& name) {
     state.counters["new_triangles"] = static_cast<double>(tris);
 }
 
+/// Per-label meshes of a labelled scan (section 2.3.2, Figure 4.5), labels in parallel.
+void PerLabel(benchmark::State& state, const std::string& name) {
+    const Model* m = GetModel(name);
+    if (m == nullptr) return state.SkipWithError(("missing input " + name).c_str());
+    if (!m->cloud.HasLabels()) return state.SkipWithError((name + " has no labels").c_str());
+    const int threads = static_cast<int>(state.range(0));
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    GreedyTriangulationParams p = Gp3Params(*m);
+    p.per_label = true;
+    p.num_threads = threads;
+    std::size_t tris = 0;
+    for (auto _ : state) {
+        tris = GreedyProjectionTriangulation(m->cloud, p).mesh.triangles.size();
+        benchmark::DoNotOptimize(tris);
+    }
+    state.counters["triangles"] = static_cast<double>(tris);
+}
+
 void RegisterTimings() {
     const std::vector<std::string> models = {"bunny", "parasaurolophus", "parasaurolophus_28k",
                                              "mosd"};
@@ -324,6 +342,14 @@ void RegisterTimings() {
 #if MULTICUE_BENCH_PEERS
         reg("gp3/" + name + "/pcl", [name](benchmark::State& s) { Gp3Pcl(s, name); });
 #endif
+    }
+    for (const std::int64_t t : {1, 2}) {
+        benchmark::RegisterBenchmark("gp3_per_label/mosd/multicue",
+                                     [](benchmark::State& s) { PerLabel(s, "mosd"); })
+            ->Arg(t)
+            ->ArgName("threads")
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
     }
     for (const auto& name : {std::string("bunny"), std::string("parasaurolophus_28k")}) {
         reg("gp3_append_half/" + name + "/multicue",
