@@ -164,6 +164,34 @@ TEST(Mls, ResamplesOnTheGridOfEq21) {
     for (const auto& q : r.cloud.points) EXPECT_NEAR(q.z(), 0.0f, 1e-4f);
 }
 
+TEST(Mls, DensityFollowsCurvature) {
+    const PointCloud cube = Cube();
+    // Output points per unit area near the edges (within 6 mm) and on the faces' interiors.
+    auto densities = [&](const MlsResult& r, double& edge, double& face) {
+        std::size_t ne = 0, nf = 0;
+        for (const auto& q : r.cloud.points) {
+            int near = 0;
+            for (int a = 0; a < 3; ++a)
+                near += std::min(std::abs(q[a]), std::abs(q[a] - 0.1f)) < 0.006f;
+            ne += near >= 2;
+            nf += near == 1;
+        }
+        // 12 edges x 2 bands of 6 mm x 10 cm; 6 faces minus their bands.
+        edge = ne / (12 * 2 * 0.006 * 0.1);
+        face = nf / (6 * 0.088 * 0.088);
+    };
+    // Steps 12, 6 and 3 mm on the 4 mm input grid.
+    MlsParams p{.radius = 0.01f, .resample_step = 0.012f};
+    double e0, f0, e1, f1;
+    densities(RunMls(cube, p), e0, f0);
+    p.curvature_slope = 4.0f;
+    densities(RunMls(cube, p), e1, f1);
+    EXPECT_LT(e0, 2.0 * f0);  // uniform without adaptation
+    EXPECT_GT(e1, 3.0 * f1);  // much denser along the edges with it
+    EXPECT_NEAR(f1, f0, 0.3 * f0);
+    EXPECT_THROW(RunMls(cube, {.radius = 0.01f, .curvature_slope = -1.0f}), InvalidArgument);
+}
+
 TEST(Mls, KeepsColoursAndLabels) {
     PointCloud plane = test::SampledPlane(20, 20, 0.005f);
     plane.colors.assign(plane.size(), Color{200, 100, 50, 255});

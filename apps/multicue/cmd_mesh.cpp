@@ -27,7 +27,7 @@ namespace {
 struct MeshOptions {
     std::string in, out, append;
     bool smooth = false, plain = false, robust = false, per_label = false;
-    float radius = 0.0f, mls_radius = 0.0f;
+    float radius = 0.0f, mls_radius = 0.0f, resample = 0.0f, curvature_slope = 0.0f;
     int order = 2;
     GreedyTriangulationParams gp3;
 };
@@ -71,16 +71,15 @@ void Run(MeshOptions& o, int threads) {
     PointCloud cloud = ReadNonEmptyCloud(o.in);
     if (o.per_label && !cloud.HasLabels())
         throw DataError(fmt::format("{}: --per-label needs a label field", o.in));
-    if (o.radius == 0.0f) {
-        o.radius = 5.0f * MedianSpacing(cloud);
-        LogInfo("--radius {} (5 x the median point spacing)", o.radius);
-    }
-    o.gp3.search_radius = o.radius;
+    const bool auto_radius = o.radius == 0.0f;
+    if (auto_radius) o.radius = 5.0f * MedianSpacing(cloud);
 
     if (o.smooth) {
         MlsParams mls;
         mls.radius = o.mls_radius > 0.0f ? o.mls_radius : o.radius;
         mls.polynomial_order = o.order;
+        mls.resample_step = o.resample;
+        mls.curvature_slope = o.curvature_slope;
         mls.plane_fit = o.plain ? MlsPlaneFit::kWeightedLeastSquares : MlsPlaneFit::kWeightedRansac;
         mls.num_threads = threads;
         const KdTree tree(cloud);
@@ -90,7 +89,11 @@ void Run(MeshOptions& o, int threads) {
                     r.dropped);
         if (r.cloud.empty()) throw DataError(fmt::format("{}: no point survived smoothing", o.in));
         cloud = std::move(r.cloud);
+        // Resampling changes the density the triangulation must bridge.
+        if (auto_radius && o.resample > 0.0f) o.radius = 5.0f * MedianSpacing(cloud);
     }
+    if (auto_radius) LogInfo("--radius {} (5 x the median point spacing)", o.radius);
+    o.gp3.search_radius = o.radius;
 
     TriangleMesh mesh;
     if (!o.append.empty()) {
@@ -136,6 +139,10 @@ void AddMeshCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--mls-radius", o->mls_radius,
                     "MLS neighbourhood radius [m] (default: --radius)");
     cmd->add_option("--order", o->order, "MLS polynomial order 0..3")->capture_default_str();
+    cmd->add_option("--resample", o->resample,
+                    "MLS resampling grid step [m] (Eq. 2.1; default: smooth the input points)");
+    cmd->add_option("--curvature-slope", o->curvature_slope,
+                    "with --resample: finer steps where the curvature is above the mean");
     cmd->add_flag("--per-label", o->per_label, "one mesh per label, built in parallel");
     cmd->add_option("--append", o->append,
                     "existing mesh (.ply) to grow with the input's points (a registered scan)");

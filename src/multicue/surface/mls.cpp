@@ -10,6 +10,7 @@
 #include "multicue/core/parallel.hpp"
 #include "multicue/search/organized.hpp"
 #include "multicue/surface/mls_fit.hpp"
+#include "multicue/surface/normals.hpp"
 
 namespace multicue {
 namespace {
@@ -43,6 +44,10 @@ void CheckParams(const MlsParams& p) {
         throw InvalidArgument(fmt::format(
             "resample_step must be >= 0 (0 = at the input points), got {}", p.resample_step));
     }
+    if (!(p.curvature_slope >= 0.0f) || !std::isfinite(p.curvature_slope)) {
+        throw InvalidArgument(
+            fmt::format("curvature_slope must be >= 0 (0 = off), got {}", p.curvature_slope));
+    }
 }
 
 void CheckTree(const PointCloud& cloud, const KdTree& tree) {
@@ -58,8 +63,36 @@ void CheckTree(const PointCloud& cloud, const KdTree& tree) {
     }
 }
 
-/// Starting points: the finite input points, or the occupied voxel centres of Eq. (2.1).
-std::vector<Eigen::Vector3f> StartingPoints(const PointCloud& cloud, float step) {
+/// Grid level (0: step s, 1: s / 2, 2: s / 4) of every finite point for curvature-adapted
+/// resampling; all 0 without it.
+std::vector<int> Levels(const PointCloud& cloud, const KdTree& tree, const MlsParams& p) {
+    std::vector<int> level(cloud.size(), 0);
+    if (p.curvature_slope == 0.0f || p.resample_step == 0.0f) return level;
+    const NormalsResult pca =
+        EstimateNormals(cloud, tree, {.radius = p.radius, .num_threads = p.num_threads});
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (float c : pca.curvature) {
+        if (std::isfinite(c)) {
+            sum += c;
+            ++n;
+        }
+    }
+    const double mean = n > 0 ? sum / static_cast<double>(n) : 0.0;
+    if (!(mean > 0.0)) return level;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const float c = pca.curvature[i];
+        if (!std::isfinite(c)) continue;
+        const double f = 1.0 + p.curvature_slope * (c - mean) / mean;  // density factor
+        level[i] = f >= 3.0 ? 2 : (f >= 1.5 ? 1 : 0);                  // nearest power of two
+    }
+    return level;
+}
+
+/// Starting points: the finite input points, or the occupied voxel centres of Eq. (2.1), on the
+/// grid of each point's level.
+std::vector<Eigen::Vector3f> StartingPoints(const PointCloud& cloud, float step,
+                                            const std::vector<int>& level) {
     std::vector<Eigen::Vector3f> starts;
     if (step == 0.0f) {
         starts.reserve(cloud.size());
@@ -67,21 +100,28 @@ std::vector<Eigen::Vector3f> StartingPoints(const PointCloud& cloud, float step)
             if (cloud.IsFinite(i)) starts.push_back(cloud.points[i]);
         return starts;
     }
-    std::vector<Eigen::Vector3i> cells;
+    // (level, cell): sorted and made unique, so the order is deterministic.
+    std::vector<Eigen::Vector4i> cells;
     cells.reserve(cloud.size());
-    for (const auto& p : cloud.points) {
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Eigen::Vector3f& p = cloud.points[i];
         if (!p.allFinite()) continue;
-        const Eigen::Vector3f c = (p / step).array().floor();
+        const float s = step / static_cast<float>(1 << level[i]);
+        const Eigen::Vector3f c = (p / s).array().floor();
         if (!(c.cwiseAbs().maxCoeff() < 1e9f))
             throw InvalidArgument(fmt::format("resample_step {} is too small for the cloud", step));
-        cells.push_back(c.cast<int>());
+        cells.emplace_back(level[i], static_cast<int>(c.x()), static_cast<int>(c.y()),
+                           static_cast<int>(c.z()));
     }
-    std::sort(cells.begin(), cells.end(), [](const Eigen::Vector3i& a, const Eigen::Vector3i& b) {
-        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+    std::sort(cells.begin(), cells.end(), [](const Eigen::Vector4i& a, const Eigen::Vector4i& b) {
+        return std::lexicographical_compare(a.data(), a.data() + 4, b.data(), b.data() + 4);
     });
     cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
     starts.reserve(cells.size());
-    for (const auto& c : cells) starts.push_back((c.cast<float>().array() + 0.5f) * step);
+    for (const auto& c : cells) {
+        const float s = step / static_cast<float>(1 << c[0]);
+        starts.push_back((c.tail<3>().cast<float>().array() + 0.5f) * s);
+    }
     return starts;
 }
 
@@ -191,7 +231,8 @@ MlsResult MovingLeastSquares(const PointCloud& cloud, const KdTree& tree, const 
                  params.plane_fit == MlsPlaneFit::kWeightedRansac, params.inlier_distance,
                  params.max_iterations, params.confidence, params.min_neighbors);
     const Eigen::Vector3f viewpoint = params.viewpoint.value_or(cloud.sensor_origin);
-    const std::vector<Eigen::Vector3f> starts = StartingPoints(cloud, params.resample_step);
+    const std::vector<Eigen::Vector3f> starts =
+        StartingPoints(cloud, params.resample_step, Levels(cloud, tree, params));
     std::vector<Slot> slots(starts.size());
 
     ParallelForChunks(

@@ -51,6 +51,12 @@ struct MlsParams {
     /// input is smoothed in place); > 0 = one output point per occupied voxel floor(p / s),
     /// started at the voxel's centre (up- or down-sampling to an even density).
     float resample_step = 0.0f;
+    /// Density adapted to curvature (Figure 2.13; with resample_step > 0): a point whose surface
+    /// variation c (PCA within `radius`) exceeds the cloud's mean c0 asks for the step
+    /// resample_step / (1 + curvature_slope * (c - c0) / c0), rounded to resample_step / 2^l with
+    /// l in {0, 1, 2} (finer grids are nested in coarser ones, so the levels do not overlap
+    /// much). 0 = the same step everywhere.
+    float curvature_slope = 0.0f;
     /// Orientation of output normals where the input has none [m]; default: sensor_origin.
     std::optional<Eigen::Vector3f> viewpoint = std::nullopt;
     std::uint64_t seed = 0;  ///< RANSAC sampling seed (per point: seed and output index)
@@ -73,7 +79,8 @@ struct MlsResult {
 /// Robust (or plain) MLS of `cloud`, neighbours found in `tree` (built from `cloud`).
 /// Throws InvalidArgument naming the parameter for radius <= 0 or not finite, gaussian < 0,
 /// polynomial_order outside [0, 3], inlier_distance < 0, max_iterations < 1, confidence outside
-/// (0, 1), min_neighbors < 3, resample_step < 0, num_threads < 0, or a tree of another cloud.
+/// (0, 1), min_neighbors < 3, resample_step < 0, curvature_slope < 0, num_threads < 0, or a tree
+/// of another cloud.
 /// An empty cloud gives an empty result.
 MlsResult MovingLeastSquares(const PointCloud& cloud, const KdTree& tree, const MlsParams& params);
 
