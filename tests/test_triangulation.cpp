@@ -212,6 +212,28 @@ TEST(GreedyTriangulation, IncrementalAppendKeepsOldTrianglesAndMatchesRebuild) {
     EXPECT_GE(Area(from_file.mesh()), 0.97 * Area(full.mesh));
 }
 
+TEST(GreedyTriangulation, IncrementalJoinsDifferentlySampledScansIntoAClosedSphere) {
+    // Two scans of a sphere, sampled differently, overlapping in a 4 cm band around the equator.
+    const PointCloud s1 = SampledSphere(4000, 0.1f), s2 = SampledSphere(3000, 0.1f);
+    Indices lower, upper;
+    for (Index i = 0; i < s1.size(); ++i)
+        if (s1.points[i].z() < 0.02f) lower.push_back(i);
+    for (Index i = 0; i < s2.size(); ++i)
+        if (s2.points[i].z() > -0.02f) upper.push_back(i);
+    IncrementalTriangulation inc({.search_radius = 0.025f});
+    inc.Add(SelectByIndex(s1, lower));
+    const std::size_t old_triangles = inc.mesh().triangles.size();
+    const auto added = inc.Add(SelectByIndex(s2, upper));
+    EXPECT_GT(added.dropped_overlap, 500u);  // the second scan's part of the band
+    EXPECT_LT(added.old_vertices_touched, old_triangles);
+    const MeshQuality q = EvaluateMesh(inc.mesh());
+    EXPECT_EQ(q.non_manifold_edges, 0u);
+    EXPECT_EQ(q.inconsistent_edges, 0u);
+    EXPECT_LE(q.boundary_loops, 2u);
+    EXPECT_NEAR(Area(inc.mesh()), 4.0 * 3.14159 * 0.01, 0.02 * 4.0 * 3.14159 * 0.01);
+    EXPECT_EQ(FacingWrongWay(inc.mesh(), [](const Eigen::Vector3f& c) { return c; }), 0u);
+}
+
 TEST(GreedyTriangulation, SmallHoleIsFilledFromItsBoundaryLoop) {
     PointCloud plane = SampledPlane(30, 30, 0.01f, 0.1f);
     Indices keep;
