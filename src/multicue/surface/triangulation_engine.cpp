@@ -331,10 +331,10 @@ class Grower {
         return overlap;
     }
 
-    bool Oriented(std::uint32_t v, const Eigen::Vector3f& ref, Eigen::Vector3f& n) const {
-        n = m_.nrm[v];
-        if (!m_.oriented[v] && n.dot(ref) < 0.0f) n = -n;
-        return true;
+    /// v's normal, flipped to agree with `ref` if v has no orientation yet.
+    Eigen::Vector3f Oriented(std::uint32_t v, const Eigen::Vector3f& ref) const {
+        const Eigen::Vector3f& n = m_.nrm[v];
+        return (!m_.oriented[v] && n.dot(ref) < 0.0f) ? Eigen::Vector3f(-n) : n;
     }
 
     /// Writes triangle (a, b, c), a being the source, if it passes every test.
@@ -354,9 +354,7 @@ class Grower {
             if (cs > s_.cos_min_angle || cs < s_.cos_max_angle) return false;
         const Eigen::Vector3f nt = ab.cross(ac).normalized();
         const Eigen::Vector3f& na = m_.nrm[a];
-        Eigen::Vector3f nb, nc;
-        Oriented(b, na, nb);
-        Oriented(c, na, nc);
+        const Eigen::Vector3f nb = Oriented(b, na), nc = Oriented(c, na);
         if (!(nt.dot(na) > 0.0f && nt.dot(nb) > 0.0f && nt.dot(nc) > 0.0f)) return false;
         if (SectorOverlaps(a, b, c) || SectorOverlaps(b, c, a) || SectorOverlaps(c, a, b))
             return false;
@@ -515,7 +513,7 @@ GrowStats Grow(MeshState& m, const Indices& working, const Indices& first,
         }
         for (auto& t : m.tris)
             if (flip_vertex[t[0]]) std::swap(t[1], t[2]);
-        // Corner lists stay valid: a corner's vertex moved with its slot swap; relink fully.
+        // The swaps moved vertices between corner slots: rebuild the corner lists.
         std::fill(m.head.begin(), m.head.end(), kNone);
         m.next_corner.assign(3 * m.tris.size(), kNone);
         for (std::uint32_t t = 0; t < m.tris.size(); ++t) {
