@@ -22,14 +22,21 @@ void MeshState::AddVertex(const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
     oriented.push_back(0);
     processed.push_back(0);
     comp.push_back(kNone);
-    closed.push_back(0);
+    open_edges.push_back(0);
     head.push_back(kNone);
 }
 
 void MeshState::AddTriangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     const auto t = static_cast<std::uint32_t>(tris.size());
-    tris.emplace_back(a, b, c);
     const std::uint32_t v[3] = {a, b, c};
+    // An edge whose reverse exists closes; otherwise it opens at both ends.
+    for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t u = v[k], w = v[(k + 1) % 3];
+        const std::int32_t delta = HasDirected(w, u) ? -1 : 1;
+        open_edges[u] += delta;
+        open_edges[w] += delta;
+    }
+    tris.emplace_back(a, b, c);
     for (std::uint32_t k = 0; k < 3; ++k) {
         next_corner.push_back(head[v[k]]);
         head[v[k]] = 3 * t + k;
@@ -42,27 +49,6 @@ bool MeshState::HasDirected(std::uint32_t a, std::uint32_t b) const {
         if (t[(c % 3 + 1) % 3] == b) return true;
     }
     return false;
-}
-
-bool MeshState::IsInterior(std::uint32_t v) const {
-    if (head[v] == kNone) return false;
-    // Interior iff the fan's x's and y's are the same multiset (every edge has both sides).
-    std::uint32_t xs[32], ys[32];
-    std::size_t n = 0;
-    bool overflow = false;
-    ForEachFan(v, [&](std::uint32_t x, std::uint32_t y) {
-        if (n == 32) {
-            overflow = true;
-            return;
-        }
-        xs[n] = x;
-        ys[n] = y;
-        ++n;
-    });
-    if (overflow) return false;
-    std::sort(xs, xs + n);
-    std::sort(ys, ys + n);
-    return std::equal(xs, xs + n, ys);
 }
 
 MeshState StateFromMesh(const TriangleMesh& mesh) {
@@ -243,12 +229,12 @@ class Grower {
         for (std::uint32_t c : nb_) {
             const float d = n.dot(m_.nrm[c]);
             if ((m_.oriented[c] ? d : std::abs(d)) < s_.cos_surface) continue;
-            if (m_.IsClosed(c)) continue;
+            if (m_.IsInterior(c)) continue;
             cand_.push_back(c);
         }
         front_.clear();
         auto collect = [&](std::uint32_t v) {
-            if (m_.closed[v]) return;
+            if (m_.IsInterior(v)) return;
             m_.ForEachFrontEdge(
                 v,
                 [&](std::uint32_t x) {

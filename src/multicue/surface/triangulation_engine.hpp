@@ -22,12 +22,12 @@ inline constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max()
 /// appended.
 struct MeshState {
     std::vector<Eigen::Vector3f> pos;
-    std::vector<Eigen::Vector3f> nrm;     ///< unit normals; oriented once `oriented` is set
-    std::vector<Eigen::Vector3f> nrm_in;  ///< normals as given (for the final orientation vote)
-    std::vector<std::uint8_t> oriented;   ///< orientation fixed by the front (or a seed)
-    std::vector<std::uint8_t> processed;  ///< the vertex has been the source of a fan
-    std::vector<std::uint32_t> comp;      ///< orientation component, kNone before orienting
-    std::vector<std::uint8_t> closed;     ///< known to be interior (see IsClosed)
+    std::vector<Eigen::Vector3f> nrm;      ///< unit normals; oriented once `oriented` is set
+    std::vector<Eigen::Vector3f> nrm_in;   ///< normals as given (for the final orientation vote)
+    std::vector<std::uint8_t> oriented;    ///< orientation fixed by the front (or a seed)
+    std::vector<std::uint8_t> processed;   ///< the vertex has been the source of a fan
+    std::vector<std::uint32_t> comp;       ///< orientation component, kNone before orienting
+    std::vector<std::int32_t> open_edges;  ///< edges at the vertex with a triangle on one side
     std::vector<Triangle> tris;
     std::vector<std::uint32_t> head;
     std::vector<std::uint32_t> next_corner;
@@ -48,14 +48,8 @@ struct MeshState {
             f(t[(k + 1) % 3], t[(k + 2) % 3]);
         }
     }
-    /// Every edge at v has a triangle on both sides.
-    bool IsInterior(std::uint32_t v) const;
-    /// The same, remembered once true (triangles are never removed, so it stays true).
-    bool IsClosed(std::uint32_t v) {
-        if (closed[v]) return true;
-        closed[v] = IsInterior(v) ? 1 : 0;
-        return closed[v] != 0;
-    }
+    /// Every edge at v has a triangle on both sides (kept up to date by AddTriangle).
+    bool IsInterior(std::uint32_t v) const { return head[v] != kNone && open_edges[v] <= 0; }
     /// Calls out(x) for every front edge v -> x and in(y) for every front edge y -> v (edges
     /// with a triangle on one side only). The twin of an edge at v is always in v's own fan.
     template <typename Out, typename In>
