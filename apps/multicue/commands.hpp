@@ -25,5 +25,6 @@ void AddSimulateCommand(CLI::App& app, const GlobalOptions& global);
 void AddFeaturesCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset`, `classifier` and `ensemble` (cmd_ml.cpp).
 void AddMlCommands(CLI::App& app, const GlobalOptions& global);
+void AddMeshCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli
