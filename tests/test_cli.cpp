@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include "cli_runner.hpp"
 #include "multicue/io/pcd.hpp"
 #include "multicue/io/ply.hpp"
 #include "test_util.hpp"
@@ -16,22 +17,7 @@
 namespace multicue {
 namespace {
 
-struct RunResult {
-    int code = -1;
-    std::string output;  // stdout and stderr
-};
-
-RunResult RunCli(const std::string& args) {
-    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
-    RunResult r;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (pipe == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-    const int status = ::pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using test::RunCli;
 
 int CountLines(const std::string& s) {
     int n = 0;
@@ -45,10 +31,7 @@ PointCloud SmallCloud() {
     return c;
 }
 
-std::string ReadAll(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::ReadTextFile;
 
 TEST(Cli, InfoPrintsFieldsAndCounts) {
     test::TempDir dir;
@@ -130,7 +113,7 @@ TEST(Cli, DataErrorsExitWithOneAndKeepExistingOutput) {
     test::TempDir dir;
     const auto out = dir / "out.pcd";
     io::WritePcd(out, SmallCloud());
-    const std::string before = ReadAll(out);
+    const std::string before = ReadTextFile(out);
     {
         std::ofstream(dir / "trunc.pcd") << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n"
                                             "TYPE F F F\nCOUNT 1 1 1\nWIDTH 10\nHEIGHT 1\n"
@@ -154,7 +137,7 @@ TEST(Cli, DataErrorsExitWithOneAndKeepExistingOutput) {
             EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
         }
     }
-    EXPECT_EQ(ReadAll(out), before);
+    EXPECT_EQ(ReadTextFile(out), before);
     const auto r = RunCli("info " + (dir / "missing.pcd").string());
     EXPECT_EQ(r.code, 1);
     const auto w = RunCli("convert " + (dir / "empty.pcd").string() + " /nonexistent/dir/x.pcd");
@@ -183,7 +166,7 @@ TEST(Cli, PerceiveWritesTheContractAndRefusesBadInput) {
     for (const char* f : {"result.json", "labels.pcd", "models.ply"}) {
         EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
     }
-    const std::string before = ReadAll(out / "result.json");
+    const std::string before = ReadTextFile(out / "result.json");
     {
         std::ofstream(dir / "typo.json") << R"({"objects": {"min_pionts": 3}})";
         std::ofstream(dir / "bad.json") << "{ nope";
@@ -209,7 +192,7 @@ TEST(Cli, PerceiveWritesTheContractAndRefusesBadInput) {
         EXPECT_EQ(e.code, c.code) << c.args << "\n" << e.output;
         EXPECT_EQ(CountLines(e.output), 1) << c.args << "\n" << e.output;
     }
-    EXPECT_EQ(ReadAll(out / "result.json"), before);
+    EXPECT_EQ(ReadTextFile(out / "result.json"), before);
     const auto dump = RunCli("config --dump");
     ASSERT_EQ(dump.code, 0);
     { std::ofstream(dir / "defaults.json") << dump.output; }
@@ -224,7 +207,7 @@ TEST(Cli, PerceiveReportOnByDefaultAndOptional) {
     const auto scene = (dir / "demo" / "scene.pcd").string();
     const auto r = RunCli("perceive " + scene + " --out " + (dir / "a").string());
     ASSERT_EQ(r.code, 0) << r.output;
-    const std::string html = ReadAll(dir / "a" / "report.html");
+    const std::string html = ReadTextFile(dir / "a" / "report.html");
     EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
     EXPECT_NE(html.find("data-object=\"1\""), std::string::npos);
     EXPECT_NE(r.output.find("report.html"), std::string::npos);

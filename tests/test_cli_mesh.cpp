@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include "cli_runner.hpp"
 #include "mesh_test_data.hpp"
 #include "multicue/io/pcd.hpp"
 #include "multicue/io/ply.hpp"
@@ -16,27 +17,9 @@
 namespace multicue {
 namespace {
 
-struct RunResult {
-    int code = -1;
-    std::string output;  // stdout and stderr
-};
+using test::RunCli;
 
-RunResult RunCli(const std::string& args) {
-    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
-    RunResult r;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (pipe == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-    const int status = ::pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
-
-std::string ReadAll(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::ReadTextFile;
 
 TEST(CliMesh, TriangulatesSmoothsAppendsAndSplitsByLabel) {
     test::TempDir dir;
@@ -86,7 +69,7 @@ TEST(CliMesh, BadInputGivesOneLineErrorAndKeepsOutput) {
     io::WritePcd(dir / "plane.pcd", test::SampledPlane(10, 10, 0.01f));
     const auto in = (dir / "plane.pcd").string();
     ASSERT_EQ(RunCli("mesh " + in + " --out " + out.string()).code, 0);
-    const std::string before = ReadAll(out);
+    const std::string before = ReadTextFile(out);
     std::ofstream(dir / "garbage.pcd") << "hello\n";
     io::WritePcd(dir / "empty.pcd", PointCloud{});
     struct Case {
@@ -111,7 +94,7 @@ TEST(CliMesh, BadInputGivesOneLineErrorAndKeepsOutput) {
         EXPECT_EQ(r.output.rfind("multicue: error:", 0), 0u) << r.output;
     }
     EXPECT_EQ(RunCli("mesh " + in + " --out " + (dir / "x.obj").string()).code, 2);
-    EXPECT_EQ(ReadAll(out), before);
+    EXPECT_EQ(ReadTextFile(out), before);
 }
 
 }  // namespace

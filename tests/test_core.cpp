@@ -123,7 +123,8 @@ TEST(Logging, LevelsAndSink) {
 
 TEST(Progress, CountsFromSeveralThreadsAndStaysSilentByDefault) {
     multicue::Progress progress;
-    multicue::ParallelFor(1000, 0, [&](std::size_t) { progress.Advance(); }, 16);
+    multicue::ParallelFor(
+        1000, 0, [&](std::size_t) { progress.Advance(); }, 16);
     EXPECT_EQ(progress.done(), 1000u);
 }
 

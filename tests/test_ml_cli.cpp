@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include "cli_runner.hpp"
 #include "ml_test_data.hpp"
 #include "multicue/ml/dataset.hpp"
 #include "multicue/ml/serialization.hpp"
@@ -16,29 +17,15 @@
 namespace multicue::ml {
 namespace {
 
-struct CliRun {
-    int code = -1;
-    std::string output;
-};
-
-CliRun Cli(const std::string& args) {
-    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
-    CliRun r;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (pipe == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-    const int status = ::pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using test::CliResult;
+using test::RunCli;
 
 TEST(MlCli, ComposesDatasetClassifierAndEnsembleCommands) {
     test::TempDir dir;
     const auto p = [&](const std::string& n) { return (dir / n).string(); };
     SaveCsv(test::Blobs(3, 8, 2, 6, 0.4f, 3, 2), p("all.csv"));
     auto ok = [&](const std::string& args) {
-        const CliRun r = Cli(args);
+        const CliResult r = RunCli(args);
         EXPECT_EQ(r.code, 0) << args << "\n" << r.output;
         return r.output;
     };
@@ -71,16 +58,16 @@ TEST(MlCli, ComposesDatasetClassifierAndEnsembleCommands) {
     ok("classifier cv " + p("all.mcd") + " --spec knn:k=3 --k 3 --by-group");
 
     // Errors: one line, non-zero exit, no output file.
-    CliRun r = Cli("classifier train " + p("l0.mcd") + " --spec knn:k=0 -o " + p("bad.mcm"));
+    CliResult r = RunCli("classifier train " + p("l0.mcd") + " --spec knn:k=0 -o " + p("bad.mcm"));
     EXPECT_EQ(r.code, 2) << r.output;
-    r = Cli("classifier eval " + p("knn.mcm") + " " + p("b0.mcd"));
+    r = RunCli("classifier eval " + p("knn.mcm") + " " + p("b0.mcd"));
     EXPECT_EQ(r.code, 2) << r.output;  // 2 columns instead of 6
     EXPECT_NE(r.output.find("trained on 6 features, got 2"), std::string::npos) << r.output;
     WriteBytesAtomically(p("junk.mcm"), "MCUEMODL garbage");
-    r = Cli("classifier eval " + p("junk.mcm") + " " + p("t.mcd"));
+    r = RunCli("classifier eval " + p("junk.mcm") + " " + p("t.mcd"));
     EXPECT_EQ(r.code, 1) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
-    r = Cli("dataset info " + p("missing.mcd"));
+    r = RunCli("dataset info " + p("missing.mcd"));
     EXPECT_EQ(r.code, 1) << r.output;
 }
 

@@ -10,28 +10,14 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include "cli_runner.hpp"
 #include "multicue/io/pcd.hpp"
 #include "test_util.hpp"
 
 namespace multicue {
 namespace {
 
-struct RunResult {
-    int code = -1;
-    std::string output;  // stdout and stderr
-};
-
-RunResult RunCli(const std::string& args) {
-    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
-    RunResult r;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (pipe == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-    const int status = ::pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using test::RunCli;
 
 std::string ReadBytes(const std::filesystem::path& p) {
     std::ifstream in(p, std::ios::binary);
