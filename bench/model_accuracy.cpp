@@ -137,10 +137,11 @@ int main(int argc, char** argv) {
 
     struct Rotational {
         const char* kind;
-        Stats axis, ms;
+        Stats axis, ms, prior_axis;
         int missed = 0;
     };
-    Rotational rotational[] = {{"bottle", {}, {}}, {"bowl", {}, {}}, {"pitcher", {}, {}}};
+    Rotational rotational[] = {
+        {"bottle", {}, {}, {}}, {"bowl", {}, {}, {}}, {"pitcher", {}, {}, {}}};
     for (auto& kind : rotational) {
         for (int t = 0; t < trials; ++t) {
             sim::StreamRng object_rng(seed, ++scan_seed);
@@ -166,6 +167,15 @@ int main(int argc, char** argv) {
                 trial.T_world_camera.linear().transpose() * Eigen::Vector3f::UnitZ();
             kind.axis.Add(std::acos(std::min(1.0f, std::abs(model.axis.dot(up)))) * 180.0 / M_PI);
             kind.ms.Add(ms);
+            // With the table's normal as a prior: the axis within 20 degrees of up.
+            RotationalFitParams prior;
+            prior.max_tilt_deg = 20.0f;
+            const RotationalModel upright =
+                FitRotationalModel(trial.cloud, indices, up, Eigen::Vector4f::Zero(), prior);
+            if (upright.found) {
+                kind.prior_axis.Add(std::acos(std::min(1.0f, std::abs(upright.axis.dot(up)))) *
+                                    180.0 / M_PI);
+            }
         }
     }
 
@@ -184,6 +194,10 @@ int main(int argc, char** argv) {
             "included) | about 10 deg in 2 s | %d |\n",
             kind.kind, kind.axis.Mean(), kind.axis.Std(), kind.axis.Max(), kind.ms.Mean(),
             kind.missed);
+        std::printf(
+            "| %s axis (within 20 deg of the table normal) | %.2f +- %.2f deg (max %.2f) | "
+            "| |\n",
+            kind.kind, kind.prior_axis.Mean(), kind.prior_axis.Std(), kind.prior_axis.Max());
     }
     return 0;
 }
