@@ -58,7 +58,8 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
         throw InvalidArgument("mesh split: need 0 <= mesh_remainder < mesh_modulo");
     }
     std::vector<Job> jobs;
-    for (const auto& category : sim::TabletopCategories()) {
+    const auto& categories = o.categories.empty() ? sim::TabletopCategories() : o.categories;
+    for (const auto& category : categories) {
         for (int i = 0; i < o.objects_per_category; ++i) {
             sim::StreamRng rng(
                 o.seed, sim::SubSeed(static_cast<std::uint64_t>(sim::CategoryIndex(category)),

@@ -19,6 +19,7 @@ namespace multicue::training {
 
 struct PartGraphTrainingOptions {
     int objects_per_category = 8;  ///< procedural objects per category (0: none)
+    std::vector<std::string> categories = {};  ///< procedural categories (empty: all six)
     int views = 8;                 ///< turntable views per object
     std::filesystem::path meshes;  ///< mesh library folder with labels.csv (empty: none)
     /// Library entries used: those whose index i satisfies i % mesh_modulo == mesh_remainder (a
