@@ -20,6 +20,7 @@
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
+#include "part_graph_training.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -35,7 +36,8 @@ struct PerceiveOptions {
     ReportParams report;
 };
 
-PerceiveOptions LoadParams(const std::string& config_path, const std::string& up, int threads) {
+PerceiveOptions LoadParams(const std::string& config_path, const std::string& up, int threads,
+                           bool load_model = true) {
     PerceiveOptions options;
     if (!config_path.empty()) {
         auto config = io::ConfigSection::Load(config_path);
@@ -45,6 +47,12 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
     }
     if (!up.empty()) options.pipeline.support.up = ParseVector3(up, "--up");
     if (threads != 0) options.pipeline.num_threads = threads;
+    auto& pl = options.pipeline;
+    if (load_model && pl.categoriser == "part-graph" && !pl.part_graph &&
+        pl.part_graph_model.empty()) {
+        pl.part_graph =
+            std::make_shared<const PartGraphModel>(training::LoadOrTrainDefaultPartGraphModel());
+    }
     return options;
 }
 
@@ -126,7 +134,7 @@ void AddConfigCommand(CLI::App& app, const GlobalOptions& /*global*/) {
     cmd->add_option("--check", *check, "read a parameter file and report the first problem");
     cmd->callback([=] {
         if (!check->empty()) {
-            LoadParams(*check, "", 0);
+            LoadParams(*check, "", 0, false);
             std::printf("%s: ok\n", check->c_str());
             return;
         }

@@ -23,6 +23,7 @@ void AddDbCommand(CLI::App& app, const GlobalOptions& global);
 void AddRunCommand(CLI::App& app, const GlobalOptions& global);
 void AddSimulateCommand(CLI::App& app, const GlobalOptions& global);
 void AddFeaturesCommand(CLI::App& app, const GlobalOptions& global);
+void AddTrainCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset`, `classifier` and `ensemble` (cmd_ml.cpp).
 void AddMlCommands(CLI::App& app, const GlobalOptions& global);
 void AddMeshCommand(CLI::App& app, const GlobalOptions& global);

@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddFeaturesCommand(app, global);
     multicue::cli::AddMlCommands(app, global);
     multicue::cli::AddMeshCommand(app, global);
+    multicue::cli::AddTrainCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));

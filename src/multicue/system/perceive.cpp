@@ -1,5 +1,8 @@
 #include "multicue/system/perceive.hpp"
 
+#include <map>
+#include <mutex>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -137,6 +140,45 @@ std::vector<PerceivedObject> MergeOccluded(const PointCloud& cloud,
 
 }  // namespace
 
+// Part-graph hashing over the parts of every object (one graph for the scene, so groups may span
+// touching objects, as in section 5.1.1); object distributions are the point-weighted mean of
+// their parts'.
+static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                                  const PerceiveParams& params) {
+    std::shared_ptr<const PartGraphModel> model = params.part_graph;
+    if (!model) {
+        if (params.part_graph_model.empty()) {
+            throw InvalidArgument("category.part_graph_model: no part-graph model given");
+        }
+        static std::mutex mutex;
+        static std::map<std::string, std::shared_ptr<const PartGraphModel>> cache;
+        const std::lock_guard lock(mutex);
+        auto& cached = cache[params.part_graph_model];
+        if (!cached) {
+            cached = std::make_shared<const PartGraphModel>(
+                PartGraphModel::Load(params.part_graph_model));
+        }
+        model = cached;
+    }
+    std::vector<Indices> parts;
+    std::vector<std::vector<std::size_t>> ids(objects.size());
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        for (const auto& part : objects[k].parts) {
+            ids[k].push_back(parts.size());
+            parts.push_back(part);
+        }
+    }
+    const PartGraphResult r = RecognizeParts(*model, cloud, parts, params.part_graph_recognition);
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        CategoryResult& c = objects[k].category;
+        if (c.category == Category::kNone || ids[k].empty()) continue;  // too few points
+        const auto p = MergePartProbabilities(r, parts, ids[k]);
+        c.probabilities = p;
+        c.category = ArgMaxCategory(p);
+        c.confidence = p[static_cast<std::size_t>(c.category)];
+    }
+}
+
 PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     input.Validate();
     if (input.CountFinite() == 0) {
@@ -237,6 +279,12 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
             o.centroid = Centroid(cloud, o.indices);
         },
         1);
+    if (params.categoriser == "part-graph") {
+        CategorizeByPartGraph(cloud, result.objects, params);
+    } else if (params.categoriser != "rules") {
+        throw InvalidArgument("category.categoriser must be rules or part-graph, got '" +
+                              params.categoriser + "'");
+    }
     timer.Done("categories");
 
     ParallelFor(

@@ -5,6 +5,7 @@
 /// parameter file.
 
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "multicue/core/triangle_mesh.hpp"
 #include "multicue/io/config.hpp"
 #include "multicue/recognition/geometric_category.hpp"
+#include "multicue/recognition/part_graph_model.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
 #include "multicue/segmentation/convexity_split.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
@@ -49,6 +51,15 @@ struct PerceiveParams {
     /// First, rule-based categories; fewer samples than the defaults of a one-off call, which
     /// keeps a frame within budget at the same accuracy on mOSD.
     CategoryParams category{.max_points = 1500, .max_iterations = 400};
+    /// "rules" (CategorizeObject) or "part-graph" (part-graph hashing, docs/part-graph.md: the
+    /// categories, probabilities and per-point labels then come from the parts' votes; the rule
+    /// result stays the input of the model fits' "upright" details only).
+    std::string categoriser = "rules";
+    /// Part-graph model file; empty = `part_graph` must be set (the CLI then uses the default
+    /// model, trained once and cached).
+    std::string part_graph_model;
+    std::shared_ptr<const PartGraphModel> part_graph;  ///< loaded model (wins over the file)
+    PartGraphRecognitionParams part_graph_recognition{};
     BoxFitParams box{};                  ///< box models of box and flat objects
     CylinderModelParams cylinder = [] {  ///< cylinder models of cylindrical objects
         CylinderModelParams p;

@@ -1,0 +1,65 @@
+// `multicue train`: a part-graph hashing model (docs/part-graph.md) from simulated turntable scans.
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/progress.hpp"
+#include "part_graph_training.hpp"
+
+namespace multicue::cli {
+
+void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
+    auto* cmd = app.add_subcommand(
+        "train", "Train the part-graph hashing categoriser on simulated turntable scans");
+    struct Options {
+        std::string out;
+        std::string meshes;
+        training::PartGraphTrainingOptions t;
+        std::size_t max_parts = 8;
+    };
+    auto o = std::make_shared<Options>();
+    cmd->add_option("--out", o->out, "model file to write (.mcpg)")->required();
+    cmd->add_option("--meshes", o->meshes,
+                    "mesh library folder with labels.csv (added to the procedural objects)");
+    cmd->add_option("--objects", o->t.objects_per_category, "procedural objects per category")
+        ->capture_default_str();
+    cmd->add_option("--max-meshes", o->t.max_meshes, "at most this many library meshes (0 = all)")
+        ->capture_default_str();
+    cmd->add_option("--views", o->t.views, "turntable views per object")->capture_default_str();
+    cmd->add_option("--max-parts", o->max_parts, "largest stored subgraph [parts]")
+        ->capture_default_str();
+    cmd->add_option("--seed", o->t.seed, "random seed")->capture_default_str();
+    cmd->callback([o, &global] {
+        if (o->t.views < 1) throw InvalidArgument("--views must be >= 1");
+        if (o->t.objects_per_category < 0) throw InvalidArgument("--objects must be >= 0");
+        if (o->max_parts < 1 || o->max_parts > 15) {
+            throw InvalidArgument("--max-parts must be in [1, 15]");
+        }
+        o->t.meshes = o->meshes;
+        o->t.num_threads = global.threads;
+        o->t.train.max_parts = o->max_parts;
+        o->t.train.seed = o->t.seed;
+        InstallInterruptHandler();
+        const std::size_t jobs =
+            static_cast<std::size_t>(o->t.objects_per_category) * 6 +
+            (o->meshes.empty() ? 0 : static_cast<std::size_t>(std::max(o->t.max_meshes, 0)));
+        Progress progress("training part graphs", jobs);
+        PartGraphModel model;
+        const bool complete = training::TrainPartGraphModel(model, o->t, &progress);
+        progress.Finish();
+        if (!complete) throw DataError("interrupted; no model written");
+        if (model.num_rows() == 0) throw DataError("no training subgraphs: nothing to write");
+        model.Save(o->out);
+        const auto per = model.rows_per_category();
+        std::fprintf(stderr,
+                     "train: %zu subgraphs in %zu buckets (sphere %zu, box %zu, flat %zu, "
+                     "cylinder %zu, plate %zu, other %zu) -> %s\n",
+                     model.num_rows(), model.num_buckets(), per[1], per[2], per[3], per[4], per[5],
+                     per[6], o->out.c_str());
+    });
+}
+
+}  // namespace multicue::cli

@@ -1,0 +1,58 @@
+#pragma once
+/// \file Training data for part-graph hashing from simulated turntable scans (docs/part-graph.md):
+/// procedural objects of every table-top category, optionally a mesh library, each scanned from
+/// `views` directions by the simulated Kinect, decomposed as perceive decomposes objects (organized
+/// normals, normal-angle region growing) and added to a PartGraphModel. Shared by `multicue train`
+/// and bench/part_graph_eval.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/system/perceive.hpp"
+
+namespace multicue::training {
+
+struct PartGraphTrainingOptions {
+    int objects_per_category = 8;  ///< procedural objects per category (0: none)
+    std::vector<std::string> categories = {};  ///< procedural categories (empty: all six)
+    int views = 8;                 ///< turntable views per object
+    std::filesystem::path meshes;  ///< mesh library folder with labels.csv (empty: none)
+    /// Library entries used: those whose index i satisfies i % mesh_modulo == mesh_remainder (a
+    /// simple split of a library into training and test meshes).
+    int mesh_modulo = 1;
+    int mesh_remainder = 0;
+    int max_meshes = 0;  ///< at most this many library meshes (0 = all selected)
+    std::uint64_t seed = 1;
+    int num_threads = 0;
+    float camera_distance = 1.0f;  ///< turntable camera distance [m]
+    PartGraphTrainParams train{};
+};
+
+/// Perceive's decomposition of one scanned object: organized normals on the object's pixels and
+/// region-growing parts (PerceiveParams::parts) of `object` (indices into `scan`). Sets normals on
+/// `scan`.
+std::vector<Indices> DecomposeObject(PointCloud& scan, const Indices& object,
+                                     const PerceiveParams& perceive = {});
+
+/// Trains a model (the graph and descriptor settings of `model` are kept) and builds it.
+/// Interruptible: stops between objects once InterruptRequested() and returns false (the model
+/// then holds what was added so far); true when complete.
+bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& options,
+                         Progress* progress = nullptr);
+
+/// The default model: procedural objects only, `multicue train` defaults.
+PartGraphModel TrainDefaultPartGraphModel(Progress* progress = nullptr);
+
+/// Where the default model is cached: $XDG_CACHE_HOME/multicue (else ~/.cache/multicue, else the
+/// system temp folder) / part-graph-default-v1.mcpg.
+std::filesystem::path DefaultPartGraphModelPath();
+
+/// Loads the cached default model, training and caching it first when it is missing.
+PartGraphModel LoadOrTrainDefaultPartGraphModel();
+
+}  // namespace multicue::training

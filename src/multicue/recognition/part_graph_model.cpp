@@ -1,0 +1,423 @@
+#include "multicue/recognition/part_graph_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <unordered_map>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/features/grsd.hpp"
+#include "multicue/ml/serialization.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue {
+
+namespace {
+
+constexpr std::string_view kMagic = "MCPARTGR";
+using Row = Eigen::Matrix<float, 1, kPartDescriptorSize>;
+
+// Unit-sum, square-rooted descriptor (Euclidean distance = Jeffries-Matusita).
+void MapDescriptor(const float* in, float* out) {
+    double sum = 0.0;
+    for (int j = 0; j < kPartDescriptorSize; ++j) sum += std::max(in[j], 0.0f);
+    const float inv = sum > 0.0 ? static_cast<float>(1.0 / sum) : 0.0f;
+    for (int j = 0; j < kPartDescriptorSize; ++j) out[j] = std::sqrt(std::max(in[j], 0.0f) * inv);
+}
+
+// Splitmix64: a portable stream for the training sample.
+struct SplitMix {
+    std::uint64_t state;
+    std::uint64_t Next() {
+        std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        return z ^ (z >> 31);
+    }
+    std::uint64_t Below(std::uint64_t n) { return Next() % n; }
+};
+
+}  // namespace
+
+FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
+                                     const PartDescriptorParams& params) {
+    FeatureMatrix out =
+        FeatureMatrix::Zero(static_cast<Eigen::Index>(parts.size()), kPartDescriptorSize);
+    // Union of the parts' finite points, as a cloud of its own.
+    std::vector<std::int32_t> owner_part;
+    PointCloud sub;
+    std::vector<std::vector<Index>> local(parts.size());
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        for (Index i : parts[p]) {
+            if (i >= cloud.size()) throw InvalidArgument("part descriptors: index out of range");
+        }
+    }
+    std::size_t total = 0;
+    for (const auto& part : parts) total += part.size();
+    if (total == 0) return out;
+    if (!cloud.HasNormals() || cloud.normals.size() != cloud.size()) {
+        throw DataError("part descriptors need one normal per point");
+    }
+    sub.points.reserve(total);
+    sub.normals.reserve(total);
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        for (Index i : parts[p]) {
+            if (!cloud.points[i].allFinite()) continue;
+            local[p].push_back(static_cast<Index>(sub.points.size()));
+            sub.points.push_back(cloud.points[i]);
+            sub.normals.push_back(cloud.normals[i]);
+            owner_part.push_back(static_cast<std::int32_t>(p));
+        }
+    }
+    sub.width = static_cast<std::uint32_t>(sub.points.size());
+    sub.height = 1;
+    if (sub.points.empty()) return out;
+    const KdTree tree(sub);
+    const VoxelRsdResult voxels = ComputeVoxelRsd(sub, tree, params.voxels);
+    // Majority owner of every voxel.
+    const std::size_t nv = voxels.size();
+    std::vector<std::unordered_map<std::int32_t, std::uint32_t>> counts(nv);
+    for (std::size_t i = 0; i < sub.points.size(); ++i) {
+        const std::uint32_t v = voxels.point_voxel[i];
+        if (v == VoxelRsdResult::kNoVoxel) continue;
+        ++counts[v][owner_part[i]];
+    }
+    std::vector<std::vector<std::uint32_t>> owned(parts.size());
+    for (std::uint32_t v = 0; v < nv; ++v) {
+        std::int32_t best = -1;
+        std::uint32_t best_count = 0;
+        for (const auto& [p, c] : counts[v]) {
+            if (c > best_count || (c == best_count && p < best)) {
+                best = p;
+                best_count = c;
+            }
+        }
+        if (best >= 0) owned[static_cast<std::size_t>(best)].push_back(v);
+    }
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        if (owned[p].empty()) continue;
+        const FeatureVector h = GrsdMinusOfVoxels(voxels, owned[p]);
+        out.row(static_cast<Eigen::Index>(p)) = h.transpose();
+    }
+    return out;
+}
+
+Row SubgraphDescriptor(const FeatureMatrix& descriptors, std::span<const std::uint32_t> vertices) {
+    Row sum = Row::Zero();
+    for (std::uint32_t v : vertices) {
+        sum += descriptors.row(static_cast<Eigen::Index>(v)).head<kPartDescriptorSize>();
+    }
+    return sum;
+}
+
+std::size_t PartGraphModel::AddObject(const FeatureMatrix& descriptors, const PartGraph& graph,
+                                      Category category, const PartGraphTrainParams& params) {
+    if (category == Category::kNone || static_cast<std::size_t>(category) >= kNumCategories) {
+        throw InvalidArgument("training category must be a real category");
+    }
+    if (params.max_parts == 0 || params.max_parts > kMaxSubgraphParts) {
+        throw InvalidArgument("max_parts must be in [1, 15]");
+    }
+    if (params.max_per_size == 0) throw InvalidArgument("max_per_size must be >= 1");
+    if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
+        (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
+        throw InvalidArgument("descriptors must have one 21-column row per part");
+    }
+    if (graph.size() == 0) return 0;
+    SplitMix rng{params.seed};
+    std::vector<std::uint32_t> order(graph.size());
+    std::iota(order.begin(), order.end(), 0u);
+    for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng.Below(i)]);
+    // Reservoir per size of (key, descriptor).
+    struct Sample {
+        std::uint64_t key;
+        Row row;
+    };
+    std::vector<std::vector<Sample>> reservoir(params.max_parts + 1);
+    std::vector<std::size_t> seen(params.max_parts + 1, 0);
+    std::size_t visited = 0;
+    EnumerateConnectedSubgraphs(
+        graph, params.max_parts,
+        [&](std::span<const std::uint32_t> vs) {
+            const std::size_t s = vs.size();
+            const std::size_t n = ++seen[s];
+            if (reservoir[s].size() < params.max_per_size) {
+                reservoir[s].push_back(
+                    {SubgraphKey(graph, vs), SubgraphDescriptor(descriptors, vs)});
+            } else {
+                const std::uint64_t j = rng.Below(n);
+                if (j < params.max_per_size) {
+                    reservoir[s][j] = {SubgraphKey(graph, vs), SubgraphDescriptor(descriptors, vs)};
+                }
+            }
+            return ++visited < params.max_visited;
+        },
+        order);
+    std::size_t added = 0;
+    float mapped[kPartDescriptorSize];
+    for (const auto& samples : reservoir) {
+        for (const Sample& sample : samples) {
+            if (sample.row.sum() <= 0.0f) continue;  // no voxel of its own: nothing to learn
+            MapDescriptor(sample.row.data(), mapped);
+            Bucket& b = buckets_[sample.key];
+            b.rows.insert(b.rows.end(), mapped, mapped + kPartDescriptorSize);
+            b.labels.push_back(static_cast<std::uint8_t>(category));
+            ++added;
+        }
+    }
+    train_max_parts = std::max(train_max_parts, params.max_parts);
+    built_ = false;
+    return added;
+}
+
+void PartGraphModel::Build() {
+    keys_by_size_.clear();
+    for (auto& [key, b] : buckets_) {
+        b.tree = ml::KdTreeNd(b.rows.data(), b.labels.size(), kPartDescriptorSize, 16);
+        keys_by_size_[KeyParts(key)].push_back(key);
+    }
+    built_ = true;
+}
+
+std::uint64_t PartGraphModel::ResolveKey(std::uint64_t key, bool* fallback) const {
+    if (fallback) *fallback = false;
+    if (buckets_.count(key)) return key;
+    const auto it = keys_by_size_.find(KeyParts(key));
+    if (it == keys_by_size_.end()) return 0;
+    if (fallback) *fallback = true;
+    const std::vector<int> want = KeyDegrees(key);
+    std::uint64_t best = 0;
+    int best_d = std::numeric_limits<int>::max();
+    for (std::uint64_t k : it->second) {
+        const std::vector<int> have = KeyDegrees(k);
+        int d = 0;
+        for (std::size_t i = 0; i < want.size(); ++i) d += std::abs(want[i] - have[i]);
+        if (d < best_d) {
+            best_d = d;
+            best = k;
+        }
+    }
+    return best;
+}
+
+std::array<float, kNumCategories> PartGraphModel::Classify(std::uint64_t key,
+                                                           const float* descriptor, std::size_t k,
+                                                           bool* fallback) const {
+    if (!built_) throw InvalidArgument("part-graph model: Build() before Classify()");
+    std::array<float, kNumCategories> p{};
+    const std::uint64_t resolved = ResolveKey(key, fallback);
+    if (resolved == 0) return p;
+    const Bucket& b = buckets_.at(resolved);
+    float q[kPartDescriptorSize];
+    MapDescriptor(descriptor, q);
+    thread_local std::vector<ml::Neighbour> nn;
+    b.tree.Search(q, std::min(k, b.labels.size()), nn);
+    if (nn.empty()) return p;
+    for (const auto& n : nn) p[b.labels[n.row]] += 1.0f;
+    const float inv = 1.0f / static_cast<float>(nn.size());
+    for (float& v : p) v *= inv;
+    return p;
+}
+
+std::size_t PartGraphModel::num_rows() const {
+    std::size_t n = 0;
+    for (const auto& [k, b] : buckets_) n += b.labels.size();
+    return n;
+}
+
+std::array<std::size_t, kNumCategories> PartGraphModel::rows_per_category() const {
+    std::array<std::size_t, kNumCategories> n{};
+    for (const auto& [k, b] : buckets_) {
+        for (auto l : b.labels) ++n[l];
+    }
+    return n;
+}
+
+std::string PartGraphModel::Serialize() const {
+    ml::ByteWriter w;
+    w.Put<float>(descriptor_params.voxels.voxel_size);
+    w.Put<float>(descriptor_params.voxels.rsd.radius);
+    w.Put<float>(graph_params.adjacency_distance);
+    w.Put<std::uint64_t>(train_max_parts);
+    w.Put<std::uint64_t>(buckets_.size());
+    for (const auto& [key, b] : buckets_) {
+        w.Put<std::uint64_t>(key);
+        w.PutVector(b.labels);
+        w.PutVector(b.rows);
+    }
+    return ml::WrapContainer(kMagic, kPartGraphModelVersion, w.bytes());
+}
+
+PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::string& what) {
+    const std::string payload =
+        ml::UnwrapContainer(bytes, kMagic, kPartGraphModelVersion, "part-graph model", what);
+    ml::ByteReader r(payload, what);
+    PartGraphModel m;
+    m.descriptor_params.voxels.voxel_size = r.Get<float>();
+    m.descriptor_params.voxels.rsd.radius = r.Get<float>();
+    m.graph_params.adjacency_distance = r.Get<float>();
+    m.train_max_parts = r.Get<std::uint64_t>();
+    if (!(m.descriptor_params.voxels.voxel_size > 0.0f) ||
+        !(m.graph_params.adjacency_distance > 0.0f) ||
+        !std::isfinite(m.descriptor_params.voxels.rsd.radius) || m.train_max_parts == 0 ||
+        m.train_max_parts > kMaxSubgraphParts) {
+        r.Fail("bad parameters");
+    }
+    const auto nb = r.Get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < nb; ++i) {
+        const auto key = r.Get<std::uint64_t>();
+        Bucket b;
+        b.labels = r.GetVector<std::uint8_t>();
+        b.rows = r.GetVector<float>();
+        const std::size_t parts = KeyParts(key);
+        if (parts == 0 || b.labels.empty() ||
+            b.rows.size() != b.labels.size() * kPartDescriptorSize || m.buckets_.count(key)) {
+            r.Fail("bad bucket");
+        }
+        for (auto l : b.labels) {
+            if (l == 0 || l >= kNumCategories) r.Fail("bad category");
+        }
+        for (float v : b.rows) {
+            if (!std::isfinite(v) || v < 0.0f || v > 1.0f) r.Fail("bad descriptor");
+        }
+        m.buckets_.emplace(key, std::move(b));
+    }
+    if (!r.AtEnd()) r.Fail("trailing bytes");
+    m.Build();
+    return m;
+}
+
+void PartGraphModel::Save(const std::filesystem::path& path) const {
+    ml::WriteBytesAtomically(path, Serialize());
+}
+
+PartGraphModel PartGraphModel::Load(const std::filesystem::path& path) {
+    return Deserialize(ml::ReadBytes(path), path.string());
+}
+
+PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
+                               const std::vector<Indices>& parts,
+                               const PartGraphRecognitionParams& params) {
+    const PartGraph graph = BuildPartGraph(cloud, parts, model.graph_params);
+    const FeatureMatrix d = ComputePartDescriptors(cloud, parts, model.descriptor_params);
+    return RecognizeParts(model, graph, d, params);
+}
+
+PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
+                               const FeatureMatrix& descriptors,
+                               const PartGraphRecognitionParams& params) {
+    if (params.k == 0) throw InvalidArgument("k must be >= 1");
+    if (!(params.size_exponent >= 0.0f)) throw InvalidArgument("size_exponent must be >= 0");
+    if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
+        (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
+        throw InvalidArgument("descriptors must have one 21-column row per part");
+    }
+    PartGraphResult result;
+    const std::size_t n = graph.size();
+    result.part_probabilities.assign(n, {});
+    result.part_categories.assign(n, Category::kNone);
+    if (n == 0) return result;
+    const std::size_t max_parts = std::min(params.max_parts, model.train_max_parts);
+    EnumerateConnectedSubgraphs(graph, max_parts, [&](std::span<const std::uint32_t> vs) {
+        const Row desc = SubgraphDescriptor(descriptors, vs);
+        if (desc.sum() <= 0.0f) return true;
+        bool fallback = false;
+        const auto p = model.Classify(SubgraphKey(graph, vs), desc.data(), params.k, &fallback);
+        float conf = *std::max_element(p.begin(), p.end());
+        if (conf <= 0.0f) return true;
+        ++result.subgraphs;
+        if (fallback) ++result.fallbacks;
+        const float w = (params.confidence_weighted ? conf : 1.0f) /
+                        std::pow(static_cast<float>(vs.size()), params.size_exponent);
+        for (std::uint32_t v : vs) {
+            for (std::size_t c = 0; c < kNumCategories; ++c) {
+                result.part_probabilities[v][c] += w * p[c];
+            }
+        }
+        return result.subgraphs < params.max_subgraphs;
+    });
+    for (std::size_t v = 0; v < n; ++v) {
+        auto& p = result.part_probabilities[v];
+        const float sum = std::accumulate(p.begin(), p.end(), 0.0f);
+        if (sum > 0.0f) {
+            for (float& x : p) x /= sum;
+        } else {
+            p[0] = 1.0f;
+        }
+        result.part_categories[v] = ArgMaxCategory(p);
+    }
+    return result;
+}
+
+std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& result,
+                                                         const std::vector<Indices>& parts,
+                                                         const std::vector<std::size_t>& part_ids) {
+    std::array<float, kNumCategories> p{};
+    double total = 0.0;
+    for (std::size_t id : part_ids) {
+        if (id >= result.part_probabilities.size() || id >= parts.size()) {
+            throw InvalidArgument("part id out of range");
+        }
+        const auto w = static_cast<float>(parts[id].size());
+        for (std::size_t c = 0; c < kNumCategories; ++c) {
+            p[c] += w * result.part_probabilities[id][c];
+        }
+        total += w;
+    }
+    if (total <= 0.0) {
+        p = {};
+        p[0] = 1.0f;
+        return p;
+    }
+    for (float& x : p) x = static_cast<float>(x / total);
+    return p;
+}
+
+Category ArgMaxCategory(const std::array<float, kNumCategories>& p) {
+    std::size_t best = 0;
+    for (std::size_t c = 1; c < kNumCategories; ++c) {
+        if (p[c] > p[best]) best = c;
+    }
+    return static_cast<Category>(best);
+}
+
+VoxelVoteGrid::VoxelVoteGrid(float voxel_size) : voxel_(voxel_size) {
+    if (!(voxel_size > 0.0f) || !std::isfinite(voxel_size)) {
+        throw InvalidArgument("voxel_size must be > 0 and finite");
+    }
+}
+
+namespace {
+std::array<int, 3> Cell(const Eigen::Vector3f& p, float s) {
+    return {static_cast<int>(std::floor(p.x() / s)), static_cast<int>(std::floor(p.y() / s)),
+            static_cast<int>(std::floor(p.z() / s))};
+}
+}  // namespace
+
+void VoxelVoteGrid::Add(const std::vector<Eigen::Vector3f>& points,
+                        const std::vector<std::array<float, kNumCategories>>& votes) {
+    if (points.size() != votes.size()) {
+        throw InvalidArgument("votes must have one distribution per point");
+    }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        if (!points[i].allFinite()) continue;
+        auto& cell = cells_[Cell(points[i], voxel_)];
+        for (std::size_t c = 0; c < kNumCategories; ++c) cell[c] += votes[i][c];
+    }
+}
+
+std::array<float, kNumCategories> VoxelVoteGrid::Votes(const Eigen::Vector3f& point) const {
+    if (!point.allFinite()) return {};
+    const auto it = cells_.find(Cell(point, voxel_));
+    return it == cells_.end() ? std::array<float, kNumCategories>{} : it->second;
+}
+
+Category VoxelVoteGrid::CategoryAt(const Eigen::Vector3f& point) const {
+    const auto v = Votes(point);
+    if (*std::max_element(v.begin(), v.end()) <= 0.0f) return Category::kNone;
+    return ArgMaxCategory(v);
+}
+
+}  // namespace multicue

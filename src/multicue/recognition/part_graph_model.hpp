@@ -1,0 +1,170 @@
+#pragma once
+/// \file Categorisation in clutter by part-graph hashing (thesis sections 5.1.2, 5.1.3 and 5.3;
+/// Figures 5.5, 5.6, 5.14, 5.16). See docs/part-graph.md.
+///
+/// Descriptor of a part: GRSD- (features/grsd.hpp, 21 raw transition counts) of the 2.5 cm voxels
+/// the part owns in one voxel map computed over all given parts (a voxel belongs to the part with
+/// most points in it, ties to the lower part index; neighbours owned by other parts count as
+/// empty). The descriptor of a group of parts is the plain sum of its parts' descriptors, so it
+/// is computed once per part and summed per subgraph. For the k-NN the sum is normalised to unit
+/// sum and square-rooted: the Euclidean distance of two such vectors is then exactly the
+/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms, and a k-d tree
+/// finds the nearest ones.
+///
+/// Model: a two-level hash table, number of parts -> sorted degree sequence -> the stored
+/// subgraph descriptors with their categories (one k-d tree per bucket). Recognition grows every
+/// subgraph of up to max_parts parts, looks up its bucket (an unseen degree sequence falls back
+/// to the bucket of the same size whose sequence is nearest in L1, ties to the lower key), takes
+/// the category frequencies of the k nearest stored descriptors, and adds them to each of its
+/// parts with weight confidence / size^size_exponent (confidence = the largest frequency).
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/core/types.hpp"
+#include "multicue/features/feature_common.hpp"
+#include "multicue/features/rsd.hpp"
+#include "multicue/ml/knn.hpp"
+#include "multicue/recognition/geometric_category.hpp"
+#include "multicue/recognition/part_graph.hpp"
+
+namespace multicue {
+
+/// Dimensions of a part descriptor (GRSD-).
+inline constexpr int kPartDescriptorSize = 21;
+/// Version of the model file format (docs/part-graph.md).
+inline constexpr std::uint32_t kPartGraphModelVersion = 1;
+
+struct PartDescriptorParams {
+    VoxelRsdParams voxels = {};  ///< GRSD- voxel map settings (2.5 cm voxels by default)
+};
+
+/// One GRSD- row per part (parts x 21, raw counts) from a voxel map over the union of the parts'
+/// points. `cloud` needs normals. Parts without a voxel of their own get a zero row. Throws
+/// InvalidArgument for an index out of range, DataError without normals (unless nothing is
+/// given).
+FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
+                                     const PartDescriptorParams& params = {});
+
+/// Sum of the descriptor rows of `vertices`.
+Eigen::Matrix<float, 1, kPartDescriptorSize> SubgraphDescriptor(
+    const FeatureMatrix& descriptors, std::span<const std::uint32_t> vertices);
+
+struct PartGraphTrainParams {
+    std::size_t max_parts = 8;  ///< largest subgraph stored (thesis: 8), [1, 15]
+    /// Stored subgraphs per object and size at most (a uniform sample of the enumerated ones).
+    std::size_t max_per_size = 200;
+    /// Enumeration stops after this many subgraphs per object (roots in random order).
+    std::size_t max_visited = 100000;
+    std::uint64_t seed = 1;  ///< sampling seed
+};
+
+struct PartGraphRecognitionParams {
+    std::size_t max_parts = 4;   ///< largest subgraph grown in a scene (Figure 5.14 a), [1, 15]
+    std::size_t k = 5;           ///< neighbours voting per subgraph, >= 1
+    float size_exponent = 1.0f;  ///< vote weight confidence / size^size_exponent, >= 0
+    bool confidence_weighted = true;     ///< weight votes by their largest frequency
+    std::size_t max_subgraphs = 200000;  ///< enumeration cap per scene
+};
+
+/// Per-part and per-group category distributions (indexed by Category; kNone stays 0 unless a
+/// part received no vote, which then gets kNone with probability 1).
+struct PartGraphResult {
+    std::vector<std::array<float, kNumCategories>> part_probabilities;
+    std::vector<Category> part_categories;
+    std::size_t subgraphs = 0;  ///< subgraphs classified
+    std::size_t fallbacks = 0;  ///< of which through a nearest bucket
+};
+
+class PartGraphModel {
+  public:
+    struct Bucket {
+        std::vector<float> rows;           ///< sqrt of unit-sum descriptors, 21 per row
+        std::vector<std::uint8_t> labels;  ///< Category per row
+        ml::KdTreeNd tree;                 ///< over `rows` (Build)
+    };
+
+    PartDescriptorParams descriptor_params;  ///< used for training; recognition must use the same
+    PartGraphParams graph_params;            ///< adjacency of parts
+    std::size_t train_max_parts = 8;
+
+    /// Adds every connected subgraph (sampled, see PartGraphTrainParams) of one labelled object.
+    /// `category` must not be kNone. Returns the number of rows added.
+    std::size_t AddObject(const FeatureMatrix& descriptors, const PartGraph& graph,
+                          Category category, const PartGraphTrainParams& params);
+    /// Builds the search structures; call after the last AddObject (Load calls it).
+    void Build();
+
+    /// Category frequencies of the k nearest stored descriptors for one subgraph key; sets
+    /// `fallback` when the key was not stored. All zero if no bucket of that size exists.
+    std::array<float, kNumCategories> Classify(std::uint64_t key, const float* descriptor,
+                                               std::size_t k, bool* fallback = nullptr) const;
+
+    std::size_t num_rows() const;
+    std::size_t num_buckets() const { return buckets_.size(); }
+    const std::map<std::uint64_t, Bucket>& buckets() const { return buckets_; }
+    std::array<std::size_t, kNumCategories> rows_per_category() const;
+
+    std::string Serialize() const;
+    static PartGraphModel Deserialize(const std::string& bytes, const std::string& what);
+    /// Atomic write.
+    void Save(const std::filesystem::path& path) const;
+    /// FormatError for a corrupt file or another version, IoError when unreadable.
+    static PartGraphModel Load(const std::filesystem::path& path);
+
+  private:
+    std::uint64_t ResolveKey(std::uint64_t key, bool* fallback) const;
+    std::map<std::uint64_t, Bucket> buckets_;
+    std::map<std::size_t, std::vector<std::uint64_t>> keys_by_size_;
+    bool built_ = false;
+};
+
+/// Categorises parts: builds their graph (model.graph_params), descriptors
+/// (model.descriptor_params), and votes with every connected subgraph up to params.max_parts.
+/// Deterministic.
+PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
+                               const std::vector<Indices>& parts,
+                               const PartGraphRecognitionParams& params = {});
+/// Same from a ready graph and descriptors.
+PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
+                               const FeatureMatrix& descriptors,
+                               const PartGraphRecognitionParams& params = {});
+
+/// Distribution of a group of parts (an object): point-count weighted mean of the parts'
+/// distributions (`part_ids` index into the result); kNone with probability 1 when empty.
+std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& result,
+                                                         const std::vector<Indices>& parts,
+                                                         const std::vector<std::size_t>& part_ids);
+
+/// The most probable category of a distribution (ties to the lower value).
+Category ArgMaxCategory(const std::array<float, kNumCategories>& p);
+
+/// Multi-view accumulation (section 5.3, Figure 5.16): per-point category votes of registered
+/// frames summed in a voxel grid (5 mm by default); each point then takes the category of its
+/// voxel.
+class VoxelVoteGrid {
+  public:
+    explicit VoxelVoteGrid(float voxel_size = 0.005f);
+    /// Adds the votes of one frame: points in the common frame and one distribution per point
+    /// (same length; non-finite points are skipped). InvalidArgument on a size mismatch.
+    void Add(const std::vector<Eigen::Vector3f>& points,
+             const std::vector<std::array<float, kNumCategories>>& votes);
+    /// Accumulated distribution at a point (all zero where nothing voted).
+    std::array<float, kNumCategories> Votes(const Eigen::Vector3f& point) const;
+    Category CategoryAt(const Eigen::Vector3f& point) const;
+    std::size_t size() const { return cells_.size(); }
+
+  private:
+    float voxel_;
+    std::map<std::array<int, 3>, std::array<float, kNumCategories>> cells_;
+};
+
+}  // namespace multicue

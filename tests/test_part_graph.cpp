@@ -1,0 +1,293 @@
+// Part graphs, subgraph enumeration, keys, descriptors and the hashed model (recognition module).
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <set>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/recognition/part_graph.hpp"
+#include "multicue/recognition/part_graph_model.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+PartGraph RandomGraph(std::size_t n, double p, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    PartGraph g(n);
+    for (std::uint32_t a = 0; a < n; ++a) {
+        for (std::uint32_t b = a + 1; b < n; ++b) {
+            if (u(rng) < p) g.AddEdge(a, b);
+        }
+    }
+    return g;
+}
+
+bool Connected(const PartGraph& g, const std::vector<std::uint32_t>& vs) {
+    std::vector<std::uint32_t> stack{vs[0]};
+    std::set<std::uint32_t> seen{vs[0]};
+    while (!stack.empty()) {
+        const auto v = stack.back();
+        stack.pop_back();
+        for (auto u : vs) {
+            if (!seen.count(u) && g.Adjacent(u, v)) {
+                seen.insert(u);
+                stack.push_back(u);
+            }
+        }
+    }
+    return seen.size() == vs.size();
+}
+
+std::set<std::vector<std::uint32_t>> BruteForce(const PartGraph& g, std::size_t k) {
+    std::set<std::vector<std::uint32_t>> out;
+    const std::size_t n = g.size();
+    for (std::uint32_t mask = 1; mask < (1u << n); ++mask) {
+        std::vector<std::uint32_t> vs;
+        for (std::uint32_t i = 0; i < n; ++i) {
+            if (mask & (1u << i)) vs.push_back(i);
+        }
+        if (vs.size() <= k && Connected(g, vs)) out.insert(vs);
+    }
+    return out;
+}
+
+TEST(PartGraph, EnumerationMatchesBruteForceExactlyOnce) {
+    for (std::uint32_t seed = 1; seed <= 12; ++seed) {
+        const std::size_t n = 4 + seed % 7;
+        const PartGraph g = RandomGraph(n, 0.2 + 0.05 * (seed % 5), seed);
+        for (std::size_t k : {1u, 2u, 3u, 5u, 8u}) {
+            const auto expected = BruteForce(g, k);
+            std::set<std::vector<std::uint32_t>> got;
+            std::size_t visits = 0;
+            std::vector<std::uint32_t> order(n);
+            for (std::uint32_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(n - 1 - i);
+            const std::size_t count = EnumerateConnectedSubgraphs(
+                g, k,
+                [&](std::span<const std::uint32_t> vs) {
+                    std::vector<std::uint32_t> v(vs.begin(), vs.end());
+                    std::sort(v.begin(), v.end());
+                    EXPECT_TRUE(got.insert(v).second) << "visited twice";
+                    ++visits;
+                    return true;
+                },
+                seed % 2 ? std::span<const std::uint32_t>(order)
+                         : std::span<const std::uint32_t>());
+            EXPECT_EQ(count, visits);
+            EXPECT_EQ(got, expected) << "seed " << seed << " k " << k;
+        }
+    }
+}
+
+TEST(PartGraph, KnownCountsAndStop) {
+    // Path of 4: subgraphs 4 + 3 + 2 + 1 = 10; complete graph of 4: 15.
+    PartGraph path(4);
+    path.AddEdge(0, 1);
+    path.AddEdge(1, 2);
+    path.AddEdge(2, 3);
+    EXPECT_EQ(EnumerateConnectedSubgraphs(path, 4, [](auto) { return true; }), 10u);
+    PartGraph k4(4);
+    for (std::uint32_t a = 0; a < 4; ++a)
+        for (std::uint32_t b = a + 1; b < 4; ++b) k4.AddEdge(a, b);
+    EXPECT_EQ(EnumerateConnectedSubgraphs(k4, 4, [](auto) { return true; }), 15u);
+    EXPECT_EQ(EnumerateConnectedSubgraphs(k4, 4, [](auto) { return false; }), 1u);
+    EXPECT_THROW(EnumerateConnectedSubgraphs(k4, 0, [](auto) { return true; }), InvalidArgument);
+    EXPECT_THROW(EnumerateConnectedSubgraphs(k4, 16, [](auto) { return true; }), InvalidArgument);
+    const std::vector<std::uint32_t> bad = {0, 0, 1, 2};
+    EXPECT_THROW(EnumerateConnectedSubgraphs(k4, 2, [](auto) { return true; }, bad),
+                 InvalidArgument);
+    EXPECT_THROW(k4.AddEdge(1, 1), InvalidArgument);
+    EXPECT_THROW(k4.AddEdge(1, 4), InvalidArgument);
+    EXPECT_EQ(EnumerateConnectedSubgraphs(PartGraph(0), 3, [](auto) { return true; }), 0u);
+}
+
+TEST(PartGraph, KeysAreDegreeSequences) {
+    // Star 0-{1,2,3} and path 0-1-2-3: both 4 parts, different keys; a relabelled star equal.
+    PartGraph g(8);
+    g.AddEdge(0, 1);
+    g.AddEdge(0, 2);
+    g.AddEdge(0, 3);
+    g.AddEdge(4, 5);
+    g.AddEdge(5, 6);
+    g.AddEdge(6, 7);
+    const std::vector<std::uint32_t> star = {0, 1, 2, 3}, star2 = {3, 0, 2, 1},
+                                     path = {4, 5, 6, 7};
+    EXPECT_EQ(SubgraphKey(g, star), SubgraphKey(g, star2));
+    EXPECT_NE(SubgraphKey(g, star), SubgraphKey(g, path));
+    EXPECT_EQ(KeyParts(SubgraphKey(g, star)), 4u);
+    EXPECT_EQ(KeyDegrees(SubgraphKey(g, star)), (std::vector<int>{3, 1, 1, 1}));
+    EXPECT_EQ(KeyDegrees(SubgraphKey(g, path)), (std::vector<int>{2, 2, 1, 1}));
+    EXPECT_THROW(SubgraphKey(g, std::vector<std::uint32_t>{}), InvalidArgument);
+}
+
+// Three flat patches: A and B 5 mm apart, C 10 cm away.
+PointCloud ThreePatches(std::vector<Indices>& parts) {
+    PointCloud c;
+    parts.assign(3, {});
+    auto patch = [&](int p, float x0, float z) {
+        for (int i = 0; i < 12; ++i)
+            for (int j = 0; j < 12; ++j) {
+                parts[p].push_back(static_cast<Index>(c.points.size()));
+                c.points.emplace_back(x0 + 0.004f * i, 0.004f * j, z);
+                c.normals.emplace_back(0.0f, 0.0f, 1.0f);
+            }
+    };
+    patch(0, 0.0f, 0.0f);
+    patch(1, 0.049f, 0.0f);
+    patch(2, 0.3f, 0.0f);
+    c.width = static_cast<std::uint32_t>(c.points.size());
+    c.height = 1;
+    return c;
+}
+
+TEST(PartGraph, AdjacencyFromDistance) {
+    std::vector<Indices> parts;
+    const PointCloud c = ThreePatches(parts);
+    const PartGraph g = BuildPartGraph(c, parts, {.adjacency_distance = 0.01f});
+    EXPECT_TRUE(g.Adjacent(0, 1));
+    EXPECT_FALSE(g.Adjacent(0, 2));
+    EXPECT_FALSE(g.Adjacent(1, 2));
+    EXPECT_EQ(g.num_edges(), 1u);
+    const PartGraph g2 = BuildPartGraph(c, parts, {.adjacency_distance = 0.004f});
+    EXPECT_EQ(g2.num_edges(), 0u);
+    EXPECT_THROW(BuildPartGraph(c, parts, {.adjacency_distance = 0.0f}), InvalidArgument);
+    parts[0].push_back(100000);
+    EXPECT_THROW(BuildPartGraph(c, parts), InvalidArgument);
+}
+
+TEST(PartGraph, DescriptorsAreAdditive) {
+    std::vector<Indices> parts;
+    const PointCloud c = ThreePatches(parts);
+    const FeatureMatrix d = ComputePartDescriptors(c, parts);
+    ASSERT_EQ(d.rows(), 3);
+    ASSERT_EQ(d.cols(), kPartDescriptorSize);
+    for (int p = 0; p < 3; ++p) EXPECT_GT(d.row(p).sum(), 0.0f);
+    const std::vector<std::uint32_t> ab = {0, 1}, abc = {2, 0, 1};
+    const auto s = SubgraphDescriptor(d, ab);
+    EXPECT_TRUE(s.isApprox(d.row(0) + d.row(1)));
+    EXPECT_TRUE(SubgraphDescriptor(d, abc).isApprox(d.row(0) + d.row(1) + d.row(2)));
+    // Empty parts, no parts.
+    std::vector<Indices> with_empty = parts;
+    with_empty.push_back({});
+    const FeatureMatrix e = ComputePartDescriptors(c, with_empty);
+    EXPECT_EQ(e.row(3).sum(), 0.0f);
+    EXPECT_EQ(ComputePartDescriptors(c, {}).rows(), 0);
+    PointCloud no_normals = c;
+    no_normals.normals.clear();
+    EXPECT_THROW(ComputePartDescriptors(no_normals, parts), DataError);
+}
+
+// A model over synthetic descriptors: two categories with distinct histograms.
+PartGraphModel SyntheticModel() {
+    PartGraphModel m;
+    PartGraph g(3);
+    g.AddEdge(0, 1);
+    g.AddEdge(1, 2);
+    for (int obj = 0; obj < 4; ++obj) {
+        FeatureMatrix box = FeatureMatrix::Zero(3, kPartDescriptorSize);
+        FeatureMatrix ball = FeatureMatrix::Zero(3, kPartDescriptorSize);
+        for (int p = 0; p < 3; ++p) {
+            box(p, 6) = 50.0f + static_cast<float>(obj + p);
+            box(p, 0) = 5.0f;
+            ball(p, 15) = 40.0f + static_cast<float>(obj * p);
+            ball(p, 11) = 8.0f;
+        }
+        m.AddObject(box, g, Category::kBox, {.max_parts = 3, .seed = 1u + obj});
+        m.AddObject(ball, g, Category::kSphere, {.max_parts = 3, .seed = 7u + obj});
+    }
+    m.Build();
+    return m;
+}
+
+TEST(PartGraphModel, ClassifiesAndRoundTrips) {
+    const PartGraphModel m = SyntheticModel();
+    EXPECT_EQ(m.num_rows(), 2u * 4u * 6u);  // 6 connected subgraphs of a 3-path
+    PartGraph q(2);
+    q.AddEdge(0, 1);
+    FeatureMatrix d = FeatureMatrix::Zero(2, kPartDescriptorSize);
+    d(0, 6) = 30.0f;
+    d(0, 0) = 4.0f;
+    d(1, 15) = 30.0f;
+    d(1, 11) = 5.0f;
+    const PartGraphResult r = RecognizeParts(m, q, d, {.max_parts = 2, .k = 3});
+    EXPECT_EQ(r.part_categories[0], Category::kBox);
+    EXPECT_EQ(r.part_categories[1], Category::kSphere);
+    EXPECT_EQ(r.subgraphs, 3u);
+
+    test::TempDir dir;
+    const auto path = dir.path() / "m.mcpg";
+    m.Save(path);
+    const PartGraphModel l = PartGraphModel::Load(path);
+    EXPECT_EQ(l.Serialize(), m.Serialize());
+    const PartGraphResult r2 = RecognizeParts(l, q, d, {.max_parts = 2, .k = 3});
+    EXPECT_EQ(r2.part_probabilities, r.part_probabilities);
+
+    // Unseen degree sequence of a known size falls back to the nearest bucket.
+    PartGraph tri(3);
+    tri.AddEdge(0, 1);
+    tri.AddEdge(1, 2);
+    tri.AddEdge(0, 2);
+    FeatureMatrix t = FeatureMatrix::Zero(3, kPartDescriptorSize);
+    for (int p = 0; p < 3; ++p) t(p, 15) = 20.0f;
+    const PartGraphResult r3 = RecognizeParts(l, tri, t, {.max_parts = 3, .k = 3});
+    EXPECT_GT(r3.fallbacks, 0u);
+    EXPECT_EQ(r3.part_categories[2], Category::kSphere);
+
+    // Empty input.
+    EXPECT_TRUE(RecognizeParts(l, PartGraph(0), FeatureMatrix(0, kPartDescriptorSize))
+                    .part_categories.empty());
+    EXPECT_THROW(RecognizeParts(l, q, d, {.k = 0}), InvalidArgument);
+    EXPECT_THROW(RecognizeParts(l, tri, d), InvalidArgument);
+}
+
+TEST(PartGraphModel, CorruptFilesAreRejected) {
+    const PartGraphModel m = SyntheticModel();
+    test::TempDir dir;
+    const auto path = dir.path() / "m.mcpg";
+    m.Save(path);
+    std::string bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    std::string flipped = bytes;
+    flipped[bytes.size() / 2] = static_cast<char>(flipped[bytes.size() / 2] ^ 0x55);
+    EXPECT_THROW(PartGraphModel::Deserialize(flipped, "flipped"), FormatError);
+    EXPECT_THROW(PartGraphModel::Deserialize(bytes.substr(0, bytes.size() - 9), "cut"),
+                 FormatError);
+    EXPECT_THROW(PartGraphModel::Deserialize("not a model", "text"), FormatError);
+    EXPECT_THROW(PartGraphModel::Load(dir.path() / "missing.mcpg"), IoError);
+    PartGraphModel unbuilt;
+    const float z[kPartDescriptorSize] = {};
+    EXPECT_THROW(unbuilt.Classify(0, z, 1), InvalidArgument);
+    PartGraph g(1);
+    EXPECT_THROW(unbuilt.AddObject(FeatureMatrix::Zero(1, kPartDescriptorSize), g, Category::kNone,
+                                   {}),
+                 InvalidArgument);
+    EXPECT_THROW(unbuilt.AddObject(FeatureMatrix::Zero(2, kPartDescriptorSize), g, Category::kBox,
+                                   {}),
+                 InvalidArgument);
+}
+
+TEST(PartGraphModel, VoxelVotesAccumulateViews) {
+    VoxelVoteGrid grid(0.005f);
+    std::array<float, kNumCategories> box{}, ball{};
+    box[static_cast<int>(Category::kBox)] = 1.0f;
+    ball[static_cast<int>(Category::kSphere)] = 1.0f;
+    const Eigen::Vector3f p(0.101f, 0.2f, 0.3f), near(0.1024f, 0.2001f, 0.3001f);
+    grid.Add({p}, {box});
+    grid.Add({near}, {ball});
+    grid.Add({near}, {ball});
+    EXPECT_EQ(grid.CategoryAt(p), Category::kSphere);
+    EXPECT_EQ(grid.CategoryAt(Eigen::Vector3f(1, 1, 1)), Category::kNone);
+    EXPECT_THROW(grid.Add({p}, {}), InvalidArgument);
+    EXPECT_THROW(VoxelVoteGrid(0.0f), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace multicue
