@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddSimulateCommand(app, global);
     multicue::cli::AddFeaturesCommand(app, global);
     multicue::cli::AddMlCommands(app, global);
+    multicue::cli::AddDatasetExtractCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));
