@@ -65,7 +65,7 @@ void PrintJson(const nlohmann::json& j) { std::printf("%s\n", j.dump(2).c_str())
 
 void AddDatasetCommands(CLI::App& app, const GlobalOptions& global) {
     auto* ds = app.add_subcommand("dataset",
-                                  "Dataset tools: info, convert, concat, select, "
+                                  "Dataset tools: extract, info, convert, concat, select, "
                                   "relabel, split, normalise, pca, bow");
     ds->require_subcommand(1);
 

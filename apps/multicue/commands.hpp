@@ -27,5 +27,7 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset`, `classifier` and `ensemble` (cmd_ml.cpp).
 void AddMlCommands(CLI::App& app, const GlobalOptions& global);
 void AddMeshCommand(CLI::App& app, const GlobalOptions& global);
+/// `dataset extract` (cmd_dataset_extract.cpp); call after AddMlCommands.
+void AddDatasetExtractCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddMlCommands(app, global);
     multicue::cli::AddMeshCommand(app, global);
     multicue::cli::AddTrainCommand(app, global);
+    multicue::cli::AddDatasetExtractCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/features/colour.hpp"
 #include "multicue/features/grsd.hpp"
 #include "multicue/features/part_stats.hpp"
 #include "multicue/features/pfh.hpp"
@@ -52,7 +53,11 @@ FeatureVector PartStats(const PointCloud& c, const ClusterFeatureParams& p) {
                                      .num_threads = p.num_threads});
 }
 
-const std::array<ClusterFeature, 8> kFeatures = {{
+FeatureVector Colour(const PointCloud& c, const ClusterFeatureParams&) {
+    return ComputeColourHistogram(c);
+}
+
+const std::array<ClusterFeature, 9> kFeatures = {{
     {"rsd", 2, "mean RSD radii (r_min, r_max) [m], section 2.5.1", Rsd},
     {"grsd", kGrsdSize, "GRSD with ray-cast free space, section 2.5.2", Grsd},
     {"grsd-minus", kGrsdSize, "additive GRSD-, section 2.5.2", GrsdMinus},
@@ -61,6 +66,7 @@ const std::array<ClusterFeature, 8> kFeatures = {{
     {"fpfh", kFpfhSize, "mean FPFH", MeanLocal<ComputeFpfh>},
     {"pfhrgb", kPfhRgbSize, "mean PFHRGB (needs colours)", MeanLocal<ComputePfhRgb>},
     {"part-stats", kPartStatsSize, "24 part statistics, section 4.2.3.1", PartStats},
+    {"colour", kColourHistogramSize, "HSV colour histogram (needs colours)", Colour},
 }};
 
 }  // namespace

@@ -11,6 +11,7 @@
 ///   fpfh 33        mean FPFH over the points
 ///   pfhrgb 250     mean PFHRGB over the points (Table 2.2); needs colours
 ///   part-stats 24  part statistics (section 4.2.3.1)
+///   colour 20      HSV colour histogram (colour.hpp); needs colours
 /// Every compute function takes a cloud with normals that is the whole cluster.
 
 #include <optional>
