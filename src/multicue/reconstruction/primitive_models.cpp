@@ -84,15 +84,6 @@ float FarEdge(const std::vector<float>& s, bool upper, float w) {
     return upper ? m - edge_depth : m + edge_depth;
 }
 
-// Distance of p to the surface of a solid box.
-float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p) {
-    const Eigen::Vector3f q = (box.axes.transpose() * (p - box.center)).cwiseAbs();
-    const Eigen::Vector3f half = 0.5f * box.extents;
-    const Eigen::Vector3f outside = (q - half).cwiseMax(0.0f);
-    if (outside.squaredNorm() > 0.0f) return outside.norm();
-    return (half - q).minCoeff();
-}
-
 float BoxInlierRatio(const PointCloud& cloud, const Indices& finite, const BoxModel& box,
                      float threshold) {
     std::size_t inliers = 0;
@@ -100,16 +91,6 @@ float BoxInlierRatio(const PointCloud& cloud, const Indices& finite, const BoxMo
         if (BoxSurfaceDistance(box, cloud.points[i]) <= threshold) ++inliers;
     }
     return static_cast<float>(inliers) / static_cast<float>(finite.size());
-}
-
-// Distance of p to the surface of a solid (capped) cylinder.
-float CylinderSurfaceDistance(const CylinderModel& c, const Eigen::Vector3f& p) {
-    const Eigen::Vector3f w = p - c.center;
-    const float t = std::abs(w.dot(c.axis));
-    const float rho = (w - w.dot(c.axis) * c.axis).norm();
-    const float half = 0.5f * c.height;
-    if (t <= half && rho <= c.radius) return std::min(c.radius - rho, half - t);
-    return std::hypot(std::max(rho - c.radius, 0.0f), std::max(t - half, 0.0f));
 }
 
 void ValidateCylinderParams(const CylinderModelParams& p) {
@@ -143,6 +124,23 @@ Eigen::Vector3f CanonicalAxis(const Eigen::Vector3f& v) {
 }
 
 }  // namespace
+
+float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p) {
+    const Eigen::Vector3f q = (box.axes.transpose() * (p - box.center)).cwiseAbs();
+    const Eigen::Vector3f half = 0.5f * box.extents;
+    const Eigen::Vector3f outside = (q - half).cwiseMax(0.0f);
+    if (outside.squaredNorm() > 0.0f) return outside.norm();
+    return (half - q).minCoeff();
+}
+
+float CylinderSurfaceDistance(const CylinderModel& c, const Eigen::Vector3f& p) {
+    const Eigen::Vector3f w = p - c.center;
+    const float t = std::abs(w.dot(c.axis));
+    const float rho = (w - w.dot(c.axis) * c.axis).norm();
+    const float half = 0.5f * c.height;
+    if (t <= half && rho <= c.radius) return std::min(c.radius - rho, half - t);
+    return std::hypot(std::max(rho - c.radius, 0.0f), std::max(t - half, 0.0f));
+}
 
 BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
                        const Eigen::Vector4f& support_plane, const BoxFitParams& params) {

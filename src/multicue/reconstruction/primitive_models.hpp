@@ -132,6 +132,12 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
                                 const Eigen::Vector4f& support_plane,
                                 const CylinderModelParams& params = {});
 
+/// Distance of p to the surface of the solid box (inside or outside) [m].
+float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p);
+
+/// Distance of p to the surface of the solid cylinder, side and caps (inside or outside) [m].
+float CylinderSurfaceDistance(const CylinderModel& cylinder, const Eigen::Vector3f& p);
+
 /// Closed box mesh: 8 vertices, 12 triangles, counter-clockwise seen from outside (outward
 /// normals). No colours; set vertex_colors to colour it. Throws InvalidArgument if the centre,
 /// axes or extents are not finite or an extent is negative.

@@ -78,32 +78,6 @@ Eigen::Vector3f Centroid(const PointCloud& cloud, const Indices& indices) {
     return (sum / std::max<std::size_t>(1, indices.size())).cast<float>();
 }
 
-// Model by category: boxes and flat boxes as boxes, cylinders and plates as cylinders when the fit
-// holds, everything else (and failed fits) as an oriented bounding box.
-ObjectModel FitModel(const PointCloud& cloud, const PerceivedObject& object,
-                     const Eigen::Vector4f& plane, const PerceiveParams& params) {
-    ObjectModel model;
-    const Category c = object.category.category;
-    const bool upright_possible = plane.head<3>().norm() > 0.5f;
-    if ((c == Category::kCylinder || c == Category::kPlate)) {
-        CylinderModelParams p = params.cylinder;
-        p.sac.num_threads = 1;
-        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p);
-        if (cyl.found) {
-            model.mesh = CylinderMesh(cyl);
-            model.cylinder = cyl;
-            return model;
-        }
-    }
-    BoxModel box = (c == Category::kBox || c == Category::kFlat) && upright_possible
-                       ? FitUprightBox(cloud, object.indices, plane, params.box)
-                       : FitOrientedBoundingBox(cloud, object.indices, params.box);
-    if (!box.found) box = FitOrientedBoundingBox(cloud, object.indices, params.box);
-    model.mesh = BoxMesh(box);
-    model.box = box;
-    return model;
-}
-
 // Fragments of one object split by a nearer occluder become one object (MergeOccludedFragments);
 // ids are renumbered in the order of the merged objects' first fragments.
 std::vector<PerceivedObject> MergeOccluded(const PointCloud& cloud,
@@ -290,7 +264,7 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     ParallelFor(
         result.objects.size(), params.num_threads,
         [&](std::size_t k) {
-            result.objects[k].model = FitModel(cloud, result.objects[k], plane, params);
+            result.objects[k].model = ModelObject(cloud, result.objects[k], plane, params);
         },
         1);
     timer.Done("models");

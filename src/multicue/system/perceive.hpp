@@ -18,12 +18,15 @@
 #include "multicue/recognition/geometric_category.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
+#include "multicue/reconstruction/rotational_model.hpp"
+#include "multicue/reconstruction/verification.hpp"
 #include "multicue/segmentation/convexity_split.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/occlusion_merge.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "multicue/segmentation/region_growing.hpp"
 #include "multicue/segmentation/support_plane.hpp"
+#include "multicue/surface/greedy_triangulation.hpp"
 #include "multicue/surface/normals.hpp"
 
 namespace multicue {
@@ -66,17 +69,67 @@ struct PerceiveParams {
         p.sac.max_iterations = 800;
         return p;
     }();
+    /// Surfaces of revolution (section 5.4.2.2) for cylindrical and "other" objects whose
+    /// cylinder fit explains too little (under min_model_inlier_ratio); kept when they explain
+    /// more points than the primitive. The support plane's up is the axis prior.
+    bool try_rotational = true;
+    RotationalFitParams rotational{.max_tilt_deg = 20.0f};
+    /// Verification of every model against the frame seen from the cloud's sensor origin
+    /// (section 4.2.4.3); a model with more than verification.max_invalid_ratio of its surface in
+    /// space the sensor saw through is rejected.
+    bool verify_models = true;
+    VerificationParams verification{};
+    /// A primitive explaining less than this share of its object's points is replaced [-].
+    float min_model_inlier_ratio = 0.75f;
+    /// Rejected or poorly fitting primitives are replaced by a triangulated mesh of the object's
+    /// points (section 5.4.2.3); off = they stay, marked not accepted.
+    bool mesh_fallback = true;
+    /// Triangulation of fallback meshes and of attached outlier points.
+    GreedyTriangulationParams model_mesh{.search_radius = 0.025f, .max_hole_edges = 8};
+    std::size_t model_mesh_max_points = 4000;  ///< triangulate at most this many (even stride)
+    /// A kept primitive's points farther than its inlier threshold from its surface (a mug's
+    /// handle) are triangulated and attached to its mesh when at least this many [points].
+    std::size_t min_attached_points = 80;
     int num_threads = 0;  ///< 0 = all cores; overrides the stages' own thread counts
 };
 
 /// Reads (or, with a dump section, records) every parameter.
 void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& params);
 
-/// The model of one object: exactly one of box / cylinder is set.
+/// Verification of a fitted primitive (shares of its surface samples, VerifyModel).
+struct ModelVerificationSummary {
+    float verified = 0.0f;
+    float occluded = 0.0f;
+    float invalid = 0.0f;
+    bool accepted = true;  ///< invalid <= max_invalid_ratio
+};
+
+/// What a gripper needs to know about an object's model.
+struct GraspSummary {
+    /// Named sizes [m]: box (and mesh): length, width, height; cylinder: diameter, height;
+    /// rotational: max_diameter, height.
+    std::vector<std::pair<std::string, float>> dimensions;
+    std::optional<Eigen::Vector3f> axis;  ///< cylinder and rotational models
+    /// Smallest extent of the model's mesh across any horizontal direction (in the support
+    /// plane); without a plane the smallest side of its oriented bounding box [m].
+    float graspable_width = 0.0f;
+};
+
+/// The model of one object: at most one of box / cylinder / rotational is set; none when the
+/// primitive was replaced by a mesh of the object's points (`replaced` names it).
 struct ObjectModel {
     std::optional<BoxModel> box;
     std::optional<CylinderModel> cylinder;
+    std::optional<RotationalModel> rotational;
     TriangleMesh mesh;
+    std::string replaced;                ///< type of the replaced primitive, empty if none
+    std::string replace_reason;          ///< "inlier_ratio" or "verification"
+    float replaced_inlier_ratio = 0.0f;  ///< the replaced primitive's inlier_ratio
+    std::optional<ModelVerificationSummary> verification;  ///< of the fitted primitive
+    bool accepted = true;             ///< the primitive passed the inlier and verification checks
+    std::size_t attached_points = 0;  ///< outlier points triangulated onto the model
+    std::size_t attached_triangles = 0;  ///< their triangles in `mesh`
+    GraspSummary grasp;
 };
 
 struct PerceivedObject {
@@ -96,6 +149,14 @@ struct PerceiveResult {
     std::vector<std::uint8_t> point_categories;  ///< per input point: category index or 0
     std::vector<std::pair<std::string, double>> timings_ms;  ///< stage -> wall time, in order
 };
+
+/// The model of one object (indices and category set) in the frame `cloud` (its sensor origin is
+/// the viewpoint): the primitive of its category (box, cylinder, or a surface of revolution when
+/// that explains more), verified against the frame, replaced by a mesh of its points when it
+/// explains too little or is rejected, outliers attached, and its grasp summary. `plane` is the
+/// support plane (zero for none). Used by Perceive; throws InvalidArgument for bad parameters.
+ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
+                        const Eigen::Vector4f& plane, const PerceiveParams& params);
 
 /// Runs the pipeline. The cloud must hold at least one finite point (DataError otherwise); normals
 /// are computed unless the cloud has them. Throws InvalidArgument for bad parameters.

@@ -153,6 +153,40 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     cyl.Get("cap_angle_deg", y.cap_angle_deg, "cap point normal tolerance [deg]");
     cyl.Get("min_cap_points", y.min_cap_points, "points needed to place a cap");
     cyl.Get("inlier_threshold", y.inlier_threshold, "surface distance for inlier_ratio [m]");
+
+    auto models = config.Section("models");
+    models.Get("min_inlier_ratio", p.min_model_inlier_ratio,
+               "primitives explaining a smaller share of their points are replaced");
+    models.Get("mesh_fallback", p.mesh_fallback,
+               "replace rejected primitives by a triangulated mesh of the object's points");
+    models.Get("mesh_search_radius", p.model_mesh.search_radius,
+               "triangulation: longest edge and neighbourhood [m]");
+    models.Get("mesh_mu", p.model_mesh.mu, "triangulation: neighbourhood / nearest distance");
+    models.Get("mesh_max_surface_angle_deg", p.model_mesh.max_surface_angle_deg,
+               "triangulation: largest angle between connected normals [deg]");
+    models.Get("mesh_max_points", p.model_mesh_max_points,
+               "triangulate at most this many points (even stride)");
+    models.Get("min_attached_points", p.min_attached_points,
+               "outliers of a kept primitive (a handle) are meshed and attached from this many, 0 "
+               "= never");
+    auto rot = models.Section("rotational");
+    rot.Get("enabled", p.try_rotational,
+            "surfaces of revolution for cylinder/other objects whose primitive fits poorly");
+    rot.Get("max_tilt_deg", p.rotational.max_tilt_deg, "axis within this angle of up [deg]");
+    rot.Get("max_points", p.rotational.max_points, "points used by the axis search");
+    rot.Get("grid_directions", p.rotational.grid_directions, "coarse axis directions (sphere)");
+    rot.Get("line_threshold", p.rotational.line_threshold, "normal line to axis distance [m]");
+    rot.Get("profile_step", p.rotational.profile_step, "contour height bin [m]");
+    rot.Get("inlier_threshold", p.rotational.inlier_threshold, "surface distance of an inlier [m]");
+    auto ver = models.Section("verification");
+    ver.Get("enabled", p.verify_models, "verify models against the frame's free space");
+    ver.Get("voxel_size", p.verification.voxel_size, "occupancy cell [m]");
+    ver.Get("margin", p.verification.margin, "grid margin around the model [m]");
+    ver.Get("sample_spacing", p.verification.sample_spacing, "surface sample spacing [m]");
+    ver.Get("tolerance_voxels", p.verification.tolerance_voxels,
+            "occupied cells this close verify a sample [cells]");
+    ver.Get("max_invalid_ratio", p.verification.max_invalid_ratio,
+            "models with a larger share of surface in free space are rejected");
 }
 
 }  // namespace multicue

@@ -44,11 +44,49 @@ nlohmann::ordered_json ModelJson(const ObjectModel& m) {
             {Vec(b.axes.col(0)), Vec(b.axes.col(1)), Vec(b.axes.col(2))});
         j["extents"] = Vec(b.extents);
         j["inlier_ratio"] = Num(b.inlier_ratio);
+    } else if (m.rotational) {
+        const auto& r = *m.rotational;
+        j["type"] = "rotational";
+        j["origin"] = Vec(r.origin);
+        j["axis"] = Vec(r.axis);
+        auto profile = nlohmann::ordered_json::array();
+        for (std::size_t k = 0; k < r.heights.size() && k < r.radii.size(); ++k) {
+            profile.push_back({Num(r.heights[k]), Num(r.radii[k])});
+        }
+        j["profile"] = profile;
+        j["inlier_ratio"] = Num(r.inlier_ratio);
     } else {
         j["type"] = "mesh";
         j["vertices"] = m.mesh.vertices.size();
         j["triangles"] = m.mesh.triangles.size();
+        if (!m.replaced.empty()) {
+            j["replaced"] = {{"type", m.replaced},
+                             {"reason", m.replace_reason},
+                             {"inlier_ratio", Num(m.replaced_inlier_ratio)}};
+        }
     }
+    if (m.attached_triangles > 0) {
+        j["attached"] = {{"points", m.attached_points}, {"triangles", m.attached_triangles}};
+    }
+    return j;
+}
+
+nlohmann::ordered_json VerificationJson(const ObjectModel& m) {
+    if (!m.verification) return nullptr;
+    const auto& v = *m.verification;
+    return {{"verified", Num(v.verified)},
+            {"occluded", Num(v.occluded)},
+            {"invalid", Num(v.invalid)},
+            {"accepted", v.accepted}};
+}
+
+nlohmann::ordered_json GraspJson(const GraspSummary& g) {
+    nlohmann::ordered_json j;
+    nlohmann::ordered_json dims = nlohmann::ordered_json::object();
+    for (const auto& [name, value] : g.dimensions) dims[name] = Num(value);
+    j["dimensions"] = dims;
+    j["axis"] = g.axis ? Vec(*g.axis) : nlohmann::ordered_json(nullptr);
+    j["graspable_width"] = Num(g.graspable_width);
     return j;
 }
 
@@ -117,6 +155,9 @@ nlohmann::ordered_json PerceiveResultJson(
         oj["parts"] = o.parts.size();
         oj["centroid"] = Vec(o.centroid);
         oj["model"] = ModelJson(o.model);
+        oj["verification"] = VerificationJson(o.model);
+        oj["accepted"] = o.model.accepted;
+        oj["grasp"] = GraspJson(o.model.grasp);
         j["objects"].push_back(oj);
     }
     nlohmann::ordered_json t = nlohmann::ordered_json::object();

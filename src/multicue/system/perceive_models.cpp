@@ -1,0 +1,350 @@
+// Models of perceived objects (thesis section 5.4): the primitive of the object's category, a
+// surface of revolution where that explains more, verification against the frame (section
+// 4.2.4.3), triangulated meshes where the primitive fails (section 5.4.2.3), attached outlier
+// surfaces and a grasp summary.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
+#include "multicue/system/perceive.hpp"
+
+namespace multicue {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Unit up of a support plane, or zero without one.
+Eigen::Vector3f PlaneUp(const Eigen::Vector4f& plane) {
+    const float n = plane.head<3>().norm();
+    return n > 0.5f ? Eigen::Vector3f(plane.head<3>() / n) : Eigen::Vector3f::Zero();
+}
+
+// The scan points whose rays from the sensor can cross the box [lo, hi]. For an organized frame
+// in the sensor's frame (a pinhole: x/z and y/z affine in the pixel column and row, checked on a
+// sample of pixels), only the pixels inside the box's projected rectangle; otherwise all points
+// (VerifyModel clips every ray to its grid anyway).
+PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
+                          const Eigen::Vector3f& hi) {
+    PointCloud out;
+    auto all = [&] {
+        out.points.reserve(cloud.size());
+        for (const auto& p : cloud.points) {
+            if (p.allFinite()) out.points.push_back(p);
+        }
+        out.width = static_cast<std::uint32_t>(out.points.size());
+        out.height = 1;
+        return out;
+    };
+    if (!cloud.IsOrganized()) return all();
+    const Eigen::Matrix3f to_sensor = cloud.sensor_orientation.conjugate().toRotationMatrix();
+    auto local = [&](const Eigen::Vector3f& p) -> Eigen::Vector3f {
+        return to_sensor * (p - cloud.sensor_origin);
+    };
+    // Least squares x/z = a u + b and y/z = c v + d over every 8th pixel in both directions.
+    Eigen::Matrix2d su = Eigen::Matrix2d::Zero(), sv = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d bu = Eigen::Vector2d::Zero(), bv = Eigen::Vector2d::Zero();
+    std::vector<Eigen::Vector4d> samples;  // u, v, x/z, y/z
+    for (std::uint32_t v = 0; v < cloud.height; v += 8) {
+        for (std::uint32_t u = 0; u < cloud.width; u += 8) {
+            const Eigen::Vector3f& p = cloud.At(u, v);
+            if (!p.allFinite()) continue;
+            const Eigen::Vector3f q = local(p);
+            if (!(q.z() > 1e-3f)) continue;
+            samples.emplace_back(u, v, q.x() / q.z(), q.y() / q.z());
+        }
+    }
+    if (samples.size() < 20) return all();
+    for (const auto& s : samples) {
+        const Eigen::Vector2d xu(s[0], 1.0), xv(s[1], 1.0);
+        su += xu * xu.transpose();
+        sv += xv * xv.transpose();
+        bu += xu * s[2];
+        bv += xv * s[3];
+    }
+    if (std::abs(su.determinant()) < 1e-9 || std::abs(sv.determinant()) < 1e-9) return all();
+    const Eigen::Vector2d fu = su.ldlt().solve(bu), fv = sv.ldlt().solve(bv);
+    if (std::abs(fu[0]) < 1e-9 || std::abs(fv[0]) < 1e-9) return all();
+    double worst = 0.0;
+    for (const auto& s : samples) {
+        worst = std::max(worst, std::abs((s[2] - fu[1]) / fu[0] - s[0]));
+        worst = std::max(worst, std::abs((s[3] - fv[1]) / fv[0] - s[1]));
+    }
+    if (worst > 1.0) return all();  // not a pinhole frame in the sensor's coordinates
+    double u0 = std::numeric_limits<double>::max(), u1 = -u0, v0 = u0, v1 = -u0;
+    for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3f corner((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(),
+                                     (k & 4) ? hi.z() : lo.z());
+        const Eigen::Vector3f q = local(corner);
+        if (!(q.z() > 1e-3f)) return all();  // the box reaches behind the sensor
+        const double u = (q.x() / q.z() - fu[1]) / fu[0], v = (q.y() / q.z() - fv[1]) / fv[0];
+        u0 = std::min(u0, u);
+        u1 = std::max(u1, u);
+        v0 = std::min(v0, v);
+        v1 = std::max(v1, v);
+    }
+    const double pad = 2.0;
+    const auto clamp = [](double x, std::uint32_t n) {
+        return static_cast<std::int64_t>(std::clamp(x, 0.0, static_cast<double>(n) - 1.0));
+    };
+    if (u1 + pad < 0.0 || v1 + pad < 0.0 || u0 - pad > cloud.width - 1.0 ||
+        v0 - pad > cloud.height - 1.0) {
+        out.height = 1;
+        return out;
+    }
+    const auto ub = clamp(std::floor(u0 - pad), cloud.width),
+               ue = clamp(std::ceil(u1 + pad), cloud.width);
+    const auto vb = clamp(std::floor(v0 - pad), cloud.height),
+               ve = clamp(std::ceil(v1 + pad), cloud.height);
+    for (auto v = vb; v <= ve; ++v) {
+        for (auto u = ub; u <= ue; ++u) {
+            const Eigen::Vector3f& p =
+                cloud.At(static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v));
+            if (p.allFinite()) out.points.push_back(p);
+        }
+    }
+    out.width = static_cast<std::uint32_t>(out.points.size());
+    out.height = 1;
+    return out;
+}
+
+// Triangulated surface of the given points (at most max_points, an even stride); only vertices
+// with triangles are kept.
+TriangleMesh TriangulatePoints(const PointCloud& cloud, const Indices& indices,
+                               const PerceiveParams& params) {
+    const std::size_t stride =
+        std::max<std::size_t>(1, (indices.size() + params.model_mesh_max_points - 1) /
+                                     std::max<std::size_t>(1, params.model_mesh_max_points));
+    PointCloud sub;
+    const bool normals = cloud.HasNormals();
+    for (std::size_t k = 0; k < indices.size(); k += stride) {
+        const Index i = indices[k];
+        if (!cloud.IsFinite(i)) continue;
+        sub.points.push_back(cloud.points[i]);
+        if (normals) sub.normals.push_back(cloud.normals[i]);
+    }
+    sub.width = static_cast<std::uint32_t>(sub.points.size());
+    sub.height = 1;
+    sub.sensor_origin = cloud.sensor_origin;
+    TriangleMesh mesh;
+    if (sub.points.size() < 3) return mesh;
+    GreedyTriangulationParams p = params.model_mesh;
+    p.per_label = false;
+    p.num_threads = 1;
+    if (!p.viewpoint) p.viewpoint = cloud.sensor_origin;
+    const TriangleMesh full = GreedyProjectionTriangulation(sub, p).mesh;
+    std::vector<std::uint32_t> map(full.vertices.size(), std::numeric_limits<std::uint32_t>::max());
+    for (const auto& t : full.triangles) {
+        Triangle nt;
+        for (int c = 0; c < 3; ++c) {
+            auto& m = map[t[c]];
+            if (m == std::numeric_limits<std::uint32_t>::max()) {
+                m = static_cast<std::uint32_t>(mesh.vertices.size());
+                mesh.vertices.push_back(full.vertices[t[c]]);
+            }
+            nt[c] = m;
+        }
+        mesh.triangles.push_back(nt);
+    }
+    return mesh;
+}
+
+// Distance of p to the surface of a surface of revolution (side or caps).
+float RotationalSurfaceDistance(const RotationalModel& m, const Eigen::Vector3f& point) {
+    const Eigen::Vector3f p = point - m.origin;
+    const float h = p.dot(m.axis);
+    const float r = (p - h * m.axis).norm();
+    const float h0 = m.heights.front(), h1 = m.heights.back();
+    const float hc = std::clamp(h, h0, h1);
+    const float side = std::hypot(r - m.RadiusAt(hc), h - hc);
+    const float below = std::max(0.0f, r - m.RadiusAt(h0)),
+                above = std::max(0.0f, r - m.RadiusAt(h1));
+    const float cap = std::min(std::hypot(h - h0, below), std::hypot(h - h1, above));
+    return std::min(side, cap);
+}
+
+// Width of the points projected onto the plane, minimised over directions (2 degree steps).
+float SmallestHorizontalWidth(const std::vector<Eigen::Vector3f>& points,
+                              const Eigen::Vector3f& up) {
+    Eigen::Vector3f e1 = up.unitOrthogonal();
+    const Eigen::Vector3f e2 = up.cross(e1);
+    std::vector<Eigen::Vector2f> flat;
+    flat.reserve(points.size());
+    for (const auto& p : points) flat.emplace_back(p.dot(e1), p.dot(e2));
+    float best = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 90; ++a) {
+        const float t = static_cast<float>(a) * static_cast<float>(M_PI) / 90.0f;
+        const Eigen::Vector2f d(std::cos(t), std::sin(t));
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        for (const auto& q : flat) {
+            const float s = q.dot(d);
+            lo = std::min(lo, s);
+            hi = std::max(hi, s);
+        }
+        best = std::min(best, hi - lo);
+    }
+    return std::isfinite(best) ? best : 0.0f;
+}
+
+GraspSummary Grasp(const PointCloud& cloud, const Indices& indices, const ObjectModel& m,
+                   const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    GraspSummary g;
+    const Eigen::Vector3f up = PlaneUp(plane);
+    if (m.box) {
+        g.dimensions = {{"length", m.box->extents.x()},
+                        {"width", m.box->extents.y()},
+                        {"height", m.box->extents.z()}};
+    } else if (m.cylinder) {
+        g.dimensions = {{"diameter", 2.0f * m.cylinder->radius}, {"height", m.cylinder->height}};
+        g.axis = m.cylinder->axis;
+    } else if (m.rotational) {
+        const auto& r = *m.rotational;
+        const float max_r =
+            r.radii.empty() ? 0.0f : *std::max_element(r.radii.begin(), r.radii.end());
+        g.dimensions = {
+            {"max_diameter", 2.0f * max_r},
+            {"height", r.heights.empty() ? 0.0f : r.heights.back() - r.heights.front()}};
+        g.axis = r.axis;
+    } else {
+        BoxFitParams bp = params.box;
+        bp.use_normals = false;
+        const BoxModel b = up.isZero() ? FitOrientedBoundingBox(cloud, indices, bp)
+                                       : FitUprightBox(cloud, indices, plane, bp);
+        g.dimensions = {
+            {"length", b.extents.x()}, {"width", b.extents.y()}, {"height", b.extents.z()}};
+    }
+    if (m.mesh.vertices.empty()) return g;
+    if (!up.isZero()) {
+        g.graspable_width = SmallestHorizontalWidth(m.mesh.vertices, up);
+    } else {
+        PointCloud v;
+        v.points = m.mesh.vertices;
+        v.width = static_cast<std::uint32_t>(v.points.size());
+        v.height = 1;
+        Indices all(v.points.size());
+        for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<Index>(i);
+        const BoxModel b = FitOrientedBoundingBox(v, all, params.box);
+        g.graspable_width = b.found ? b.extents.minCoeff() : 0.0f;
+    }
+    return g;
+}
+
+}  // namespace
+
+ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
+                        const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!(params.min_model_inlier_ratio >= 0.0f && params.min_model_inlier_ratio <= 1.0f)) {
+        throw InvalidArgument("models.min_inlier_ratio must be in [0, 1]");
+    }
+    if (params.model_mesh_max_points < 3) {
+        throw InvalidArgument("models.mesh_max_points must be >= 3");
+    }
+    ValidateTriangulationParams(params.model_mesh);
+    ObjectModel model;
+    const Category c = object.category.category;
+    const Eigen::Vector3f up = PlaneUp(plane);
+    const bool upright_possible = !up.isZero();
+    float inlier_ratio = 0.0f;
+    if (c == Category::kCylinder || c == Category::kPlate) {
+        CylinderModelParams p = params.cylinder;
+        p.sac.num_threads = 1;
+        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p);
+        if (cyl.found) {
+            model.mesh = CylinderMesh(cyl);
+            model.cylinder = cyl;
+            inlier_ratio = cyl.inlier_ratio;
+        }
+    }
+    if (!model.cylinder) {
+        BoxModel box = (c == Category::kBox || c == Category::kFlat) && upright_possible
+                           ? FitUprightBox(cloud, object.indices, plane, params.box)
+                           : FitOrientedBoundingBox(cloud, object.indices, params.box);
+        if (!box.found) box = FitOrientedBoundingBox(cloud, object.indices, params.box);
+        if (box.found) {
+            model.mesh = BoxMesh(box);
+            model.box = box;
+            inlier_ratio = box.inlier_ratio;
+        }
+    }
+    if (params.try_rotational && upright_possible && cloud.HasNormals() &&
+        (c == Category::kCylinder || c == Category::kOther) &&
+        inlier_ratio < params.min_model_inlier_ratio) {
+        RotationalModel rot =
+            FitRotationalModel(cloud, object.indices, up, plane, params.rotational);
+        if (rot.found && rot.inlier_ratio > inlier_ratio) {
+            model.box.reset();
+            model.cylinder.reset();
+            model.mesh = RotationalMesh(rot);
+            inlier_ratio = rot.inlier_ratio;
+            model.rotational = std::move(rot);
+        }
+    }
+    const bool has_primitive = model.box || model.cylinder || model.rotational;
+    if (!has_primitive) return model;
+
+    if (params.verify_models) {
+        Eigen::Vector3f lo = model.mesh.vertices.front(), hi = lo;
+        for (const auto& v : model.mesh.vertices) {
+            lo = lo.cwiseMin(v);
+            hi = hi.cwiseMax(v);
+        }
+        lo.array() -= params.verification.margin;
+        hi.array() += params.verification.margin;
+        const PointCloud rays = RaysThroughBox(cloud, lo, hi);
+        const VerificationResult v =
+            VerifyModel(model.mesh, rays, cloud.sensor_origin, params.verification);
+        model.verification = ModelVerificationSummary{v.verified_ratio, v.occluded_ratio,
+                                                      v.invalid_ratio, v.accepted};
+    }
+    model.accepted = inlier_ratio >= params.min_model_inlier_ratio &&
+                     (!model.verification || model.verification->accepted);
+
+    if (!model.accepted && params.mesh_fallback) {
+        TriangleMesh mesh = TriangulatePoints(cloud, object.indices, params);
+        if (!mesh.triangles.empty()) {
+            model.replaced = model.box ? "box" : model.cylinder ? "cylinder" : "rotational";
+            model.replace_reason =
+                inlier_ratio < params.min_model_inlier_ratio ? "inlier_ratio" : "verification";
+            model.replaced_inlier_ratio = inlier_ratio;
+            model.box.reset();
+            model.cylinder.reset();
+            model.rotational.reset();
+            model.mesh = std::move(mesh);
+        }
+    } else if (model.accepted && params.min_attached_points > 0) {
+        // Outliers of a good model: a handle, a spout; triangulated and attached.
+        float threshold = params.box.inlier_threshold;
+        if (model.cylinder) threshold = params.cylinder.inlier_threshold;
+        if (model.rotational) threshold = params.rotational.inlier_threshold;
+        Indices outliers;
+        for (Index i : object.indices) {
+            if (!cloud.IsFinite(i)) continue;
+            const Eigen::Vector3f& p = cloud.points[i];
+            const float d = model.box        ? BoxSurfaceDistance(*model.box, p)
+                            : model.cylinder ? CylinderSurfaceDistance(*model.cylinder, p)
+                                             : RotationalSurfaceDistance(*model.rotational, p);
+            if (d > threshold) outliers.push_back(i);
+        }
+        if (outliers.size() >= params.min_attached_points) {
+            const TriangleMesh extra = TriangulatePoints(cloud, outliers, params);
+            if (!extra.triangles.empty()) {
+                model.attached_points = extra.vertices.size();
+                model.attached_triangles = extra.triangles.size();
+                TriangleMesh base = std::move(model.mesh);
+                base.vertex_normals.clear();
+                base.vertex_colors.clear();
+                base.vertex_labels.clear();
+                base.Append(extra);
+                model.mesh = std::move(base);
+            }
+        }
+    }
+    model.grasp = Grasp(cloud, object.indices, model, plane, params);
+    return model;
+}
+
+}  // namespace multicue
