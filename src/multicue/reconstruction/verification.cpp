@@ -106,17 +106,39 @@ std::vector<Eigen::Vector3f> SampleMeshSurface(const TriangleMesh& mesh, float s
     mesh.Validate();
     std::vector<Eigen::Vector3f> samples;
     for (const auto& t : mesh.triangles) {
-        const Eigen::Vector3f& a = mesh.vertices[t[0]];
-        const Eigen::Vector3f& b = mesh.vertices[t[1]];
-        const Eigen::Vector3f& c = mesh.vertices[t[2]];
-        const float longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-        const int k = std::max(1, static_cast<int>(std::ceil(longest / spacing)));
-        for (int i = 0; i <= k; ++i) {
-            for (int j = 0; i + j <= k; ++j) {
-                // Interior lattice points and one vertex per triangle; shared edges are sampled by
-                // both triangles, which only weights them twice.
-                const float u = static_cast<float>(i) / k, v = static_cast<float>(j) / k;
-                samples.push_back(a + u * (b - a) + v * (c - a));
+        // Rows parallel to the longest edge (b, c), from the opposite vertex a to it: about
+        // area / spacing^2 samples, so long thin triangles (a cylinder's sides) are not
+        // oversampled.
+        Eigen::Vector3f a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
+        const float ab = (b - a).squaredNorm(), bc = (c - b).squaredNorm(),
+                    ca = (a - c).squaredNorm();
+        if (ab >= bc && ab >= ca) {
+            const Eigen::Vector3f apex = c;  // longest edge a-b becomes b-c
+            c = b;
+            b = a;
+            a = apex;
+        } else if (ca >= bc && ca >= ab) {
+            const Eigen::Vector3f apex = b;  // longest edge c-a becomes b-c
+            b = c;
+            c = a;
+            a = apex;
+        }
+        const float base = (c - b).norm();
+        const float height = base > 0.0f ? (b - a).cross(c - a).norm() / base : 0.0f;
+        const int rows = std::max(1, static_cast<int>(std::ceil(height / spacing)));
+        for (int r = 0; r <= rows; ++r) {
+            const float f = static_cast<float>(r) / static_cast<float>(rows);
+            const Eigen::Vector3f from = a + f * (b - a), to = a + f * (c - a);
+            const int n = std::max(0, static_cast<int>(std::ceil(f * base / spacing)));
+            if (n == 0) {
+                samples.push_back(from);
+                continue;
+            }
+            // Each row's last point lies on the edge a-c, which the neighbouring triangle
+            // samples too; shared edges are only weighted twice.
+            for (int k = 0; k <= n; ++k) {
+                samples.push_back(from +
+                                  (static_cast<float>(k) / static_cast<float>(n)) * (to - from));
             }
         }
     }

@@ -50,8 +50,9 @@ VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan
                                const Eigen::Vector3f& sensor_origin,
                                const VerificationParams& params = {});
 
-/// Points on the mesh's triangles, at most `spacing` apart along each triangle's edges
-/// (barycentric lattice), deterministic.
+/// Points on the mesh's triangles, at most `spacing` apart: rows parallel to each triangle's
+/// longest edge, `spacing` apart, each sampled at most `spacing` apart (about area / spacing^2
+/// points per triangle, thin triangles included), deterministic.
 std::vector<Eigen::Vector3f> SampleMeshSurface(const TriangleMesh& mesh, float spacing);
 
 }  // namespace multicue

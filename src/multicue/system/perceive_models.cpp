@@ -29,7 +29,7 @@ Eigen::Vector3f PlaneUp(const Eigen::Vector4f& plane) {
 // sample of pixels), only the pixels inside the box's projected rectangle; otherwise all points
 // (VerifyModel clips every ray to its grid anyway).
 PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
-                          const Eigen::Vector3f& hi) {
+                          const Eigen::Vector3f& hi, float voxel_size) {
     PointCloud out;
     auto all = [&] {
         out.points.reserve(cloud.size());
@@ -75,12 +75,13 @@ PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
         worst = std::max(worst, std::abs((s[3] - fv[1]) / fv[0] - s[1]));
     }
     if (worst > 1.0) return all();  // not a pinhole frame in the sensor's coordinates
-    double u0 = std::numeric_limits<double>::max(), u1 = -u0, v0 = u0, v1 = -u0;
+    double u0 = std::numeric_limits<double>::max(), u1 = -u0, v0 = u0, v1 = -u0, far = 0.0;
     for (int k = 0; k < 8; ++k) {
         const Eigen::Vector3f corner((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(),
                                      (k & 4) ? hi.z() : lo.z());
         const Eigen::Vector3f q = local(corner);
         if (!(q.z() > 1e-3f)) return all();  // the box reaches behind the sensor
+        far = std::max(far, static_cast<double>(q.z()));
         const double u = (q.x() / q.z() - fu[1]) / fu[0], v = (q.y() / q.z() - fv[1]) / fv[0];
         u0 = std::min(u0, u);
         u1 = std::max(u1, u);
@@ -100,8 +101,13 @@ PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
                ue = clamp(std::ceil(u1 + pad), cloud.width);
     const auto vb = clamp(std::floor(v0 - pad), cloud.height),
                ve = clamp(std::ceil(v1 + pad), cloud.height);
-    for (auto v = vb; v <= ve; ++v) {
-        for (auto u = ub; u <= ue; ++u) {
+    // Rays at most half a cell apart at the box's farthest depth are enough to mark every cell
+    // the sensor saw through, and the points they end in every occupied cell.
+    const double footprint = far * std::min(std::abs(fu[0]), std::abs(fv[0]));
+    const auto stride =
+        static_cast<std::int64_t>(std::clamp(std::floor(0.5 * voxel_size / footprint), 1.0, 8.0));
+    for (auto v = vb; v <= ve; v += stride) {
+        for (auto u = ub; u <= ue; u += stride) {
             const Eigen::Vector3f& p =
                 cloud.At(static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v));
             if (p.allFinite()) out.points.push_back(p);
@@ -294,7 +300,7 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         }
         lo.array() -= params.verification.margin;
         hi.array() += params.verification.margin;
-        const PointCloud rays = RaysThroughBox(cloud, lo, hi);
+        const PointCloud rays = RaysThroughBox(cloud, lo, hi, params.verification.voxel_size);
         const VerificationResult v =
             VerifyModel(model.mesh, rays, cloud.sensor_origin, params.verification);
         model.verification = ModelVerificationSummary{v.verified_ratio, v.occluded_ratio,
