@@ -92,7 +92,7 @@ float PointSize(const PointCloud& cloud, std::size_t finite, std::size_t shown,
 
 std::string Cm(float metres) { return fmt::format("{:.1f}", 100.0f * metres); }
 
-std::string Dimensions(const PerceivedObject& o) {
+std::string ModelText(const PerceivedObject& o) {
     if (o.model.cylinder) {
         const auto& c = *o.model.cylinder;
         return fmt::format("cylinder model: radius {} cm, height {} cm", Cm(c.radius),
@@ -102,11 +102,30 @@ std::string Dimensions(const PerceivedObject& o) {
         const auto& e = o.model.box->extents;
         return fmt::format("box model: {} × {} × {} cm", Cm(e.x()), Cm(e.y()), Cm(e.z()));
     }
+    if (o.model.rotational && !o.model.rotational->radii.empty()) {
+        const auto& r = *o.model.rotational;
+        return fmt::format("rotational model: largest diameter {} cm, height {} cm",
+                           Cm(2.0f * *std::max_element(r.radii.begin(), r.radii.end())),
+                           Cm(r.heights.back() - r.heights.front()));
+    }
+    if (!o.model.replaced.empty()) {
+        return fmt::format("mesh model ({} rejected: {})", o.model.replaced,
+                           o.model.replace_reason == "verification" ? "surface in free space"
+                                                                    : "too few points explained");
+    }
     const auto& e = o.category.extents;
     if (e.maxCoeff() > 0) {
         return fmt::format("extent {} × {} × {} cm", Cm(e.x()), Cm(e.y()), Cm(e.z()));
     }
     return "no model";
+}
+
+std::string Dimensions(const PerceivedObject& o) {
+    std::string text = ModelText(o);
+    if (o.model.grasp.graspable_width > 0.0f) {
+        text += fmt::format(", grasp width {} cm", Cm(o.model.grasp.graspable_width));
+    }
+    return text;
 }
 
 std::string ObjectPanel(const PerceiveResult& result) {
