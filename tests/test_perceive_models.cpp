@@ -107,6 +107,24 @@ TEST(PerceiveModels, ModelMatchingTheScanIsAccepted) {
     EXPECT_LT(m.grasp.graspable_width, 0.03f);
 }
 
+TEST(PerceiveModels, ModelInsideTheTableIsRejected) {
+    // A plate reaching 10 cm below the table's top: hidden from the sensor, but impossible.
+    PointCloud cloud;
+    PerceivedObject object;
+    object.indices = AddPlate(cloud, -0.12f, 0.12f, 1.0f);
+    AddWall(cloud);
+    Finish(cloud);
+    object.category.category = Category::kOther;
+    const Eigen::Vector4f high_table(0.0f, -1.0f, 0.0f, 0.2f);
+    const ObjectModel m = ModelObject(cloud, object, high_table, Params());
+    ASSERT_TRUE(m.verification.has_value());
+    EXPECT_GT(m.verification->invalid, 0.4f);
+    EXPECT_FALSE(m.accepted);
+    EXPECT_EQ(m.replaced, "box");
+    // The same plate on the real table is fine.
+    EXPECT_TRUE(ModelObject(cloud, object, kPlane, Params()).accepted);
+}
+
 // The visible half of an upright mug (radius 4 cm, 10 cm high) at depth 1 m with a handle on
 // its right side (a tube of radius 6 mm bent in a half circle of radius 3 cm).
 PointCloud Mug(Indices& body, Indices& handle) {

@@ -301,8 +301,26 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         lo.array() -= params.verification.margin;
         hi.array() += params.verification.margin;
         const PointCloud rays = RaysThroughBox(cloud, lo, hi, params.verification.voxel_size);
-        const VerificationResult v =
+        VerificationResult v =
             VerifyModel(model.mesh, rays, cloud.sensor_origin, params.verification);
+        if (upright_possible && !v.samples.empty()) {
+            // Surface inside the table is as impossible as surface in free space, but hidden from
+            // the sensor: samples more than two cells below the plane count as invalid.
+            const float n = plane.head<3>().norm();
+            const float depth = 2.0f * params.verification.voxel_size;
+            std::size_t counts[3] = {0, 0, 0};
+            for (std::size_t i = 0; i < v.samples.size(); ++i) {
+                if ((plane.head<3>().dot(v.samples[i]) + plane.w()) / n < -depth) {
+                    v.states[i] = SurfaceState::kInvalid;
+                }
+                ++counts[static_cast<int>(v.states[i])];
+            }
+            const float total = static_cast<float>(v.samples.size());
+            v.verified_ratio = static_cast<float>(counts[0]) / total;
+            v.occluded_ratio = static_cast<float>(counts[1]) / total;
+            v.invalid_ratio = static_cast<float>(counts[2]) / total;
+            v.accepted = v.invalid_ratio <= params.verification.max_invalid_ratio;
+        }
         model.verification = ModelVerificationSummary{v.verified_ratio, v.occluded_ratio,
                                                       v.invalid_ratio, v.accepted};
     }
