@@ -208,6 +208,34 @@ TEST(PerceiveModels, BadParameters) {
     EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
 }
 
+TEST(PerceiveModels, VerificationOfOrganizedFramesMatchesAllRays) {
+    // Organized frames cast only the rays through the model's projected bounds, spaced at most
+    // half a cell apart; the shares agree with casting every point of the unorganized cloud.
+    const sim::TableTopScene scene = sim::MakeDemoScene();
+    sim::ScanParams sp;
+    sp.T_world_camera = sim::DefaultCameraPose(scene);
+    const PointCloud organized = sim::ScanTableTopScene(scene, sp);
+    ASSERT_TRUE(organized.IsOrganized());
+    const PerceiveResult r = Perceive(organized, Params());
+    ASSERT_FALSE(r.objects.empty());
+    PointCloud flat = organized;
+    flat.width = static_cast<std::uint32_t>(flat.size());
+    flat.height = 1;
+    PerceiveParams p = Params();
+    p.mesh_fallback = false;
+    p.min_attached_points = 0;
+    for (const auto& o : r.objects) {
+        PerceivedObject object = o;
+        object.category.category = Category::kBox;  // no normals needed
+        const ObjectModel a = ModelObject(organized, object, r.support.plane, p);
+        const ObjectModel b = ModelObject(flat, object, r.support.plane, p);
+        ASSERT_TRUE(a.verification && b.verification);
+        EXPECT_NEAR(a.verification->verified, b.verification->verified, 0.05f) << o.id;
+        EXPECT_NEAR(a.verification->invalid, b.verification->invalid, 0.03f) << o.id;
+        EXPECT_GT(a.verification->verified, 0.2f) << o.id;
+    }
+}
+
 TEST(PerceiveModels, ResultJsonHasVerificationGraspAndRotationalModels) {
     const sim::TableTopScene scene = sim::MakeDemoScene();
     sim::ScanParams sp;
