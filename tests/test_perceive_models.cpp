@@ -287,6 +287,7 @@ TEST(PerceiveModels, ResultJsonHasVerificationGraspAndRotationalModels) {
     const auto& last = j["objects"].back();
     EXPECT_EQ(last["model"]["type"], "rotational");
     EXPECT_EQ(last["model"]["axis"].size(), 3u);
+    EXPECT_EQ(last["model"]["axis_point"].size(), 3u);
     ASSERT_EQ(last["model"]["profile"].size(), 3u);
     EXPECT_NEAR(last["model"]["profile"][1][1].get<double>(), 0.05, 1e-6);
     EXPECT_TRUE(last["verification"].is_null());

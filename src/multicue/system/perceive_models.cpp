@@ -290,7 +290,11 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         }
     }
     const bool has_primitive = model.box || model.cylinder || model.rotational;
-    if (!has_primitive) return model;
+    if (!has_primitive) {
+        model.accepted = false;
+        model.grasp = Grasp(cloud, object.indices, model, plane, params);
+        return model;
+    }
 
     if (params.verify_models) {
         Eigen::Vector3f lo = model.mesh.vertices.front(), hi = lo;

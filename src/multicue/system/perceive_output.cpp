@@ -47,7 +47,7 @@ nlohmann::ordered_json ModelJson(const ObjectModel& m) {
     } else if (m.rotational) {
         const auto& r = *m.rotational;
         j["type"] = "rotational";
-        j["origin"] = Vec(r.origin);
+        j["axis_point"] = Vec(r.origin);  // the contract's name for the origin
         j["axis"] = Vec(r.axis);
         auto profile = nlohmann::ordered_json::array();
         for (std::size_t k = 0; k < r.heights.size() && k < r.radii.size(); ++k) {
