@@ -123,6 +123,12 @@ TEST(PerceiveModels, ModelInsideTheTableIsRejected) {
     EXPECT_EQ(m.replaced, "box");
     // The same plate on the real table is fine.
     EXPECT_TRUE(ModelObject(cloud, object, kPlane, Params()).accepted);
+    // A model too large for the grid is not verified (no error).
+    PerceiveParams p = Params();
+    p.verification.max_cells = 1000;
+    const ObjectModel unverified = ModelObject(cloud, object, high_table, p);
+    EXPECT_FALSE(unverified.verification.has_value());
+    EXPECT_TRUE(unverified.accepted);
 }
 
 // The visible half of an upright mug (radius 4 cm, 10 cm high) at depth 1 m with a handle on

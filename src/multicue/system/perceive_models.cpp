@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <Eigen/Geometry>
 
@@ -250,6 +251,9 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         throw InvalidArgument("models.mesh_max_points must be >= 3");
     }
     ValidateTriangulationParams(params.model_mesh);
+    if (params.verify_models) {  // checks the parameters only
+        VerifyModel(TriangleMesh{}, PointCloud{}, cloud.sensor_origin, params.verification);
+    }
     ObjectModel model;
     const Category c = object.category.category;
     const Eigen::Vector3f up = PlaneUp(plane);
@@ -296,7 +300,22 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         return model;
     }
 
+    std::optional<double> grid_cells;
     if (params.verify_models) {
+        Eigen::Vector3f lo = model.mesh.vertices.front(), hi = lo;
+        for (const auto& v : model.mesh.vertices) {
+            lo = lo.cwiseMin(v);
+            hi = hi.cwiseMax(v);
+        }
+        const Eigen::Vector3d cells =
+            ((hi - lo).array() + 2.0f * params.verification.margin).cast<double>() /
+                params.verification.voxel_size +
+            1.0;
+        grid_cells = cells.prod();
+    }
+    // A model too large for the grid (a whole room without a table) is not verified.
+    if (params.verify_models &&
+        *grid_cells <= 0.9 * static_cast<double>(params.verification.max_cells)) {
         Eigen::Vector3f lo = model.mesh.vertices.front(), hi = lo;
         for (const auto& v : model.mesh.vertices) {
             lo = lo.cwiseMin(v);
