@@ -69,8 +69,8 @@ struct PerceiveParams {
         p.sac.max_iterations = 800;
         return p;
     }();
-    /// Surfaces of revolution (section 5.4.2.2) for cylindrical and "other" objects whose
-    /// cylinder fit explains too little (under min_model_inlier_ratio); kept when they explain
+    /// Surfaces of revolution (section 5.4.2.2) for cylindrical, spherical and "other" objects
+    /// whose primitive explains too little (under min_model_inlier_ratio); kept when they explain
     /// more points than the primitive. The support plane's up is the axis prior.
     bool try_rotational = true;
     RotationalFitParams rotational{.max_tilt_deg = 20.0f};

@@ -171,7 +171,7 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
                "= never");
     auto rot = models.Section("rotational");
     rot.Get("enabled", p.try_rotational,
-            "surfaces of revolution for cylinder/other objects whose primitive fits poorly");
+            "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
     rot.Get("max_tilt_deg", p.rotational.max_tilt_deg, "axis within this angle of up [deg]");
     rot.Get("max_points", p.rotational.max_points, "points used by the axis search");
     rot.Get("grid_directions", p.rotational.grid_directions, "coarse axis directions (sphere)");

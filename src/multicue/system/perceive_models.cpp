@@ -281,7 +281,7 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         }
     }
     if (params.try_rotational && upright_possible && cloud.HasNormals() &&
-        (c == Category::kCylinder || c == Category::kOther) &&
+        (c == Category::kCylinder || c == Category::kOther || c == Category::kSphere) &&
         inlier_ratio < params.min_model_inlier_ratio) {
         RotationalModel rot =
             FitRotationalModel(cloud, object.indices, up, plane, params.rotational);
