@@ -6,6 +6,7 @@
 // the time to categorise all parts of a 640x480 frame.
 //
 // usage: part_graph_eval [--meshes DIR] [--scenes N] [--seed S] [--max-meshes N]
+//                        [--size-weight W] [--balanced 0|1] [--k K] [--max-parts N]
 
 #include <chrono>
 #include <cstdio>
@@ -67,6 +68,8 @@ int main(int argc, char** argv) {
     std::string meshes = std::string(MULTICUE_SHARED_DATA_DIR) + "/meshes/tabletop";
     int scenes = 4, max_meshes = 60;
     std::uint64_t seed = 1;
+    PartGraphModel model;
+    PartGraphRecognitionParams rp;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--meshes"))
             meshes = argv[i + 1];
@@ -76,6 +79,14 @@ int main(int argc, char** argv) {
             seed = std::strtoull(argv[i + 1], nullptr, 10);
         else if (!std::strcmp(argv[i], "--max-meshes"))
             max_meshes = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--size-weight"))
+            model.descriptor_params.size_weight = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--balanced"))
+            rp.balanced = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--k"))
+            rp.k = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--max-parts"))
+            rp.max_parts = std::strtoull(argv[i + 1], nullptr, 10);
     }
     const bool library = std::filesystem::exists(std::filesystem::path(meshes) / "labels.csv");
     training::PartGraphTrainingOptions o;
@@ -87,7 +98,6 @@ int main(int argc, char** argv) {
         o.max_meshes = max_meshes;
     }
     auto t0 = std::chrono::steady_clock::now();
-    PartGraphModel model;
     training::TrainPartGraphModel(model, o);
     const double train_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -131,7 +141,7 @@ int main(int argc, char** argv) {
             for (const auto& obj : r.objects)
                 for (const auto& p : obj.parts) parts.push_back(p);
             const auto a = std::chrono::steady_clock::now();
-            const PartGraphResult pg = RecognizeParts(model, scan, parts);
+            const PartGraphResult pg = RecognizeParts(model, scan, parts, rp);
             recog_ms +=
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
                     .count();

@@ -149,7 +149,8 @@ std::filesystem::path DefaultPartGraphModelPath() {
     } else {
         base = std::filesystem::temp_directory_path();
     }
-    return base / "multicue" / "part-graph-default-v1.mcpg";
+    return base / "multicue" /
+           ("part-graph-default-v" + std::to_string(kPartGraphModelVersion) + ".mcpg");
 }
 
 PartGraphModel LoadOrTrainDefaultPartGraphModel() {

@@ -18,9 +18,9 @@
 namespace multicue::training {
 
 struct PartGraphTrainingOptions {
-    int objects_per_category = 8;  ///< procedural objects per category (0: none)
+    int objects_per_category = 8;              ///< procedural objects per category (0: none)
     std::vector<std::string> categories = {};  ///< procedural categories (empty: all six)
-    int views = 8;                 ///< turntable views per object
+    int views = 8;                             ///< turntable views per object
     std::filesystem::path meshes;  ///< mesh library folder with labels.csv (empty: none)
     /// Library entries used: those whose index i satisfies i % mesh_modulo == mesh_remainder (a
     /// simple split of a library into training and test meshes).
@@ -49,7 +49,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
 PartGraphModel TrainDefaultPartGraphModel(Progress* progress = nullptr);
 
 /// Where the default model is cached: $XDG_CACHE_HOME/multicue (else ~/.cache/multicue, else the
-/// system temp folder) / part-graph-default-v1.mcpg.
+/// system temp folder) / part-graph-default-v<model format version>.mcpg.
 std::filesystem::path DefaultPartGraphModelPath();
 
 /// Loads the cached default model, training and caching it first when it is missing.

@@ -38,19 +38,32 @@
 
 namespace multicue {
 
-/// Dimensions of a part descriptor (GRSD-).
-inline constexpr int kPartDescriptorSize = 21;
-/// Version of the model file format (docs/part-graph.md).
-inline constexpr std::uint32_t kPartGraphModelVersion = 1;
+/// Columns of the GRSD- block of a part descriptor.
+inline constexpr int kPartGrsdSize = 21;
+/// Columns of the moment block: point count, sums of x, y, z and of xx, xy, xz, yy, yz, zz (point
+/// coordinates relative to the mean of all parts given to ComputePartDescriptors).
+inline constexpr int kPartMomentSize = 10;
+/// Dimensions of a raw part descriptor (GRSD- counts, then moments); every column is additive.
+inline constexpr int kPartDescriptorSize = kPartGrsdSize + kPartMomentSize;
+/// Dimensions of a stored (mapped) descriptor: square-rooted unit-sum GRSD-, then the three
+/// extents of the group's points (sqrt(12 lambda) of their covariance, descending) times
+/// PartDescriptorParams::size_weight.
+inline constexpr int kPartMappedSize = kPartGrsdSize + 3;
+/// Version of the model file format (docs/part-graph.md). 2: moment block and extents.
+inline constexpr std::uint32_t kPartGraphModelVersion = 2;
 
 struct PartDescriptorParams {
     VoxelRsdParams voxels = {};  ///< GRSD- voxel map settings (2.5 cm voxels by default)
+    /// Weight of the extents in the k-NN distance [1/m], >= 0 (0: shape only, as in the thesis).
+    /// A 5 cm difference in an extent then counts as much as a Jeffries-Matusita distance of
+    /// 0.05 * size_weight.
+    float size_weight = 4.0f;
 };
 
-/// One GRSD- row per part (parts x 21, raw counts) from a voxel map over the union of the parts'
-/// points. `cloud` needs normals. Parts without a voxel of their own get a zero row. Throws
-/// InvalidArgument for an index out of range, DataError without normals (unless nothing is
-/// given).
+/// One row per part (parts x kPartDescriptorSize): GRSD- raw counts from a voxel map over the
+/// union of the parts' points, then the point moments. `cloud` needs normals. Parts without a
+/// voxel of their own get a zero GRSD- block. Throws InvalidArgument for an index out of range,
+/// DataError without normals (unless nothing is given).
 FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
                                      const PartDescriptorParams& params = {});
 
@@ -71,7 +84,10 @@ struct PartGraphRecognitionParams {
     std::size_t max_parts = 4;   ///< largest subgraph grown in a scene (Figure 5.14 a), [1, 15]
     std::size_t k = 5;           ///< neighbours voting per subgraph, >= 1
     float size_exponent = 1.0f;  ///< vote weight confidence / size^size_exponent, >= 0
-    bool confidence_weighted = true;     ///< weight votes by their largest frequency
+    bool confidence_weighted = true;  ///< weight votes by their largest frequency
+    /// Divide each neighbour's vote by its category's share of the stored rows (so categories
+    /// with few stored subgraphs, e.g. flat objects of few parts, are not outvoted).
+    bool balanced = true;
     std::size_t max_subgraphs = 200000;  ///< enumeration cap per scene
 };
 
@@ -87,7 +103,7 @@ struct PartGraphResult {
 class PartGraphModel {
   public:
     struct Bucket {
-        std::vector<float> rows;           ///< sqrt of unit-sum descriptors, 21 per row
+        std::vector<float> rows;           ///< mapped descriptors, kPartMappedSize per row
         std::vector<std::uint8_t> labels;  ///< Category per row
         ml::KdTreeNd tree;                 ///< over `rows` (Build)
     };
@@ -103,10 +119,15 @@ class PartGraphModel {
     /// Builds the search structures; call after the last AddObject (Load calls it).
     void Build();
 
-    /// Category frequencies of the k nearest stored descriptors for one subgraph key; sets
-    /// `fallback` when the key was not stored. All zero if no bucket of that size exists.
+    /// Category frequencies of the k nearest stored descriptors for one subgraph key (raw
+    /// descriptor, kPartDescriptorSize values); sets `fallback` when the key was not stored.
+    /// With `balanced`, votes are divided by their category's share of the rows (then
+    /// renormalised). All zero if no bucket of that size exists.
     std::array<float, kNumCategories> Classify(std::uint64_t key, const float* descriptor,
-                                               std::size_t k, bool* fallback = nullptr) const;
+                                               std::size_t k, bool* fallback = nullptr,
+                                               bool balanced = false) const;
+    /// The stored form of a raw descriptor (kPartMappedSize values into `out`).
+    void MapDescriptor(const float* raw, float* out) const;
 
     std::size_t num_rows() const;
     std::size_t num_buckets() const { return buckets_.size(); }
@@ -124,6 +145,7 @@ class PartGraphModel {
     std::uint64_t ResolveKey(std::uint64_t key, bool* fallback) const;
     std::map<std::uint64_t, Bucket> buckets_;
     std::map<std::size_t, std::vector<std::uint64_t>> keys_by_size_;
+    std::array<float, kNumCategories> class_weight_{};  ///< 1 / share of rows (Build)
     bool built_ = false;
 };
 
