@@ -7,6 +7,7 @@
 //
 // usage: part_graph_eval [--meshes DIR] [--scenes N] [--seed S] [--max-meshes N]
 //                        [--size-weight W] [--balanced 0|1] [--k K] [--max-parts N]
+//                        [--table-scenes N] [--table-views N] [--objects N] [--train-meshes 0|1]
 
 #include <chrono>
 #include <cstdio>
@@ -70,6 +71,7 @@ int main(int argc, char** argv) {
     std::uint64_t seed = 1;
     PartGraphModel model;
     PartGraphRecognitionParams rp;
+    int table_scenes = 0, table_views = 4, objects = 8, train_meshes = 1;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--meshes"))
             meshes = argv[i + 1];
@@ -87,15 +89,27 @@ int main(int argc, char** argv) {
             rp.k = std::strtoull(argv[i + 1], nullptr, 10);
         else if (!std::strcmp(argv[i], "--max-parts"))
             rp.max_parts = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--table-scenes"))
+            table_scenes = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--table-views"))
+            table_views = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--objects"))
+            objects = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--train-meshes"))
+            train_meshes = std::atoi(argv[i + 1]);
     }
     const bool library = std::filesystem::exists(std::filesystem::path(meshes) / "labels.csv");
     training::PartGraphTrainingOptions o;
     o.seed = seed;
+    o.objects_per_category = objects;
+    o.table_scenes = table_scenes;
+    o.table_views = table_views;
     if (library) {
         o.meshes = meshes;
         o.mesh_modulo = 2;
         o.mesh_remainder = 0;
         o.max_meshes = max_meshes;
+        o.mesh_turntable = train_meshes != 0;
     }
     auto t0 = std::chrono::steady_clock::now();
     training::TrainPartGraphModel(model, o);

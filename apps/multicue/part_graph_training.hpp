@@ -26,10 +26,18 @@ struct PartGraphTrainingOptions {
     /// simple split of a library into training and test meshes).
     int mesh_modulo = 1;
     int mesh_remainder = 0;
-    int max_meshes = 0;  ///< at most this many library meshes (0 = all selected)
+    int max_meshes = 0;          ///< at most this many library meshes (0 = all selected)
+    bool mesh_turntable = true;  ///< scan the selected library meshes on the turntable
     std::uint64_t seed = 1;
     int num_threads = 0;
     float camera_distance = 1.0f;  ///< turntable camera distance [m]
+    /// Cluttered table scenes (objects drawn from the selected library meshes, else procedural
+    /// objects) scanned from `table_views` robot-head viewpoints each (sim::TableViewpoints) and
+    /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
+    /// one category adds its parts as one labelled object. Closer to real frames than the
+    /// turntable. 0: none.
+    int table_scenes = 0;
+    int table_views = 4;
     PartGraphTrainParams train{};
 };
 

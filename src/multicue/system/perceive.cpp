@@ -172,7 +172,20 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
     for (std::size_t k = 0; k < objects.size(); ++k) {
         CategoryResult& c = objects[k].category;
         if (c.category == Category::kNone || ids[k].empty()) continue;  // too few points
-        const auto p = MergePartProbabilities(r, parts, ids[k]);
+        auto p = MergePartProbabilities(r, parts, ids[k]);
+        if (params.categoriser == "part-graph+rules") {
+            // Weighted geometric mean of the two distributions (a product of experts).
+            constexpr float kFloor = 0.01f;
+            const float w = params.part_graph_weight;
+            float sum = 0.0f;
+            for (std::size_t j = 1; j < kNumCategories; ++j) {
+                p[j] = std::pow(std::max(c.probabilities[j], kFloor), 1.0f - w) *
+                       std::pow(std::max(p[j], kFloor), w);
+                sum += p[j];
+            }
+            p[0] = 0.0f;
+            for (float& x : p) x /= sum;
+        }
         c.probabilities = p;
         c.category = ArgMaxCategory(p);
         c.confidence = p[static_cast<std::size_t>(c.category)];
@@ -186,6 +199,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
                                     input.size()));
     }
     ResolveThreadCount(params.num_threads);  // validates
+    if (!(params.part_graph_weight >= 0.0f && params.part_graph_weight <= 1.0f)) {
+        throw InvalidArgument("category.part_graph_weight must be in [0, 1]");
+    }
     PerceiveResult result;
     result.points = input.size();
     StageTimer timer(result.timings_ms);
@@ -279,11 +295,12 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
             o.centroid = Centroid(cloud, o.indices);
         },
         1);
-    if (params.categoriser == "part-graph") {
+    if (params.categoriser == "part-graph" || params.categoriser == "part-graph+rules") {
         CategorizeByPartGraph(cloud, result.objects, params);
     } else if (params.categoriser != "rules") {
-        throw InvalidArgument("category.categoriser must be rules or part-graph, got '" +
-                              params.categoriser + "'");
+        throw InvalidArgument(
+            "category.categoriser must be rules, part-graph or part-graph+rules, got '" +
+            params.categoriser + "'");
     }
     timer.Done("categories");
 
