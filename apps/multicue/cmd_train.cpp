@@ -1,5 +1,6 @@
 // `multicue train`: a part-graph hashing model (docs/part-graph.md) from simulated turntable scans.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -41,12 +42,20 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         ->capture_default_str();
     cmd->add_option("--table-views", o->t.table_views, "views per table scene")
         ->capture_default_str();
+    cmd->add_option("--table-distance", o->t.table_viewpoints.max_distance,
+                    "largest horizontal camera distance from the table centre [m]")
+        ->capture_default_str();
     cmd->add_option("--seed", o->t.seed, "random seed")->capture_default_str();
     cmd->callback([o, &global] {
         if (o->t.views < 1) throw InvalidArgument("--views must be >= 1");
         if (o->t.objects_per_category < 0) throw InvalidArgument("--objects must be >= 0");
         if (o->t.table_scenes < 0) throw InvalidArgument("--table-scenes must be >= 0");
         if (o->t.table_views < 1) throw InvalidArgument("--table-views must be >= 1");
+        if (!(o->t.table_viewpoints.max_distance > 0.0f)) {
+            throw InvalidArgument("--table-distance must be > 0");
+        }
+        o->t.table_viewpoints.min_distance =
+            std::min(o->t.table_viewpoints.min_distance, o->t.table_viewpoints.max_distance);
         if (o->max_parts < 1 || o->max_parts > 15) {
             throw InvalidArgument("--max-parts must be in [1, 15]");
         }

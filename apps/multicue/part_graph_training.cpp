@@ -162,7 +162,8 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             }
             const std::uint64_t seed = sim::SubSeed(o.seed, 8000000u + s);
             const sim::RayCaster caster(scenes[s]);
-            const auto views = sim::TableViewpoints(scenes[s], o.table_views, {}, seed);
+            const auto views =
+                sim::TableViewpoints(scenes[s], o.table_views, o.table_viewpoints, seed);
             sim::KinectParams kp;
             kp.num_threads = 1;
             PerceiveParams pp = perceive;

@@ -13,6 +13,7 @@
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/sim/scene_gen.hpp"
 #include "multicue/system/perceive.hpp"
 
 namespace multicue::training {
@@ -38,6 +39,7 @@ struct PartGraphTrainingOptions {
     /// turntable. 0: none.
     int table_scenes = 0;
     int table_views = 4;
+    sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
     PartGraphTrainParams train{};
 };
 
