@@ -255,6 +255,25 @@ TEST(PartGraphModel, BalancedVotesDivideByClassShare) {
     EXPECT_NEAR(balanced[static_cast<int>(Category::kSphere)], 0.5f, 1e-6f);
 }
 
+TEST(PartGraphModel, BlendIsAWeightedProductOfExperts) {
+    std::array<float, kNumCategories> a{}, b{};
+    a[static_cast<int>(Category::kBox)] = 0.7f;
+    a[static_cast<int>(Category::kFlat)] = 0.3f;
+    b[static_cast<int>(Category::kFlat)] = 0.6f;
+    b[static_cast<int>(Category::kCylinder)] = 0.4f;
+    EXPECT_EQ(ArgMaxCategory(BlendCategoryProbabilities(a, b, 0.0f)), Category::kBox);
+    EXPECT_EQ(ArgMaxCategory(BlendCategoryProbabilities(a, b, 1.0f)), Category::kFlat);
+    // Both agree on flat more than on anything else.
+    const auto mid = BlendCategoryProbabilities(a, b, 0.5f);
+    EXPECT_EQ(ArgMaxCategory(mid), Category::kFlat);
+    EXPECT_EQ(mid[0], 0.0f);
+    float sum = 0.0f;
+    for (float v : mid) sum += v;
+    EXPECT_NEAR(sum, 1.0f, 1e-6f);
+    EXPECT_THROW(BlendCategoryProbabilities(a, b, -0.1f), InvalidArgument);
+    EXPECT_THROW(BlendCategoryProbabilities(a, b, 1.1f), InvalidArgument);
+}
+
 // A model over synthetic descriptors: two categories with distinct histograms.
 PartGraphModel SyntheticModel() {
     PartGraphModel m;

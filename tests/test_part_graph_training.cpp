@@ -21,6 +21,7 @@ PartGraphModel TinyModel(int threads) {
     o.categories = kCats;
     o.objects_per_category = 3;
     o.views = 3;
+    o.table_scenes = 0;
     o.seed = 11;
     o.num_threads = threads;
     PartGraphModel m;

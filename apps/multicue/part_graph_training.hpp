@@ -37,7 +37,7 @@ struct PartGraphTrainingOptions {
     /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
     /// one category adds its parts as one labelled object. Closer to real frames than the
     /// turntable. 0: none.
-    int table_scenes = 0;
+    int table_scenes = 20;
     int table_views = 4;
     sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
     PartGraphTrainParams train{};

@@ -441,6 +441,21 @@ std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& 
     return p;
 }
 
+std::array<float, kNumCategories> BlendCategoryProbabilities(
+    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
+    float w) {
+    if (!(w >= 0.0f && w <= 1.0f)) throw InvalidArgument("blend weight must be in [0, 1]");
+    constexpr float kFloor = 0.01f;
+    std::array<float, kNumCategories> p{};
+    float sum = 0.0f;
+    for (std::size_t c = 1; c < kNumCategories; ++c) {
+        p[c] = std::pow(std::max(a[c], kFloor), 1.0f - w) * std::pow(std::max(b[c], kFloor), w);
+        sum += p[c];
+    }
+    for (float& x : p) x /= sum;
+    return p;
+}
+
 Category ArgMaxCategory(const std::array<float, kNumCategories>& p) {
     std::size_t best = 0;
     for (std::size_t c = 1; c < kNumCategories; ++c) {

@@ -57,7 +57,7 @@ struct PartDescriptorParams {
     /// Weight of the extents in the k-NN distance [1/m], >= 0 (0: shape only, as in the thesis).
     /// A 5 cm difference in an extent then counts as much as a Jeffries-Matusita distance of
     /// 0.05 * size_weight.
-    float size_weight = 4.0f;
+    float size_weight = 32.0f;
 };
 
 /// One row per part (parts x kPartDescriptorSize): GRSD- raw counts from a voxel map over the
@@ -165,6 +165,13 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
 std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& result,
                                                          const std::vector<Indices>& parts,
                                                          const std::vector<std::size_t>& part_ids);
+
+/// Product of experts of two category distributions: per real category
+/// max(a, 0.01)^(1 - w) * max(b, 0.01)^w, normalised (kNone gets 0). InvalidArgument unless
+/// w is in [0, 1].
+std::array<float, kNumCategories> BlendCategoryProbabilities(
+    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
+    float w);
 
 /// The most probable category of a distribution (ties to the lower value).
 Category ArgMaxCategory(const std::array<float, kNumCategories>& p);

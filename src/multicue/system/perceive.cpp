@@ -174,17 +174,7 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
         if (c.category == Category::kNone || ids[k].empty()) continue;  // too few points
         auto p = MergePartProbabilities(r, parts, ids[k]);
         if (params.categoriser == "part-graph+rules") {
-            // Weighted geometric mean of the two distributions (a product of experts).
-            constexpr float kFloor = 0.01f;
-            const float w = params.part_graph_weight;
-            float sum = 0.0f;
-            for (std::size_t j = 1; j < kNumCategories; ++j) {
-                p[j] = std::pow(std::max(c.probabilities[j], kFloor), 1.0f - w) *
-                       std::pow(std::max(p[j], kFloor), w);
-                sum += p[j];
-            }
-            p[0] = 0.0f;
-            for (float& x : p) x /= sum;
+            p = BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
         }
         c.probabilities = p;
         c.category = ArgMaxCategory(p);
