@@ -5,11 +5,13 @@
 /// Descriptor of a part: GRSD- (features/grsd.hpp, 21 raw transition counts) of the 2.5 cm voxels
 /// the part owns in one voxel map computed over all given parts (a voxel belongs to the part with
 /// most points in it, ties to the lower part index; neighbours owned by other parts count as
-/// empty). The descriptor of a group of parts is the plain sum of its parts' descriptors, so it
-/// is computed once per part and summed per subgraph. For the k-NN the sum is normalised to unit
-/// sum and square-rooted: the Euclidean distance of two such vectors is then exactly the
-/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms, and a k-d tree
-/// finds the nearest ones.
+/// empty), followed by the part's point moments (count, first and second order sums). The
+/// descriptor of a group of parts is the plain sum of its parts' descriptors, so it is computed
+/// once per part and summed per subgraph. For the k-NN the GRSD- sum is normalised to unit sum and
+/// square-rooted (the Euclidean distance of two such vectors is then exactly the
+/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms), and the summed
+/// moments give the covariance of the group's points, whose three extents (weighted) are
+/// appended; a k-d tree finds the nearest ones.
 ///
 /// Model: a two-level hash table, number of parts -> sorted degree sequence -> the stored
 /// subgraph descriptors with their categories (one k-d tree per bucket). Recognition grows every
