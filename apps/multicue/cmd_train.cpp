@@ -49,6 +49,9 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->callback([o, &global] {
         if (o->t.views < 1) throw InvalidArgument("--views must be >= 1");
         if (o->t.objects_per_category < 0) throw InvalidArgument("--objects must be >= 0");
+        if (!(o->size_weight >= 0.0f) || !std::isfinite(o->size_weight)) {
+            throw InvalidArgument("--size-weight must be >= 0 and finite");
+        }
         if (o->t.table_scenes < 0) throw InvalidArgument("--table-scenes must be >= 0");
         if (o->t.table_views < 1) throw InvalidArgument("--table-views must be >= 1");
         if (!(o->t.table_viewpoints.max_distance > 0.0f)) {
@@ -69,9 +72,6 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
             (o->meshes.empty() ? 0 : static_cast<std::size_t>(std::max(o->t.max_meshes, 0))) +
             static_cast<std::size_t>(std::max(o->t.table_scenes, 0));
         Progress progress("training part graphs", jobs);
-        if (!(o->size_weight >= 0.0f) || !std::isfinite(o->size_weight)) {
-            throw InvalidArgument("--size-weight must be >= 0 and finite");
-        }
         PartGraphModel model;
         model.descriptor_params.size_weight = o->size_weight;
         const bool complete = training::TrainPartGraphModel(model, o->t, &progress);
