@@ -6,6 +6,9 @@
 // the time to categorise all parts of a 640x480 frame.
 //
 // usage: part_graph_eval [--meshes DIR] [--scenes N] [--seed S] [--max-meshes N]
+//                        [--size-weight W] [--balanced 0|1] [--k K] [--max-parts N]
+//                        [--table-scenes N] [--table-views N] [--objects N] [--train-meshes 0|1]
+//                        [--blend-weight W]
 
 #include <chrono>
 #include <cstdio>
@@ -67,6 +70,11 @@ int main(int argc, char** argv) {
     std::string meshes = std::string(MULTICUE_SHARED_DATA_DIR) + "/meshes/tabletop";
     int scenes = 4, max_meshes = 60;
     std::uint64_t seed = 1;
+    PartGraphModel model;
+    PartGraphRecognitionParams rp;
+    float blend_weight = 0.2f;
+    int table_scenes = training::PartGraphTrainingOptions{}.table_scenes, table_views = 4,
+        objects = 8, train_meshes = 1;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--meshes"))
             meshes = argv[i + 1];
@@ -76,25 +84,50 @@ int main(int argc, char** argv) {
             seed = std::strtoull(argv[i + 1], nullptr, 10);
         else if (!std::strcmp(argv[i], "--max-meshes"))
             max_meshes = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--size-weight"))
+            model.descriptor_params.size_weight = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--balanced"))
+            rp.balanced = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--k"))
+            rp.k = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--max-parts"))
+            rp.max_parts = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--table-scenes"))
+            table_scenes = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--table-views"))
+            table_views = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--blend-weight"))
+            blend_weight = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--objects"))
+            objects = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--train-meshes"))
+            train_meshes = std::atoi(argv[i + 1]);
     }
     const bool library = std::filesystem::exists(std::filesystem::path(meshes) / "labels.csv");
     training::PartGraphTrainingOptions o;
     o.seed = seed;
+    o.objects_per_category = objects;
+    o.table_scenes = table_scenes;
+    o.table_views = table_views;
     if (library) {
         o.meshes = meshes;
         o.mesh_modulo = 2;
         o.mesh_remainder = 0;
         o.max_meshes = max_meshes;
+        o.mesh_turntable = train_meshes != 0;
     }
     auto t0 = std::chrono::steady_clock::now();
-    PartGraphModel model;
     training::TrainPartGraphModel(model, o);
     const double train_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::fflush(stdout);
-    std::printf("training: %zu subgraphs, %zu buckets, %.1f s (%s)\n", model.num_rows(),
-                model.num_buckets(), train_s,
-                library ? "procedural + even library meshes" : "procedural only");
+    std::printf(
+        "training: %zu subgraphs, %zu buckets, %.1f s (%d procedural objects per category, %s, "
+        "%d table scenes x %d views; size weight %g, %s votes)\n",
+        model.num_rows(), model.num_buckets(), train_s, objects,
+        library && train_meshes ? "even library meshes" : "no library meshes", table_scenes,
+        table_views, double(model.descriptor_params.size_weight),
+        rp.balanced ? "balanced" : "plain");
 
     std::optional<sim::ObjectSource> source;
     if (library) {
@@ -106,7 +139,7 @@ int main(int argc, char** argv) {
         source.emplace();
     }
     PerceiveParams pp;
-    Counts point, part, rules, multi, single_in_multi;
+    Counts point, part, rules, multi, single_in_multi, blend;
     double recog_ms = 0.0;
     std::size_t frames = 0, parts_total = 0;
     sim::TableSceneParams sp;
@@ -128,15 +161,36 @@ int main(int argc, char** argv) {
             }
             const PerceiveResult r = Perceive(scan, pp);
             std::vector<Indices> parts;
-            for (const auto& obj : r.objects)
-                for (const auto& p : obj.parts) parts.push_back(p);
+            std::vector<std::size_t> part_object;
+            for (std::size_t ob = 0; ob < r.objects.size(); ++ob)
+                for (const auto& p : r.objects[ob].parts) {
+                    parts.push_back(p);
+                    part_object.push_back(ob);
+                }
             const auto a = std::chrono::steady_clock::now();
-            const PartGraphResult pg = RecognizeParts(model, scan, parts);
+            const PartGraphResult pg = RecognizeParts(model, scan, parts, rp);
             recog_ms +=
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
                     .count();
             ++frames;
             parts_total += parts.size();
+            // part-graph+rules per object (as perceive blends them).
+            std::vector<std::vector<std::size_t>> ids(r.objects.size());
+            for (std::size_t k = 0; k < parts.size(); ++k) ids[part_object[k]].push_back(k);
+            for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
+                const auto& c = r.objects[ob].category;
+                Category cat = c.category;
+                if (cat != Category::kNone && !ids[ob].empty()) {
+                    cat = ArgMaxCategory(BlendCategoryProbabilities(
+                        c.probabilities, MergePartProbabilities(pg, parts, ids[ob]), blend_weight));
+                }
+                for (std::size_t k : ids[ob])
+                    for (Index i : parts[k]) {
+                        const int t = gt_field->data[i];
+                        if (t >= 1 && t < static_cast<int>(kNumCategories))
+                            blend.Add(t, static_cast<int>(cat));
+                    }
+            }
             std::vector<Eigen::Vector3f> world;
             std::vector<std::array<float, kNumCategories>> votes;
             std::vector<int> truth;
@@ -173,6 +227,8 @@ int main(int argc, char** argv) {
     PrintConfusion("per point, part-graph hashing", point);
     PrintConfusion("per part (segment), part-graph hashing", part);
     PrintConfusion("per point, rule-based categoriser (perceive default)", rules);
+    std::printf("per point, part-graph+rules (weight %.2f): %.3f\n", double(blend_weight),
+                blend.Accuracy());
     std::printf("multi-view (6 views, 5 mm voxel votes): %.3f per point vs %.3f single views\n",
                 multi.Accuracy(), single_in_multi.Accuracy());
     std::printf(

@@ -233,5 +233,28 @@ TEST(Cli, PerceiveReportOnByDefaultAndOptional) {
     EXPECT_EQ(CountLines(typo.output), 1) << typo.output;
 }
 
+TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
+    test::TempDir dir;
+    const auto model = (dir / "m.mcpg").string();
+    const auto t =
+        RunCli("train --out " + model + " --objects 1 --views 1 --table-scenes 1 --table-views 1");
+    ASSERT_EQ(t.code, 0) << t.output;
+    const auto bad = RunCli("train --out " + (dir / "bad.mcpg").string() + " --size-weight -1");
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_EQ(CountLines(bad.output), 1) << bad.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.mcpg"));
+    ASSERT_EQ(RunCli("demo --no-report --out " + (dir / "demo").string()).code, 0);
+    {
+        std::ofstream(dir / "blend.json")
+            << R"({"category": {"categoriser": "part-graph+rules", "part_graph_weight": 0.5, )"
+            << R"("part_graph_model": ")" << model << R"("}})";
+    }
+    const auto r =
+        RunCli("perceive " + (dir / "demo" / "scene.pcd").string() + " --no-report -q --config " +
+               (dir / "blend.json").string() + " --out " + (dir / "p").string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "p" / "result.json"));
+}
+
 }  // namespace
 }  // namespace multicue

@@ -8,7 +8,10 @@
 #include <random>
 #include <set>
 
+#include <Eigen/Eigenvalues>
+
 #include "multicue/core/exceptions.hpp"
+#include "multicue/ml/serialization.hpp"
 #include "multicue/recognition/part_graph.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
 #include "test_util.hpp"
@@ -99,7 +102,8 @@ TEST(PartGraph, KnownCountsAndStop) {
     EXPECT_THROW(EnumerateConnectedSubgraphs(k4, 0, [](auto) { return true; }), InvalidArgument);
     EXPECT_THROW(EnumerateConnectedSubgraphs(k4, 16, [](auto) { return true; }), InvalidArgument);
     const std::vector<std::uint32_t> bad = {0, 0, 1, 2};
-    EXPECT_THROW(EnumerateConnectedSubgraphs(k4, 2, [](auto) { return true; }, bad),
+    EXPECT_THROW(EnumerateConnectedSubgraphs(
+                     k4, 2, [](auto) { return true; }, bad),
                  InvalidArgument);
     EXPECT_THROW(k4.AddEdge(1, 1), InvalidArgument);
     EXPECT_THROW(k4.AddEdge(1, 4), InvalidArgument);
@@ -115,8 +119,7 @@ TEST(PartGraph, KeysAreDegreeSequences) {
     g.AddEdge(4, 5);
     g.AddEdge(5, 6);
     g.AddEdge(6, 7);
-    const std::vector<std::uint32_t> star = {0, 1, 2, 3}, star2 = {3, 0, 2, 1},
-                                     path = {4, 5, 6, 7};
+    const std::vector<std::uint32_t> star = {0, 1, 2, 3}, star2 = {3, 0, 2, 1}, path = {4, 5, 6, 7};
     EXPECT_EQ(SubgraphKey(g, star), SubgraphKey(g, star2));
     EXPECT_NE(SubgraphKey(g, star), SubgraphKey(g, path));
     EXPECT_EQ(KeyParts(SubgraphKey(g, star)), 4u);
@@ -166,7 +169,7 @@ TEST(PartGraph, DescriptorsAreAdditive) {
     const FeatureMatrix d = ComputePartDescriptors(c, parts);
     ASSERT_EQ(d.rows(), 3);
     ASSERT_EQ(d.cols(), kPartDescriptorSize);
-    for (int p = 0; p < 3; ++p) EXPECT_GT(d.row(p).sum(), 0.0f);
+    for (int p = 0; p < 3; ++p) EXPECT_GT(d.row(p).head<kPartGrsdSize>().sum(), 0.0f);
     const std::vector<std::uint32_t> ab = {0, 1}, abc = {2, 0, 1};
     const auto s = SubgraphDescriptor(d, ab);
     EXPECT_TRUE(s.isApprox(d.row(0) + d.row(1)));
@@ -175,11 +178,100 @@ TEST(PartGraph, DescriptorsAreAdditive) {
     std::vector<Indices> with_empty = parts;
     with_empty.push_back({});
     const FeatureMatrix e = ComputePartDescriptors(c, with_empty);
-    EXPECT_EQ(e.row(3).sum(), 0.0f);
+    EXPECT_EQ(e.row(3).cwiseAbs().sum(), 0.0f);
     EXPECT_EQ(ComputePartDescriptors(c, {}).rows(), 0);
     PointCloud no_normals = c;
     no_normals.normals.clear();
     EXPECT_THROW(ComputePartDescriptors(no_normals, parts), DataError);
+}
+
+// The extents of a group come from its summed moments and equal those of the union's points.
+TEST(PartGraph, ExtentsFromSummedMoments) {
+    std::vector<Indices> parts;
+    const PointCloud c = ThreePatches(parts);
+    const FeatureMatrix d = ComputePartDescriptors(c, parts);
+    EXPECT_FLOAT_EQ(d(0, kPartGrsdSize), 144.0f);  // point count
+    PartGraphModel m;
+    m.descriptor_params.size_weight = 1.0f;  // extents in metres
+    auto direct = [&](const std::vector<int>& ids) {
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        std::size_t n = 0;
+        for (int p : ids)
+            for (Index i : parts[p]) mean += c.points[i].cast<double>(), ++n;
+        mean /= double(n);
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (int p : ids)
+            for (Index i : parts[p]) {
+                const Eigen::Vector3d q = c.points[i].cast<double>() - mean;
+                cov += q * q.transpose();
+            }
+        cov /= double(n);
+        const Eigen::Vector3d l = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();
+        return Eigen::Vector3d(std::sqrt(12 * l[2]), std::sqrt(12 * std::max(l[1], 0.0)),
+                               std::sqrt(12 * std::max(l[0], 0.0)));
+    };
+    for (const std::vector<int>& ids : {std::vector<int>{0}, {0, 1}, {0, 1, 2}}) {
+        std::vector<std::uint32_t> vs(ids.begin(), ids.end());
+        const auto raw = SubgraphDescriptor(d, vs);
+        float mapped[kPartMappedSize];
+        m.MapDescriptor(raw.data(), mapped);
+        const Eigen::Vector3d want = direct(ids);
+        for (int j = 0; j < 3; ++j) EXPECT_NEAR(mapped[kPartGrsdSize + j], want[j], 1e-4);
+        float sum = 0.0f;
+        for (int j = 0; j < kPartGrsdSize; ++j) sum += mapped[j] * mapped[j];
+        EXPECT_NEAR(sum, 1.0f, 1e-5f);  // square-rooted unit-sum histogram
+    }
+    // One 12 x 12 patch, 4 mm apart: extents 4 mm * sqrt(143) twice, flat.
+    float one[kPartMappedSize];
+    m.MapDescriptor(SubgraphDescriptor(d, std::vector<std::uint32_t>{2}).data(), one);
+    EXPECT_NEAR(one[kPartGrsdSize], 0.004 * std::sqrt(143.0), 1e-4);
+    EXPECT_NEAR(one[kPartGrsdSize + 2], 0.0, 1e-4);
+    // Weight 0 drops the extents.
+    m.descriptor_params.size_weight = 0.0f;
+    m.MapDescriptor(SubgraphDescriptor(d, std::vector<std::uint32_t>{2}).data(), one);
+    EXPECT_EQ(one[kPartGrsdSize], 0.0f);
+}
+
+// Balanced votes: a category with a third of the rows weighs as much as the other.
+TEST(PartGraphModel, BalancedVotesDivideByClassShare) {
+    PartGraphModel m;
+    PartGraph g(3);
+    g.AddEdge(0, 1);
+    g.AddEdge(1, 2);
+    FeatureMatrix box = FeatureMatrix::Zero(3, kPartDescriptorSize);
+    FeatureMatrix ball = FeatureMatrix::Zero(3, kPartDescriptorSize);
+    for (int p = 0; p < 3; ++p) {
+        box(p, 6) = 10.0f;
+        ball(p, 15) = 10.0f;
+    }
+    for (int i = 0; i < 3; ++i) m.AddObject(box, g, Category::kBox, {.max_parts = 1});
+    m.AddObject(ball, g, Category::kSphere, {.max_parts = 1});
+    m.Build();
+    const std::uint64_t key = SubgraphKey(g, std::vector<std::uint32_t>{0});
+    const auto plain = m.Classify(key, box.row(0).data(), 100);
+    const auto balanced = m.Classify(key, box.row(0).data(), 100, nullptr, true);
+    EXPECT_NEAR(plain[static_cast<int>(Category::kBox)], 0.75f, 1e-6f);
+    EXPECT_NEAR(balanced[static_cast<int>(Category::kBox)], 0.5f, 1e-6f);
+    EXPECT_NEAR(balanced[static_cast<int>(Category::kSphere)], 0.5f, 1e-6f);
+}
+
+TEST(PartGraphModel, BlendIsAWeightedProductOfExperts) {
+    std::array<float, kNumCategories> a{}, b{};
+    a[static_cast<int>(Category::kBox)] = 0.7f;
+    a[static_cast<int>(Category::kFlat)] = 0.3f;
+    b[static_cast<int>(Category::kFlat)] = 0.6f;
+    b[static_cast<int>(Category::kCylinder)] = 0.4f;
+    EXPECT_EQ(ArgMaxCategory(BlendCategoryProbabilities(a, b, 0.0f)), Category::kBox);
+    EXPECT_EQ(ArgMaxCategory(BlendCategoryProbabilities(a, b, 1.0f)), Category::kFlat);
+    // Both agree on flat more than on anything else.
+    const auto mid = BlendCategoryProbabilities(a, b, 0.5f);
+    EXPECT_EQ(ArgMaxCategory(mid), Category::kFlat);
+    EXPECT_EQ(mid[0], 0.0f);
+    float sum = 0.0f;
+    for (float v : mid) sum += v;
+    EXPECT_NEAR(sum, 1.0f, 1e-6f);
+    EXPECT_THROW(BlendCategoryProbabilities(a, b, -0.1f), InvalidArgument);
+    EXPECT_THROW(BlendCategoryProbabilities(a, b, 1.1f), InvalidArgument);
 }
 
 // A model over synthetic descriptors: two categories with distinct histograms.
@@ -261,17 +353,24 @@ TEST(PartGraphModel, CorruptFilesAreRejected) {
     EXPECT_THROW(PartGraphModel::Deserialize(bytes.substr(0, bytes.size() - 9), "cut"),
                  FormatError);
     EXPECT_THROW(PartGraphModel::Deserialize("not a model", "text"), FormatError);
+    // A file of the previous layout (version 1, GRSD- only) is refused by its version.
+    try {
+        PartGraphModel::Deserialize(ml::WrapContainer("MCPARTGR", 1, "old"), "old.mcpg");
+        ADD_FAILURE() << "version 1 accepted";
+    } catch (const FormatError& e) {
+        EXPECT_NE(std::string(e.what()).find("version 1"), std::string::npos) << e.what();
+    }
     EXPECT_THROW(PartGraphModel::Load(dir.path() / "missing.mcpg"), IoError);
     PartGraphModel unbuilt;
     const float z[kPartDescriptorSize] = {};
     EXPECT_THROW(unbuilt.Classify(0, z, 1), InvalidArgument);
     PartGraph g(1);
-    EXPECT_THROW(unbuilt.AddObject(FeatureMatrix::Zero(1, kPartDescriptorSize), g, Category::kNone,
-                                   {}),
-                 InvalidArgument);
-    EXPECT_THROW(unbuilt.AddObject(FeatureMatrix::Zero(2, kPartDescriptorSize), g, Category::kBox,
-                                   {}),
-                 InvalidArgument);
+    EXPECT_THROW(
+        unbuilt.AddObject(FeatureMatrix::Zero(1, kPartDescriptorSize), g, Category::kNone, {}),
+        InvalidArgument);
+    EXPECT_THROW(
+        unbuilt.AddObject(FeatureMatrix::Zero(2, kPartDescriptorSize), g, Category::kBox, {}),
+        InvalidArgument);
 }
 
 TEST(PartGraphModel, VoxelVotesAccumulateViews) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "multicue/core/exceptions.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/raycaster.hpp"
@@ -20,6 +21,7 @@ PartGraphModel TinyModel(int threads) {
     o.categories = kCats;
     o.objects_per_category = 3;
     o.views = 3;
+    o.table_scenes = 0;
     o.seed = 11;
     o.num_threads = threads;
     PartGraphModel m;
@@ -61,6 +63,34 @@ TEST(PartGraphTraining, RecognisesHeldOutObjects) {
 
 TEST(PartGraphTraining, DeterministicAcrossThreads) {
     EXPECT_EQ(TinyModel(1).Serialize(), TinyModel(2).Serialize());
+}
+
+// Table scenes segmented by perceive: labelled objects of the scenes' categories only, the same
+// model whatever the thread count.
+TEST(PartGraphTraining, TableScenesAddPerceivedObjects) {
+    auto train = [](int threads) {
+        training::PartGraphTrainingOptions o;
+        o.categories = kCats;
+        o.objects_per_category = 0;
+        o.table_scenes = 2;
+        o.table_views = 1;
+        o.seed = 5;
+        o.num_threads = threads;
+        PartGraphModel m;
+        EXPECT_TRUE(training::TrainPartGraphModel(m, o));
+        return m;
+    };
+    const PartGraphModel m = train(1);
+    EXPECT_GT(m.num_rows(), 0u);
+    const auto per = m.rows_per_category();
+    std::size_t in_cats = 0;
+    for (const auto& c : kCats) in_cats += per[static_cast<std::size_t>(ParseCategory(c))];
+    EXPECT_EQ(in_cats, m.num_rows());
+    EXPECT_EQ(m.Serialize(), train(2).Serialize());
+    training::PartGraphTrainingOptions bad;
+    bad.table_scenes = -1;
+    PartGraphModel unused;
+    EXPECT_THROW(training::TrainPartGraphModel(unused, bad), InvalidArgument);
 }
 
 }  // namespace

@@ -156,6 +156,47 @@ TEST(Perceive, BadInput) {
     EXPECT_THROW(Perceive(DemoScene().cloud, bad), InvalidArgument);
 }
 
+// part-graph+rules: weight 0 reproduces the rules, weight 1 the part-graph votes.
+TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
+    const auto& s = DemoScene();
+    const PerceiveResult rules = Perceive(s.cloud, {});
+    ASSERT_FALSE(rules.objects.empty());
+    // A model of the scene's own objects, labelled sphere whatever they are.
+    PointCloud cloud = s.cloud;
+    auto model = std::make_shared<PartGraphModel>();
+    for (const auto& o : rules.objects) {
+        if (o.parts.empty()) continue;
+        PointCloud c = cloud;
+        if (!c.HasNormals()) c.normals.assign(c.size(), Eigen::Vector3f::UnitZ());
+        model->AddObject(ComputePartDescriptors(c, o.parts), BuildPartGraph(c, o.parts),
+                         Category::kSphere, {.max_parts = 4});
+    }
+    model->Build();
+    PerceiveParams p;
+    p.part_graph = model;
+    p.categoriser = "part-graph+rules";
+    p.part_graph_weight = 0.0f;
+    const PerceiveResult w0 = Perceive(s.cloud, p);
+    ASSERT_EQ(w0.objects.size(), rules.objects.size());
+    for (std::size_t k = 0; k < w0.objects.size(); ++k) {
+        EXPECT_EQ(w0.objects[k].category.category, rules.objects[k].category.category);
+    }
+    p.part_graph_weight = 1.0f;
+    const PerceiveResult w1 = Perceive(s.cloud, p);
+    for (const auto& o : w1.objects) {
+        if (o.category.category == Category::kNone) continue;
+        EXPECT_EQ(o.category.category, Category::kSphere);
+        float sum = 0.0f;
+        for (float v : o.category.probabilities) sum += v;
+        EXPECT_NEAR(sum, 1.0f, 1e-5f);
+    }
+    p.part_graph_weight = 1.5f;
+    EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
+    p.part_graph_weight = 0.5f;
+    p.categoriser = "votes";
+    EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
+}
+
 TEST(PerceiveOutput, FilesFollowTheContract) {
     test::TempDir dir;
     const auto& s = DemoScene();

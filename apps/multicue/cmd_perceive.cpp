@@ -48,7 +48,7 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
     if (!up.empty()) options.pipeline.support.up = ParseVector3(up, "--up");
     if (threads != 0) options.pipeline.num_threads = threads;
     auto& pl = options.pipeline;
-    if (load_model && pl.categoriser == "part-graph" && !pl.part_graph &&
+    if (load_model && pl.categoriser.starts_with("part-graph") && !pl.part_graph &&
         pl.part_graph_model.empty()) {
         pl.part_graph =
             std::make_shared<const PartGraphModel>(training::LoadOrTrainDefaultPartGraphModel());

@@ -1,5 +1,7 @@
 // `multicue train`: a part-graph hashing model (docs/part-graph.md) from simulated turntable scans.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -19,6 +21,7 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         std::string meshes;
         training::PartGraphTrainingOptions t;
         std::size_t max_parts = 8;
+        float size_weight = PartDescriptorParams{}.size_weight;
     };
     auto o = std::make_shared<Options>();
     cmd->add_option("--out", o->out, "model file to write (.mcpg)")->required();
@@ -31,10 +34,31 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--views", o->t.views, "turntable views per object")->capture_default_str();
     cmd->add_option("--max-parts", o->max_parts, "largest stored subgraph [parts]")
         ->capture_default_str();
+    cmd->add_option("--size-weight", o->size_weight,
+                    "weight of the group extents in the k-NN distance [1/m] (0: shape only)")
+        ->capture_default_str();
+    cmd->add_option("--table-scenes", o->t.table_scenes,
+                    "cluttered table scenes segmented by perceive (robot-head views)")
+        ->capture_default_str();
+    cmd->add_option("--table-views", o->t.table_views, "views per table scene")
+        ->capture_default_str();
+    cmd->add_option("--table-distance", o->t.table_viewpoints.max_distance,
+                    "largest horizontal camera distance from the table centre [m]")
+        ->capture_default_str();
     cmd->add_option("--seed", o->t.seed, "random seed")->capture_default_str();
     cmd->callback([o, &global] {
         if (o->t.views < 1) throw InvalidArgument("--views must be >= 1");
         if (o->t.objects_per_category < 0) throw InvalidArgument("--objects must be >= 0");
+        if (!(o->size_weight >= 0.0f) || !std::isfinite(o->size_weight)) {
+            throw InvalidArgument("--size-weight must be >= 0 and finite");
+        }
+        if (o->t.table_scenes < 0) throw InvalidArgument("--table-scenes must be >= 0");
+        if (o->t.table_views < 1) throw InvalidArgument("--table-views must be >= 1");
+        if (!(o->t.table_viewpoints.max_distance > 0.0f)) {
+            throw InvalidArgument("--table-distance must be > 0");
+        }
+        o->t.table_viewpoints.min_distance =
+            std::min(o->t.table_viewpoints.min_distance, o->t.table_viewpoints.max_distance);
         if (o->max_parts < 1 || o->max_parts > 15) {
             throw InvalidArgument("--max-parts must be in [1, 15]");
         }
@@ -45,9 +69,11 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         InstallInterruptHandler();
         const std::size_t jobs =
             static_cast<std::size_t>(o->t.objects_per_category) * 6 +
-            (o->meshes.empty() ? 0 : static_cast<std::size_t>(std::max(o->t.max_meshes, 0)));
+            (o->meshes.empty() ? 0 : static_cast<std::size_t>(std::max(o->t.max_meshes, 0))) +
+            static_cast<std::size_t>(std::max(o->t.table_scenes, 0));
         Progress progress("training part graphs", jobs);
         PartGraphModel model;
+        model.descriptor_params.size_weight = o->size_weight;
         const bool complete = training::TrainPartGraphModel(model, o->t, &progress);
         progress.Finish();
         if (!complete) throw DataError("interrupted; no model written");

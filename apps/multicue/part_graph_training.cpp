@@ -1,5 +1,7 @@
 #include "part_graph_training.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <mutex>
 #include <optional>
@@ -72,7 +74,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             jobs.push_back({std::move(m), rng()});
         }
     }
-    if (!o.meshes.empty()) {
+    if (!o.meshes.empty() && o.mesh_turntable) {
         sim::ObjectSource source(sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories()), false);
         int used = 0;
         for (std::size_t i = 0; i < source.library().size(); ++i) {
@@ -87,8 +89,38 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             ++used;
         }
     }
+    if (o.table_scenes < 0 || o.table_views < 1) {
+        throw InvalidArgument("table_scenes must be >= 0 and table_views >= 1");
+    }
+    // Table scenes, drawn sequentially (the object source caches meshes), scanned in parallel.
+    std::vector<sim::Scene> scenes;
+    if (o.table_scenes > 0) {
+        std::optional<sim::ObjectSource> source;
+        if (!o.meshes.empty()) {
+            auto all = sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories());
+            std::vector<sim::MeshEntry> selected;
+            for (std::size_t i = 0; i < all.size(); ++i) {
+                if (static_cast<int>(i % static_cast<std::size_t>(o.mesh_modulo)) ==
+                    o.mesh_remainder) {
+                    selected.push_back(all[i]);
+                }
+            }
+            if (o.max_meshes > 0 && selected.size() > static_cast<std::size_t>(o.max_meshes)) {
+                selected.resize(static_cast<std::size_t>(o.max_meshes));
+            }
+            source.emplace(std::move(selected), false);
+        } else {
+            source.emplace(o.categories);
+        }
+        sim::TableSceneParams sp;
+        sp.clutter = 0.6f;
+        for (int s = 0; s < o.table_scenes; ++s) {
+            scenes.push_back(sim::MakeTableScene(
+                sp, *source, sim::SubSeed(o.seed, 7000000u + std::uint64_t(s))));
+        }
+    }
     if (progress) progress->Advance(0);
-    std::vector<std::vector<Sample>> samples(jobs.size());
+    std::vector<std::vector<Sample>> samples(jobs.size() + scenes.size());
     std::atomic<bool> stopped{false};
     const PerceiveParams perceive;
     ParallelFor(
@@ -121,8 +153,50 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             if (progress) progress->Advance();
         },
         1);
+    ParallelFor(
+        scenes.size(), o.num_threads,
+        [&](std::size_t s) {
+            if (InterruptRequested()) {
+                stopped = true;
+                return;
+            }
+            const std::uint64_t seed = sim::SubSeed(o.seed, 8000000u + s);
+            const sim::RayCaster caster(scenes[s]);
+            const auto views =
+                sim::TableViewpoints(scenes[s], o.table_views, o.table_viewpoints, seed);
+            sim::KinectParams kp;
+            kp.num_threads = 1;
+            PerceiveParams pp = perceive;
+            pp.num_threads = 1;
+            for (std::size_t v = 0; v < views.size(); ++v) {
+                PointCloud scan = sim::ScanKinect(caster, views[v], kp, seed + v);
+                const auto* truth = scan.FindExtraField("category");
+                if (!truth) continue;
+                OrganizedNormalParams np = pp.organized_normals;
+                np.num_threads = 1;
+                SetNormals(scan, EstimateNormalsOrganized(scan, np));
+                const PerceiveResult r = Perceive(scan, pp);
+                for (const auto& obj : r.objects) {
+                    if (obj.parts.empty()) continue;
+                    std::array<std::size_t, kNumCategories> hist{};
+                    for (Index i : obj.indices) {
+                        const int t = static_cast<int>(truth->data[i]);
+                        if (t >= 0 && t < static_cast<int>(kNumCategories)) ++hist[t];
+                    }
+                    const auto best = static_cast<std::size_t>(
+                        std::max_element(hist.begin() + 1, hist.end()) - hist.begin());
+                    if (hist[best] == 0 || 10 * hist[best] < 6 * obj.indices.size()) continue;
+                    Sample sample{ComputePartDescriptors(scan, obj.parts, model.descriptor_params),
+                                  BuildPartGraph(scan, obj.parts, model.graph_params),
+                                  static_cast<Category>(best)};
+                    samples[jobs.size() + s].push_back(std::move(sample));
+                }
+            }
+            if (progress) progress->Advance();
+        },
+        1);
     // Added in job order: the model does not depend on the thread count.
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
+    for (std::size_t j = 0; j < samples.size(); ++j) {
         for (std::size_t v = 0; v < samples[j].size(); ++v) {
             PartGraphTrainParams tp = o.train;
             tp.seed = sim::SubSeed(o.train.seed, j * 1000 + v);
@@ -149,7 +223,8 @@ std::filesystem::path DefaultPartGraphModelPath() {
     } else {
         base = std::filesystem::temp_directory_path();
     }
-    return base / "multicue" / "part-graph-default-v1.mcpg";
+    return base / "multicue" /
+           ("part-graph-default-v" + std::to_string(kPartGraphModelVersion) + ".mcpg");
 }
 
 PartGraphModel LoadOrTrainDefaultPartGraphModel() {

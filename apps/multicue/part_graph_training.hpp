@@ -13,23 +13,33 @@
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/sim/scene_gen.hpp"
 #include "multicue/system/perceive.hpp"
 
 namespace multicue::training {
 
 struct PartGraphTrainingOptions {
-    int objects_per_category = 8;  ///< procedural objects per category (0: none)
+    int objects_per_category = 8;              ///< procedural objects per category (0: none)
     std::vector<std::string> categories = {};  ///< procedural categories (empty: all six)
-    int views = 8;                 ///< turntable views per object
+    int views = 8;                             ///< turntable views per object
     std::filesystem::path meshes;  ///< mesh library folder with labels.csv (empty: none)
     /// Library entries used: those whose index i satisfies i % mesh_modulo == mesh_remainder (a
     /// simple split of a library into training and test meshes).
     int mesh_modulo = 1;
     int mesh_remainder = 0;
-    int max_meshes = 0;  ///< at most this many library meshes (0 = all selected)
+    int max_meshes = 0;          ///< at most this many library meshes (0 = all selected)
+    bool mesh_turntable = true;  ///< scan the selected library meshes on the turntable
     std::uint64_t seed = 1;
     int num_threads = 0;
     float camera_distance = 1.0f;  ///< turntable camera distance [m]
+    /// Cluttered table scenes (objects drawn from the selected library meshes, else procedural
+    /// objects) scanned from `table_views` robot-head viewpoints each (sim::TableViewpoints) and
+    /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
+    /// one category adds its parts as one labelled object. Closer to real frames than the
+    /// turntable. 0: none.
+    int table_scenes = 20;
+    int table_views = 4;
+    sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
     PartGraphTrainParams train{};
 };
 
@@ -49,7 +59,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
 PartGraphModel TrainDefaultPartGraphModel(Progress* progress = nullptr);
 
 /// Where the default model is cached: $XDG_CACHE_HOME/multicue (else ~/.cache/multicue, else the
-/// system temp folder) / part-graph-default-v1.mcpg.
+/// system temp folder) / part-graph-default-v<model format version>.mcpg.
 std::filesystem::path DefaultPartGraphModelPath();
 
 /// Loads the cached default model, training and caching it first when it is missing.

@@ -7,6 +7,8 @@
 #include <random>
 #include <unordered_map>
 
+#include <Eigen/Eigenvalues>
+
 #include "multicue/core/exceptions.hpp"
 #include "multicue/features/grsd.hpp"
 #include "multicue/ml/serialization.hpp"
@@ -19,12 +21,10 @@ namespace {
 constexpr std::string_view kMagic = "MCPARTGR";
 using Row = Eigen::Matrix<float, 1, kPartDescriptorSize>;
 
-// Unit-sum, square-rooted descriptor (Euclidean distance = Jeffries-Matusita).
-void MapDescriptor(const float* in, float* out) {
-    double sum = 0.0;
-    for (int j = 0; j < kPartDescriptorSize; ++j) sum += std::max(in[j], 0.0f);
-    const float inv = sum > 0.0 ? static_cast<float>(1.0 / sum) : 0.0f;
-    for (int j = 0; j < kPartDescriptorSize; ++j) out[j] = std::sqrt(std::max(in[j], 0.0f) * inv);
+float GrsdSum(const float* d) {
+    float s = 0.0f;
+    for (int j = 0; j < kPartGrsdSize; ++j) s += d[j];
+    return s;
 }
 
 // Splitmix64: a portable stream for the training sample.
@@ -74,6 +74,29 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
     sub.width = static_cast<std::uint32_t>(sub.points.size());
     sub.height = 1;
     if (sub.points.empty()) return out;
+    // Moments about the mean of all points (small numbers, still additive over parts).
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    for (const auto& q : sub.points) origin += q.cast<double>();
+    origin /= static_cast<double>(sub.points.size());
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        double m[kPartMomentSize] = {};
+        for (Index i : local[p]) {
+            const Eigen::Vector3d q = sub.points[i].cast<double>() - origin;
+            m[0] += 1.0;
+            m[1] += q.x();
+            m[2] += q.y();
+            m[3] += q.z();
+            m[4] += q.x() * q.x();
+            m[5] += q.x() * q.y();
+            m[6] += q.x() * q.z();
+            m[7] += q.y() * q.y();
+            m[8] += q.y() * q.z();
+            m[9] += q.z() * q.z();
+        }
+        for (int j = 0; j < kPartMomentSize; ++j) {
+            out(static_cast<Eigen::Index>(p), kPartGrsdSize + j) = static_cast<float>(m[j]);
+        }
+    }
     const KdTree tree(sub);
     const VoxelRsdResult voxels = ComputeVoxelRsd(sub, tree, params.voxels);
     // Majority owner of every voxel.
@@ -99,7 +122,7 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
     for (std::size_t p = 0; p < parts.size(); ++p) {
         if (owned[p].empty()) continue;
         const FeatureVector h = GrsdMinusOfVoxels(voxels, owned[p]);
-        out.row(static_cast<Eigen::Index>(p)) = h.transpose();
+        out.row(static_cast<Eigen::Index>(p)).head<kPartGrsdSize>() = h.transpose();
     }
     return out;
 }
@@ -107,7 +130,7 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
 Row SubgraphDescriptor(const FeatureMatrix& descriptors, std::span<const std::uint32_t> vertices) {
     Row sum = Row::Zero();
     for (std::uint32_t v : vertices) {
-        sum += descriptors.row(static_cast<Eigen::Index>(v)).head<kPartDescriptorSize>();
+        sum += descriptors.row(static_cast<Eigen::Index>(v));
     }
     return sum;
 }
@@ -123,7 +146,7 @@ std::size_t PartGraphModel::AddObject(const FeatureMatrix& descriptors, const Pa
     if (params.max_per_size == 0) throw InvalidArgument("max_per_size must be >= 1");
     if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
         (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
-        throw InvalidArgument("descriptors must have one 21-column row per part");
+        throw InvalidArgument("descriptors must have one row of kPartDescriptorSize per part");
     }
     if (graph.size() == 0) return 0;
     SplitMix rng{params.seed};
@@ -156,13 +179,14 @@ std::size_t PartGraphModel::AddObject(const FeatureMatrix& descriptors, const Pa
         },
         order);
     std::size_t added = 0;
-    float mapped[kPartDescriptorSize];
+    float mapped[kPartMappedSize];
     for (const auto& samples : reservoir) {
         for (const Sample& sample : samples) {
-            if (sample.row.sum() <= 0.0f) continue;  // no voxel of its own: nothing to learn
+            // No voxel of its own: nothing to learn.
+            if (GrsdSum(sample.row.data()) <= 0.0f) continue;
             MapDescriptor(sample.row.data(), mapped);
             Bucket& b = buckets_[sample.key];
-            b.rows.insert(b.rows.end(), mapped, mapped + kPartDescriptorSize);
+            b.rows.insert(b.rows.end(), mapped, mapped + kPartMappedSize);
             b.labels.push_back(static_cast<std::uint8_t>(category));
             ++added;
         }
@@ -172,11 +196,41 @@ std::size_t PartGraphModel::AddObject(const FeatureMatrix& descriptors, const Pa
     return added;
 }
 
+void PartGraphModel::MapDescriptor(const float* in, float* out) const {
+    // Unit-sum, square-rooted GRSD- (Euclidean distance = Jeffries-Matusita).
+    double sum = 0.0;
+    for (int j = 0; j < kPartGrsdSize; ++j) sum += std::max(in[j], 0.0f);
+    const float inv = sum > 0.0 ? static_cast<float>(1.0 / sum) : 0.0f;
+    for (int j = 0; j < kPartGrsdSize; ++j) out[j] = std::sqrt(std::max(in[j], 0.0f) * inv);
+    // Extents of the group's points from its summed moments.
+    const float* m = in + kPartGrsdSize;
+    for (int j = 0; j < 3; ++j) out[kPartGrsdSize + j] = 0.0f;
+    const double n = m[0];
+    if (!(n >= 2.0) || descriptor_params.size_weight <= 0.0f) return;
+    const Eigen::Vector3d mean(m[1] / n, m[2] / n, m[3] / n);
+    Eigen::Matrix3d c;
+    c << m[4] / n, m[5] / n, m[6] / n, m[5] / n, m[7] / n, m[8] / n, m[6] / n, m[8] / n, m[9] / n;
+    c -= mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c, Eigen::EigenvaluesOnly);
+    const Eigen::Vector3d l = es.eigenvalues();  // ascending
+    for (int j = 0; j < 3; ++j) {
+        const double extent = std::sqrt(12.0 * std::max(l[2 - j], 0.0));
+        out[kPartGrsdSize + j] = static_cast<float>(extent * descriptor_params.size_weight);
+    }
+}
+
 void PartGraphModel::Build() {
     keys_by_size_.clear();
     for (auto& [key, b] : buckets_) {
-        b.tree = ml::KdTreeNd(b.rows.data(), b.labels.size(), kPartDescriptorSize, 16);
+        b.tree = ml::KdTreeNd(b.rows.data(), b.labels.size(), kPartMappedSize, 16);
         keys_by_size_[KeyParts(key)].push_back(key);
+    }
+    const auto counts = rows_per_category();
+    std::size_t total = 0;
+    for (auto c : counts) total += c;
+    for (std::size_t c = 0; c < kNumCategories; ++c) {
+        class_weight_[c] =
+            counts[c] > 0 ? static_cast<float>(static_cast<double>(total) / counts[c]) : 0.0f;
     }
     built_ = true;
 }
@@ -204,20 +258,25 @@ std::uint64_t PartGraphModel::ResolveKey(std::uint64_t key, bool* fallback) cons
 
 std::array<float, kNumCategories> PartGraphModel::Classify(std::uint64_t key,
                                                            const float* descriptor, std::size_t k,
-                                                           bool* fallback) const {
+                                                           bool* fallback, bool balanced) const {
     if (!built_) throw InvalidArgument("part-graph model: Build() before Classify()");
     std::array<float, kNumCategories> p{};
     const std::uint64_t resolved = ResolveKey(key, fallback);
     if (resolved == 0) return p;
     const Bucket& b = buckets_.at(resolved);
-    float q[kPartDescriptorSize];
+    float q[kPartMappedSize];
     MapDescriptor(descriptor, q);
     thread_local std::vector<ml::Neighbour> nn;
     b.tree.Search(q, std::min(k, b.labels.size()), nn);
     if (nn.empty()) return p;
-    for (const auto& n : nn) p[b.labels[n.row]] += 1.0f;
-    const float inv = 1.0f / static_cast<float>(nn.size());
-    for (float& v : p) v *= inv;
+    float total = 0.0f;
+    for (const auto& n : nn) {
+        const float w = balanced ? class_weight_[b.labels[n.row]] : 1.0f;
+        p[b.labels[n.row]] += w;
+        total += w;
+    }
+    if (total <= 0.0f) return {};
+    for (float& v : p) v /= total;
     return p;
 }
 
@@ -240,6 +299,7 @@ std::string PartGraphModel::Serialize() const {
     w.Put<float>(descriptor_params.voxels.voxel_size);
     w.Put<float>(descriptor_params.voxels.rsd.radius);
     w.Put<float>(graph_params.adjacency_distance);
+    w.Put<float>(descriptor_params.size_weight);
     w.Put<std::uint64_t>(train_max_parts);
     w.Put<std::uint64_t>(buckets_.size());
     for (const auto& [key, b] : buckets_) {
@@ -258,10 +318,13 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
     m.descriptor_params.voxels.voxel_size = r.Get<float>();
     m.descriptor_params.voxels.rsd.radius = r.Get<float>();
     m.graph_params.adjacency_distance = r.Get<float>();
+    m.descriptor_params.size_weight = r.Get<float>();
     m.train_max_parts = r.Get<std::uint64_t>();
     if (!(m.descriptor_params.voxels.voxel_size > 0.0f) ||
         !(m.graph_params.adjacency_distance > 0.0f) ||
-        !std::isfinite(m.descriptor_params.voxels.rsd.radius) || m.train_max_parts == 0 ||
+        !std::isfinite(m.descriptor_params.voxels.rsd.radius) ||
+        !(m.descriptor_params.size_weight >= 0.0f) ||
+        !std::isfinite(m.descriptor_params.size_weight) || m.train_max_parts == 0 ||
         m.train_max_parts > kMaxSubgraphParts) {
         r.Fail("bad parameters");
     }
@@ -272,15 +335,17 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
         b.labels = r.GetVector<std::uint8_t>();
         b.rows = r.GetVector<float>();
         const std::size_t parts = KeyParts(key);
-        if (parts == 0 || b.labels.empty() ||
-            b.rows.size() != b.labels.size() * kPartDescriptorSize || m.buckets_.count(key)) {
+        if (parts == 0 || b.labels.empty() || b.rows.size() != b.labels.size() * kPartMappedSize ||
+            m.buckets_.count(key)) {
             r.Fail("bad bucket");
         }
         for (auto l : b.labels) {
             if (l == 0 || l >= kNumCategories) r.Fail("bad category");
         }
-        for (float v : b.rows) {
-            if (!std::isfinite(v) || v < 0.0f || v > 1.0f) r.Fail("bad descriptor");
+        for (std::size_t j = 0; j < b.rows.size(); ++j) {
+            const float v = b.rows[j];
+            const bool grsd = static_cast<int>(j % kPartMappedSize) < kPartGrsdSize;
+            if (!std::isfinite(v) || v < 0.0f || (grsd && v > 1.0f)) r.Fail("bad descriptor");
         }
         m.buckets_.emplace(key, std::move(b));
     }
@@ -312,7 +377,7 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     if (!(params.size_exponent >= 0.0f)) throw InvalidArgument("size_exponent must be >= 0");
     if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
         (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
-        throw InvalidArgument("descriptors must have one 21-column row per part");
+        throw InvalidArgument("descriptors must have one row of kPartDescriptorSize per part");
     }
     PartGraphResult result;
     const std::size_t n = graph.size();
@@ -322,9 +387,10 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     const std::size_t max_parts = std::min(params.max_parts, model.train_max_parts);
     EnumerateConnectedSubgraphs(graph, max_parts, [&](std::span<const std::uint32_t> vs) {
         const Row desc = SubgraphDescriptor(descriptors, vs);
-        if (desc.sum() <= 0.0f) return true;
+        if (GrsdSum(desc.data()) <= 0.0f) return true;
         bool fallback = false;
-        const auto p = model.Classify(SubgraphKey(graph, vs), desc.data(), params.k, &fallback);
+        const auto p = model.Classify(SubgraphKey(graph, vs), desc.data(), params.k, &fallback,
+                                      params.balanced);
         float conf = *std::max_element(p.begin(), p.end());
         if (conf <= 0.0f) return true;
         ++result.subgraphs;
@@ -372,6 +438,21 @@ std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& 
         return p;
     }
     for (float& x : p) x = static_cast<float>(x / total);
+    return p;
+}
+
+std::array<float, kNumCategories> BlendCategoryProbabilities(
+    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
+    float w) {
+    if (!(w >= 0.0f && w <= 1.0f)) throw InvalidArgument("blend weight must be in [0, 1]");
+    constexpr float kFloor = 0.01f;
+    std::array<float, kNumCategories> p{};
+    float sum = 0.0f;
+    for (std::size_t c = 1; c < kNumCategories; ++c) {
+        p[c] = std::pow(std::max(a[c], kFloor), 1.0f - w) * std::pow(std::max(b[c], kFloor), w);
+        sum += p[c];
+    }
+    for (float& x : p) x /= sum;
     return p;
 }
 

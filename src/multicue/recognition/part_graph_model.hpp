@@ -5,11 +5,13 @@
 /// Descriptor of a part: GRSD- (features/grsd.hpp, 21 raw transition counts) of the 2.5 cm voxels
 /// the part owns in one voxel map computed over all given parts (a voxel belongs to the part with
 /// most points in it, ties to the lower part index; neighbours owned by other parts count as
-/// empty). The descriptor of a group of parts is the plain sum of its parts' descriptors, so it
-/// is computed once per part and summed per subgraph. For the k-NN the sum is normalised to unit
-/// sum and square-rooted: the Euclidean distance of two such vectors is then exactly the
-/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms, and a k-d tree
-/// finds the nearest ones.
+/// empty), followed by the part's point moments (count, first and second order sums). The
+/// descriptor of a group of parts is the plain sum of its parts' descriptors, so it is computed
+/// once per part and summed per subgraph. For the k-NN the GRSD- sum is normalised to unit sum and
+/// square-rooted (the Euclidean distance of two such vectors is then exactly the
+/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms), and the summed
+/// moments give the covariance of the group's points, whose three extents (weighted) are
+/// appended; a k-d tree finds the nearest ones.
 ///
 /// Model: a two-level hash table, number of parts -> sorted degree sequence -> the stored
 /// subgraph descriptors with their categories (one k-d tree per bucket). Recognition grows every
@@ -38,19 +40,32 @@
 
 namespace multicue {
 
-/// Dimensions of a part descriptor (GRSD-).
-inline constexpr int kPartDescriptorSize = 21;
-/// Version of the model file format (docs/part-graph.md).
-inline constexpr std::uint32_t kPartGraphModelVersion = 1;
+/// Columns of the GRSD- block of a part descriptor.
+inline constexpr int kPartGrsdSize = 21;
+/// Columns of the moment block: point count, sums of x, y, z and of xx, xy, xz, yy, yz, zz (point
+/// coordinates relative to the mean of all parts given to ComputePartDescriptors).
+inline constexpr int kPartMomentSize = 10;
+/// Dimensions of a raw part descriptor (GRSD- counts, then moments); every column is additive.
+inline constexpr int kPartDescriptorSize = kPartGrsdSize + kPartMomentSize;
+/// Dimensions of a stored (mapped) descriptor: square-rooted unit-sum GRSD-, then the three
+/// extents of the group's points (sqrt(12 lambda) of their covariance, descending) times
+/// PartDescriptorParams::size_weight.
+inline constexpr int kPartMappedSize = kPartGrsdSize + 3;
+/// Version of the model file format (docs/part-graph.md). 2: moment block and extents.
+inline constexpr std::uint32_t kPartGraphModelVersion = 2;
 
 struct PartDescriptorParams {
     VoxelRsdParams voxels = {};  ///< GRSD- voxel map settings (2.5 cm voxels by default)
+    /// Weight of the extents in the k-NN distance [1/m], >= 0 (0: shape only, as in the thesis).
+    /// A 5 cm difference in an extent then counts as much as a Jeffries-Matusita distance of
+    /// 0.05 * size_weight.
+    float size_weight = 32.0f;
 };
 
-/// One GRSD- row per part (parts x 21, raw counts) from a voxel map over the union of the parts'
-/// points. `cloud` needs normals. Parts without a voxel of their own get a zero row. Throws
-/// InvalidArgument for an index out of range, DataError without normals (unless nothing is
-/// given).
+/// One row per part (parts x kPartDescriptorSize): GRSD- raw counts from a voxel map over the
+/// union of the parts' points, then the point moments. `cloud` needs normals. Parts without a
+/// voxel of their own get a zero GRSD- block. Throws InvalidArgument for an index out of range,
+/// DataError without normals (unless nothing is given).
 FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
                                      const PartDescriptorParams& params = {});
 
@@ -71,7 +86,10 @@ struct PartGraphRecognitionParams {
     std::size_t max_parts = 4;   ///< largest subgraph grown in a scene (Figure 5.14 a), [1, 15]
     std::size_t k = 5;           ///< neighbours voting per subgraph, >= 1
     float size_exponent = 1.0f;  ///< vote weight confidence / size^size_exponent, >= 0
-    bool confidence_weighted = true;     ///< weight votes by their largest frequency
+    bool confidence_weighted = true;  ///< weight votes by their largest frequency
+    /// Divide each neighbour's vote by its category's share of the stored rows (so categories
+    /// with few stored subgraphs, e.g. flat objects of few parts, are not outvoted).
+    bool balanced = true;
     std::size_t max_subgraphs = 200000;  ///< enumeration cap per scene
 };
 
@@ -87,7 +105,7 @@ struct PartGraphResult {
 class PartGraphModel {
   public:
     struct Bucket {
-        std::vector<float> rows;           ///< sqrt of unit-sum descriptors, 21 per row
+        std::vector<float> rows;           ///< mapped descriptors, kPartMappedSize per row
         std::vector<std::uint8_t> labels;  ///< Category per row
         ml::KdTreeNd tree;                 ///< over `rows` (Build)
     };
@@ -103,10 +121,15 @@ class PartGraphModel {
     /// Builds the search structures; call after the last AddObject (Load calls it).
     void Build();
 
-    /// Category frequencies of the k nearest stored descriptors for one subgraph key; sets
-    /// `fallback` when the key was not stored. All zero if no bucket of that size exists.
+    /// Category frequencies of the k nearest stored descriptors for one subgraph key (raw
+    /// descriptor, kPartDescriptorSize values); sets `fallback` when the key was not stored.
+    /// With `balanced`, votes are divided by their category's share of the rows (then
+    /// renormalised). All zero if no bucket of that size exists.
     std::array<float, kNumCategories> Classify(std::uint64_t key, const float* descriptor,
-                                               std::size_t k, bool* fallback = nullptr) const;
+                                               std::size_t k, bool* fallback = nullptr,
+                                               bool balanced = false) const;
+    /// The stored form of a raw descriptor (kPartMappedSize values into `out`).
+    void MapDescriptor(const float* raw, float* out) const;
 
     std::size_t num_rows() const;
     std::size_t num_buckets() const { return buckets_.size(); }
@@ -124,6 +147,7 @@ class PartGraphModel {
     std::uint64_t ResolveKey(std::uint64_t key, bool* fallback) const;
     std::map<std::uint64_t, Bucket> buckets_;
     std::map<std::size_t, std::vector<std::uint64_t>> keys_by_size_;
+    std::array<float, kNumCategories> class_weight_{};  ///< 1 / share of rows (Build)
     bool built_ = false;
 };
 
@@ -143,6 +167,13 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
 std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& result,
                                                          const std::vector<Indices>& parts,
                                                          const std::vector<std::size_t>& part_ids);
+
+/// Product of experts of two category distributions: per real category
+/// max(a, 0.01)^(1 - w) * max(b, 0.01)^w, normalised (kNone gets 0). InvalidArgument unless
+/// w is in [0, 1].
+std::array<float, kNumCategories> BlendCategoryProbabilities(
+    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
+    float w);
 
 /// The most probable category of a distribution (ties to the lower value).
 Category ArgMaxCategory(const std::array<float, kNumCategories>& p);

@@ -146,7 +146,10 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
     for (std::size_t k = 0; k < objects.size(); ++k) {
         CategoryResult& c = objects[k].category;
         if (c.category == Category::kNone || ids[k].empty()) continue;  // too few points
-        const auto p = MergePartProbabilities(r, parts, ids[k]);
+        auto p = MergePartProbabilities(r, parts, ids[k]);
+        if (params.categoriser == "part-graph+rules") {
+            p = BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
+        }
         c.probabilities = p;
         c.category = ArgMaxCategory(p);
         c.confidence = p[static_cast<std::size_t>(c.category)];
@@ -160,6 +163,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
                                     input.size()));
     }
     ResolveThreadCount(params.num_threads);  // validates
+    if (!(params.part_graph_weight >= 0.0f && params.part_graph_weight <= 1.0f)) {
+        throw InvalidArgument("category.part_graph_weight must be in [0, 1]");
+    }
     PerceiveResult result;
     result.points = input.size();
     StageTimer timer(result.timings_ms);
@@ -253,11 +259,12 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
             o.centroid = Centroid(cloud, o.indices);
         },
         1);
-    if (params.categoriser == "part-graph") {
+    if (params.categoriser == "part-graph" || params.categoriser == "part-graph+rules") {
         CategorizeByPartGraph(cloud, result.objects, params);
     } else if (params.categoriser != "rules") {
-        throw InvalidArgument("category.categoriser must be rules or part-graph, got '" +
-                              params.categoriser + "'");
+        throw InvalidArgument(
+            "category.categoriser must be rules, part-graph or part-graph+rules, got '" +
+            params.categoriser + "'");
     }
     timer.Done("categories");
 

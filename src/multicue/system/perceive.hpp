@@ -56,13 +56,16 @@ struct PerceiveParams {
     CategoryParams category{.max_points = 1500, .max_iterations = 400};
     /// "rules" (CategorizeObject) or "part-graph" (part-graph hashing, docs/part-graph.md: the
     /// categories, probabilities and per-point labels then come from the parts' votes; the rule
-    /// result stays the input of the model fits' "upright" details only).
+    /// result stays the input of the model fits' "upright" details only), or "part-graph+rules"
+    /// (both: per category rules^(1 - w) * part-graph^w, w = part_graph_weight, each
+    /// distribution floored at 0.01 first, then normalised).
     std::string categoriser = "rules";
     /// Part-graph model file; empty = `part_graph` must be set (the CLI then uses the default
     /// model, trained once and cached).
     std::string part_graph_model;
     std::shared_ptr<const PartGraphModel> part_graph;  ///< loaded model (wins over the file)
     PartGraphRecognitionParams part_graph_recognition{};
+    float part_graph_weight = 0.5f;      ///< weight w of the part-graph votes in "part-graph+rules"
     BoxFitParams box{};                  ///< box models of box and flat objects
     CylinderModelParams cylinder = [] {  ///< cylinder models of cylindrical objects
         CylinderModelParams p;

@@ -99,12 +99,17 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     occlusion.Get("cylinder_iterations", o.cylinder_iterations, "cylinder RANSAC sample cap");
 
     auto cat = config.Section("category");
-    cat.Get("categoriser", p.categoriser, "rules or part-graph (docs/part-graph.md)");
+    cat.Get("categoriser", p.categoriser,
+            "rules, part-graph or part-graph+rules (docs/part-graph.md)");
     cat.Get("part_graph_model", p.part_graph_model,
             "part-graph model file (empty: the default model, trained once and cached)");
     cat.Get("part_graph_max_parts", p.part_graph_recognition.max_parts,
             "largest group of parts classified in a scene");
     cat.Get("part_graph_k", p.part_graph_recognition.k, "neighbours voting per group");
+    cat.Get("part_graph_balanced", p.part_graph_recognition.balanced,
+            "divide votes by the category's share of the model's rows");
+    cat.Get("part_graph_weight", p.part_graph_weight,
+            "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
     auto& c = p.category;
     cat.Get("min_points", c.min_points, "fewer usable points give category none");
     cat.Get("max_points", c.max_points, "evidence uses at most this many points");
