@@ -3,11 +3,11 @@
 /// in the same run. Names: `<feature>/<input>/<library>/threads:<n>` (bench/ratios.py reads them).
 ///
 /// Inputs (from $MULTICUE_DATA, default the shared data folder): `mosd` = the object points
-/// (label > 0) of scans/mosd-learn/learn0.pcd on a 3 mm voxel grid, `milk` = scans/milk.pcd, `bunny` =
-/// scans/bunny.pcd. Normals are computed once by multicue (2 cm radius, 1.5 cm for the bunny)
-/// outside the timing and given to both libraries. Each timed call builds its search structure,
-/// as PCL's compute() does (PCL: a sorted pcl::search::KdTree; multicue: its KdTree). VFH and
-/// GRSD- run on the whole input as one cluster; PCL's VFHEstimation builds a k-d tree in
+/// (label > 0) of scans/mosd-learn/learn0.pcd on a 3 mm voxel grid, `milk` = scans/milk.pcd,
+/// `bunny` = scans/bunny.pcd. Normals are computed once by multicue (2 cm radius, 1.5 cm for the
+/// bunny) outside the timing and given to both libraries. Each timed call builds its search
+/// structure, as PCL's compute() does (PCL: a sorted pcl::search::KdTree; multicue: its KdTree).
+/// VFH and GRSD- run on the whole input as one cluster; PCL's VFHEstimation builds a k-d tree in
 /// compute() that VFH never queries, which is part of what calling it costs.
 
 #include <cstdlib>
