@@ -19,7 +19,7 @@ packages=(
     build-essential cmake ninja-build ccache pkg-config git
     libeigen3-dev liblzf-dev libtbb-dev
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
-    libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev liboctomap-dev
+    libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev
     libyaml-cpp-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     clang-format
