@@ -142,6 +142,25 @@ TEST(Perceive, DeterministicAndThreadIndependent) {
     }
 }
 
+TEST(Perceive, InsideAndOutsideOfAPotAreOneObject) {
+    // mOSD learn38: two pots and two cans whose inner and outer walls segment apart; their
+    // cylinders share the axis, so model-based grouping joins them (section 5.4.1).
+    if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
+    const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn38.pcd"));
+    PerceiveParams params;
+    params.merge_concentric = false;
+    const std::size_t apart = Perceive(cloud, params).objects.size();
+    params.merge_concentric = true;
+    const PerceiveResult merged = Perceive(cloud, params);
+    EXPECT_EQ(merged.objects.size(), 4u);  // the ground truth's four objects
+    EXPECT_LT(merged.objects.size(), apart);
+    for (const auto& o : merged.objects) {
+        EXPECT_EQ(o.id, static_cast<int>(&o - merged.objects.data()) + 1);
+    }
+    params.concentric_distance = -1.0f;
+    EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
+}
+
 TEST(Perceive, BadInput) {
     EXPECT_THROW(Perceive(PointCloud{}, {}), DataError);
     PointCloud nan_only;

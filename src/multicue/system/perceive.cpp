@@ -156,6 +156,93 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
     }
 }
 
+// Objects whose cylinder models share their axis and radius and overlap along it are one
+// container seen as two surfaces (inside and outside); merged, categorised and modelled again.
+static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                            const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!(params.concentric_angle_deg >= 0.0f) || !(params.concentric_distance >= 0.0f) ||
+        !(params.concentric_radius_ratio >= 0.0f)) {
+        throw InvalidArgument("models.concentric: angle, distance and radius ratio must be >= 0");
+    }
+    const std::size_t n = objects.size();
+    const float cos_angle = std::cos(params.concentric_angle_deg * 3.14159265f / 180.0f);
+    auto cylinder = [&](std::size_t k) -> const CylinderModel* {
+        const auto& m = objects[k].model;
+        return m.cylinder && m.cylinder->found ? &*m.cylinder : nullptr;
+    };
+    std::vector<std::size_t> root(n);
+    for (std::size_t k = 0; k < n; ++k) root[k] = k;
+    auto find = [&](std::size_t k) {
+        while (root[k] != k) k = root[k] = root[root[k]];
+        return k;
+    };
+    bool any = false;
+    for (std::size_t i = 0; i < n; ++i) {
+        const CylinderModel* a = cylinder(i);
+        if (a == nullptr) continue;
+        for (std::size_t j = i + 1; j < n; ++j) {
+            const CylinderModel* b = cylinder(j);
+            if (b == nullptr) continue;
+            const Eigen::Vector3f axis = a->axis.normalized();
+            if (std::abs(axis.dot(b->axis.normalized())) < cos_angle) continue;
+            const Eigen::Vector3f d = b->center - a->center;
+            if ((d - d.dot(axis) * axis).norm() > params.concentric_distance) continue;
+            if (std::abs(a->radius - b->radius) >
+                params.concentric_radius_ratio * std::max(a->radius, b->radius)) {
+                continue;
+            }
+            if (std::abs(d.dot(axis)) > 0.5f * (a->height + b->height)) continue;  // stacked
+            root[find(j)] = find(i);
+            any = true;
+        }
+    }
+    if (!any) return;
+    std::vector<PerceivedObject> merged;
+    std::vector<std::size_t> slot(n, n);
+    std::vector<std::size_t> changed;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t r = find(k);
+        if (slot[r] == n) {
+            slot[r] = merged.size();
+            merged.push_back(std::move(objects[k]));
+            continue;
+        }
+        auto& into = merged[slot[r]];
+        Indices both;
+        std::merge(into.indices.begin(), into.indices.end(), objects[k].indices.begin(),
+                   objects[k].indices.end(), std::back_inserter(both));
+        into.indices = std::move(both);
+        for (auto& part : objects[k].parts) into.parts.push_back(std::move(part));
+        if (changed.empty() || changed.back() != slot[r]) changed.push_back(slot[r]);
+    }
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    std::vector<PerceivedObject> redo;
+    for (std::size_t k : changed) {
+        auto& o = merged[k];
+        CategoryParams p = params.category;
+        p.num_threads = 1;
+        o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
+        o.centroid = Centroid(cloud, o.indices);
+        redo.push_back(o);
+    }
+    if (params.categoriser != "rules") {
+        CategorizeByPartGraph(cloud, redo, params);
+        for (std::size_t r = 0; r < changed.size(); ++r)
+            merged[changed[r]].category = redo[r].category;
+    }
+    ParallelFor(
+        changed.size(), params.num_threads,
+        [&](std::size_t r) {
+            auto& o = merged[changed[r]];
+            o.model = ModelObject(cloud, o, plane, params);
+        },
+        1);
+    for (std::size_t k = 0; k < merged.size(); ++k) merged[k].id = static_cast<int>(k + 1);
+    LogDebug("perceive: {} concentric objects merged", n - merged.size());
+    objects = std::move(merged);
+}
+
 PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     input.Validate();
     if (input.CountFinite() == 0) {
@@ -274,6 +361,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
             result.objects[k].model = ModelObject(cloud, result.objects[k], plane, params);
         },
         1);
+    if (params.merge_concentric && result.objects.size() >= 2) {
+        MergeConcentric(cloud, result.objects, plane, params);
+    }
     timer.Done("models");
 
     result.point_objects.assign(cloud.size(), 0);

@@ -96,6 +96,14 @@ struct PerceiveParams {
     /// A kept primitive's points farther than its inlier threshold from its surface (a mug's
     /// handle) are triangulated and attached to its mesh when at least this many [points].
     std::size_t min_attached_points = 80;
+    /// Grouping by models (section 5.4.1): two objects whose cylinders share their axis (within
+    /// concentric_angle_deg and concentric_distance), have radii within concentric_radius_ratio of
+    /// each other and overlap along the axis are one object seen as two surfaces (the inside and
+    /// the outside of a pot or bowl); they are merged and categorised and modelled again.
+    bool merge_concentric = true;
+    float concentric_angle_deg = 8.0f;      ///< [deg]
+    float concentric_distance = 0.02f;      ///< axis to axis [m]
+    float concentric_radius_ratio = 0.25f;  ///< |r1 - r2| / max(r1, r2) [-]
     int num_threads = 0;  ///< 0 = all cores; overrides the stages' own thread counts
 };
 

@@ -174,6 +174,13 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     models.Get("min_attached_points", p.min_attached_points,
                "outliers of a kept primitive (a handle) are meshed and attached from this many, 0 "
                "= never");
+    auto concentric = models.Section("concentric");
+    concentric.Get("enabled", p.merge_concentric,
+                   "merge objects whose cylinders share their axis (inside and outside of a pot)");
+    concentric.Get("angle_deg", p.concentric_angle_deg, "axes parallel within [deg]");
+    concentric.Get("distance", p.concentric_distance, "axis to axis at most [m]");
+    concentric.Get("radius_ratio", p.concentric_radius_ratio,
+                   "radii differ by at most this share of the larger one");
     auto rot = models.Section("rotational");
     rot.Get("enabled", p.try_rotational,
             "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
