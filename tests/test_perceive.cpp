@@ -161,6 +161,38 @@ TEST(Perceive, InsideAndOutsideOfAPotAreOneObject) {
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
+TEST(Perceive, StackedBoxesAreSplitAtTheLowerTopFace) {
+    // mOSD learn22: a box standing on a larger one, which segmentation keeps together; their two
+    // horizontal faces at different heights and the better fit of two boxes split them.
+    if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
+    const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn22.pcd"));
+    auto majority = [&](const PerceiveResult& r, std::uint32_t label) {
+        std::map<std::uint32_t, std::size_t> votes;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.labels[i] == label && r.point_objects[i] != 0) ++votes[r.point_objects[i]];
+        }
+        std::uint32_t best = 0;
+        std::size_t count = 0;
+        for (const auto& [id, n] : votes) {
+            if (n > count) {
+                best = id;
+                count = n;
+            }
+        }
+        return best;
+    };
+    PerceiveParams params;
+    params.split_stacked = false;
+    const PerceiveResult together = Perceive(cloud, params);
+    EXPECT_EQ(majority(together, 30), majority(together, 40));
+    params.split_stacked = true;
+    const PerceiveResult split = Perceive(cloud, params);
+    EXPECT_NE(majority(split, 30), majority(split, 40));
+    EXPECT_NE(majority(split, 30), 0u);
+    params.stack_min_step = 0.0f;
+    EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
+}
+
 TEST(Perceive, BadInput) {
     EXPECT_THROW(Perceive(PointCloud{}, {}), DataError);
     PointCloud nan_only;

@@ -243,6 +243,109 @@ static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject
     objects = std::move(merged);
 }
 
+// Stacked boxes that segmentation kept together: two horizontal faces at different heights
+// above the table say "two boxes"; the split at the lower face's height is kept when two upright
+// boxes explain the points clearly better than one (grouping by models, section 5.4.1).
+static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                         const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!(params.stack_min_step > 0.0f) || !(params.stack_min_gain >= 0.0f)) {
+        throw InvalidArgument("models.stacked: min_step must be > 0 and min_gain >= 0");
+    }
+    const Eigen::Vector3f up = plane.head<3>();
+    if (!(up.norm() > 0.5f)) return;
+    const float scale = 1.0f / up.norm();
+    auto height = [&](Index i) { return (up.dot(cloud.points[i]) + plane.w()) * scale; };
+    const float cos_up = std::cos(10.0f * 3.14159265f / 180.0f);
+    std::vector<PerceivedObject> out;
+    std::vector<std::size_t> changed;
+    for (auto& o : objects) {
+        const Category c = o.category.category;
+        if ((c != Category::kBox && c != Category::kFlat) || !cloud.HasNormals()) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        // Heights of the horizontal faces.
+        std::vector<float> faces;
+        for (const auto& part : o.parts) {
+            if (part.size() < params.stack_min_face_points) continue;
+            Eigen::Vector3f n = Eigen::Vector3f::Zero();
+            for (Index i : part) {
+                if (cloud.normals[i].allFinite()) n += cloud.normals[i];
+            }
+            if (!(n.norm() > 0.0f) || std::abs(n.normalized().dot(up * scale)) < cos_up) continue;
+            std::vector<float> h;
+            h.reserve(part.size());
+            for (Index i : part) h.push_back(height(i));
+            std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2),
+                             h.end());
+            faces.push_back(h[h.size() / 2]);
+        }
+        std::sort(faces.begin(), faces.end());
+        if (faces.size() < 2 || faces.front() < params.stack_min_step ||
+            faces.back() - faces.front() < params.stack_min_step) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        const float cut = faces.front() + 0.5f * params.stack_min_step;
+        PerceivedObject lower, upper;
+        for (Index i : o.indices) (height(i) <= cut ? lower : upper).indices.push_back(i);
+        for (const auto& part : o.parts) {
+            Indices a, b;
+            for (Index i : part) (height(i) <= cut ? a : b).push_back(i);
+            if (!a.empty()) lower.parts.push_back(std::move(a));
+            if (!b.empty()) upper.parts.push_back(std::move(b));
+        }
+        if (lower.indices.size() < params.min_object_points ||
+            upper.indices.size() < params.min_object_points) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        const float one = FitUprightBox(cloud, o.indices, plane, params.box).inlier_ratio;
+        const float n_low = static_cast<float>(lower.indices.size());
+        const float n_up = static_cast<float>(upper.indices.size());
+        const float two =
+            (FitUprightBox(cloud, lower.indices, plane, params.box).inlier_ratio * n_low +
+             FitUprightBox(cloud, upper.indices, plane, params.box).inlier_ratio * n_up) /
+            (n_low + n_up);
+        if (two < one + params.stack_min_gain) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        changed.push_back(out.size());
+        out.push_back(std::move(lower));
+        changed.push_back(out.size());
+        out.push_back(std::move(upper));
+    }
+    if (changed.empty()) {
+        objects = std::move(out);
+        return;
+    }
+    std::vector<PerceivedObject> redo;
+    for (std::size_t k : changed) {
+        auto& o = out[k];
+        CategoryParams p = params.category;
+        p.num_threads = 1;
+        o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
+        o.centroid = Centroid(cloud, o.indices);
+        redo.push_back(o);
+    }
+    if (params.categoriser != "rules") {
+        CategorizeByPartGraph(cloud, redo, params);
+        for (std::size_t r = 0; r < changed.size(); ++r)
+            out[changed[r]].category = redo[r].category;
+    }
+    ParallelFor(
+        changed.size(), params.num_threads,
+        [&](std::size_t r) {
+            auto& o = out[changed[r]];
+            o.model = ModelObject(cloud, o, plane, params);
+        },
+        1);
+    for (std::size_t k = 0; k < out.size(); ++k) out[k].id = static_cast<int>(k + 1);
+    LogDebug("perceive: {} stacked objects split", changed.size() / 2);
+    objects = std::move(out);
+}
+
 PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     input.Validate();
     if (input.CountFinite() == 0) {
@@ -363,6 +466,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
         1);
     if (params.merge_concentric && result.objects.size() >= 2) {
         MergeConcentric(cloud, result.objects, plane, params);
+    }
+    if (params.split_stacked && !result.objects.empty()) {
+        SplitStacked(cloud, result.objects, plane, params);
     }
     timer.Done("models");
 

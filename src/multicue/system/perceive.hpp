@@ -104,6 +104,14 @@ struct PerceiveParams {
     float concentric_angle_deg = 8.0f;      ///< [deg]
     float concentric_distance = 0.02f;      ///< axis to axis [m]
     float concentric_radius_ratio = 0.25f;  ///< |r1 - r2| / max(r1, r2) [-]
+    /// Stacked boxes: a box or flat object with two horizontal faces (parts with normals within
+    /// 10 degrees of up, at least stack_min_face_points each) at heights at least stack_min_step
+    /// apart, the lower one above the table, is split at the lower face's height when the two
+    /// upright boxes explain a larger share of the points than one box (by stack_min_gain).
+    bool split_stacked = true;
+    std::size_t stack_min_face_points = 200;  ///< [points]
+    float stack_min_step = 0.02f;             ///< [m]
+    float stack_min_gain = 0.05f;             ///< inlier ratio gain of two boxes over one [-]
     int num_threads = 0;  ///< 0 = all cores; overrides the stages' own thread counts
 };
 

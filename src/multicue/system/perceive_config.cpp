@@ -181,6 +181,13 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     concentric.Get("distance", p.concentric_distance, "axis to axis at most [m]");
     concentric.Get("radius_ratio", p.concentric_radius_ratio,
                    "radii differ by at most this share of the larger one");
+    auto stacked = models.Section("stacked");
+    stacked.Get("enabled", p.split_stacked,
+                "split box objects with two horizontal faces at different heights into two boxes");
+    stacked.Get("min_face_points", p.stack_min_face_points, "points of each horizontal face");
+    stacked.Get("min_step", p.stack_min_step, "height between the faces at least [m]");
+    stacked.Get("min_gain", p.stack_min_gain,
+                "two boxes must explain this much larger a share of the points than one");
     auto rot = models.Section("rotational");
     rot.Get("enabled", p.try_rotational,
             "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
