@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/search/voxel_traversal.hpp"
 
 namespace multicue {
 namespace {
@@ -68,67 +69,6 @@ float FoldWeight(int a, int b) { return a == b ? 2.0f : 1.0f; }
 
 int TypeOf(const VoxelRsdResult& voxels, std::uint32_t v) {
     return static_cast<int>(voxels.types[v]);
-}
-
-// Walks the cells of the segment from s to e (grid units, cell c covers [c, c + 1)) with the
-// 3D DDA of Amanatides and Woo, calling visit(cell) for each cell after the first; stops after
-// the cell containing e or when visit returns false.
-template <typename Visit>
-void WalkCells(const Eigen::Vector3d& s, const Eigen::Vector3d& e, Visit&& visit) {
-    Eigen::Vector3i cell(static_cast<int>(std::floor(s.x())), static_cast<int>(std::floor(s.y())),
-                         static_cast<int>(std::floor(s.z())));
-    const Eigen::Vector3i last(static_cast<int>(std::floor(e.x())),
-                               static_cast<int>(std::floor(e.y())),
-                               static_cast<int>(std::floor(e.z())));
-    const Eigen::Vector3d dir = e - s;
-    Eigen::Vector3i step;
-    Eigen::Vector3d t_max, t_delta;
-    for (int a = 0; a < 3; ++a) {
-        if (dir[a] > 0) {
-            step[a] = 1;
-            t_delta[a] = 1.0 / dir[a];
-            t_max[a] = (cell[a] + 1 - s[a]) / dir[a];
-        } else if (dir[a] < 0) {
-            step[a] = -1;
-            t_delta[a] = -1.0 / dir[a];
-            t_max[a] = (s[a] - cell[a]) / -dir[a];
-        } else {
-            step[a] = 0;
-            t_delta[a] = t_max[a] = std::numeric_limits<double>::infinity();
-        }
-    }
-    const int max_steps = (last - cell).cwiseAbs().sum();
-    for (int k = 0; k < max_steps && cell != last; ++k) {
-        int a = 0;
-        if (t_max[1] < t_max[a]) a = 1;
-        if (t_max[2] < t_max[a]) a = 2;
-        if (t_max[a] > 1.0) break;
-        cell[a] += step[a];
-        t_max[a] += t_delta[a];
-        if (!visit(cell)) return;
-    }
-}
-
-// Clips the segment s -> e to the box [0, dims]; false if it misses the box.
-bool ClipToBox(Eigen::Vector3d& s, const Eigen::Vector3d& e, const Eigen::Vector3d& dims) {
-    const Eigen::Vector3d d = e - s;
-    double t0 = 0.0, t1 = 1.0;
-    for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0.0) {
-            if (s[a] < 0.0 || s[a] > dims[a]) return false;
-            continue;
-        }
-        double ta = (0.0 - s[a]) / d[a];
-        double tb = (dims[a] - s[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) return false;
-    }
-    // Step a hair inside so that floor() lands in the box.
-    s += d * std::min(1.0, t0 + 1e-9);
-    for (int a = 0; a < 3; ++a) s[a] = std::clamp(s[a], 0.0, std::nextafter(dims[a], 0.0));
-    return true;
 }
 
 }  // namespace
@@ -265,7 +205,7 @@ FeatureVector GrsdOfVoxels(const PointCloud& cloud, const VoxelRsdResult& voxels
         const Eigen::Vector3i target = voxels.coordinates[voxels.point_voxel[i]] - lo;
         const Eigen::Vector3d end = cloud.points[i].cast<double>() * inv - origin;
         Eigen::Vector3d start = eye;
-        if (!ClipToBox(start, end, box)) continue;
+        if (!ClipSegmentToBox(start, end, box)) continue;
         auto mark = [&](const Eigen::Vector3i& c) {
             if (!inside(c) || c == target) return false;
             std::int8_t& cls = at(c);

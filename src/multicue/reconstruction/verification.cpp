@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/search/voxel_traversal.hpp"
 
 namespace multicue {
 namespace {
@@ -33,68 +34,20 @@ struct Grid {
     }
 };
 
-/// Clips the segment o + t d, t in [0, 1], to the box; false if it misses.
-bool ClipToBox(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eigen::Vector3f& lo,
-               const Eigen::Vector3f& hi, float& t0, float& t1) {
-    t0 = 0.0f;
-    t1 = 1.0f;
-    for (int k = 0; k < 3; ++k) {
-        if (std::abs(d[k]) < 1e-12f) {
-            if (o[k] < lo[k] || o[k] > hi[k]) return false;
-            continue;
-        }
-        float a = (lo[k] - o[k]) / d[k];
-        float b = (hi[k] - o[k]) / d[k];
-        if (a > b) std::swap(a, b);
-        t0 = std::max(t0, a);
-        t1 = std::min(t1, b);
-        if (t0 > t1) return false;
-    }
-    return true;
-}
-
 /// Marks the cells the ray from o to p crosses (within the grid) free, the cell of p occupied.
 void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p) {
-    const Eigen::Vector3f d = p - o;
-    const Eigen::Vector3f lo = grid.origin;
-    const Eigen::Vector3f hi = grid.origin + grid.size * grid.dims.cast<float>();
-    float t0 = 0.0f, t1 = 1.0f;
-    if (!ClipToBox(o, d, lo, hi, t0, t1)) return;
-    const Eigen::Vector3i end = grid.Cell(p);
-    const Eigen::Vector3f start_point = o + t0 * d;
-    Eigen::Vector3i cell =
-        grid.Cell(start_point).cwiseMax(0).cwiseMin(grid.dims - Eigen::Vector3i::Ones());
-    Eigen::Vector3i step;
-    Eigen::Vector3f t_max, t_delta;
-    for (int k = 0; k < 3; ++k) {
-        if (d[k] > 0.0f) {
-            step[k] = 1;
-            const float boundary = grid.origin[k] + grid.size * static_cast<float>(cell[k] + 1);
-            t_max[k] = (boundary - o[k]) / d[k];
-            t_delta[k] = grid.size / d[k];
-        } else if (d[k] < 0.0f) {
-            step[k] = -1;
-            const float boundary = grid.origin[k] + grid.size * static_cast<float>(cell[k]);
-            t_max[k] = (boundary - o[k]) / d[k];
-            t_delta[k] = -grid.size / d[k];
-        } else {
-            step[k] = 0;
-            t_max[k] = std::numeric_limits<float>::infinity();
-            t_delta[k] = std::numeric_limits<float>::infinity();
-        }
-    }
-    const int max_steps = grid.dims.sum() + 3;
-    for (int s = 0; s < max_steps && grid.Inside(cell); ++s) {
-        if (cell == end) break;
+    // Grid units: cell c covers [c, c + 1).
+    Eigen::Vector3d s = ((o - grid.origin) / grid.size).cast<double>();
+    const Eigen::Vector3d e = ((p - grid.origin) / grid.size).cast<double>();
+    if (!ClipSegmentToBox(s, e, grid.dims.cast<double>())) return;
+    const Eigen::Vector3i end = e.array().floor().cast<int>();
+    auto mark_free = [&](const Eigen::Vector3i& cell) {
+        if (cell == end || !grid.Inside(cell)) return false;
         auto& c = grid.cells[grid.Index(cell)];
         if (c == kUnknown) c = kFree;
-        int k = 0;
-        if (t_max[1] < t_max[k]) k = 1;
-        if (t_max[2] < t_max[k]) k = 2;
-        if (t_max[k] > t1) break;
-        cell[k] += step[k];
-        t_max[k] += t_delta[k];
-    }
+        return true;
+    };
+    if (mark_free(s.array().floor().cast<int>())) WalkCells(s, e, mark_free);
     if (grid.Inside(end)) grid.cells[grid.Index(end)] = kOccupied;
 }
 

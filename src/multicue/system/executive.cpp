@@ -8,6 +8,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/features/colour.hpp"
 
 namespace multicue {
 namespace {
@@ -117,21 +118,12 @@ class ColourDescriptorMethod final : public ExaminationMethod {
             std::vector<float> histogram(static_cast<std::size_t>(hue_bins + grey_bins), 0.0f);
             if (cloud.HasColors()) {
                 for (auto i : h.indices) {
-                    const Color& c = cloud.colors[i];
-                    const float r = c.r / 255.0f, g = c.g / 255.0f, b = c.b / 255.0f;
-                    const float mx = std::max({r, g, b}), mn = std::min({r, g, b});
-                    const float saturation = mx > 0.0f ? (mx - mn) / mx : 0.0f;
-                    if (saturation > 0.25f && mx > 0.1f) {
-                        float hue = 0.0f;  // [0, 6)
-                        if (mx == r) {
-                            hue = std::fmod((g - b) / (mx - mn) + 6.0f, 6.0f);
-                        } else if (mx == g) {
-                            hue = (b - r) / (mx - mn) + 2.0f;
-                        } else {
-                            hue = (r - g) / (mx - mn) + 4.0f;
-                        }
+                    // Hue in degrees, saturation and value in [0, 1].
+                    const Eigen::Vector3f hsv = RgbToHsv(cloud.colors[i]);
+                    const float mx = hsv[2];
+                    if (hsv[1] > 0.25f && mx > 0.1f) {
                         const int bin =
-                            std::min(hue_bins - 1, static_cast<int>(hue / 6.0f * hue_bins));
+                            std::min(hue_bins - 1, static_cast<int>(hsv[0] / 360.0f * hue_bins));
                         histogram[static_cast<std::size_t>(bin)] += 1.0f;
                     } else {
                         const int bin = std::min(grey_bins - 1, static_cast<int>(mx * grey_bins));

@@ -156,6 +156,36 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
     }
 }
 
+// After objects were merged or split: categories and models again for the `changed` ones, and
+// ids renumbered in order.
+static void Regroup(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                    const std::vector<std::size_t>& changed, const Eigen::Vector4f& plane,
+                    const PerceiveParams& params) {
+    std::vector<PerceivedObject> redo;
+    for (std::size_t k : changed) {
+        auto& o = objects[k];
+        CategoryParams p = params.category;
+        p.num_threads = 1;
+        o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
+        o.centroid = Centroid(cloud, o.indices);
+        if (params.categoriser != "rules") redo.push_back(o);
+    }
+    if (!redo.empty()) {
+        CategorizeByPartGraph(cloud, redo, params);
+        for (std::size_t r = 0; r < changed.size(); ++r) {
+            objects[changed[r]].category = redo[r].category;
+        }
+    }
+    ParallelFor(
+        changed.size(), params.num_threads,
+        [&](std::size_t r) {
+            auto& o = objects[changed[r]];
+            o.model = ModelObject(cloud, o, plane, params);
+        },
+        1);
+    for (std::size_t k = 0; k < objects.size(); ++k) objects[k].id = static_cast<int>(k + 1);
+}
+
 // Objects whose cylinder models share their axis and radius and overlap along it are one
 // container seen as two surfaces (inside and outside); merged, categorised and modelled again.
 static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
@@ -217,28 +247,7 @@ static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject
     }
     std::sort(changed.begin(), changed.end());
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
-    std::vector<PerceivedObject> redo;
-    for (std::size_t k : changed) {
-        auto& o = merged[k];
-        CategoryParams p = params.category;
-        p.num_threads = 1;
-        o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
-        o.centroid = Centroid(cloud, o.indices);
-        redo.push_back(o);
-    }
-    if (params.categoriser != "rules") {
-        CategorizeByPartGraph(cloud, redo, params);
-        for (std::size_t r = 0; r < changed.size(); ++r)
-            merged[changed[r]].category = redo[r].category;
-    }
-    ParallelFor(
-        changed.size(), params.num_threads,
-        [&](std::size_t r) {
-            auto& o = merged[changed[r]];
-            o.model = ModelObject(cloud, o, plane, params);
-        },
-        1);
-    for (std::size_t k = 0; k < merged.size(); ++k) merged[k].id = static_cast<int>(k + 1);
+    Regroup(cloud, merged, changed, plane, params);
     LogDebug("perceive: {} concentric objects merged", n - merged.size());
     objects = std::move(merged);
 }
@@ -320,28 +329,7 @@ static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& 
         objects = std::move(out);
         return;
     }
-    std::vector<PerceivedObject> redo;
-    for (std::size_t k : changed) {
-        auto& o = out[k];
-        CategoryParams p = params.category;
-        p.num_threads = 1;
-        o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
-        o.centroid = Centroid(cloud, o.indices);
-        redo.push_back(o);
-    }
-    if (params.categoriser != "rules") {
-        CategorizeByPartGraph(cloud, redo, params);
-        for (std::size_t r = 0; r < changed.size(); ++r)
-            out[changed[r]].category = redo[r].category;
-    }
-    ParallelFor(
-        changed.size(), params.num_threads,
-        [&](std::size_t r) {
-            auto& o = out[changed[r]];
-            o.model = ModelObject(cloud, o, plane, params);
-        },
-        1);
-    for (std::size_t k = 0; k < out.size(); ++k) out[k].id = static_cast<int>(k + 1);
+    Regroup(cloud, out, changed, plane, params);
     LogDebug("perceive: {} stacked objects split", changed.size() / 2);
     objects = std::move(out);
 }
