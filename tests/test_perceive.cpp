@@ -193,6 +193,45 @@ TEST(Perceive, StackedBoxesAreSplitAtTheLowerTopFace) {
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
+TEST(Perceive, TouchingBoxesThatOneBoxExplainsPoorlyAreSplit) {
+    // mOSD learn24: two boxes side by side under a third one; segmentation keeps the two
+    // together, one upright box explains under half of their points, two explain nearly all.
+    if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
+    const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn24.pcd"));
+    auto majority = [&](const PerceiveResult& r, std::uint32_t label) {
+        std::map<std::uint32_t, std::size_t> votes;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.labels[i] == label && r.point_objects[i] != 0) ++votes[r.point_objects[i]];
+        }
+        std::uint32_t best = 0;
+        std::size_t count = 0;
+        for (const auto& [id, n] : votes) {
+            if (n > count) {
+                best = id;
+                count = n;
+            }
+        }
+        return best;
+    };
+    PerceiveParams params;
+    params.split_touching = false;
+    const PerceiveResult together = Perceive(cloud, params);
+    EXPECT_EQ(majority(together, 20), majority(together, 40));
+    params.split_touching = true;
+    const PerceiveResult split = Perceive(cloud, params);
+    EXPECT_NE(majority(split, 20), majority(split, 40));
+    EXPECT_NE(majority(split, 40), 0u);
+    EXPECT_NE(majority(split, 40), majority(split, 30));  // the box on top stays apart
+    for (const auto& o : split.objects) {
+        if (o.id == static_cast<int>(majority(split, 40))) {
+            const Category c = o.category.category;
+            EXPECT_TRUE(c == Category::kBox || c == Category::kFlat) << CategoryName(c);
+        }
+    }
+    params.touching_max_parts = 1;
+    EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
+}
+
 TEST(Perceive, BadInput) {
     EXPECT_THROW(Perceive(PointCloud{}, {}), DataError);
     PointCloud nan_only;

@@ -660,6 +660,39 @@ TEST(Categorize, ThinDiscIsPlate) {
                 r.thickness_ratio);
 }
 
+TEST(Categorize, WideLowTinIsNoPlate) {
+    // As thin and round as a plate relative to its size, but 6 cm high: plates are 1.5-3 cm.
+    sim::TableTopScene scene;
+    scene.cylinders = {{{0.0f, 0.0f}, 0.13f, 0.06f, {}}};
+    const Scan scan = ScanScene(scene);
+    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(obj.size(), 300u);
+    const CategoryResult r = CategorizeObject(scan.cloud, obj, {}, scan.plane, {});
+    EXPECT_NE(r.category, Category::kPlate);
+    EXPECT_LT(r.probabilities[static_cast<std::size_t>(Category::kPlate)], 0.05f);
+    EXPECT_LT(r.thickness_ratio, 0.3f);
+    CategoryParams high_plates;
+    high_plates.plate_low_height = 0.1f;
+    high_plates.plate_high_height = 0.2f;
+    const CategoryResult old = CategorizeObject(scan.cloud, obj, {}, scan.plane, high_plates);
+    EXPECT_GT(old.probabilities[static_cast<std::size_t>(Category::kPlate)],
+              r.probabilities[static_cast<std::size_t>(Category::kPlate)] + 0.1f);
+}
+
+TEST(Categorize, LargeBoxIsNoSphere) {
+    // The faces of a large box fit a large sphere within the threshold; aligned normals say box.
+    sim::TableTopScene scene;
+    scene.boxes = {{{0.0f, 0.0f}, 0.5f, {0.15f, 0.07f, 0.25f}, {}}};
+    const Scan scan = ScanScene(scene);
+    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(obj.size(), 300u);
+    const CategoryResult r = CategorizeObject(scan.cloud, obj, {}, scan.plane, {});
+    EXPECT_TRUE(r.category == Category::kBox || r.category == Category::kFlat)
+        << CategoryName(r.category);
+    EXPECT_LT(r.probabilities[static_cast<std::size_t>(Category::kSphere)], 0.05f);
+    EXPECT_GT(r.side_face_ratio, 0.2f);
+}
+
 TEST(Categorize, LyingCanIsCylinder) {
     const Scan& scan = LyingCanScan();
     const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
@@ -807,6 +840,10 @@ TEST(PrimitiveContracts, BadParametersAndInputThrow) {
     EXPECT_THROW(categorize({.flat_ratio = 1.5f}), InvalidArgument);
     EXPECT_THROW(categorize({.min_evidence = 1.0f}), InvalidArgument);
     EXPECT_THROW(categorize({.sharpness = 0.0f}), InvalidArgument);
+    EXPECT_THROW(categorize({.plate_low_height = 0.05f, .plate_high_height = 0.04f}),
+                 InvalidArgument);
+    EXPECT_THROW(categorize({.sphere_box_axis_area = 0.7f, .sphere_box_axis_area_max = 0.6f}),
+                 InvalidArgument);
     EXPECT_THROW(categorize({.num_threads = -1}), InvalidArgument);
     EXPECT_THROW(CategorizeObject(scan.cloud, obj, {}, nan_plane, {}), InvalidArgument);
     EXPECT_THROW(CategorizeObject(scan.cloud, obj, {}, zero_normal, {}), InvalidArgument);

@@ -13,6 +13,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
 #include "multicue/recognition/bounding_box.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
 #include "multicue/segmentation/sac_sphere.hpp"
@@ -293,6 +294,15 @@ void ValidateCategoryParams(const CategoryParams& p) {
             "plate ratios must satisfy 0 <= plate_thin_ratio < plate_thick_ratio <= 1, got {} and "
             "{}",
             p.plate_thin_ratio, p.plate_thick_ratio);
+    Require(p.plate_low_height >= 0.0f && p.plate_high_height > p.plate_low_height &&
+                std::isfinite(p.plate_high_height),
+            "plate heights must satisfy 0 <= plate_low_height < plate_high_height, got {} and {}",
+            p.plate_low_height, p.plate_high_height);
+    Require(p.sphere_box_axis_area >= 0.0f && p.sphere_box_axis_area_max > p.sphere_box_axis_area &&
+                p.sphere_box_axis_area_max <= 1.0f,
+            "sphere axis areas must satisfy 0 <= sphere_box_axis_area < sphere_box_axis_area_max "
+            "<= 1, got {} and {}",
+            p.sphere_box_axis_area, p.sphere_box_axis_area_max);
     Require(p.round_fill > 0.0f && p.square_fill > p.round_fill && p.square_fill <= 1.0f,
             "fills must satisfy 0 < round_fill < square_fill <= 1, got {} and {}", p.round_fill,
             p.square_fill);
@@ -359,7 +369,12 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
 
     // Box-likeness (axis_area), and planar parts when given.
     if (plane) {
-        r.axis_area = AlignUprightAxes(cloud, usable, plane->head<3>(), axis_angle).aligned_ratio;
+        const FaceAlignment faces = AlignUprightAxes(cloud, usable, plane->head<3>(), axis_angle);
+        r.axis_area = faces.aligned_ratio;
+        if (faces.num_normals > 0) {
+            r.side_face_ratio = static_cast<float>(faces.num_aligned - faces.num_vertical) /
+                                static_cast<float>(faces.num_normals);
+        }
     } else {
         // Without a plane the box's "up" is taken as its most populated face direction.
         const Eigen::Vector3f face = DominantNormal(cloud, sample, axis_angle);
@@ -434,7 +449,9 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
             MeasureSphere(cloud, sample, sphere, params.fit_threshold, cos_inlier_normal);
         r.sphere_radius = sphere.radius;
         sphere_score = r.sphere_inlier_ratio *
-                       SizeMatch(2.0f * sphere.radius, r.extents[0], params.size_tolerance);
+                       SizeMatch(2.0f * sphere.radius, r.extents[0], params.size_tolerance) *
+                       (1.0f - Ramp(r.axis_area, params.sphere_box_axis_area,
+                                    params.sphere_box_axis_area_max));
     }
 
     // Plate: thin and round.
@@ -442,7 +459,9 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
         1.0f - Ramp(r.thickness_ratio, params.plate_thin_ratio, params.plate_thick_ratio);
     const float round = 1.0f - Ramp(r.footprint_fill, params.round_fill, params.square_fill);
     // With a support plane only a thin axis along up (a lying plate) qualifies, see the header.
-    const float plate = (plane && thin_axis != 2) ? 0.0f : thin * round;
+    const float low =
+        plane ? 1.0f - Ramp(r.height, params.plate_low_height, params.plate_high_height) : 1.0f;
+    const float plate = (plane && thin_axis != 2) ? 0.0f : thin * round * low;
     const float flat_share = FlatShare(r.extents, params);
 
     auto& s = r.scores;
@@ -469,6 +488,13 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
         std::max_element(r.probabilities.begin(), r.probabilities.end()) - r.probabilities.begin());
     r.category = static_cast<Category>(best);
     r.confidence = r.probabilities[best];
+    LogDebug(
+        "category: {} points, extents {:.3f} {:.3f} {:.3f}, box {:.2f} (axis {:.2f}, side {:.2f}, "
+        "planar parts {:.2f}), cylinder {:.2f} (r {:.3f}), sphere {:.2f}, thin {:.2f}, fill {:.2f}"
+        " -> {}",
+        r.points, r.extents[0], r.extents[1], r.extents[2], r.box_score, r.axis_area,
+        r.side_face_ratio, r.planar_part_ratio, best_cyl.score, r.cylinder_radius, sphere_score,
+        r.thickness_ratio, r.footprint_fill, CategoryName(r.category));
     return r;
 }
 

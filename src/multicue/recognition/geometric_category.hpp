@@ -18,11 +18,15 @@
 ///   matches the object's size (upright: the footprint's length; lying: the height;
 ///   size_tolerance);
 /// - sphere: RANSAC sphere with normals (FitSphere); share of points on it (same test as the
-///   cylinder side), provided the diameter matches the object's largest extent;
+///   cylinder side), provided the diameter matches the object's largest extent, fading out
+///   as axis_area rises from sphere_box_axis_area to sphere_box_axis_area_max (the faces of a
+///   large box fit a large sphere within the threshold);
 /// - plate: thin (thickness / largest extent) and round (hull area / minimum rectangle area
 ///   across the thin axis: pi/4 for a disc, 1 for a slab). With a support plane only objects
 ///   whose thin axis is up (lying plates) qualify: across a horizontal axis a single view shows
-///   too little of the outline to judge roundness;
+///   too little of the outline to judge roundness; and not higher than plate_low_height ..
+///   plate_high_height above the plane (a flat box under another one shows a round-looking,
+///   partly covered outline but stands far higher than a plate);
 /// - box vs flat: the rule of the data README on the sorted extents e1 >= e2 >= e3 (flat if
 ///   e2/e3 >= 2.5; box if e2/e3 < 2.0; in between flat if e1/e3 > 2.8), made soft near the
 ///   boundaries so that the probabilities show how close the call was;
@@ -89,10 +93,17 @@ struct CategoryParams {
     float flat_ratio = 2.5f;          ///< flat if e2/e3 >= flat_ratio [-]
     float box_ratio = 2.0f;        ///< box if e2/e3 < box_ratio; in between see flat_long_ratio [-]
     float flat_long_ratio = 2.8f;  ///< flat in the band if e1/e3 > flat_long_ratio [-]
-    float boundary_softness = 8.0f;  ///< slope of the soft box/flat split per unit log-distance
-                                     ///< from the rule's boundary [-]; > 0
-    float plate_thin_ratio = 0.2f;   ///< thickness / diameter up to this is fully thin [-]
-    float plate_thick_ratio = 0.3f;  ///< ... and from this on not thin at all [-]
+    float boundary_softness = 8.0f;     ///< slope of the soft box/flat split per unit log-distance
+                                        ///< from the rule's boundary [-]; > 0
+    float plate_thin_ratio = 0.2f;      ///< thickness / diameter up to this is fully thin [-]
+    float plate_thick_ratio = 0.3f;     ///< ... and from this on not thin at all [-]
+    float plate_low_height = 0.035f;    ///< with a support plane: objects up to this high may be
+                                        ///< plates (tabletop plates are 1.5-3 cm high) [m]
+    float plate_high_height = 0.05f;    ///< ... and from this height on are not [m]
+    float sphere_box_axis_area = 0.3f;  ///< a sphere's normals hardly align with box axes (a
+                                        ///< ball: 0.07, a bowl: 0.01); the sphere score fades
+                                        ///< from this axis_area [-]
+    float sphere_box_axis_area_max = 0.6f;  ///< ... to 0 at this one [-]
     float round_fill = 0.86f;    ///< hull / rectangle area up to this is fully round (disc: 0.785)
                                  ///< [-]
     float square_fill = 0.94f;   ///< ... and from this on not round at all (rectangle: 1) [-]
@@ -131,8 +142,10 @@ struct CategoryResult {
     float sphere_inlier_ratio = 0.0f;  ///< share of points on the best sphere [-]
     float sphere_radius = 0.0f;        ///< its radius, 0 if none [m]
     float thickness_ratio = 0.0f;      ///< e3 / e1 [-]
-    float footprint_fill = 0.0f;  ///< convex hull area / rectangle area across the thinnest box
-                                  ///< axis: 1 rectangle, pi/4 disc [-]
+    float footprint_fill = 0.0f;   ///< convex hull area / rectangle area across the thinnest box
+                                   ///< axis: 1 rectangle, pi/4 disc [-]
+    float side_face_ratio = 0.0f;  ///< share of normals within axis_angle_deg of a horizontal
+                                   ///< axis of the upright box (its vertical faces) [-]
 };
 
 /// Categorises one object: the points `object` of `cloud` (which needs one normal per point;

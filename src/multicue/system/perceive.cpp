@@ -4,9 +4,11 @@
 #include <mutex>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -158,15 +160,37 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
 
 // After objects were merged or split: categories and models again for the `changed` ones, and
 // ids renumbered in order.
+// The categories a grouping model allows (two boxes explain a split: box or flat), all if empty.
+using CategorySet = std::vector<Category>;
+
+static void RestrictCategories(CategoryResult& c, const CategorySet& allowed) {
+    if (allowed.empty() || c.category == Category::kNone) return;
+    std::array<float, kNumCategories> p{};
+    float sum = 0.0f;
+    for (Category a : allowed) {
+        const auto k = static_cast<std::size_t>(a);
+        p[k] = c.probabilities[k];
+        sum += p[k];
+    }
+    for (Category a : allowed) {
+        const auto k = static_cast<std::size_t>(a);
+        p[k] = sum > 0.0f ? p[k] / sum : 1.0f / static_cast<float>(allowed.size());
+    }
+    c.probabilities = p;
+    c.category = ArgMaxCategory(p);
+    c.confidence = p[static_cast<std::size_t>(c.category)];
+}
+
 static void Regroup(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
                     const std::vector<std::size_t>& changed, const Eigen::Vector4f& plane,
-                    const PerceiveParams& params) {
+                    const PerceiveParams& params, const CategorySet& allowed = {}) {
     std::vector<PerceivedObject> redo;
     for (std::size_t k : changed) {
         auto& o = objects[k];
         CategoryParams p = params.category;
         p.num_threads = 1;
         o.category = CategorizeObject(cloud, o.indices, o.parts, plane, p);
+        RestrictCategories(o.category, allowed);
         o.centroid = Centroid(cloud, o.indices);
         if (params.categoriser != "rules") redo.push_back(o);
     }
@@ -174,6 +198,7 @@ static void Regroup(const PointCloud& cloud, std::vector<PerceivedObject>& objec
         CategorizeByPartGraph(cloud, redo, params);
         for (std::size_t r = 0; r < changed.size(); ++r) {
             objects[changed[r]].category = redo[r].category;
+            RestrictCategories(objects[changed[r]].category, allowed);
         }
     }
     ParallelFor(
@@ -329,8 +354,178 @@ static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& 
         objects = std::move(out);
         return;
     }
-    Regroup(cloud, out, changed, plane, params);
+    Regroup(cloud, out, changed, plane, params, {Category::kBox, Category::kFlat});
     LogDebug("perceive: {} stacked objects split", changed.size() / 2);
+    objects = std::move(out);
+}
+
+// Share of the solid `a` inside the solid `b`, from a 6 x 6 x 6 grid of cell centres in `a`.
+static float BoxOverlap(const BoxModel& a, const BoxModel& b) {
+    constexpr int kSteps = 6;
+    int inside = 0;
+    const Eigen::Vector3f half_b = 0.5f * b.extents;
+    for (int i = 0; i < kSteps; ++i) {
+        for (int j = 0; j < kSteps; ++j) {
+            for (int k = 0; k < kSteps; ++k) {
+                const Eigen::Vector3f u((i + 0.5f) / kSteps - 0.5f, (j + 0.5f) / kSteps - 0.5f,
+                                        (k + 0.5f) / kSteps - 0.5f);
+                const Eigen::Vector3f p = a.center + a.axes * u.cwiseProduct(a.extents);
+                const Eigen::Vector3f q = (b.axes.transpose() * (p - b.center)).cwiseAbs();
+                if ((q.array() <= half_b.array()).all()) ++inside;
+            }
+        }
+    }
+    return static_cast<float>(inside) / (kSteps * kSteps * kSteps);
+}
+
+// Touching boxes that segmentation kept together (side by side, or under a third one): a box or
+// flat object that one upright box explains poorly is tried as every split of its larger parts
+// into two groups, each modelled by an upright box. The best split is kept when the two boxes
+// together explain clearly more of the points, each explains its own group, and their solids
+// hardly overlap (grouping by models, section 5.4.1).
+static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                               const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!(params.touching_min_gain >= 0.0f) || !(params.touching_max_overlap >= 0.0f) ||
+        params.touching_max_parts < 2 || params.touching_max_parts > 12) {
+        throw InvalidArgument(
+            "models.touching: min_gain and max_overlap must be >= 0, max_parts in [2, 12]");
+    }
+    if (!(plane.head<3>().norm() > 0.5f) || !cloud.HasNormals()) return;
+    const float threshold = params.box.inlier_threshold;
+    auto subsample = [](const Indices& in, std::size_t max) {
+        if (in.size() <= max) return in;
+        Indices out;
+        out.reserve(max);
+        for (std::size_t k = 0; k < max; ++k) out.push_back(in[k * in.size() / max]);
+        return out;
+    };
+    auto explained = [&](const BoxModel& box, const Indices& points) {
+        std::size_t n = 0;
+        for (Index i : points) n += BoxSurfaceDistance(box, cloud.points[i]) <= threshold;
+        return points.empty() ? 0.0f : static_cast<float>(n) / static_cast<float>(points.size());
+    };
+    std::vector<PerceivedObject> out;
+    std::vector<std::size_t> changed;
+    for (auto& o : objects) {
+        const Category c = o.category.category;
+        const bool boxy = c == Category::kBox || c == Category::kFlat;
+        const Indices sample = subsample(o.indices, params.touching_max_points);
+        BoxModel one;
+        if (boxy) one = FitUprightBox(cloud, sample, plane, params.box);
+        const float one_ratio = one.found ? explained(one, sample) : 0.0f;
+        std::vector<std::size_t> big;
+        for (std::size_t k = 0; k < o.parts.size(); ++k) {
+            if (o.parts[k].size() >= params.touching_min_part_points) big.push_back(k);
+        }
+        if (!boxy || !one.found || one_ratio >= params.min_model_inlier_ratio || big.size() < 2) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        std::sort(big.begin(), big.end(), [&](std::size_t a, std::size_t b) {
+            return o.parts[a].size() > o.parts[b].size() ||
+                   (o.parts[a].size() == o.parts[b].size() && a < b);
+        });
+        if (big.size() > static_cast<std::size_t>(params.touching_max_parts)) {
+            big.resize(static_cast<std::size_t>(params.touching_max_parts));
+        }
+        const std::size_t m = big.size();
+        float best = one_ratio + params.touching_min_gain;
+        BoxModel best_a, best_b;
+        bool found = false;
+        // Part big[0] is always in group a; each mask picks group b among the others.
+        for (std::uint32_t mask = 1; mask < (1u << (m - 1)); ++mask) {
+            Indices ga, gb;
+            for (std::size_t k = 0; k < m; ++k) {
+                const bool in_b = k > 0 && (mask >> (k - 1)) & 1u;
+                const Indices& part = o.parts[big[k]];
+                (in_b ? gb : ga).insert((in_b ? gb : ga).end(), part.begin(), part.end());
+            }
+            std::sort(ga.begin(), ga.end());
+            std::sort(gb.begin(), gb.end());
+            ga = subsample(ga, params.touching_max_points / 2);
+            gb = subsample(gb, params.touching_max_points / 2);
+            const BoxModel a = FitUprightBox(cloud, ga, plane, params.box);
+            const BoxModel b = FitUprightBox(cloud, gb, plane, params.box);
+            if (!a.found || !b.found) continue;
+            if (explained(a, ga) < params.min_model_inlier_ratio ||
+                explained(b, gb) < params.min_model_inlier_ratio) {
+                continue;
+            }
+            if (std::max(BoxOverlap(a, b), BoxOverlap(b, a)) > params.touching_max_overlap)
+                continue;
+            std::size_t n = 0;
+            for (Index i : sample) {
+                n += std::min(BoxSurfaceDistance(a, cloud.points[i]),
+                              BoxSurfaceDistance(b, cloud.points[i])) <= threshold;
+            }
+            const float both = static_cast<float>(n) / static_cast<float>(sample.size());
+            LogDebug("perceive: touching boxes {} | {}: {:.2f} (one box {:.2f})", ga.size(),
+                     gb.size(), both, one_ratio);
+            if (both > best) {
+                best = both;
+                best_a = a;
+                best_b = b;
+                found = true;
+            }
+        }
+        if (!found) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        // Whole parts go to the box nearer to most of their points; loose points to the nearer.
+        PerceivedObject pa, pb;
+        for (auto& part : o.parts) {
+            std::size_t to_a = 0;
+            for (Index i : part) {
+                to_a += BoxSurfaceDistance(best_a, cloud.points[i]) <=
+                        BoxSurfaceDistance(best_b, cloud.points[i]);
+            }
+            (2 * to_a >= part.size() ? pa : pb).parts.push_back(std::move(part));
+        }
+        Indices in_parts;
+        for (const auto* g : {&pa, &pb}) {
+            for (const auto& part : g->parts) {
+                in_parts.insert(in_parts.end(), part.begin(), part.end());
+            }
+        }
+        std::sort(in_parts.begin(), in_parts.end());
+        for (Index i : o.indices) {
+            bool to_a = false;
+            if (std::binary_search(in_parts.begin(), in_parts.end(), i)) {
+                to_a = std::any_of(pa.parts.begin(), pa.parts.end(), [&](const Indices& part) {
+                    return std::binary_search(part.begin(), part.end(), i);
+                });
+            } else {
+                to_a = BoxSurfaceDistance(best_a, cloud.points[i]) <=
+                       BoxSurfaceDistance(best_b, cloud.points[i]);
+            }
+            (to_a ? pa : pb).indices.push_back(i);
+        }
+        if (pa.indices.size() < params.min_object_points ||
+            pb.indices.size() < params.min_object_points) {
+            // Put the object back together.
+            PerceivedObject whole;
+            whole.indices = std::move(o.indices);
+            for (auto* g : {&pa, &pb}) {
+                for (auto& part : g->parts) whole.parts.push_back(std::move(part));
+            }
+            whole.category = o.category;
+            whole.model = std::move(o.model);
+            whole.centroid = o.centroid;
+            out.push_back(std::move(whole));
+            continue;
+        }
+        changed.push_back(out.size());
+        out.push_back(std::move(pa));
+        changed.push_back(out.size());
+        out.push_back(std::move(pb));
+    }
+    if (changed.empty()) {
+        objects = std::move(out);
+        return;
+    }
+    Regroup(cloud, out, changed, plane, params, {Category::kBox, Category::kFlat});
+    LogDebug("perceive: {} touching boxes split", changed.size() / 2);
     objects = std::move(out);
 }
 
@@ -457,6 +652,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     }
     if (params.split_stacked && !result.objects.empty()) {
         SplitStacked(cloud, result.objects, plane, params);
+    }
+    if (params.split_touching && !result.objects.empty()) {
+        SplitTouchingBoxes(cloud, result.objects, plane, params);
     }
     timer.Done("models");
 

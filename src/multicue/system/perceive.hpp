@@ -112,6 +112,18 @@ struct PerceiveParams {
     std::size_t stack_min_face_points = 200;  ///< [points]
     float stack_min_step = 0.02f;             ///< [m]
     float stack_min_gain = 0.05f;             ///< inlier ratio gain of two boxes over one [-]
+    /// Touching boxes: a box or flat object that one upright box explains poorly (below
+    /// min_model_inlier_ratio) is tried as every split of its touching_max_parts largest parts
+    /// (of at least touching_min_part_points each) into two groups, each an upright box; the best
+    /// split is kept when each box explains at least min_model_inlier_ratio of its group, the two
+    /// solids overlap by at most touching_max_overlap (of either box's volume), and together they
+    /// explain at least touching_min_gain more of the object's points than one box.
+    bool split_touching = true;
+    std::size_t touching_min_part_points = 100;  ///< [points]
+    int touching_max_parts = 8;                  ///< [parts]; 2 to 12
+    float touching_max_overlap = 0.15f;          ///< [-]
+    float touching_min_gain = 0.1f;              ///< [-]
+    std::size_t touching_max_points = 3000;      ///< points used per evaluation [points]
     int num_threads = 0;  ///< 0 = all cores; overrides the stages' own thread counts
 };
 

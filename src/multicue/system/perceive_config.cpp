@@ -131,6 +131,11 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     cat.Get("boundary_softness", c.boundary_softness, "slope of the soft box/flat split");
     cat.Get("plate_thin_ratio", c.plate_thin_ratio, "thickness/diameter fully thin");
     cat.Get("plate_thick_ratio", c.plate_thick_ratio, "thickness/diameter not thin");
+    cat.Get("plate_low_height", c.plate_low_height, "objects up to this high may be plates [m]");
+    cat.Get("plate_high_height", c.plate_high_height, "objects from this high are no plates [m]");
+    cat.Get("sphere_box_axis_area", c.sphere_box_axis_area,
+            "sphere score fades from this axis_area");
+    cat.Get("sphere_box_axis_area_max", c.sphere_box_axis_area_max, "... to 0 at this axis_area");
     cat.Get("round_fill", c.round_fill, "footprint fill up to this is round");
     cat.Get("square_fill", c.square_fill, "footprint fill from this is square");
     cat.Get("min_evidence", c.min_evidence, "other wins below this score");
@@ -188,6 +193,16 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     stacked.Get("min_step", p.stack_min_step, "height between the faces at least [m]");
     stacked.Get("min_gain", p.stack_min_gain,
                 "two boxes must explain this much larger a share of the points than one");
+    auto touching = models.Section("touching");
+    touching.Get("enabled", p.split_touching,
+                 "split box objects that one box explains poorly into two touching boxes");
+    touching.Get("min_part_points", p.touching_min_part_points, "parts taking part in the splits");
+    touching.Get("max_parts", p.touching_max_parts, "largest parts tried (2 to 12)");
+    touching.Get("max_overlap", p.touching_max_overlap,
+                 "the two solid boxes overlap by at most this share");
+    touching.Get("min_gain", p.touching_min_gain,
+                 "two boxes must explain this much larger a share of the points than one");
+    touching.Get("max_points", p.touching_max_points, "points used per evaluation");
     auto rot = models.Section("rotational");
     rot.Get("enabled", p.try_rotational,
             "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
