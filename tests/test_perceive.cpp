@@ -232,6 +232,43 @@ TEST(Perceive, TouchingBoxesThatOneBoxExplainsPoorlyAreSplit) {
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
+TEST(Perceive, CanStandingInABowlIsSplitByTwoCylinders) {
+    // mOSD learn41: a can standing in a bowl, one object after segmentation (12 parts, which the
+    // Poisson model finds likelier for two objects); one cylinder explains the can's parts, a
+    // second one the bowl's.
+    if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
+    const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn41.pcd"));
+    auto objects_of = [&](const PerceiveResult& r, std::uint32_t label) {
+        std::map<std::uint32_t, std::size_t> votes;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.labels[i] == label && r.point_objects[i] != 0) ++votes[r.point_objects[i]];
+        }
+        return votes;
+    };
+    PerceiveParams params;
+    params.split_touching_round = false;
+    const PerceiveResult together = Perceive(cloud, params);
+    EXPECT_EQ(together.objects.size(), 1u);
+    params.split_touching_round = true;
+    const PerceiveResult split = Perceive(cloud, params);
+    ASSERT_EQ(split.objects.size(), 2u);
+    for (const std::uint32_t label : {20u, 30u}) {
+        const auto votes = objects_of(split, label);
+        std::size_t all = 0, best = 0;
+        for (const auto& [id, n] : votes) {
+            all += n;
+            best = std::max(best, n);
+        }
+        EXPECT_GT(best, 9 * all / 10) << "label " << label;
+    }
+    // A Poisson model that expects many parts per object does not try the split.
+    params.part_counts.other_mean = 30.0;
+    params.part_counts.round_mean = 30.0;
+    EXPECT_EQ(Perceive(cloud, params).objects.size(), 1u);
+    params.several_min_ratio = -1.0f;
+    EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
+}
+
 TEST(Perceive, BadInput) {
     EXPECT_THROW(Perceive(PointCloud{}, {}), DataError);
     PointCloud nan_only;

@@ -1,6 +1,9 @@
 #include "multicue/reconstruction/part_count_model.hpp"
 
 #include <cmath>
+#include <string>
+
+#include "multicue/core/exceptions.hpp"
 
 namespace multicue {
 namespace {
@@ -27,23 +30,24 @@ ObjectType ObjectTypeOf(Category category) {
     }
 }
 
-double MeanPartCount(ObjectType type) {
-    switch (type) {
-        case ObjectType::kFlat:
-            return 0.876;
-        case ObjectType::kRound:
-            return 2.166;
-        default:
-            return 3.317;
+double MeanPartCount(ObjectType type, const PartCountParams& params) {
+    const double mean = type == ObjectType::kFlat    ? params.flat_mean
+                        : type == ObjectType::kRound ? params.round_mean
+                                                     : params.other_mean;
+    if (!(mean > 0.0) || !std::isfinite(mean)) {
+        throw InvalidArgument("part count means must be > 0 and finite, got " +
+                              std::to_string(mean));
     }
+    return mean;
 }
 
-double PartCountProbability(ObjectType type, std::size_t k) {
-    return Poisson(MeanPartCount(type), k);
+double PartCountProbability(ObjectType type, std::size_t k, const PartCountParams& params) {
+    return Poisson(MeanPartCount(type, params), k);
 }
 
-double TwoObjectsLikelihoodRatio(ObjectType type, std::size_t parts) {
-    const double lambda = MeanPartCount(type);
+double TwoObjectsLikelihoodRatio(ObjectType type, std::size_t parts,
+                                 const PartCountParams& params) {
+    const double lambda = MeanPartCount(type, params);
     return Poisson(2.0 * lambda, parts) / Poisson(lambda, parts);
 }
 

@@ -385,6 +385,9 @@ static float BoxOverlap(const BoxModel& a, const BoxModel& b) {
 // hardly overlap (grouping by models, section 5.4.1).
 static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
                                const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!(params.several_min_ratio >= 0.0f)) {
+        throw InvalidArgument("models.several_min_ratio must be >= 0");
+    }
     if (!(params.touching_min_gain >= 0.0f) || !(params.touching_max_overlap >= 0.0f) ||
         params.touching_max_parts < 2 || params.touching_max_parts > 12) {
         throw InvalidArgument(
@@ -417,7 +420,10 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
         for (std::size_t k = 0; k < o.parts.size(); ++k) {
             if (o.parts[k].size() >= params.touching_min_part_points) big.push_back(k);
         }
-        if (!boxy || !one.found || one_ratio >= params.min_model_inlier_ratio || big.size() < 2) {
+        const double several =
+            TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
+        if (!boxy || !one.found || one_ratio >= params.min_model_inlier_ratio || big.size() < 2 ||
+            several < params.several_min_ratio) {
             out.push_back(std::move(o));
             continue;
         }
@@ -526,6 +532,104 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
     }
     Regroup(cloud, out, changed, plane, params, {Category::kBox, Category::kFlat});
     LogDebug("perceive: {} touching boxes split", changed.size() / 2);
+    objects = std::move(out);
+}
+
+// Touching round objects that segmentation kept together (a can standing in a bowl): the parts
+// one cylinder explains become one object and the remaining parts another, when each has a
+// cylinder explaining its points, together they explain clearly more than one cylinder, and they
+// are not the inside and outside of one container (grouping by models, section 5.4.1).
+static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                               const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!cloud.HasNormals()) return;
+    const float threshold = params.cylinder.inlier_threshold;
+    auto explained = [&](const CylinderModel& m, const Indices& points) {
+        std::size_t n = 0;
+        for (Index i : points) n += CylinderSurfaceDistance(m, cloud.points[i]) <= threshold;
+        return points.empty() ? 0.0f : static_cast<float>(n) / static_cast<float>(points.size());
+    };
+    auto gather = [](const std::vector<Indices>& parts) {
+        Indices all;
+        for (const auto& p : parts) all.insert(all.end(), p.begin(), p.end());
+        std::sort(all.begin(), all.end());
+        return all;
+    };
+    std::vector<PerceivedObject> out;
+    std::vector<std::size_t> changed;
+    for (auto& o : objects) {
+        const Category c = o.category.category;
+        const bool round =
+            c == Category::kSphere || c == Category::kCylinder || c == Category::kOther;
+        const double several =
+            TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
+        if (!round || o.parts.size() < 2 || several < params.several_min_ratio) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        const CylinderModel one = FitObjectCylinder(cloud, o.indices, plane, params.cylinder);
+        const float one_ratio = one.found ? explained(one, o.indices) : 0.0f;
+        if (!one.found || one_ratio >= params.min_model_inlier_ratio) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        std::vector<Indices> pa, pb;
+        for (auto& part : o.parts) {
+            (2.0f * explained(one, part) >= 1.0f ? pa : pb).push_back(part);
+        }
+        const Indices ga = gather(pa), gb = gather(pb);
+        if (ga.size() < params.min_object_points || gb.size() < params.min_object_points) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        const CylinderModel a = FitObjectCylinder(cloud, ga, plane, params.cylinder);
+        const CylinderModel b = FitObjectCylinder(cloud, gb, plane, params.cylinder);
+        bool keep = !a.found || !b.found || explained(a, ga) < params.min_model_inlier_ratio ||
+                    explained(b, gb) < params.min_model_inlier_ratio;
+        if (!keep) {
+            std::size_t n = 0;
+            for (Index i : o.indices) {
+                n += std::min(CylinderSurfaceDistance(a, cloud.points[i]),
+                              CylinderSurfaceDistance(b, cloud.points[i])) <= threshold;
+            }
+            const float both = static_cast<float>(n) / static_cast<float>(o.indices.size());
+            const Eigen::Vector3f axis = a.axis.normalized();
+            const Eigen::Vector3f d = b.center - a.center;
+            const bool concentric =
+                std::abs(axis.dot(b.axis.normalized())) >=
+                    std::cos(params.concentric_angle_deg * 3.14159265f / 180.0f) &&
+                (d - d.dot(axis) * axis).norm() <= params.concentric_distance &&
+                std::abs(a.radius - b.radius) <=
+                    params.concentric_radius_ratio * std::max(a.radius, b.radius);
+            LogDebug("perceive: touching round {} | {}: {:.2f} (one cylinder {:.2f}){}", ga.size(),
+                     gb.size(), both, one_ratio, concentric ? ", concentric" : "");
+            keep = concentric || both < one_ratio + params.touching_min_gain;
+        }
+        if (keep) {
+            out.push_back(std::move(o));
+            continue;
+        }
+        // Points outside the parts go to the nearer cylinder.
+        PerceivedObject oa, ob;
+        oa.parts = std::move(pa);
+        ob.parts = std::move(pb);
+        for (Index i : o.indices) {
+            const bool to_a = std::binary_search(ga.begin(), ga.end(), i) ||
+                              (!std::binary_search(gb.begin(), gb.end(), i) &&
+                               CylinderSurfaceDistance(a, cloud.points[i]) <=
+                                   CylinderSurfaceDistance(b, cloud.points[i]));
+            (to_a ? oa : ob).indices.push_back(i);
+        }
+        changed.push_back(out.size());
+        out.push_back(std::move(oa));
+        changed.push_back(out.size());
+        out.push_back(std::move(ob));
+    }
+    if (changed.empty()) {
+        objects = std::move(out);
+        return;
+    }
+    Regroup(cloud, out, changed, plane, params);
+    LogDebug("perceive: {} touching round objects split", changed.size() / 2);
     objects = std::move(out);
 }
 
@@ -655,6 +759,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     }
     if (params.split_touching && !result.objects.empty()) {
         SplitTouchingBoxes(cloud, result.objects, plane, params);
+    }
+    if (params.split_touching_round && !result.objects.empty()) {
+        SplitTouchingRound(cloud, result.objects, plane, params);
     }
     timer.Done("models");
 

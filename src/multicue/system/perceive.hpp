@@ -17,6 +17,7 @@
 #include "multicue/io/config.hpp"
 #include "multicue/recognition/geometric_category.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/reconstruction/part_count_model.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
 #include "multicue/reconstruction/rotational_model.hpp"
 #include "multicue/reconstruction/verification.hpp"
@@ -124,7 +125,19 @@ struct PerceiveParams {
     float touching_max_overlap = 0.15f;          ///< [-]
     float touching_min_gain = 0.1f;              ///< [-]
     std::size_t touching_max_points = 3000;      ///< points used per evaluation [points]
-    int num_threads = 0;  ///< 0 = all cores; overrides the stages' own thread counts
+    /// Touching round objects (a can standing in a bowl): a sphere, cylinder or other object
+    /// that one cylinder explains poorly gets a cylinder for the parts it explains (most of
+    /// their points within the cylinder's inlier threshold) and one for the remaining parts;
+    /// the two are kept as objects when each explains min_model_inlier_ratio of its parts,
+    /// together touching_min_gain more of the points than one, and they are not the inside and
+    /// outside of one container (see merge_concentric).
+    bool split_touching_round = true;
+    /// The Poisson model of parts per object (section 5.4.1, Eq. 5.1) decides which objects may be
+    /// several: the touching splits are tried only when the object's part count is at least
+    /// several_min_ratio times as likely for two objects of its type as for one.
+    PartCountParams part_counts{};
+    float several_min_ratio = 0.5f;  ///< [-]; >= 0
+    int num_threads = 0;             ///< 0 = all cores; overrides the stages' own thread counts
 };
 
 /// Reads (or, with a dump section, records) every parameter.

@@ -203,6 +203,14 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     touching.Get("min_gain", p.touching_min_gain,
                  "two boxes must explain this much larger a share of the points than one");
     touching.Get("max_points", p.touching_max_points, "points used per evaluation");
+    touching.Get("round_enabled", p.split_touching_round,
+                 "split round objects that one cylinder explains poorly into two cylinders");
+    models.Get("several_min_ratio", p.several_min_ratio,
+               "splits are tried when the part count is this much likelier for two objects");
+    auto counts = models.Section("part_counts");
+    counts.Get("flat_mean", p.part_counts.flat_mean, "Poisson mean of parts of flat objects");
+    counts.Get("round_mean", p.part_counts.round_mean, "Poisson mean of parts of round objects");
+    counts.Get("other_mean", p.part_counts.other_mean, "Poisson mean of parts of other objects");
     auto rot = models.Section("rotational");
     rot.Get("enabled", p.try_rotational,
             "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
