@@ -148,6 +148,7 @@ TEST(Perceive, InsideAndOutsideOfAPotAreOneObject) {
     if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
     const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn38.pcd"));
     PerceiveParams params;
+    params.merge_contained = false;  // would join them as well
     params.merge_concentric = false;
     const std::size_t apart = Perceive(cloud, params).objects.size();
     params.merge_concentric = true;
@@ -266,6 +267,38 @@ TEST(Perceive, CanStandingInABowlIsSplitByTwoCylinders) {
     params.part_counts.round_mean = 30.0;
     EXPECT_EQ(Perceive(cloud, params).objects.size(), 1u);
     params.several_min_ratio = -1.0f;
+    EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
+}
+
+TEST(Perceive, PiecesInsideABowlJoinIt) {
+    // mOSD learn34: a bowl (ground-truth object 4: labels 40-42) whose inner wall, inner bottom
+    // and outer wall segment apart; the bottom and the outer wall lie inside the inner wall's
+    // surface of revolution.
+    if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
+    const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn34.pcd"));
+    auto best_share = [&](const PerceiveResult& r, std::uint32_t object) {
+        std::map<std::uint32_t, std::size_t> votes;
+        std::size_t all = 0, best = 0;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.labels[i] / 10 == object && cloud.labels[i] >= 20) {
+                ++all;
+                if (r.point_objects[i] != 0) best = std::max(best, ++votes[r.point_objects[i]]);
+            }
+        }
+        return all ? static_cast<double>(best) / static_cast<double>(all) : 0.0;
+    };
+    PerceiveParams params;
+    params.merge_contained = false;
+    const PerceiveResult apart = Perceive(cloud, params);
+    EXPECT_LT(best_share(apart, 4), 0.8);
+    params.merge_contained = true;
+    const PerceiveResult joined = Perceive(cloud, params);
+    EXPECT_LT(joined.objects.size(), apart.objects.size());
+    EXPECT_GT(best_share(joined, 4), 0.83);  // a rim strip stays apart
+    for (const std::uint32_t other : {2u, 3u}) {
+        EXPECT_GT(best_share(joined, other), 0.85) << "object " << other;
+    }
+    params.contained_min_share = 0.0f;
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 

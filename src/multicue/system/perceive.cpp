@@ -277,6 +277,87 @@ static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject
     objects = std::move(merged);
 }
 
+// Objects that lie inside a container's model or against its surface (the bottom inside a bowl,
+// its outer wall below the rim, a mug's handle) are part of it: an object with most of its points
+// inside the solid of another's cylinder or surface of revolution, enlarged by contained_margin,
+// joins that object (grouping by models, section 5.4.1).
+static void MergeContained(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                           const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    if (!(params.contained_margin >= 0.0f) ||
+        !(params.contained_min_share > 0.0f && params.contained_min_share <= 1.0f)) {
+        throw InvalidArgument("models.contained: margin must be >= 0 and min_share in (0, 1]");
+    }
+    const float margin = params.contained_margin;
+    auto inside = [&](const ObjectModel& m, const Eigen::Vector3f& point) {
+        if (m.rotational && m.rotational->found && !m.rotational->heights.empty()) {
+            const RotationalModel& r = *m.rotational;
+            const Eigen::Vector3f p = point - r.origin;
+            const float h = p.dot(r.axis);
+            const float h0 = r.heights.front(), h1 = r.heights.back();
+            if (h < h0 - margin || h > h1 + margin) return false;
+            return (p - h * r.axis).norm() <= r.RadiusAt(std::clamp(h, h0, h1)) + margin;
+        }
+        if (m.cylinder && m.cylinder->found) {
+            const CylinderModel& c = *m.cylinder;
+            const Eigen::Vector3f p = point - c.center;
+            const Eigen::Vector3f axis = c.axis.normalized();
+            const float h = p.dot(axis);
+            return std::abs(h) <= 0.5f * c.height + margin &&
+                   (p - h * axis).norm() <= c.radius + margin;
+        }
+        return false;
+    };
+    const std::size_t n = objects.size();
+    std::vector<std::size_t> order(n);
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return objects[a].indices.size() > objects[b].indices.size();
+    });
+    std::vector<std::size_t> into(n, n);
+    for (std::size_t x = 0; x < n; ++x) {
+        const std::size_t a = order[x];
+        const ObjectModel& m = objects[a].model;
+        if (into[a] != n || !m.accepted) continue;
+        if (!(m.rotational && m.rotational->found) && !(m.cylinder && m.cylinder->found)) continue;
+        for (std::size_t y = x + 1; y < n; ++y) {
+            const std::size_t b = order[y];
+            if (into[b] != n) continue;
+            std::size_t in = 0;
+            for (Index i : objects[b].indices) in += inside(m, cloud.points[i]);
+            if (static_cast<float>(in) >=
+                params.contained_min_share * static_cast<float>(objects[b].indices.size())) {
+                into[b] = a;
+            }
+        }
+    }
+    std::vector<PerceivedObject> out;
+    std::vector<std::size_t> slot(n, n), changed;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (into[k] != n) continue;
+        slot[k] = out.size();
+        out.push_back(std::move(objects[k]));
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        if (into[k] == n) continue;
+        auto& target = out[slot[into[k]]];
+        Indices both;
+        std::merge(target.indices.begin(), target.indices.end(), objects[k].indices.begin(),
+                   objects[k].indices.end(), std::back_inserter(both));
+        target.indices = std::move(both);
+        for (auto& part : objects[k].parts) target.parts.push_back(std::move(part));
+        changed.push_back(slot[into[k]]);
+    }
+    if (changed.empty()) {
+        objects = std::move(out);
+        return;
+    }
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    LogDebug("perceive: {} objects joined the container they lie in", n - out.size());
+    Regroup(cloud, out, changed, plane, params);
+    objects = std::move(out);
+}
+
 // Stacked boxes that segmentation kept together: two horizontal faces at different heights
 // above the table say "two boxes"; the split at the lower face's height is kept when two upright
 // boxes explain the points clearly better than one (grouping by models, section 5.4.1).
@@ -753,6 +834,9 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
         1);
     if (params.merge_concentric && result.objects.size() >= 2) {
         MergeConcentric(cloud, result.objects, plane, params);
+    }
+    if (params.merge_contained && result.objects.size() >= 2) {
+        MergeContained(cloud, result.objects, plane, params);
     }
     if (params.split_stacked && !result.objects.empty()) {
         SplitStacked(cloud, result.objects, plane, params);

@@ -105,6 +105,12 @@ struct PerceiveParams {
     float concentric_angle_deg = 8.0f;      ///< [deg]
     float concentric_distance = 0.02f;      ///< axis to axis [m]
     float concentric_radius_ratio = 0.25f;  ///< |r1 - r2| / max(r1, r2) [-]
+    /// Contained objects: an object with at least contained_min_share of its points inside the
+    /// solid of another (larger) object's accepted cylinder or surface of revolution, enlarged by
+    /// contained_margin, is part of it (the bottom inside a bowl, its outer wall, a mug's handle).
+    bool merge_contained = true;
+    float contained_margin = 0.015f;   ///< [m]
+    float contained_min_share = 0.8f;  ///< (0, 1] [-]
     /// Stacked boxes: a box or flat object with two horizontal faces (parts with normals within
     /// 10 degrees of up, at least stack_min_face_points each) at heights at least stack_min_step
     /// apart, the lower one above the table, is split at the lower face's height when the two

@@ -186,6 +186,11 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     concentric.Get("distance", p.concentric_distance, "axis to axis at most [m]");
     concentric.Get("radius_ratio", p.concentric_radius_ratio,
                    "radii differ by at most this share of the larger one");
+    auto contained = models.Section("contained");
+    contained.Get("enabled", p.merge_contained,
+                  "join objects lying inside a container's cylinder or surface of revolution");
+    contained.Get("margin", p.contained_margin, "the container's solid enlarged by this [m]");
+    contained.Get("min_share", p.contained_min_share, "share of the object's points inside");
     auto stacked = models.Section("stacked");
     stacked.Get("enabled", p.split_stacked,
                 "split box objects with two horizontal faces at different heights into two boxes");
