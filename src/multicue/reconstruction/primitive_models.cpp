@@ -123,6 +123,156 @@ Eigen::Vector3f CanonicalAxis(const Eigen::Vector3f& v) {
     return v[k] < 0.0f ? Eigen::Vector3f(-v) : v;
 }
 
+// Points with a normal perpendicular to up (within the side angle), in footprint coordinates of
+// the basis (u, v) of the plane, u x v = up.
+struct SideFootprint {
+    Eigen::Vector3f up = Eigen::Vector3f::UnitZ(), u = Eigen::Vector3f::UnitX(),
+                    v = Eigen::Vector3f::UnitY();
+    Indices idx;
+    std::vector<Eigen::Vector2f> q;
+};
+
+SideFootprint SidePointsOf(const PointCloud& cloud, const Indices& finite,
+                           const Eigen::Vector3f& up, float side_angle) {
+    SideFootprint s;
+    s.up = up;
+    s.u = up.unitOrthogonal();
+    s.v = up.cross(s.u);
+    const float sin_side = std::sin(side_angle);
+    for (Index i : finite) {
+        const Eigen::Vector3f& n = cloud.normals[i];
+        if (!n.allFinite() || !(n.squaredNorm() > 0.0f)) continue;
+        if (std::abs(n.normalized().dot(up)) > sin_side) continue;
+        s.idx.push_back(i);
+        s.q.emplace_back(cloud.points[i].dot(s.u), cloud.points[i].dot(s.v));
+    }
+    return s;
+}
+
+// A footprint rectangle: orientation theta of its first axis in the (u, v) basis and the
+// intervals it covers along both axes.
+struct Rectangle2d {
+    float theta = 0.0f;
+    float lo[2] = {0.0f, 0.0f};
+    float hi[2] = {0.0f, 0.0f};
+
+    Eigen::Vector2f Axis(int k) const {
+        const float c = std::cos(theta), s = std::sin(theta);
+        return k == 0 ? Eigen::Vector2f(c, s) : Eigen::Vector2f(-s, c);
+    }
+    // Distance of q to the rectangle's boundary.
+    float Distance(const Eigen::Vector2f& q) const {
+        const float s0 = q.dot(Axis(0)), s1 = q.dot(Axis(1));
+        const float out0 = std::max({lo[0] - s0, s0 - hi[0], 0.0f});
+        const float out1 = std::max({lo[1] - s1, s1 - hi[1], 0.0f});
+        if (out0 > 0.0f || out1 > 0.0f) return std::hypot(out0, out1);
+        return std::min({s0 - lo[0], hi[0] - s0, s1 - lo[1], hi[1] - s1});
+    }
+};
+
+// The oriented bounding rectangle of q at orientation theta, with a share `trim` of the points
+// left out at each end of each axis.
+Rectangle2d BoundingRectangle(const std::vector<Eigen::Vector2f>& q, float theta, float trim) {
+    Rectangle2d r;
+    r.theta = theta;
+    std::vector<float> s(q.size());
+    const auto cut = static_cast<std::size_t>(trim * static_cast<float>(q.size()));
+    for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2f a = r.Axis(k);
+        for (std::size_t j = 0; j < q.size(); ++j) s[j] = q[j].dot(a);
+        const auto first = s.begin() + static_cast<std::ptrdiff_t>(cut);
+        const auto last = s.end() - 1 - static_cast<std::ptrdiff_t>(cut);
+        std::nth_element(s.begin(), first, s.end());
+        r.lo[k] = *first;
+        std::nth_element(first, last, s.end());
+        r.hi[k] = *last;
+    }
+    return r;
+}
+
+// Orientation of a footprint direction modulo 90 degrees, in [0, pi/2).
+float QuarterAngle(const Eigen::Vector2f& d) {
+    constexpr float kQuarter = 0.5f * std::numbers::pi_v<float>;
+    float a = std::fmod(std::atan2(d.y(), d.x()), kQuarter);
+    if (a < 0.0f) a += kQuarter;
+    return a >= kQuarter ? 0.0f : a;
+}
+
+// Side points within `threshold` of the rectangle's boundary and their summed score weight.
+double RectangleSupport(const SideFootprint& side, const Rectangle2d& r, float threshold,
+                        const std::vector<float>& score_weights) {
+    double support = 0.0;
+    for (std::size_t j = 0; j < side.q.size(); ++j) {
+        if (r.Distance(side.q[j]) <= threshold) {
+            support += score_weights.empty() ? 1.0 : double{score_weights[side.idx[j]]};
+        }
+    }
+    return support;
+}
+
+void ValidateRectangleParams(const FootprintRectangleParams& p) {
+    ValidateSacParams(p.sac);
+    Require(p.side_angle_deg > 0.0f && p.side_angle_deg <= 45.0f,
+            "side_angle_deg must be in (0, 45], got {}", p.side_angle_deg);
+    Require(p.trim >= 0.0f && p.trim <= 0.25f, "trim must be in [0, 0.25], got {}", p.trim);
+}
+
+// The RANSAC of FitFootprintRectangle on prepared side points; sac carries the weights.
+FootprintRectangle RunRectangleRansac(const PointCloud& cloud, const SideFootprint& side,
+                                      float plane_d, const FootprintRectangleParams& params,
+                                      const SacParams& sac) {
+    FootprintRectangle rect;
+    rect.side_points = side.idx.size();
+    if (side.idx.size() < 2) return rect;
+    const float max_diff = params.side_angle_deg * kDeg;
+    const Eigen::Vector3f u = side.u, v = side.v;
+    SacModel model;
+    model.sample_size = 2;
+    model.needs_normals = true;
+    model.fit_sample = [&](const PointCloud& c, std::span<const Index> s, SacCoefficients& coef) {
+        const Eigen::Vector3f& n1 = c.normals[s[0]];
+        const Eigen::Vector3f& n2 = c.normals[s[1]];
+        const float t1 = QuarterAngle(Eigen::Vector2f(n1.dot(u), n1.dot(v)));
+        const float t2 = QuarterAngle(Eigen::Vector2f(n2.dot(u), n2.dot(v)));
+        constexpr float kQuarter = 0.5f * std::numbers::pi_v<float>;
+        float diff = t2 - t1;  // wrapped to [-pi/4, pi/4)
+        if (diff >= 0.5f * kQuarter) diff -= kQuarter;
+        if (diff < -0.5f * kQuarter) diff += kQuarter;
+        if (!(std::abs(diff) <= max_diff)) return false;
+        const Rectangle2d r = BoundingRectangle(side.q, t1 + 0.5f * diff, params.trim);
+        coef.resize(5);
+        coef << r.theta, r.lo[0], r.hi[0], r.lo[1], r.hi[1];
+        return coef.allFinite();
+    };
+    model.distances = [&](const PointCloud& c, const SacCoefficients& coef,
+                          std::span<const Index> idx, std::span<float> dist) {
+        Rectangle2d r;
+        r.theta = coef[0];
+        r.lo[0] = coef[1];
+        r.hi[0] = coef[2];
+        r.lo[1] = coef[3];
+        r.hi[1] = coef[4];
+        for (std::size_t k = 0; k < idx.size(); ++k) {
+            const Eigen::Vector3f& p = c.points[idx[k]];
+            dist[k] = r.Distance(Eigen::Vector2f(p.dot(u), p.dot(v)));
+        }
+    };
+    const SacResult r = RunSampleConsensus(cloud, side.idx, model, sac);
+    rect.iterations = r.iterations;
+    rect.converged = r.converged;
+    if (!r.found) return rect;
+    const SacCoefficients& c = r.coefficients;
+    const float theta = c[0];
+    const Eigen::Vector3f a1 = std::cos(theta) * u + std::sin(theta) * v;
+    const Eigen::Vector3f a2 = side.up.cross(a1);
+    rect.found = true;
+    rect.axis = a1;
+    rect.extents = Eigen::Vector2f(c[2] - c[1], c[4] - c[3]);
+    rect.center = 0.5f * (c[1] + c[2]) * a1 + 0.5f * (c[3] + c[4]) * a2 - plane_d * side.up;
+    rect.inliers = r.inliers;
+    rect.inlier_weight = r.inlier_weight;
+    return rect;
+}
 }  // namespace
 
 float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p) {
@@ -142,9 +292,35 @@ float CylinderSurfaceDistance(const CylinderModel& c, const Eigen::Vector3f& p) 
     return std::hypot(std::max(rho - c.radius, 0.0f), std::max(t - half, 0.0f));
 }
 
+FootprintRectangle FitFootprintRectangle(const PointCloud& cloud, const Indices& indices,
+                                         const Eigen::Vector4f& support_plane,
+                                         const FootprintRectangleParams& params,
+                                         const FitGuidance& guidance) {
+    ValidateRectangleParams(params);
+    ValidateFitGuidance(guidance, cloud.size());
+    const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
+    Require(plane.has_value(), "FitFootprintRectangle needs a support plane, got the zero vector");
+    CheckIndices(cloud, indices);
+    if (indices.empty()) return {};
+    if (cloud.normals.size() != cloud.size()) {
+        throw DataError(
+            fmt::format("footprint rectangle fitting needs one normal per point, got "
+                        "{} for {}",
+                        cloud.normals.size(), cloud.size()));
+    }
+    const SideFootprint side = SidePointsOf(cloud, FinitePoints(cloud, indices), plane->head<3>(),
+                                            params.side_angle_deg * kDeg);
+    SacParams sac = params.sac;
+    MakeSacWeights(guidance, SampledSurface::kPlanar, cloud.size(), side.idx, sac.sample_weights,
+                   sac.score_weights);
+    return RunRectangleRansac(cloud, side, (*plane)[3], params, sac);
+}
+
 BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
-                       const Eigen::Vector4f& support_plane, const BoxFitParams& params) {
+                       const Eigen::Vector4f& support_plane, const BoxFitParams& params,
+                       const FitGuidance& guidance) {
     ValidateBoxParams(params);
+    ValidateFitGuidance(guidance, cloud.size());
     const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
     Require(plane.has_value(), "FitUprightBox needs a support plane, got the zero vector");
     CheckIndices(cloud, indices);
@@ -175,6 +351,31 @@ BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
         if (fa.found) dir = Eigen::Vector2d(fa.axes.col(0).dot(u), fa.axes.col(0).dot(v));
     }
     dir.normalize();
+    if (normals && params.rectangle_ransac) {
+        // The footprint rectangle RANSAC (section 5.4.2.1) proposes an orientation; it replaces
+        // the one above when its rectangle has more (prior-weighted) side points on its boundary.
+        FootprintRectangleParams rp;
+        rp.sac.distance_threshold = params.inlier_threshold;
+        rp.sac.max_iterations = params.rectangle_iterations;
+        rp.sac.seed = params.seed;
+        rp.side_angle_deg = params.face_angle_deg;
+        const SideFootprint side = SidePointsOf(cloud, finite, up, face_angle);
+        SacParams sac = rp.sac;
+        MakeSacWeights(guidance, SampledSurface::kPlanar, cloud.size(), side.idx,
+                       sac.sample_weights, sac.score_weights);
+        const FootprintRectangle rect = RunRectangleRansac(cloud, side, d, rp, sac);
+        if (rect.found) {
+            // side.u, side.v are u, v: both orientations are angles in the same basis.
+            const float old_theta = QuarterAngle(
+                Eigen::Vector2f(static_cast<float>(dir.x()), static_cast<float>(dir.y())));
+            const double old_support =
+                RectangleSupport(side, BoundingRectangle(side.q, old_theta, rp.trim),
+                                 params.inlier_threshold, sac.score_weights);
+            if (rect.inlier_weight > old_support) {
+                dir = Eigen::Vector2d(rect.axis.dot(u), rect.axis.dot(v)).normalized();
+            }
+        }
+    }
 
     // Face membership of every point for the current orientation: 0/1 = faces across the first
     // axis (low/high side), 2/3 = across the second, -1 = none; the side is taken from the
@@ -317,8 +518,9 @@ BoxModel FitOrientedBoundingBox(const PointCloud& cloud, const Indices& indices,
 
 CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
                                 const Eigen::Vector4f& support_plane,
-                                const CylinderModelParams& params) {
+                                const CylinderModelParams& params, const FitGuidance& guidance) {
     ValidateCylinderParams(params);
+    ValidateFitGuidance(guidance, cloud.size());
     const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
     CheckIndices(cloud, indices);
     CylinderModel model;
@@ -339,6 +541,17 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     // 1. Hypothesis.
     CylinderFitParams cp{
         .sac = params.sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
+    if (!guidance.rsd_min_radius.empty() || !guidance.shape_prior.empty()) {
+        MakeSacWeights(guidance, SampledSurface::kCurved, cloud.size(), usable,
+                       cp.sac.sample_weights, cp.sac.score_weights);
+    }
+    // Inliers of a fit, weighted like its scoring.
+    auto support = [&](const CylinderFit& f) {
+        if (cp.sac.score_weights.empty()) return static_cast<double>(f.inliers.size());
+        double w = 0.0;
+        for (Index i : f.inliers) w += double{cp.sac.score_weights[i]};
+        return w;
+    };
     CylinderFit fit;
     if (plane) {
         cp.axis = plane->head<3>();
@@ -347,9 +560,8 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
         if (params.allow_free_axis) {
             cp.axis = std::nullopt;
             CylinderFit free = FitCylinder(cloud, usable, cp);
-            if (free.found && (!fit.found || static_cast<float>(free.inliers.size()) >=
-                                                 params.free_axis_gain *
-                                                     static_cast<float>(fit.inliers.size()))) {
+            if (free.found &&
+                (!fit.found || support(free) >= double{params.free_axis_gain} * support(fit))) {
                 fit = std::move(free);
             }
         }

@@ -7,12 +7,14 @@
 /// completed around its axis and, when upright, down to the table.
 
 #include <cstddef>
+#include <cstdint>
 
 #include <Eigen/Core>
 
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/triangle_mesh.hpp"
 #include "multicue/core/types.hpp"
+#include "multicue/reconstruction/fit_guidance.hpp"
 #include "multicue/segmentation/sample_consensus.hpp"
 
 namespace multicue {
@@ -45,19 +47,76 @@ struct BoxFitParams {
                                        ///< (0, 45] [deg]
     std::size_t min_face_points = 30;  ///< a face is placed at the median of its points only
                                        ///< with at least this many of them [points]; >= 1
-    float edge_window = 0.01f;  ///< an unseen side is placed from the point density in the two
-                                ///< strips of this width next to the extreme point, which noise
-                                ///< pushes outwards; should exceed 3 sigma of the noise; 0 = at
-                                ///< the extreme point [m]
+    float edge_window = 0.01f;     ///< an unseen side is placed from the point density in the two
+                                   ///< strips of this width next to the extreme point, which noise
+                                   ///< pushes outwards; should exceed 3 sigma of the noise; 0 = at
+                                   ///< the extreme point [m]
+    bool rectangle_ransac = true;  ///< with normals: the footprint rectangle RANSAC
+                                   ///< (FitFootprintRectangle) proposes an orientation too
+    int rectangle_iterations = 500;  ///< its sample cap, >= 1 [samples]
+    std::uint64_t seed = 1;          ///< its sampler seed [-]
 };
+
+struct FootprintRectangleParams {
+    /// RANSAC (the thesis maximises the number of inliers) on the side points; the threshold is
+    /// the footprint distance to the rectangle's boundary [m]. Weights are set from the guidance.
+    SacParams sac{.method = SacMethod::kRansac,
+                  .distance_threshold = 0.01f,
+                  .p_success = 0.99,
+                  .max_iterations = 500,
+                  .seed = 1,
+                  .max_refine_rounds = 0,
+                  .normal_distance_weight = 0.0f,
+                  .num_threads = 1};
+    /// Side points have normals within this angle of perpendicular to up; the two normals of a
+    /// sample must be parallel or perpendicular within it, (0, 45] [deg]
+    float side_angle_deg = 15.0f;
+    /// Share of the side points left out at each end of an axis when the rectangle's sides are
+    /// placed at the extreme points (the oriented bounding box), against stray points; [0, 0.25]
+    float trim = 0.01f;
+};
+
+/// A rectangle in the support plane: the footprint of an upright box.
+struct FootprintRectangle {
+    bool found = false;  ///< a rectangle with at least 2 inliers was found
+    Eigen::Vector3f center = Eigen::Vector3f::Zero();   ///< centre, in the support plane [m]
+    Eigen::Vector3f axis = Eigen::Vector3f::UnitX();    ///< unit first axis, in the plane
+    Eigen::Vector2f extents = Eigen::Vector2f::Zero();  ///< side lengths along axis and
+                                                        ///< up x axis [m]
+    Indices inliers;              ///< side points within the threshold of its boundary
+    double inlier_weight = 0.0;   ///< their summed shape prior (their count without one) [-]
+    std::size_t side_points = 0;  ///< points with a normal perpendicular to up [points]
+    int iterations = 0;           ///< samples drawn [samples]
+    bool converged = false;       ///< stopped by Eq. (4.6) before max_iterations
+};
+
+/// Footprint rectangle of an upright box, fitted directly to the points whose normals are
+/// perpendicular to up (statically stable boxes stand on a side; section 5.4.2.1), maximising
+/// the number of inliers in a RANSAC loop:
+/// - sample: two side points whose footprint normals are parallel or perpendicular (within
+///   side_angle_deg); the orientation is their mean modulo 90 degrees;
+/// - rectangle: the oriented bounding box of the side points in that orientation (trim of them
+///   left out at each end);
+/// - score: side points within the threshold of the rectangle's boundary in the footprint.
+/// With guidance, planar points (large RSD r_min) are drawn more often and the shape prior
+/// weights sampling and inlier counting (section 5.4.1). The final rectangle's inliers are
+/// counted again. Fewer than 2 side points give found = false.
+/// Throws InvalidArgument for bad parameters or guidance, a zero or non-finite plane or an index
+/// out of range; DataError if the cloud has no normals (unless `indices` is empty).
+FootprintRectangle FitFootprintRectangle(const PointCloud& cloud, const Indices& indices,
+                                         const Eigen::Vector4f& support_plane,
+                                         const FootprintRectangleParams& params = {},
+                                         const FitGuidance& guidance = {});
 
 /// Upright box of an object standing on the support plane (a, b, c, d), normal pointing up
 /// (section 5.4.2.1: boxes stand on one of their sides):
 /// - orientation about up: the rotation that aligns the most side normals with the box's faces
 ///   (AlignUprightAxes) when at least min_face_points side normals are seen, else the
 ///   minimum-area rectangle of the points projected onto the plane (rotating calipers over their
-///   2D convex hull); then refined as the least-squares orientation of a rectangle through the
-///   points of the seen sides (normals within face_angle_deg of a side's normal);
+///   2D convex hull); with rectangle_ransac, the footprint rectangle RANSAC's orientation
+///   (FitFootprintRectangle, guided by `guidance`) replaces it when its rectangle has more
+///   (prior-weighted) inliers; then refined as the least-squares orientation of a rectangle through
+///   the points of the seen sides (normals within face_angle_deg of a side's normal);
 /// - each side: the median position of its points when at least min_face_points are seen, else
 ///   the far edge of all points, from their density next to the extreme one (edge_window);
 /// - top: the median height of the top face's points when seen, else the highest point; bottom:
@@ -66,10 +125,11 @@ struct BoxFitParams {
 /// such edges and the highest point as top.
 /// axes.col(2) is up and axes.col(0) the longer footprint side, so extents = (length, width,
 /// height). Points with non-finite coordinates are ignored; no usable point gives found = false.
-/// Throws InvalidArgument for bad parameters, a zero or non-finite plane, or an index out of
-/// range.
+/// Throws InvalidArgument for bad parameters or guidance, a zero or non-finite plane, or an index
+/// out of range.
 BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
-                       const Eigen::Vector4f& support_plane, const BoxFitParams& params = {});
+                       const Eigen::Vector4f& support_plane, const BoxFitParams& params = {},
+                       const FitGuidance& guidance = {});
 
 /// Oriented bounding box of any object (for "other" objects): an approximate minimum-volume box
 /// (each principal axis in turn with the minimum-area rectangle across it, MinVolumeBoundingBox),
@@ -109,10 +169,13 @@ struct CylinderModelParams {
 };
 
 /// Cylinder of an object (cans, cups, bottles; section 5.4.2.1).
-/// 1. Hypothesis: RANSAC with normals (FitCylinder). With a known support plane (non-zero) the
+/// 1. Hypothesis: RANSAC with normals (FitCylinder): two points with their normals give two skew
+///    lines, their shortest connection the axis. With a known support plane (non-zero) the
 ///    axis is first searched within upright_angle_deg of up; with allow_free_axis also without
 ///    the prior, and the free cylinder wins when it has at least free_axis_gain times the upright
-///    one's inliers. Without a plane the axis is free.
+///    one's (prior-weighted) inliers. Without a plane the axis is free. With guidance, curved
+///    points (small RSD r_min) are drawn more often and the shape prior weights sampling and
+///    scoring (sections 5.4.1, 5.4.2.1); params.sac's own weights are then replaced.
 /// 2. Refinement: least squares (Levenberg-Marquardt) of | dist(p, axis) - r | over the side
 ///    points (within side_distance of the surface, normal within side_normal_angle_deg of
 ///    radial; cap points never count), reselected refine_rounds times. The RANSAC inliers are
@@ -126,11 +189,12 @@ struct CylinderModelParams {
 /// The axis points away from the plane (upright) or has a positive largest component. inlier_ratio
 /// is over all object points with finite coordinates. Points without a finite normal do not take
 /// part in the fit. No usable point, or no cylinder, gives found = false.
-/// Throws InvalidArgument for bad parameters, a non-finite plane or an index out of range;
-/// DataError if the cloud has no normals (unless `indices` is empty).
+/// Throws InvalidArgument for bad parameters or guidance, a non-finite plane or an index out of
+/// range; DataError if the cloud has no normals (unless `indices` is empty).
 CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
                                 const Eigen::Vector4f& support_plane,
-                                const CylinderModelParams& params = {});
+                                const CylinderModelParams& params = {},
+                                const FitGuidance& guidance = {});
 
 /// Distance of p to the surface of the solid box (inside or outside) [m].
 float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p);

@@ -27,18 +27,23 @@ constexpr std::size_t kMinPointsForThreads = 4096;
 struct Score {
     double cost = 0.0;        // lower is better: outlier count (RANSAC) or truncated cost (MSAC)
     std::size_t inliers = 0;  // points with d <= t
+    double drawn_mass = 0.0;  // sampling weight of the inliers (only with sample weights)
 };
 
 // Distances d of the usable points to one model, blended with the normal deviation when used.
 class Evaluator {
   public:
+    // score_w / sample_w: per usable point (aligned with `points`), or empty.
     Evaluator(const PointCloud& cloud, const Indices& points, const SacModel& model,
-              const SacParams& params, bool blend_normals)
+              const SacParams& params, bool blend_normals, const std::vector<float>& score_w,
+              const std::vector<float>& sample_w)
         : cloud_(cloud),
           points_(points),
           model_(model),
           threshold_(params.distance_threshold),
-          weight_(blend_normals ? params.normal_distance_weight : 0.0f) {}
+          weight_(blend_normals ? params.normal_distance_weight : 0.0f),
+          score_w_(score_w),
+          sample_w_(sample_w) {}
 
     // Calls visit(k, d, euclidean) for the k-th usable point, in order.
     template <typename Visit>
@@ -67,35 +72,47 @@ class Evaluator {
     Score Evaluate(const SacCoefficients& c, SacMethod method) const {
         Score s;
         const double t2 = double{threshold_} * threshold_;
-        ForEach(c, [&](std::size_t, float d, float) {
+        const bool weighted = !score_w_.empty();
+        const bool drawn = !sample_w_.empty();
+        ForEach(c, [&](std::size_t k, float d, float) {
             // NaN distances (a model gone bad) count as outliers.
             const bool inlier = d <= threshold_;
-            if (inlier) ++s.inliers;
+            if (inlier) {
+                ++s.inliers;
+                if (drawn) s.drawn_mass += sample_w_[k];
+            }
+            const double w = weighted ? double{score_w_[k]} : 1.0;
             if (method == SacMethod::kMsac) {
-                s.cost += inlier ? double{d} * d : t2;
+                s.cost += w * (inlier ? double{d} * d : t2);
+            } else if (weighted && !inlier) {
+                s.cost += w;
             }
         });
-        if (method == SacMethod::kRansac) {
+        if (method == SacMethod::kRansac && !weighted) {
             s.cost = static_cast<double>(points_.size() - s.inliers);
         }
         return s;
     }
 
-    // Inliers of `c` (cloud indices, input order), their Euclidean sum of squares, and the
-    // truncated quadratic cost over all usable points.
-    void Inliers(const SacCoefficients& c, Indices& inliers, double& sum_sq,
-                 double& truncated) const {
+    // Inliers of `c` (cloud indices, input order), their Euclidean sum of squares, the truncated
+    // quadratic cost over all usable points (score-weighted) and the inliers' score weight.
+    void Inliers(const SacCoefficients& c, Indices& inliers, double& sum_sq, double& truncated,
+                 double& inlier_weight) const {
         inliers.clear();
         sum_sq = 0.0;
         truncated = 0.0;
+        inlier_weight = 0.0;
         const double t2 = double{threshold_} * threshold_;
+        const bool weighted = !score_w_.empty();
         ForEach(c, [&](std::size_t k, float d, float e) {
+            const double w = weighted ? double{score_w_[k]} : 1.0;
             if (d <= threshold_) {
                 inliers.push_back(points_[k]);
                 sum_sq += double{e} * e;
-                truncated += double{d} * d;
+                truncated += w * d * d;
+                inlier_weight += w;
             } else {
-                truncated += t2;
+                truncated += w * t2;
             }
         });
     }
@@ -106,6 +123,8 @@ class Evaluator {
     const SacModel& model_;
     float threshold_;
     float weight_;
+    const std::vector<float>& score_w_;
+    const std::vector<float>& sample_w_;
 };
 
 // Uniform integer in [0, n) from a 64-bit engine, by rejection: unbiased and the same on every
@@ -119,18 +138,94 @@ std::size_t UniformBelow(std::mt19937_64& rng, std::size_t n) {
     return static_cast<std::size_t>(x % range);
 }
 
-// Draws sample.size() distinct usable points.
-void DrawSample(std::mt19937_64& rng, const Indices& points, std::vector<std::size_t>& positions,
-                std::vector<Index>& sample) {
-    for (std::size_t j = 0; j < sample.size(); ++j) {
-        std::size_t pos = 0;
-        do {
-            pos = UniformBelow(rng, points.size());
-        } while (std::find(positions.begin(), positions.begin() + static_cast<std::ptrdiff_t>(j),
-                           pos) != positions.begin() + static_cast<std::ptrdiff_t>(j));
-        positions[j] = pos;
-        sample[j] = points[pos];
+// Uniform double in [0, 1) from the top 53 bits of one engine output (the same everywhere).
+double UnitUniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+// Draws minimal samples of distinct usable points, uniformly or proportionally to weights.
+class Sampler {
+  public:
+    // weights: per usable point (aligned with `points`), or empty for uniform sampling.
+    Sampler(const Indices& points, const std::vector<float>& weights) : points_(points) {
+        if (weights.empty()) return;
+        ends_.resize(weights.size());
+        double sum = 0.0;
+        for (std::size_t k = 0; k < weights.size(); ++k) {
+            sum += double{weights[k]};
+            ends_[k] = sum;
+        }
     }
+
+    // Usable points that can be drawn at all.
+    std::size_t Drawable(const std::vector<float>& weights) const {
+        if (ends_.empty()) return points_.size();
+        return static_cast<std::size_t>(
+            std::count_if(weights.begin(), weights.end(), [](float w) { return w > 0.0f; }));
+    }
+
+    void Draw(std::mt19937_64& rng, std::vector<std::size_t>& positions,
+              std::vector<Index>& sample) const {
+        for (std::size_t j = 0; j < sample.size(); ++j) {
+            const auto chosen_end = positions.begin() + static_cast<std::ptrdiff_t>(j);
+            std::size_t pos = 0;
+            do {
+                pos = ends_.empty() ? UniformBelow(rng, points_.size())
+                                    : WeightedPosition(rng, j, positions);
+            } while (std::find(positions.begin(), chosen_end, pos) != chosen_end);
+            positions[j] = pos;
+            sample[j] = points_[pos];
+        }
+    }
+
+  private:
+    double Start(std::size_t k) const { return k == 0 ? 0.0 : ends_[k - 1]; }
+
+    // One position drawn from the weights with the first `taken` positions removed: a uniform
+    // value in the remaining mass is mapped onto the full cumulative sum by stepping over the
+    // removed intervals in ascending order. Rounding can still land on a removed point; the
+    // caller then draws again.
+    std::size_t WeightedPosition(std::mt19937_64& rng, std::size_t taken,
+                                 const std::vector<std::size_t>& positions) const {
+        std::array<std::size_t, 16> sorted_small{};
+        std::vector<std::size_t> sorted_large;
+        std::size_t* sorted = sorted_small.data();
+        if (taken > sorted_small.size()) {
+            sorted_large.resize(taken);
+            sorted = sorted_large.data();
+        }
+        double removed = 0.0;
+        for (std::size_t j = 0; j < taken; ++j) {
+            sorted[j] = positions[j];
+            removed += ends_[positions[j]] - Start(positions[j]);
+        }
+        std::sort(sorted, sorted + taken);
+        const double remaining = ends_.back() - removed;
+        double x = UnitUniform(rng) * remaining;
+        for (std::size_t j = 0; j < taken; ++j) {
+            if (x >= Start(sorted[j])) x += ends_[sorted[j]] - Start(sorted[j]);
+        }
+        // First point whose interval [start, end) holds x; zero-weight points have empty
+        // intervals and are never selected.
+        const auto it = std::upper_bound(ends_.begin(), ends_.end(), x);
+        if (it == ends_.end()) {
+            // x rounded up to the total: the last point with a positive weight.
+            std::size_t k = ends_.size() - 1;
+            while (k > 0 && !(ends_[k] > Start(k))) --k;
+            return k;
+        }
+        return static_cast<std::size_t>(it - ends_.begin());
+    }
+
+    const Indices& points_;
+    std::vector<double> ends_;  // cumulative weights: point k covers [ends_[k-1], ends_[k])
+};
+
+// Weights of the usable points, aligned with them (empty when `weights` is empty).
+std::vector<float> Gather(const std::vector<float>& weights, const Indices& points) {
+    std::vector<float> out;
+    if (weights.empty()) return out;
+    out.reserve(points.size());
+    for (Index i : points) out.push_back(weights[i]);
+    return out;
 }
 
 // The usable points: finite, inside the cloud, with a finite normal when normals are used.
@@ -184,6 +279,23 @@ void ValidateSacParams(const SacParams& params) {
     ResolveThreadCount(params.num_threads);  // throws on negative values
 }
 
+void ValidateSacWeights(std::span<const float> weights, std::size_t cloud_size, const char* name) {
+    if (weights.empty()) return;
+    if (weights.size() != cloud_size) {
+        throw InvalidArgument(
+            fmt::format("sample consensus {} must have one value per cloud point "
+                        "({}), got {}",
+                        name, cloud_size, weights.size()));
+    }
+    for (std::size_t i = 0; i < weights.size(); ++i) {
+        if (!(weights[i] >= 0.0f) || !std::isfinite(weights[i])) {
+            throw InvalidArgument(
+                fmt::format("sample consensus {} must be finite and >= 0, got {} at point {}", name,
+                            weights[i], i));
+        }
+    }
+}
+
 int AdaptiveIterationCount(double p_success, double inlier_ratio, int sample_size) {
     constexpr int kInfinite = std::numeric_limits<int>::max();
     if (!(p_success > 0.0 && p_success < 1.0)) {
@@ -212,6 +324,8 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
     if (!model.fit_sample || !model.distances) {
         throw InvalidArgument("sample consensus model needs fit_sample and distances");
     }
+    ValidateSacWeights(params.sample_weights, cloud.size(), "sample_weights");
+    ValidateSacWeights(params.score_weights, cloud.size(), "score_weights");
     SacResult result;
     if (cloud.empty()) return result;
 
@@ -227,7 +341,13 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
     const auto k = static_cast<std::size_t>(model.sample_size);
     if (points.size() < k) return result;
 
-    const Evaluator evaluator(cloud, points, model, params, blend_normals);
+    const std::vector<float> sample_w = Gather(params.sample_weights, points);
+    const std::vector<float> score_w = Gather(params.score_weights, points);
+    const Sampler sampler(points, sample_w);
+    if (sampler.Drawable(sample_w) < k) return result;
+    double total_mass = 0.0;  // sampling weight of all usable points
+    for (float w : sample_w) total_mass += double{w};
+    const Evaluator evaluator(cloud, points, model, params, blend_normals, score_w, sample_w);
     const int threads = ResolveThreadCount(params.num_threads);
     std::optional<tbb::task_arena> arena;
     if (threads > 1 && points.size() >= kMinPointsForThreads) {
@@ -253,7 +373,7 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
             static_cast<std::size_t>(std::min(needed, params.max_iterations) - iterations);
         const std::size_t n = std::min(batch, remaining);
         for (std::size_t j = 0; j < n; ++j) {
-            DrawSample(rng, points, positions, sample);
+            sampler.Draw(rng, positions, sample);
             valid[j] = model.fit_sample(cloud, sample, hypotheses[j]) ? 1 : 0;
         }
         auto score = [&](std::size_t j) {
@@ -277,10 +397,11 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
                 have_best = true;
                 best = scores[j];
                 best_coefficients = hypotheses[j];
-                needed = AdaptiveIterationCount(
-                    params.p_success,
-                    static_cast<double>(best.inliers) / static_cast<double>(points.size()),
-                    model.sample_size);
+                // The chance that one draw is an inlier.
+                const double ratio = sample_w.empty() ? static_cast<double>(best.inliers) /
+                                                            static_cast<double>(points.size())
+                                                      : best.drawn_mass / total_mass;
+                needed = AdaptiveIterationCount(params.p_success, ratio, model.sample_size);
             }
             if (iterations >= std::min(needed, params.max_iterations)) break;
         }
@@ -295,20 +416,23 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
     Indices inliers;
     double sum_sq = 0.0;
     double truncated = 0.0;
-    evaluator.Inliers(best_coefficients, inliers, sum_sq, truncated);
+    double inlier_weight = 0.0;
+    evaluator.Inliers(best_coefficients, inliers, sum_sq, truncated, inlier_weight);
     if (model.refine) {
         Indices refit_inliers;
         double refit_sum_sq = 0.0;
         double refit_truncated = 0.0;
+        double refit_weight = 0.0;
         SacCoefficients refined;
         for (int round = 0; round < params.max_refine_rounds; ++round) {
             if (inliers.size() < k) break;
             if (!model.refine(cloud, inliers, best_coefficients, refined)) break;
-            evaluator.Inliers(refined, refit_inliers, refit_sum_sq, refit_truncated);
+            evaluator.Inliers(refined, refit_inliers, refit_sum_sq, refit_truncated, refit_weight);
             if (!(refit_truncated <= truncated * (1.0 + 1e-6) + 1e-12)) break;
             best_coefficients = refined;
             truncated = refit_truncated;
             sum_sq = refit_sum_sq;
+            inlier_weight = refit_weight;
             const bool stable = refit_inliers == inliers;
             inliers.swap(refit_inliers);
             if (stable) break;
@@ -320,6 +444,7 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
     result.coefficients = std::move(best_coefficients);
     result.rmse = static_cast<float>(std::sqrt(sum_sq / static_cast<double>(inliers.size())));
     result.inliers = std::move(inliers);
+    result.inlier_weight = inlier_weight;
     return result;
 }
 

@@ -6,22 +6,30 @@
 /// FitCylinder (sac_cylinder.hpp). RunSampleConsensus is for new models (a box side, a handle).
 ///
 /// The loop, for a fixed seed and independent of the thread count:
-/// 1. draw a minimal sample (uniformly, without repetition) from the usable points, fit a model;
+/// 1. draw a minimal sample (without repetition) from the usable points, uniformly or, with
+///    sample_weights, with probability proportional to the points' weights; fit a model;
 ///    degenerate samples and models violating a constraint still count as drawn samples;
 /// 2. score it: RANSAC counts the points outside the threshold, MSAC sums the truncated quadratic
-///    cost min(d^2, t^2); the lowest score wins, ties keep the earlier model;
+///    cost min(d^2, t^2), each point's term multiplied by its score weight when score_weights are
+///    given; the lowest score wins, ties keep the earlier model;
 /// 3. after every new best model, update the number of samples needed with Eq. (4.6) of the thesis
-///    (section 4.2.4.3): T = log(1 - p_success) / log(1 - w^n), w = inliers / usable points,
-///    n = sample size; stop after T samples or max_iterations, whichever comes first;
+///    (section 4.2.4.3): T = log(1 - p_success) / log(1 - w^n), w = the chance that one draw is an
+///    inlier (inliers / usable points; with sample_weights the inliers' share of the total sampling
+///    weight), n = sample size; stop after T samples or max_iterations, whichever comes first;
 /// 4. refine: refit the model to its inliers by least squares, reselect the inliers, and repeat
 ///    while the truncated quadratic cost does not grow, until the inlier set is stable.
 ///
 /// Hypotheses are scored in parallel batches, but every decision is taken in drawing order, so
 /// the result equals that of the serial loop bit for bit.
+///
+/// Weighted sampling and scoring (thesis section 5.4.1: the categorisation's shape probabilities
+/// weight "the sampling (which used to be random) and the scoring"; section 5.4.2.1: RSD tells
+/// planar from curved points) are generic: any model can be given per-point weights.
 
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -52,6 +60,15 @@ struct SacParams {
     /// the blended value, so it mixes metres and radians: keep w small (0.05-0.2) [-]
     float normal_distance_weight = 0.0f;
     int num_threads = 0;  ///< threads scoring hypotheses (0 = all cores); never changes the result
+    /// Sampling weights, one per cloud point (indexed like cloud.points), or empty for uniform
+    /// sampling. A usable point is drawn with probability proportional to its weight (without
+    /// repetition inside one sample); weight 0 is never drawn. Each must be finite and >= 0.
+    /// Fewer usable points with a positive weight than the sample size give found = false [-]
+    std::vector<float> sample_weights{};
+    /// Score weights, one per cloud point, or empty for all 1: RANSAC sums the weights of the
+    /// outliers, MSAC multiplies each point's truncated cost by its weight, and the refinement
+    /// compares weighted costs. Each must be finite and >= 0 [-]
+    std::vector<float> score_weights{};
 };
 
 /// Coefficients of a model as a flat vector; each model defines the layout.
@@ -86,16 +103,18 @@ struct SacResult {
     SacCoefficients coefficients;  ///< the model (layout defined by the model); empty if !found
     Indices inliers;     ///< points within the threshold, in input order (ascending for all points)
     int iterations = 0;  ///< samples drawn, degenerate ones included [samples]
-    bool converged = false;  ///< stopped by Eq. (4.6) before reaching max_iterations
-    float rmse = 0.0f;       ///< root mean square Euclidean distance of the inliers [m]
+    bool converged = false;      ///< stopped by Eq. (4.6) before reaching max_iterations
+    float rmse = 0.0f;           ///< root mean square Euclidean distance of the inliers [m]
+    double inlier_weight = 0.0;  ///< sum of the inliers' score weights (their count without) [-]
 };
 
 /// Runs RANSAC or MSAC for `model` on the points `indices` of `cloud` (all points when empty).
 /// Non-finite points are skipped, and so are points without a finite normal when normals are used.
 /// Fewer usable points than the sample size, or no acceptable model, give found = false.
 /// Throws InvalidArgument for a parameter out of its domain (the message names it), an incomplete
-/// model or an index out of range; throws DataError when normals are needed but the cloud has none
-/// (or not one per point).
+/// model, an index out of range or bad weights (wrong size, negative or not finite; the message
+/// names sample_weights or score_weights); throws DataError when normals are needed but the cloud
+/// has none (or not one per point).
 SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, const SacModel& model,
                              const SacParams& params);
 
@@ -104,7 +123,12 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
 /// rounded up, at least 1; saturates at the largest int when w^n is (numerically) zero.
 int AdaptiveIterationCount(double p_success, double inlier_ratio, int sample_size);
 
-/// Throws InvalidArgument if a field of `params` is out of its domain.
+/// Throws InvalidArgument if a field of `params` is out of its domain (weights are checked against
+/// the cloud by ValidateSacWeights).
 void ValidateSacParams(const SacParams& params);
+
+/// Throws InvalidArgument (naming `name`) unless `weights` is empty or has one finite value >= 0
+/// per cloud point.
+void ValidateSacWeights(std::span<const float> weights, std::size_t cloud_size, const char* name);
 
 }  // namespace multicue
