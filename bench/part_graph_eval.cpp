@@ -200,6 +200,7 @@ int main(int argc, char** argv) {
     vp.words = 200;
     vp.num_threads = 0;
     std::string object_spec = "knn:k=5";
+    std::string variants;
     ClusterDescriptorParams cluster_params;
     int table_scenes = training::PartGraphTrainingOptions{}.table_scenes, table_views = 4,
         objects = 8, train_meshes = 1;
@@ -238,6 +239,12 @@ int main(int argc, char** argv) {
             vp.words = std::strtoull(argv[i + 1], nullptr, 10);
         else if (!std::strcmp(argv[i], "--activations"))
             vp.activations = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--variants"))
+            variants = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--distance-weighted"))
+            rp.distance_weighted = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--size-exponent"))
+            rp.size_exponent = std::strtof(argv[i + 1], nullptr);
         else if (!std::strcmp(argv[i], "--object-classifier"))
             object_spec = argv[i + 1];
         else if (!std::strcmp(argv[i], "--cluster-size-weight"))
@@ -329,7 +336,56 @@ int main(int argc, char** argv) {
     methods[kVocabStatsParts].name = "vocabulary of parts, 24 part statistics, part votes";
     methods[kVocabStatsBow].name = "vocabulary of parts, 24 part statistics, bag of words";
     methods[kWhole].name = "whole cluster, GRSD- + VFH";
-    const int num_methods = baselines ? int(kNumMethods) : int(kVocabModelParts);
+    int num_methods = baselines ? int(kNumMethods) : int(kVocabModelParts);
+    // Further part-graph recognition settings on the same model and parts ("k=10,dw=1;se=0.5").
+    std::vector<PartGraphRecognitionParams> variant_params;
+    {
+        std::size_t begin = 0;
+        while (begin < variants.size()) {
+            std::size_t end = variants.find(';', begin);
+            if (end == std::string::npos) end = variants.size();
+            const std::string spec = variants.substr(begin, end - begin);
+            begin = end + 1;
+            if (spec.empty()) continue;
+            PartGraphRecognitionParams vr = rp;
+            std::size_t b = 0;
+            while (b < spec.size()) {
+                std::size_t e = spec.find(',', b);
+                if (e == std::string::npos) e = spec.size();
+                const std::string kv = spec.substr(b, e - b);
+                b = e + 1;
+                const auto eq = kv.find('=');
+                if (eq == std::string::npos) {
+                    std::fprintf(stderr, "bad variant %s\n", kv.c_str());
+                    return 2;
+                }
+                const std::string key = kv.substr(0, eq);
+                const double val = std::strtod(kv.c_str() + eq + 1, nullptr);
+                if (key == "k")
+                    vr.k = std::size_t(val);
+                else if (key == "dw")
+                    vr.distance_weighted = val != 0.0;
+                else if (key == "off")
+                    vr.distance_offset = float(val);
+                else if (key == "se")
+                    vr.size_exponent = float(val);
+                else if (key == "mp")
+                    vr.max_parts = std::size_t(val);
+                else if (key == "cw")
+                    vr.confidence_weighted = val != 0.0;
+                else if (key == "bal")
+                    vr.balanced = val != 0.0;
+                else {
+                    std::fprintf(stderr, "bad variant key %s\n", key.c_str());
+                    return 2;
+                }
+            }
+            variant_params.push_back(vr);
+            methods.push_back({});
+            methods.back().name = "part-graph " + spec;
+        }
+    }
+    const int first_variant = int(methods.size()) - int(variant_params.size());
 
     std::optional<sim::ObjectSource> source;
     if (library) {
@@ -379,13 +435,28 @@ int main(int argc, char** argv) {
             ++frames;
             parts_total += parts.size();
             // Per-part predictions of every method (object-level methods: the object's).
-            std::vector<std::array<Category, kNumMethods>> part_pred(parts.size());
+            std::vector<std::vector<Category>> part_pred(
+                parts.size(), std::vector<Category>(methods.size(), Category::kNone));
             for (std::size_t k = 0; k < parts.size(); ++k) {
                 part_pred[k][kPg] = pg.part_categories[k];
             }
-            std::vector<std::array<Category, kNumMethods>> object_pred(r.objects.size());
+            std::vector<std::vector<Category>> object_pred(
+                r.objects.size(), std::vector<Category>(methods.size(), Category::kNone));
             std::vector<std::vector<std::size_t>> ids(r.objects.size());
             for (std::size_t k = 0; k < parts.size(); ++k) ids[part_object[k]].push_back(k);
+            for (std::size_t vi = 0; vi < variant_params.size(); ++vi) {
+                const int m = first_variant + int(vi);
+                const PartGraphResult vr = RecognizeParts(model, graph, raw, variant_params[vi]);
+                for (std::size_t k = 0; k < parts.size(); ++k) {
+                    part_pred[k][m] = vr.part_categories[k];
+                }
+                for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
+                    if (!ids[ob].empty()) {
+                        object_pred[ob][m] =
+                            ArgMaxCategory(MergePartProbabilities(vr, parts, ids[ob]));
+                    }
+                }
+            }
             // Baseline part features of the frame.
             std::vector<std::array<float, kNumCategories>> vm_part(parts.size()),
                 vs_part(parts.size());
@@ -413,7 +484,7 @@ int main(int argc, char** argv) {
                 }
             }
             for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
-                auto& op = object_pred[ob];
+                std::vector<Category>& op = object_pred[ob];
                 const auto& c = r.objects[ob].category;
                 op[kRules] = c.category;
                 op[kPg] = op[kPgRules] = Category::kNone;
@@ -476,9 +547,10 @@ int main(int argc, char** argv) {
                         const int t = gt_field->data[i];
                         if (t < 1 || t >= static_cast<int>(kNumCategories)) continue;
                         ++hist[t];
-                        for (int m = 0; m < num_methods; ++m) {
-                            const bool per_part =
-                                m == kPg || m == kVocabModelParts || m == kVocabStatsParts;
+                        for (int m = 0; m < int(methods.size()); ++m) {
+                            if (m >= num_methods && m < first_variant) continue;
+                            const bool per_part = m == kPg || m == kVocabModelParts ||
+                                                  m == kVocabStatsParts || m >= first_variant;
                             Category pred = per_part ? part_pred[k][m] : object_pred[ob][m];
                             if (m == kRules) pred = static_cast<Category>(r.point_categories[i]);
                             methods[m].AddPoint(t, pred);
@@ -487,7 +559,8 @@ int main(int argc, char** argv) {
                 }
                 const auto best = std::max_element(hist.begin(), hist.end()) - hist.begin();
                 if (hist[best] == 0) continue;
-                for (int m = 0; m < num_methods; ++m) {
+                for (int m = 0; m < int(methods.size()); ++m) {
+                    if (m >= num_methods && m < first_variant) continue;
                     methods[m].object.Add(static_cast<int>(best), int(object_pred[ob][m]));
                 }
             }
@@ -519,14 +592,15 @@ int main(int argc, char** argv) {
                 single_in_multi.Add(kept[v].second[i], static_cast<int>(single[v][i]));
             }
         }
-        for (int m = 0; m < num_methods; ++m) methods[m].EndScene();
+        for (auto& m : methods) m.EndScene();
         std::printf("scene %d: %zu objects, %zu frames done; part-graph %.3f, rules %.3f\n", s,
                     scene.objects.size(), frames, methods[kPg].scene_accuracy.back(),
                     methods[kRules].scene_accuracy.back());
         std::fflush(stdout);
     }
     if (matrices) {
-        for (int m = 0; m < num_methods; ++m) {
+        for (int m = 0; m < int(methods.size()); ++m) {
+            if (m >= num_methods && m < first_variant) continue;
             PrintConfusion(("per point, " + methods[m].name).c_str(), methods[m].point);
             PrintConfusion(("per object, " + methods[m].name).c_str(), methods[m].object);
         }
@@ -535,7 +609,8 @@ int main(int argc, char** argv) {
     std::printf("\nsummary over %d scenes (%zu points, %zu perceived objects with a category):\n",
                 scenes, methods[kPg].point.Total(), methods[kPg].object.Total());
     std::printf("%-56s %9s %9s %19s\n", "method", "per point", "per object", "per scene mean+-sd");
-    for (int m = 0; m < num_methods; ++m) {
+    for (int m = 0; m < int(methods.size()); ++m) {
+        if (m >= num_methods && m < first_variant) continue;
         const auto [mean, sd] = MeanStd(methods[m].scene_accuracy);
         std::printf("%-56s %9.3f %9.3f %11.3f +- %.3f\n", methods[m].name.c_str(),
                     methods[m].point.Accuracy(), methods[m].object.Accuracy(), mean, sd);
