@@ -3,21 +3,32 @@
 // touching objects from the other meshes (procedural objects without a library), six views per
 // scene. Prints per-point and per-part accuracy with a confusion matrix, the rule-based
 // categoriser's per-point accuracy on the same points, the multi-view gain (5 mm voxel votes) and
-// the time to categorise all parts of a 640x480 frame.
+// the time to categorise all parts of a 640x480 frame. Baselines on the same parts and points
+// (thesis Table 5.9), trained on the same training objects: a vocabulary of parts (k-means words
+// of the model's 24-value part descriptor and of the 24 statistical part features; part votes
+// through the words' categories, and bag-of-words histograms of objects classified by
+// --object-classifier) and a classifier of whole clusters (GRSD- and VFH). Per point and per
+// perceived object (truth: the majority category of its points), with confusion matrices and
+// the per-scene spread.
 //
 // usage: part_graph_eval [--meshes DIR] [--scenes N] [--seed S] [--max-meshes N]
 //                        [--size-weight W] [--balanced 0|1] [--k K] [--max-parts N]
 //                        [--table-scenes N] [--table-views N] [--objects N] [--train-meshes 0|1]
-//                        [--blend-weight W]
+//                        [--blend-weight W] [--baselines 0|1] [--words N] [--activations N]
+//                        [--object-classifier SPEC] [--cluster-size-weight W] [--matrices 0|1]
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/features/part_stats.hpp"
+#include "multicue/ml/classifier.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/recognition/part_vocabulary.hpp"
 #include "multicue/sim/mesh.hpp"
 #include "multicue/sim/objects.hpp"
 #include "multicue/sim/raycaster.hpp"
@@ -64,6 +75,117 @@ void PrintConfusion(const char* title, const Counts& c) {
     }
 }
 
+// One categoriser's counts: per point, per perceived object, per point in each scene.
+struct Method {
+    std::string name;
+    Counts point, object, scene;
+    std::vector<double> scene_accuracy;
+    void EndScene() {
+        if (scene.Total() > 0) scene_accuracy.push_back(scene.Accuracy());
+        scene = {};
+    }
+    void AddPoint(int truth, Category pred) {
+        point.Add(truth, static_cast<int>(pred));
+        scene.Add(truth, static_cast<int>(pred));
+    }
+};
+
+std::pair<double, double> MeanStd(const std::vector<double>& v) {
+    if (v.empty()) return {0.0, 0.0};
+    double m = 0.0;
+    for (double x : v) m += x;
+    m /= double(v.size());
+    double s = 0.0;
+    for (double x : v) s += (x - m) * (x - m);
+    return {m, v.size() > 1 ? std::sqrt(s / double(v.size() - 1)) : 0.0};
+}
+
+// A classifier of whole objects from one feature row per training object.
+struct ObjectClassifier {
+    std::unique_ptr<ml::Classifier> classifier;
+    void Fit(const std::vector<FeatureVector>& rows, const std::vector<Category>& labels,
+             const std::string& spec) {
+        ml::Dataset d = ml::Dataset::WithColumns(static_cast<std::size_t>(rows.at(0).size()));
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            d.AppendRow({rows[i].data(), static_cast<std::size_t>(rows[i].size())},
+                        std::string(kCategoryNames[static_cast<std::size_t>(labels[i])]));
+        }
+        classifier = ml::CreateClassifier(spec);
+        classifier->Fit(d);
+    }
+    Category Predict(const FeatureVector& row) const {
+        const ml::FeatureMatrix x = row.transpose();
+        const int c = classifier->Predict(x).at(0);
+        return ParseCategory(classifier->class_names().at(static_cast<std::size_t>(c)));
+    }
+};
+
+// Stored form of every part (row) with a voxel of its own; `keep` marks which rows qualified.
+FeatureMatrix MappedParts(const PartGraphModel& model, const FeatureMatrix& raw,
+                          std::vector<bool>* keep = nullptr) {
+    FeatureMatrix out(raw.rows(), kPartMappedSize);
+    Eigen::Index n = 0;
+    if (keep) keep->assign(static_cast<std::size_t>(raw.rows()), false);
+    for (Eigen::Index i = 0; i < raw.rows(); ++i) {
+        float grsd = 0.0f;
+        for (int j = 0; j < kPartGrsdSize; ++j) grsd += raw(i, j);
+        if (grsd <= 0.0f) continue;
+        model.MapDescriptor(raw.row(i).data(), out.row(n++).data());
+        if (keep) (*keep)[static_cast<std::size_t>(i)] = true;
+    }
+    out.conservativeResize(n, kPartMappedSize);
+    return out;
+}
+
+// Rows of `m` whose statistics are defined (not all zero).
+FeatureMatrix DefinedRows(const FeatureMatrix& m, std::vector<bool>* keep = nullptr) {
+    FeatureMatrix out(m.rows(), m.cols());
+    Eigen::Index n = 0;
+    if (keep) keep->assign(static_cast<std::size_t>(m.rows()), false);
+    for (Eigen::Index i = 0; i < m.rows(); ++i) {
+        if (m.row(i).cwiseAbs().sum() <= 0.0f) continue;
+        out.row(n++) = m.row(i);
+        if (keep) (*keep)[static_cast<std::size_t>(i)] = true;
+    }
+    out.conservativeResize(n, m.cols());
+    return out;
+}
+
+// A vocabulary of parts over one part feature and its bag-of-words object classifier.
+struct VocabularyBaseline {
+    PartVocabulary vocabulary;
+    ObjectClassifier objects;
+    std::size_t train_parts = 0;
+};
+
+VocabularyBaseline TrainVocabulary(const std::vector<FeatureMatrix>& object_parts,
+                                   const std::vector<Category>& labels,
+                                   const PartVocabularyParams& vp, const std::string& spec) {
+    VocabularyBaseline b;
+    std::size_t total = 0;
+    for (const auto& m : object_parts) total += static_cast<std::size_t>(m.rows());
+    FeatureMatrix all(static_cast<Eigen::Index>(total), object_parts.at(0).cols());
+    std::vector<Category> cats;
+    Eigen::Index r = 0;
+    for (std::size_t o = 0; o < object_parts.size(); ++o) {
+        for (Eigen::Index i = 0; i < object_parts[o].rows(); ++i) {
+            all.row(r++) = object_parts[o].row(i);
+            cats.push_back(labels[o]);
+        }
+    }
+    b.train_parts = total;
+    b.vocabulary = PartVocabulary::Train(all, cats, vp);
+    std::vector<FeatureVector> bows;
+    std::vector<Category> bow_labels;
+    for (std::size_t o = 0; o < object_parts.size(); ++o) {
+        if (object_parts[o].rows() == 0) continue;
+        bows.push_back(b.vocabulary.BagOfWords(object_parts[o]));
+        bow_labels.push_back(labels[o]);
+    }
+    b.objects.Fit(bows, bow_labels, spec);
+    return b;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -73,6 +195,13 @@ int main(int argc, char** argv) {
     PartGraphModel model;
     PartGraphRecognitionParams rp;
     float blend_weight = 0.2f;
+    int baselines = 1, matrices = 1;
+    PartVocabularyParams vp;
+    vp.words = 200;
+    vp.num_threads = 0;
+    std::string object_spec = "knn:k=5";
+    std::string variants;
+    ClusterDescriptorParams cluster_params;
     int table_scenes = training::PartGraphTrainingOptions{}.table_scenes, table_views = 4,
         objects = 8, train_meshes = 1;
     for (int i = 1; i + 1 < argc; i += 2) {
@@ -102,6 +231,28 @@ int main(int argc, char** argv) {
             objects = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--train-meshes"))
             train_meshes = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--baselines"))
+            baselines = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--matrices"))
+            matrices = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--words"))
+            vp.words = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--activations"))
+            vp.activations = std::strtoull(argv[i + 1], nullptr, 10);
+        else if (!std::strcmp(argv[i], "--variants"))
+            variants = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--distance-weighted"))
+            rp.distance_weighted = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--size-exponent"))
+            rp.size_exponent = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--object-classifier"))
+            object_spec = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--cluster-size-weight"))
+            cluster_params.size_weight = std::strtof(argv[i + 1], nullptr);
+        else {
+            std::fprintf(stderr, "unknown option %s\n", argv[i]);
+            return 2;
+        }
     }
     const bool library = std::filesystem::exists(std::filesystem::path(meshes) / "labels.csv");
     training::PartGraphTrainingOptions o;
@@ -116,6 +267,13 @@ int main(int argc, char** argv) {
         o.max_meshes = max_meshes;
         o.mesh_turntable = train_meshes != 0;
     }
+    std::vector<training::TrainingObject> train_objects;
+    if (baselines) {
+        o.objects_out = &train_objects;
+        o.cluster_descriptors = true;
+        o.cluster_params = cluster_params;
+        o.part_statistics = true;
+    }
     auto t0 = std::chrono::steady_clock::now();
     training::TrainPartGraphModel(model, o);
     const double train_s =
@@ -129,6 +287,106 @@ int main(int argc, char** argv) {
         table_views, double(model.descriptor_params.size_weight),
         rp.balanced ? "balanced" : "plain");
 
+    // Baselines trained on the same objects.
+    VocabularyBaseline vocab_model, vocab_stats;
+    ObjectClassifier whole;
+    if (baselines) {
+        t0 = std::chrono::steady_clock::now();
+        std::vector<FeatureMatrix> mapped, stats;
+        std::vector<Category> labels;
+        std::vector<FeatureVector> clusters;
+        for (const auto& t : train_objects) {
+            mapped.push_back(MappedParts(model, t.part_descriptors));
+            stats.push_back(DefinedRows(t.part_statistics));
+            labels.push_back(t.category);
+            clusters.push_back(t.cluster);
+        }
+        vocab_model = TrainVocabulary(mapped, labels, vp, object_spec);
+        PartVocabularyParams sp = vp;
+        sp.normalize = true;
+        vocab_stats = TrainVocabulary(stats, labels, sp, object_spec);
+        whole.Fit(clusters, labels, object_spec);
+        std::printf(
+            "baselines: %zu training objects, %zu / %zu parts, %zu words, %zu activations, object "
+            "classifier %s, %.1f s\n",
+            train_objects.size(), vocab_model.train_parts, vocab_stats.train_parts,
+            vocab_model.vocabulary.num_words(), vp.activations, object_spec.c_str(),
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    enum {
+        kPg,
+        kPgRules,
+        kRules,
+        kVocabModelParts,
+        kVocabModelBow,
+        kVocabStatsParts,
+        kVocabStatsBow,
+        kWhole,
+        kNumMethods
+    };
+    std::vector<Method> methods(kNumMethods);
+    methods[kPg].name = "part-graph hashing";
+    char blend_name[64];
+    std::snprintf(blend_name, sizeof blend_name, "part-graph+rules (weight %.2f)",
+                  double(blend_weight));
+    methods[kPgRules].name = blend_name;
+    methods[kRules].name = "rule-based categoriser (perceive default)";
+    methods[kVocabModelParts].name = "vocabulary of parts, model descriptor, part votes";
+    methods[kVocabModelBow].name = "vocabulary of parts, model descriptor, bag of words";
+    methods[kVocabStatsParts].name = "vocabulary of parts, 24 part statistics, part votes";
+    methods[kVocabStatsBow].name = "vocabulary of parts, 24 part statistics, bag of words";
+    methods[kWhole].name = "whole cluster, GRSD- + VFH";
+    int num_methods = baselines ? int(kNumMethods) : int(kVocabModelParts);
+    // Further part-graph recognition settings on the same model and parts ("k=10,dw=1;se=0.5").
+    std::vector<PartGraphRecognitionParams> variant_params;
+    {
+        std::size_t begin = 0;
+        while (begin < variants.size()) {
+            std::size_t end = variants.find(';', begin);
+            if (end == std::string::npos) end = variants.size();
+            const std::string spec = variants.substr(begin, end - begin);
+            begin = end + 1;
+            if (spec.empty()) continue;
+            PartGraphRecognitionParams vr = rp;
+            std::size_t b = 0;
+            while (b < spec.size()) {
+                std::size_t e = spec.find(',', b);
+                if (e == std::string::npos) e = spec.size();
+                const std::string kv = spec.substr(b, e - b);
+                b = e + 1;
+                const auto eq = kv.find('=');
+                if (eq == std::string::npos) {
+                    std::fprintf(stderr, "bad variant %s\n", kv.c_str());
+                    return 2;
+                }
+                const std::string key = kv.substr(0, eq);
+                const double val = std::strtod(kv.c_str() + eq + 1, nullptr);
+                if (key == "k")
+                    vr.k = std::size_t(val);
+                else if (key == "dw")
+                    vr.distance_weighted = val != 0.0;
+                else if (key == "off")
+                    vr.distance_offset = float(val);
+                else if (key == "se")
+                    vr.size_exponent = float(val);
+                else if (key == "mp")
+                    vr.max_parts = std::size_t(val);
+                else if (key == "cw")
+                    vr.confidence_weighted = val != 0.0;
+                else if (key == "bal")
+                    vr.balanced = val != 0.0;
+                else {
+                    std::fprintf(stderr, "bad variant key %s\n", key.c_str());
+                    return 2;
+                }
+            }
+            variant_params.push_back(vr);
+            methods.push_back({});
+            methods.back().name = "part-graph " + spec;
+        }
+    }
+    const int first_variant = int(methods.size()) - int(variant_params.size());
+
     std::optional<sim::ObjectSource> source;
     if (library) {
         auto all = sim::ReadMeshLibrary(meshes, sim::TabletopCategories());
@@ -139,7 +397,7 @@ int main(int argc, char** argv) {
         source.emplace();
     }
     PerceiveParams pp;
-    Counts point, part, rules, multi, single_in_multi, blend;
+    Counts part, multi, single_in_multi;
     double recog_ms = 0.0;
     std::size_t frames = 0, parts_total = 0;
     sim::TableSceneParams sp;
@@ -168,28 +426,143 @@ int main(int argc, char** argv) {
                     part_object.push_back(ob);
                 }
             const auto a = std::chrono::steady_clock::now();
-            const PartGraphResult pg = RecognizeParts(model, scan, parts, rp);
+            const PartGraph graph = BuildPartGraph(scan, parts, model.graph_params);
+            const FeatureMatrix raw = ComputePartDescriptors(scan, parts, model.descriptor_params);
+            const PartGraphResult pg = RecognizeParts(model, graph, raw, rp);
             recog_ms +=
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
                     .count();
             ++frames;
             parts_total += parts.size();
-            // part-graph+rules per object (as perceive blends them).
+            // Per-part predictions of every method (object-level methods: the object's).
+            std::vector<std::vector<Category>> part_pred(
+                parts.size(), std::vector<Category>(methods.size(), Category::kNone));
+            for (std::size_t k = 0; k < parts.size(); ++k) {
+                part_pred[k][kPg] = pg.part_categories[k];
+            }
+            std::vector<std::vector<Category>> object_pred(
+                r.objects.size(), std::vector<Category>(methods.size(), Category::kNone));
             std::vector<std::vector<std::size_t>> ids(r.objects.size());
             for (std::size_t k = 0; k < parts.size(); ++k) ids[part_object[k]].push_back(k);
-            for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
-                const auto& c = r.objects[ob].category;
-                Category cat = c.category;
-                if (cat != Category::kNone && !ids[ob].empty()) {
-                    cat = ArgMaxCategory(BlendCategoryProbabilities(
-                        c.probabilities, MergePartProbabilities(pg, parts, ids[ob]), blend_weight));
+            for (std::size_t vi = 0; vi < variant_params.size(); ++vi) {
+                const int m = first_variant + int(vi);
+                const PartGraphResult vr = RecognizeParts(model, graph, raw, variant_params[vi]);
+                for (std::size_t k = 0; k < parts.size(); ++k) {
+                    part_pred[k][m] = vr.part_categories[k];
                 }
-                for (std::size_t k : ids[ob])
+                for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
+                    if (!ids[ob].empty()) {
+                        object_pred[ob][m] =
+                            ArgMaxCategory(MergePartProbabilities(vr, parts, ids[ob]));
+                    }
+                }
+            }
+            // Baseline part features of the frame.
+            std::vector<std::array<float, kNumCategories>> vm_part(parts.size()),
+                vs_part(parts.size());
+            std::vector<bool> vm_keep, vs_keep;
+            FeatureMatrix vm_rows, vs_rows;
+            if (baselines) {
+                vm_rows = MappedParts(model, raw, &vm_keep);
+                const FeatureMatrix stats = training::ComputePartStatisticsRows(
+                    scan, parts, views[v].linear().transpose() * Eigen::Vector3f::UnitZ());
+                vs_rows = DefinedRows(stats, &vs_keep);
+                Eigen::Index im = 0, is = 0;
+                for (std::size_t k = 0; k < parts.size(); ++k) {
+                    vm_part[k] = {};
+                    vs_part[k] = {};
+                    if (vm_keep[k]) {
+                        vm_part[k] = vocab_model.vocabulary.PartProbabilities(
+                            {vm_rows.row(im++).data(), kPartMappedSize});
+                    }
+                    if (vs_keep[k]) {
+                        vs_part[k] = vocab_stats.vocabulary.PartProbabilities(
+                            {vs_rows.row(is++).data(), kPartStatsSize});
+                    }
+                    part_pred[k][kVocabModelParts] = ArgMaxCategory(vm_part[k]);
+                    part_pred[k][kVocabStatsParts] = ArgMaxCategory(vs_part[k]);
+                }
+            }
+            for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
+                std::vector<Category>& op = object_pred[ob];
+                const auto& c = r.objects[ob].category;
+                op[kRules] = c.category;
+                op[kPg] = op[kPgRules] = Category::kNone;
+                if (!ids[ob].empty()) {
+                    const auto merged = MergePartProbabilities(pg, parts, ids[ob]);
+                    op[kPg] = ArgMaxCategory(merged);
+                    // part-graph+rules per object (as perceive blends them).
+                    op[kPgRules] = c.category == Category::kNone
+                                       ? Category::kNone
+                                       : ArgMaxCategory(BlendCategoryProbabilities(
+                                             c.probabilities, merged, blend_weight));
+                }
+                if (!baselines) continue;
+                // Part votes merged per object (point-weighted), bags of words, whole cluster.
+                std::array<float, kNumCategories> pm{}, ps{};
+                FeatureMatrix bm(0, kPartMappedSize), bs(0, kPartStatsSize);
+                for (std::size_t k : ids[ob]) {
+                    for (std::size_t cc = 0; cc < kNumCategories; ++cc) {
+                        pm[cc] += float(parts[k].size()) * vm_part[k][cc];
+                        ps[cc] += float(parts[k].size()) * vs_part[k][cc];
+                    }
+                }
+                {
+                    Eigen::Index im = 0, is = 0;
+                    for (std::size_t k = 0; k < parts.size(); ++k) {
+                        const bool mine = part_object[k] == ob;
+                        if (vm_keep[k]) {
+                            if (mine) {
+                                bm.conservativeResize(bm.rows() + 1, Eigen::NoChange);
+                                bm.row(bm.rows() - 1) = vm_rows.row(im);
+                            }
+                            ++im;
+                        }
+                        if (vs_keep[k]) {
+                            if (mine) {
+                                bs.conservativeResize(bs.rows() + 1, Eigen::NoChange);
+                                bs.row(bs.rows() - 1) = vs_rows.row(is);
+                            }
+                            ++is;
+                        }
+                    }
+                }
+                op[kVocabModelParts] = ArgMaxCategory(pm);
+                op[kVocabStatsParts] = ArgMaxCategory(ps);
+                op[kVocabModelBow] =
+                    bm.rows() ? vocab_model.objects.Predict(vocab_model.vocabulary.BagOfWords(bm))
+                              : Category::kNone;
+                op[kVocabStatsBow] =
+                    bs.rows() ? vocab_stats.objects.Predict(vocab_stats.vocabulary.BagOfWords(bs))
+                              : Category::kNone;
+                const FeatureVector cd =
+                    ComputeClusterDescriptor(scan, r.objects[ob].indices, cluster_params);
+                op[kWhole] = cd.cwiseAbs().sum() > 0.0f ? whole.Predict(cd) : Category::kNone;
+            }
+            // Per-point and per-object counts.
+            for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
+                std::array<std::size_t, kNumCategories> hist{};
+                for (std::size_t k : ids[ob]) {
                     for (Index i : parts[k]) {
                         const int t = gt_field->data[i];
-                        if (t >= 1 && t < static_cast<int>(kNumCategories))
-                            blend.Add(t, static_cast<int>(cat));
+                        if (t < 1 || t >= static_cast<int>(kNumCategories)) continue;
+                        ++hist[t];
+                        for (int m = 0; m < int(methods.size()); ++m) {
+                            if (m >= num_methods && m < first_variant) continue;
+                            const bool per_part = m == kPg || m == kVocabModelParts ||
+                                                  m == kVocabStatsParts || m >= first_variant;
+                            Category pred = per_part ? part_pred[k][m] : object_pred[ob][m];
+                            if (m == kRules) pred = static_cast<Category>(r.point_categories[i]);
+                            methods[m].AddPoint(t, pred);
+                        }
                     }
+                }
+                const auto best = std::max_element(hist.begin(), hist.end()) - hist.begin();
+                if (hist[best] == 0) continue;
+                for (int m = 0; m < int(methods.size()); ++m) {
+                    if (m >= num_methods && m < first_variant) continue;
+                    methods[m].object.Add(static_cast<int>(best), int(object_pred[ob][m]));
+                }
             }
             std::vector<Eigen::Vector3f> world;
             std::vector<std::array<float, kNumCategories>> votes;
@@ -201,8 +574,6 @@ int main(int argc, char** argv) {
                     const int t = gt_field->data[i];
                     if (t < 1 || t >= static_cast<int>(kNumCategories)) continue;
                     ++hist[t];
-                    point.Add(t, static_cast<int>(pg.part_categories[k]));
-                    rules.Add(t, r.point_categories[i]);
                     world.push_back(views[v] * scan.points[i]);
                     votes.push_back(pg.part_probabilities[k]);
                     truth.push_back(t);
@@ -221,14 +592,30 @@ int main(int argc, char** argv) {
                 single_in_multi.Add(kept[v].second[i], static_cast<int>(single[v][i]));
             }
         }
-        std::printf("scene %d: %zu objects, %zu frames done\n", s, scene.objects.size(), frames);
+        for (auto& m : methods) m.EndScene();
+        std::printf("scene %d: %zu objects, %zu frames done; part-graph %.3f, rules %.3f\n", s,
+                    scene.objects.size(), frames, methods[kPg].scene_accuracy.back(),
+                    methods[kRules].scene_accuracy.back());
         std::fflush(stdout);
     }
-    PrintConfusion("per point, part-graph hashing", point);
-    PrintConfusion("per part (segment), part-graph hashing", part);
-    PrintConfusion("per point, rule-based categoriser (perceive default)", rules);
-    std::printf("per point, part-graph+rules (weight %.2f): %.3f\n", double(blend_weight),
-                blend.Accuracy());
+    if (matrices) {
+        for (int m = 0; m < int(methods.size()); ++m) {
+            if (m >= num_methods && m < first_variant) continue;
+            PrintConfusion(("per point, " + methods[m].name).c_str(), methods[m].point);
+            PrintConfusion(("per object, " + methods[m].name).c_str(), methods[m].object);
+        }
+        PrintConfusion("per part (segment), part-graph hashing", part);
+    }
+    std::printf("\nsummary over %d scenes (%zu points, %zu perceived objects with a category):\n",
+                scenes, methods[kPg].point.Total(), methods[kPg].object.Total());
+    std::printf("%-56s %9s %9s %19s\n", "method", "per point", "per object", "per scene mean+-sd");
+    for (int m = 0; m < int(methods.size()); ++m) {
+        if (m >= num_methods && m < first_variant) continue;
+        const auto [mean, sd] = MeanStd(methods[m].scene_accuracy);
+        std::printf("%-56s %9.3f %9.3f %11.3f +- %.3f\n", methods[m].name.c_str(),
+                    methods[m].point.Accuracy(), methods[m].object.Accuracy(), mean, sd);
+    }
+    std::printf("per part (segment), part-graph hashing: %.3f\n", part.Accuracy());
     std::printf("multi-view (6 views, 5 mm voxel votes): %.3f per point vs %.3f single views\n",
                 multi.Accuracy(), single_in_multi.Accuracy());
     std::printf(

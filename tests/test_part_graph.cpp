@@ -253,6 +253,14 @@ TEST(PartGraphModel, BalancedVotesDivideByClassShare) {
     EXPECT_NEAR(plain[static_cast<int>(Category::kBox)], 0.75f, 1e-6f);
     EXPECT_NEAR(balanced[static_cast<int>(Category::kBox)], 0.5f, 1e-6f);
     EXPECT_NEAR(balanced[static_cast<int>(Category::kSphere)], 0.5f, 1e-6f);
+    // Distance-weighted: the three box rows lie at distance 0, the sphere row at sqrt(2)
+    // (Jeffries-Matusita of disjoint histograms): 3 / 0.05 against 1 / (sqrt(2) + 0.05).
+    const auto near = m.Classify(key, box.row(0).data(), 100, nullptr, false, 0.05f);
+    const float wb = 3.0f / 0.05f, ws = 1.0f / (std::sqrt(2.0f) + 0.05f);
+    EXPECT_NEAR(near[static_cast<int>(Category::kBox)], wb / (wb + ws), 1e-4f);
+    PartGraphRecognitionParams bad;
+    bad.distance_offset = 0.0f;
+    EXPECT_THROW(RecognizeParts(m, g, box, bad), InvalidArgument);
 }
 
 TEST(PartGraphModel, BlendIsAWeightedProductOfExperts) {

@@ -68,7 +68,8 @@ TEST(PartGraphTraining, DeterministicAcrossThreads) {
 // Table scenes segmented by perceive: labelled objects of the scenes' categories only, the same
 // model whatever the thread count.
 TEST(PartGraphTraining, TableScenesAddPerceivedObjects) {
-    auto train = [](int threads) {
+    std::vector<training::TrainingObject> objects;
+    auto train = [&](int threads, bool baselines) {
         training::PartGraphTrainingOptions o;
         o.categories = kCats;
         o.objects_per_category = 0;
@@ -76,17 +77,30 @@ TEST(PartGraphTraining, TableScenesAddPerceivedObjects) {
         o.table_views = 1;
         o.seed = 5;
         o.num_threads = threads;
+        if (baselines) {
+            o.objects_out = &objects;
+            o.cluster_descriptors = true;
+            o.part_statistics = true;
+        }
         PartGraphModel m;
         EXPECT_TRUE(training::TrainPartGraphModel(m, o));
         return m;
     };
-    const PartGraphModel m = train(1);
+    const PartGraphModel m = train(1, true);
+    // Every labelled object is handed over with its baseline features.
+    ASSERT_FALSE(objects.empty());
+    for (const auto& t : objects) {
+        EXPECT_NE(t.category, Category::kNone);
+        EXPECT_GT(t.part_descriptors.rows(), 0);
+        EXPECT_EQ(t.part_statistics.rows(), t.part_descriptors.rows());
+        EXPECT_EQ(t.cluster.size(), kClusterDescriptorSize);
+    }
     EXPECT_GT(m.num_rows(), 0u);
     const auto per = m.rows_per_category();
     std::size_t in_cats = 0;
     for (const auto& c : kCats) in_cats += per[static_cast<std::size_t>(ParseCategory(c))];
     EXPECT_EQ(in_cats, m.num_rows());
-    EXPECT_EQ(m.Serialize(), train(2).Serialize());
+    EXPECT_EQ(m.Serialize(), train(2, false).Serialize());
     training::PartGraphTrainingOptions bad;
     bad.table_scenes = -1;
     PartGraphModel unused;

@@ -11,6 +11,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/features/part_stats.hpp"
 #include "multicue/search/kdtree.hpp"
 #include "multicue/sim/mesh.hpp"
 #include "multicue/sim/objects.hpp"
@@ -37,6 +38,27 @@ std::vector<Indices> DecomposeObject(PointCloud& scan, const Indices& object,
     return RegionGrowing(scan, tree, rg).parts;
 }
 
+FeatureMatrix ComputePartStatisticsRows(const PointCloud& scan, const std::vector<Indices>& parts,
+                                        const Eigen::Vector3f& up) {
+    FeatureMatrix out =
+        FeatureMatrix::Zero(static_cast<Eigen::Index>(parts.size()), kPartStatsSize);
+    PartStatsParams sp;
+    sp.up = up.normalized();
+    sp.num_threads = 1;
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        PointCloud part;
+        for (Index i : parts[p]) {
+            if (!scan.points[i].allFinite()) continue;
+            part.points.push_back(scan.points[i]);
+            part.normals.push_back(scan.normals[i]);
+        }
+        part.width = static_cast<std::uint32_t>(part.points.size());
+        part.height = 1;
+        out.row(static_cast<Eigen::Index>(p)) = ComputePartStatistics(part, sp).transpose();
+    }
+    return out;
+}
+
 namespace {
 
 struct Job {
@@ -48,7 +70,18 @@ struct Sample {
     FeatureMatrix descriptors;
     PartGraph graph;
     Category category;
+    FeatureMatrix statistics;
+    FeatureVector cluster;
 };
+
+// The optional baseline features of one training object.
+void AddBaselineFeatures(Sample& s, const PointCloud& scan, const std::vector<Indices>& parts,
+                         const Indices& object, const Eigen::Vector3f& up,
+                         const PartGraphTrainingOptions& o) {
+    if (!o.objects_out) return;
+    if (o.cluster_descriptors) s.cluster = ComputeClusterDescriptor(scan, object, o.cluster_params);
+    if (o.part_statistics) s.statistics = ComputePartStatisticsRows(scan, parts, up);
+}
 
 }  // namespace
 
@@ -147,7 +180,12 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
                 const auto parts = DecomposeObject(scan, object, perceive);
                 if (parts.empty()) continue;
                 Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params),
-                         BuildPartGraph(scan, parts, model.graph_params), category};
+                         BuildPartGraph(scan, parts, model.graph_params),
+                         category,
+                         {},
+                         {}};
+                AddBaselineFeatures(s, scan, parts, object,
+                                    poses[v].linear().transpose() * Eigen::Vector3f::UnitZ(), o);
                 samples[j].push_back(std::move(s));
             }
             if (progress) progress->Advance();
@@ -188,7 +226,12 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
                     if (hist[best] == 0 || 10 * hist[best] < 6 * obj.indices.size()) continue;
                     Sample sample{ComputePartDescriptors(scan, obj.parts, model.descriptor_params),
                                   BuildPartGraph(scan, obj.parts, model.graph_params),
-                                  static_cast<Category>(best)};
+                                  static_cast<Category>(best),
+                                  {},
+                                  {}};
+                    AddBaselineFeatures(sample, scan, obj.parts, obj.indices,
+                                        views[v].linear().transpose() * Eigen::Vector3f::UnitZ(),
+                                        o);
                     samples[jobs.size() + s].push_back(std::move(sample));
                 }
             }
@@ -202,6 +245,11 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             tp.seed = sim::SubSeed(o.train.seed, j * 1000 + v);
             model.AddObject(samples[j][v].descriptors, samples[j][v].graph, samples[j][v].category,
                             tp);
+            if (o.objects_out) {
+                o.objects_out->push_back(
+                    {std::move(samples[j][v].descriptors), std::move(samples[j][v].statistics),
+                     std::move(samples[j][v].cluster), samples[j][v].category});
+            }
         }
     }
     model.Build();

@@ -13,10 +13,19 @@
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/recognition/part_vocabulary.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/system/perceive.hpp"
 
 namespace multicue::training {
+
+/// One labelled training object as the model saw it (for baselines trained on the same data).
+struct TrainingObject {
+    FeatureMatrix part_descriptors;  ///< raw part descriptors (ComputePartDescriptors)
+    FeatureMatrix part_statistics;   ///< the 24 features of every part (with part_statistics)
+    FeatureVector cluster;           ///< ComputeClusterDescriptor (with cluster_descriptors)
+    Category category = Category::kNone;
+};
 
 struct PartGraphTrainingOptions {
     int objects_per_category = 8;              ///< procedural objects per category (0: none)
@@ -41,7 +50,18 @@ struct PartGraphTrainingOptions {
     int table_views = 4;
     sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
     PartGraphTrainParams train{};
+    /// When set, receives every labelled object added to the model, in a fixed order (turntable
+    /// scans, then table-scene objects).
+    std::vector<TrainingObject>* objects_out = nullptr;
+    bool cluster_descriptors = false;  ///< fill TrainingObject::cluster
+    ClusterDescriptorParams cluster_params{};
+    bool part_statistics = false;  ///< fill TrainingObject::part_statistics (up = world z)
 };
+
+/// The 24 statistical features (features/part_stats.hpp) of every part, `up` given in the frame
+/// of `scan` (which needs normals); one row per part.
+FeatureMatrix ComputePartStatisticsRows(const PointCloud& scan, const std::vector<Indices>& parts,
+                                        const Eigen::Vector3f& up);
 
 /// Perceive's decomposition of one scanned object: organized normals on the object's pixels and
 /// region-growing parts (PerceiveParams::parts) of `object` (indices into `scan`). Sets normals on

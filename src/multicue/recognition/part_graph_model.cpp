@@ -258,7 +258,8 @@ std::uint64_t PartGraphModel::ResolveKey(std::uint64_t key, bool* fallback) cons
 
 std::array<float, kNumCategories> PartGraphModel::Classify(std::uint64_t key,
                                                            const float* descriptor, std::size_t k,
-                                                           bool* fallback, bool balanced) const {
+                                                           bool* fallback, bool balanced,
+                                                           float distance_offset) const {
     if (!built_) throw InvalidArgument("part-graph model: Build() before Classify()");
     std::array<float, kNumCategories> p{};
     const std::uint64_t resolved = ResolveKey(key, fallback);
@@ -271,7 +272,8 @@ std::array<float, kNumCategories> PartGraphModel::Classify(std::uint64_t key,
     if (nn.empty()) return p;
     float total = 0.0f;
     for (const auto& n : nn) {
-        const float w = balanced ? class_weight_[b.labels[n.row]] : 1.0f;
+        float w = balanced ? class_weight_[b.labels[n.row]] : 1.0f;
+        if (distance_offset > 0.0f) w /= std::sqrt(n.distance) + distance_offset;
         p[b.labels[n.row]] += w;
         total += w;
     }
@@ -375,6 +377,9 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
                                const PartGraphRecognitionParams& params) {
     if (params.k == 0) throw InvalidArgument("k must be >= 1");
     if (!(params.size_exponent >= 0.0f)) throw InvalidArgument("size_exponent must be >= 0");
+    if (!(params.distance_offset > 0.0f) || !std::isfinite(params.distance_offset)) {
+        throw InvalidArgument("distance_offset must be > 0 and finite");
+    }
     if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
         (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
         throw InvalidArgument("descriptors must have one row of kPartDescriptorSize per part");
@@ -390,7 +395,8 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
         if (GrsdSum(desc.data()) <= 0.0f) return true;
         bool fallback = false;
         const auto p = model.Classify(SubgraphKey(graph, vs), desc.data(), params.k, &fallback,
-                                      params.balanced);
+                                      params.balanced,
+                                      params.distance_weighted ? params.distance_offset : 0.0f);
         float conf = *std::max_element(p.begin(), p.end());
         if (conf <= 0.0f) return true;
         ++result.subgraphs;

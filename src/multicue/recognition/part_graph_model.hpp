@@ -90,6 +90,10 @@ struct PartGraphRecognitionParams {
     /// Divide each neighbour's vote by its category's share of the stored rows (so categories
     /// with few stored subgraphs, e.g. flat objects of few parts, are not outvoted).
     bool balanced = true;
+    /// Weight each neighbour's vote by 1 / (distance + distance_offset) (distance in the stored
+    /// descriptor space); off: every neighbour counts once.
+    bool distance_weighted = false;
+    float distance_offset = 0.05f;       ///< > 0
     std::size_t max_subgraphs = 200000;  ///< enumeration cap per scene
 };
 
@@ -124,10 +128,12 @@ class PartGraphModel {
     /// Category frequencies of the k nearest stored descriptors for one subgraph key (raw
     /// descriptor, kPartDescriptorSize values); sets `fallback` when the key was not stored.
     /// With `balanced`, votes are divided by their category's share of the rows (then
-    /// renormalised). All zero if no bucket of that size exists.
+    /// renormalised). With distance_offset > 0, each vote is also weighted by
+    /// 1 / (distance + distance_offset). All zero if no bucket of that size exists.
     std::array<float, kNumCategories> Classify(std::uint64_t key, const float* descriptor,
                                                std::size_t k, bool* fallback = nullptr,
-                                               bool balanced = false) const;
+                                               bool balanced = false,
+                                               float distance_offset = 0.0f) const;
     /// The stored form of a raw descriptor (kPartMappedSize values into `out`).
     void MapDescriptor(const float* raw, float* out) const;
 
