@@ -124,6 +124,32 @@ TEST(Perceive, NoTableGivesNullSupportAndObjectsFromTheWholeCloud) {
     EXPECT_TRUE(j["support"].is_null());
 }
 
+TEST(Perceive, GuidedFitsKeepTheDemoSceneModels) {
+    // RSD-guided sampling changes which samples are drawn, not what the models converge to.
+    const auto& s = DemoScene();
+    PerceiveParams guided;
+    guided.guided_fits = true;
+    const PerceiveResult a = Perceive(s.cloud, PerceiveParams{});
+    const PerceiveResult b = Perceive(s.cloud, guided);
+    ASSERT_EQ(a.objects.size(), b.objects.size());
+    for (std::size_t k = 0; k < a.objects.size(); ++k) {
+        const auto& ma = a.objects[k].model;
+        const auto& mb = b.objects[k].model;
+        EXPECT_EQ(a.objects[k].category.category, b.objects[k].category.category);
+        ASSERT_EQ(ma.box.has_value(), mb.box.has_value());
+        ASSERT_EQ(ma.cylinder.has_value(), mb.cylinder.has_value());
+        if (ma.box) {
+            EXPECT_LT((ma.box->extents - mb.box->extents).norm(), 0.005f);
+        }
+        if (ma.cylinder) {
+            EXPECT_NEAR(ma.cylinder->radius, mb.cylinder->radius, 0.002f);
+        }
+        EXPECT_TRUE(a.objects[k].part_probabilities.empty());  // rule-based categories
+    }
+    guided.guided_rsd.radius = -1.0f;
+    EXPECT_THROW(Perceive(s.cloud, guided), InvalidArgument);
+}
+
 TEST(Perceive, DeterministicAndThreadIndependent) {
     const auto& s = DemoScene();
     PerceiveParams one;

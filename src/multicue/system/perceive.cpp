@@ -146,6 +146,9 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
     }
     const PartGraphResult r = RecognizeParts(*model, cloud, parts, params.part_graph_recognition);
     for (std::size_t k = 0; k < objects.size(); ++k) {
+        objects[k].part_probabilities.clear();
+        for (std::size_t id : ids[k])
+            objects[k].part_probabilities.push_back(r.part_probabilities[id]);
         CategoryResult& c = objects[k].category;
         if (c.category == Category::kNone || ids[k].empty()) continue;  // too few points
         auto p = MergePartProbabilities(r, parts, ids[k]);

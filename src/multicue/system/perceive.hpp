@@ -4,6 +4,7 @@
 /// 3.2.1, 4.2.1). Every parameter lives in PerceiveParams; ReadPerceiveParams maps it to a
 /// parameter file.
 
+#include <array>
 #include <map>
 #include <memory>
 #include <optional>
@@ -17,6 +18,7 @@
 #include "multicue/io/config.hpp"
 #include "multicue/recognition/geometric_category.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/reconstruction/fit_guidance.hpp"
 #include "multicue/reconstruction/part_count_model.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
 #include "multicue/reconstruction/rotational_model.hpp"
@@ -86,6 +88,11 @@ struct PerceiveParams {
     /// Samples 1 cm apart, as the grid's cells.
     bool verify_models = true;
     VerificationParams verification{.sample_spacing = 0.01f, .max_invalid_ratio = 0.25f};
+    /// Box and cylinder fits sample by RSD (planar points for boxes, curved ones for cylinders)
+    /// and, with a part-graph categoriser, weight sampling and scoring by each point's part
+    /// probability of the fitted shape (sections 5.4.1, 5.4.2.1; FitGuidance).
+    bool guided_fits = false;
+    RsdParams guided_rsd{};  ///< RSD of the guidance (neighbourhoods among the object's points)
     /// A primitive explaining less than this share of its object's points is replaced [-].
     float min_model_inlier_ratio = 0.75f;
     /// Rejected or poorly fitting primitives are replaced by a triangulated mesh of the object's
@@ -189,6 +196,9 @@ struct PerceivedObject {
     int id = 0;       ///< 1-based, as in labels.pcd's `object` field
     Indices indices;  ///< the object's points, ascending
     std::vector<Indices> parts;
+    /// Per part (same order as `parts`), the part-graph categoriser's distribution; empty with the
+    /// rule-based categoriser.
+    std::vector<std::array<float, kNumCategories>> part_probabilities;
     CategoryResult category;
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
     ObjectModel model;

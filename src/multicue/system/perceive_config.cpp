@@ -186,6 +186,9 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     concentric.Get("distance", p.concentric_distance, "axis to axis at most [m]");
     concentric.Get("radius_ratio", p.concentric_radius_ratio,
                    "radii differ by at most this share of the larger one");
+    models.Get("guided_fits", p.guided_fits,
+               "box/cylinder fits sample by RSD and weight by part-graph part probabilities");
+    models.Get("guided_rsd_radius", p.guided_rsd.radius, "RSD neighbourhood radius [m]");
     auto contained = models.Section("contained");
     contained.Get("enabled", p.merge_contained,
                   "join objects lying inside a container's cylinder or surface of revolution");

@@ -259,10 +259,43 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
     const Eigen::Vector3f up = PlaneUp(plane);
     const bool upright_possible = !up.isZero();
     float inlier_ratio = 0.0f;
+    // Guidance: RSD r_min of the object's points, and each point's part probability of the shape.
+    std::vector<float> rsd, box_prior, round_prior;
+    FitGuidance box_guidance, round_guidance;
+    if (params.guided_fits && cloud.HasNormals()) {
+        RsdParams rp = params.guided_rsd;
+        rp.num_threads = 1;
+        rsd = RsdMinRadii(cloud, object.indices, rp);
+        box_guidance.rsd_min_radius = round_guidance.rsd_min_radius = rsd;
+        if (object.part_probabilities.size() == object.parts.size() && !object.parts.empty()) {
+            box_prior.assign(cloud.size(), 0.0f);
+            round_prior.assign(cloud.size(), 0.0f);
+            for (std::size_t k = 0; k < object.parts.size(); ++k) {
+                const auto& q = object.part_probabilities[k];
+                const auto at = [&](Category x) { return q[static_cast<std::size_t>(x)]; };
+                for (Index i : object.parts[k]) {
+                    box_prior[i] = std::clamp(at(Category::kBox) + at(Category::kFlat), 0.0f, 1.0f);
+                    round_prior[i] = std::clamp(
+                        at(Category::kCylinder) + at(Category::kSphere) + at(Category::kPlate),
+                        0.0f, 1.0f);
+                }
+            }
+            // Points outside every part keep a neutral prior.
+            std::vector<char> in_part(cloud.size(), 0);
+            for (const auto& part : object.parts) {
+                for (Index i : part) in_part[i] = 1;
+            }
+            for (Index i : object.indices) {
+                if (!in_part[i]) box_prior[i] = round_prior[i] = 0.5f;
+            }
+            box_guidance.shape_prior = box_prior;
+            round_guidance.shape_prior = round_prior;
+        }
+    }
     if (c == Category::kCylinder || c == Category::kPlate) {
         CylinderModelParams p = params.cylinder;
         p.sac.num_threads = 1;
-        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p);
+        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p, round_guidance);
         if (cyl.found) {
             model.mesh = CylinderMesh(cyl);
             model.cylinder = cyl;
@@ -271,7 +304,7 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
     }
     if (!model.cylinder) {
         BoxModel box = (c == Category::kBox || c == Category::kFlat) && upright_possible
-                           ? FitUprightBox(cloud, object.indices, plane, params.box)
+                           ? FitUprightBox(cloud, object.indices, plane, params.box, box_guidance)
                            : FitOrientedBoundingBox(cloud, object.indices, params.box);
         if (!box.found) box = FitOrientedBoundingBox(cloud, object.indices, params.box);
         if (box.found) {
