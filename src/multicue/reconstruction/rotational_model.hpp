@@ -38,7 +38,12 @@ struct RotationalFitParams {
     /// With an up direction: the axis within this angle of up [deg] (90 = any axis; small values
     /// give an upright prior).
     float max_tilt_deg = 90.0f;
-    float profile_step = 0.005f;     ///< height bin of the contour [m]; > 0
+    float profile_step = 0.005f;  ///< height bin of the contour [m]; > 0
+    /// Refine the axis by the thinnest contour (see the file comment).
+    bool profile_refinement = true;
+    float profile_tolerance = 0.003f;  ///< Huber scale of the contour residuals [m]; > 0
+    float rim_weight = 1.0f;  ///< weight of the top edge's level spread in the refinement; >= 0
+    float cap_weight = 1.0f;  ///< weight of the cap points' height spread in the refinement; >= 0
     float inlier_threshold = 0.01f;  ///< radial distance to the contour of an inlier [m]; > 0
     float min_radius = 0.003f;       ///< contour radii below this are raised to it [m]
 };
@@ -51,6 +56,9 @@ struct RotationalModel {
     std::vector<float> radii;    ///< radius at each height [m]
     float inlier_ratio = 0.0f;   ///< share of points within inlier_threshold of the surface [-]
     float axis_cost = 0.0f;      ///< mean truncated squared line distance, relative to t^2 [-]
+    /// Spread of the contour about the axis: root of the mean Huber loss of the radius residuals
+    /// of the side points (0 without profile refinement) [m].
+    float profile_spread = 0.0f;
 
     /// Radius at height h (linear interpolation; 0 outside the contour).
     float RadiusAt(float h) const;
