@@ -510,7 +510,10 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
         const Eigen::Vector3d a0 = best.direction, c0 = best.center;
         std::vector<Eigen::Vector3d> side, cap, all;
         std::vector<char> inner, down;
-        for (const auto& sample : samples) {
+        const std::size_t refine_stride =
+            (samples.size() + params.profile_points - 1) / params.profile_points;
+        for (std::size_t k = 0; k < samples.size(); k += refine_stride) {
+            const Sample& sample = samples[k];
             all.push_back(sample.p);
             const Eigen::Vector3d v = sample.n.cross(a0);
             const double s = v.norm();

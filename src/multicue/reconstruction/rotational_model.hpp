@@ -41,7 +41,8 @@ struct RotationalFitParams {
     float profile_step = 0.005f;  ///< height bin of the contour [m]; > 0
     /// Refine the axis by the thinnest contour (see the file comment).
     bool profile_refinement = true;
-    float profile_tolerance = 0.003f;  ///< Huber scale of the contour residuals [m]; > 0
+    std::size_t profile_points = 1000;  ///< at most this many points in the refinement; >= 10
+    float profile_tolerance = 0.003f;   ///< Huber scale of the contour residuals [m]; > 0
     float rim_weight = 1.0f;  ///< weight of the top edge's level spread in the refinement; >= 0
     float cap_weight = 1.0f;  ///< weight of the cap points' height spread in the refinement; >= 0
     float inlier_threshold = 0.01f;  ///< radial distance to the contour of an inlier [m]; > 0
