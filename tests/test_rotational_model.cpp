@@ -223,6 +223,18 @@ TEST(RotationalModel, BadInputEmptyInputAndDeterminism) {
     RotationalFitParams bad;
     bad.line_threshold = 0.0f;
     EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad), InvalidArgument);
+    RotationalFitParams bad_tolerance;
+    bad_tolerance.profile_tolerance = 0.0f;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_tolerance),
+                 InvalidArgument);
+    RotationalFitParams bad_points;
+    bad_points.profile_points = 5;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_points),
+                 InvalidArgument);
+    RotationalFitParams bad_weight;
+    bad_weight.rim_weight = -1.0f;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_weight),
+                 InvalidArgument);
     PointCloud bare = cloud;
     bare.normals.clear();
     EXPECT_THROW(FitRotationalModel(bare, All(bare), none, no_plane), DataError);

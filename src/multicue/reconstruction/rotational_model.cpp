@@ -348,6 +348,23 @@ Eigen::Matrix<double, N, 1> NelderMead(const F& f, const Eigen::Matrix<double, N
     return x[best];
 }
 
+/// The truncated line-to-line cost of the axis with direction `a` through `c`.
+double LineCost(const std::vector<Sample>& samples, const Eigen::Vector3d& a,
+                const Eigen::Vector3d& c, double t, double sin_parallel) {
+    double cost = 0.0;
+    for (const auto& sample : samples) {
+        const Eigen::Vector3d v = sample.n.cross(a);
+        const double s = v.norm();
+        if (s < sin_parallel) {
+            cost += 0.25 * t * t;
+            continue;
+        }
+        const double d = (v / s).dot(sample.p - c);
+        cost += std::min(d * d, t * t);
+    }
+    return cost;
+}
+
 /// About `count` directions spread evenly over the cap within max_tilt of `pole` (a hemisphere
 /// for 90 degrees): a Fibonacci spiral in height.
 std::vector<Eigen::Vector3d> CapDirections(const Eigen::Vector3d& pole, double max_tilt_rad,
@@ -387,6 +404,12 @@ void CheckParams(const RotationalFitParams& p) {
         bad(fmt::format("profile_step must be > 0, got {}", p.profile_step));
     if (!(p.inlier_threshold > 0.0f))
         bad(fmt::format("inlier_threshold must be > 0, got {}", p.inlier_threshold));
+    if (p.profile_points < 10)
+        bad(fmt::format("profile_points must be >= 10, got {}", p.profile_points));
+    if (!(p.rim_weight >= 0.0f && std::isfinite(p.rim_weight)))
+        bad(fmt::format("rim_weight must be >= 0, got {}", p.rim_weight));
+    if (!(p.cap_weight >= 0.0f && std::isfinite(p.cap_weight)))
+        bad(fmt::format("cap_weight must be >= 0, got {}", p.cap_weight));
     if (!(p.profile_tolerance > 0.0f))
         bad(fmt::format("profile_tolerance must be > 0, got {}", p.profile_tolerance));
     if (!(p.min_radius >= 0.0f)) bad(fmt::format("min_radius must be >= 0, got {}", p.min_radius));
@@ -503,9 +526,12 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
     }
     if (!std::isfinite(best.cost)) return model;
 
-    // Second criterion: the thinnest profile. Points consistent with the normal-line axis (a
-    // looser window) that are not on caps; their contour spread is minimised over the axis
-    // direction (2 angles) and position (2 offsets) by a simplex search from that axis.
+    // Second criterion: the thinnest contour (see the header). The point sets are fixed by the
+    // normal-line axis: side points consistent with it (a looser window), cap points, and all
+    // points for the level of the ends. The direction (2 angles) and position (2 offsets) are
+    // found by simplex searches: from the best few of a grid of directions within 30 degrees of
+    // the normal-line axis (each with its normal-line position), scored with the contour and the
+    // level of the ends; the best result is polished on the contour alone.
     if (params.profile_refinement) {
         const Eigen::Vector3d a0 = best.direction, c0 = best.center;
         std::vector<Eigen::Vector3d> side, cap, all;
@@ -566,7 +592,10 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
             // normal-line position for it; the best few are refined.
             std::vector<std::pair<double, Eigen::Vector4d>> starts;
             auto start_at = [&](const Eigen::Vector3d& d) {
-                if (d.dot(a0) < 0.5) return;
+                if (d.dot(a0) < 0.5 ||
+                    (has_up && std::acos(std::clamp(std::abs(d.dot(pole)), 0.0, 1.0)) > max_tilt)) {
+                    return;
+                }
                 const AxisFit fit = EvaluateDirection(samples, 1, d, t, sin_parallel);
                 const Eigen::Vector4d x(d.dot(e1) / d.dot(a0), d.dot(e2) / d.dot(a0),
                                         (fit.center - c0).dot(e1), (fit.center - c0).dot(e2));
@@ -598,6 +627,7 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
             }
             model.profile_spread = static_cast<float>(std::sqrt(cost(x)));
             axis_of(x, best.direction, best.center);
+            best.cost = LineCost(samples, best.direction, best.center, t, sin_parallel);
         }
     }
 
