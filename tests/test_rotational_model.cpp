@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -8,6 +9,9 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/reconstruction/rotational_model.hpp"
 #include "multicue/search/kdtree.hpp"
+#include "multicue/sim/procedural.hpp"
+#include "multicue/sim/scene_gen.hpp"
+#include "multicue/sim/sensors.hpp"
 #include "multicue/surface/normals.hpp"
 
 namespace multicue {
@@ -113,6 +117,57 @@ TEST(RotationalModel, RecoversTheAxisAndContourOfTiltedBottlesBowlsAndVases) {
     }
 }
 
+/// A small shallow bowl (rim radius 7.5 cm, 3.6 cm high, 4 mm wall) on a table, scanned by the
+/// simulated Kinect from a low camera at 1.3-1.5 m: the outside of the near wall and the inside
+/// of the far wall are seen, the bottom is not. The normals of such a wall barely constrain the
+/// axis (they nearly meet in one point, as on a sphere: the normal lines alone give 19 and 23
+/// degrees here); the contour and the level rim do.
+TEST(RotationalModel, RecoversTheAxisOfAShallowBowlSeenFromTheSide) {
+    const float R = 0.075f, h = 0.036f, Rb = 0.03f, t = 0.004f;
+    std::vector<sim::ProfilePoint> profile{{0.0f, 0.0f, 0}};
+    for (int i = 0; i <= 10; ++i) {
+        const float s = static_cast<float>(i) / 10.0f * kPi / 2.0f;
+        profile.push_back({Rb + (R - Rb) * std::sin(s), h * (1.0f - std::cos(s)), 0});
+    }
+    for (int i = 10; i >= 0; --i) {
+        const float s = static_cast<float>(i) / 10.0f * kPi / 2.0f;
+        profile.push_back({Rb - t + (R - Rb) * std::sin(s), t + (h - t) * (1.0f - std::cos(s)), 0});
+    }
+    profile.push_back({0.0f, t, 0});
+    sim::ObjectModel object;
+    object.mesh = std::make_shared<sim::PartMesh>(sim::MakeRevolutionMesh(profile, {"bowl"}));
+    object.category = object.source = "bowl";
+    const struct {
+        float distance, elevation_deg;
+        std::uint64_t seed;
+    } views[] = {{1.3f, 28.0f, 14}, {1.5f, 20.0f, 12}};
+    for (const auto& v : views) {
+        sim::TurntableParams table;
+        const float elevation = v.elevation_deg * kPi / 180.0f;
+        table.distance = v.distance * std::cos(elevation);
+        table.camera_height = table.table_height + v.distance * std::sin(elevation);
+        const sim::Scene scene = sim::MakeTurntableScene(object, table, 3);
+        const Eigen::Isometry3f pose = sim::TurntableViews(scene, 12, table)[0];
+        PointCloud cloud = sim::ScanKinect(scene, pose, sim::KinectParams{}, v.seed);
+        SetNormals(cloud, EstimateNormalsOrganized(cloud, {}));
+        Indices bowl;
+        for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.labels[i] == sim::ObjectLabel(1)) bowl.push_back(i);
+        }
+        ASSERT_GT(bowl.size(), 500u);
+        const Eigen::Vector3f up = pose.linear().transpose() * Eigen::Vector3f::UnitZ();
+        const auto model =
+            FitRotationalModel(cloud, bowl, Eigen::Vector3f::Zero(), Eigen::Vector4f::Zero());
+        ASSERT_TRUE(model.found);
+        EXPECT_LT(AngleDeg(model.axis, up), 4.0f) << v.distance << " m";
+        EXPECT_GT(model.profile_spread, 0.0f);
+        EXPECT_LT(model.profile_spread, 0.005f);
+        // The contour: the rim (its widest part) within 1 cm.
+        EXPECT_NEAR(*std::max_element(model.radii.begin(), model.radii.end()), R, 0.01f)
+            << v.distance << " m";
+    }
+}
+
 TEST(RotationalModel, UprightPriorAndSupportPlaneReachDownToTheTable) {
     // Upright bottle on a table 5 cm below its lowest scanned point; camera frame y down.
     const Eigen::Vector3f up(0.0f, -1.0f, 0.0f);
@@ -168,6 +223,18 @@ TEST(RotationalModel, BadInputEmptyInputAndDeterminism) {
     RotationalFitParams bad;
     bad.line_threshold = 0.0f;
     EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad), InvalidArgument);
+    RotationalFitParams bad_tolerance;
+    bad_tolerance.profile_tolerance = 0.0f;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_tolerance),
+                 InvalidArgument);
+    RotationalFitParams bad_points;
+    bad_points.profile_points = 5;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_points),
+                 InvalidArgument);
+    RotationalFitParams bad_weight;
+    bad_weight.rim_weight = -1.0f;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_weight),
+                 InvalidArgument);
     PointCloud bare = cloud;
     bare.normals.clear();
     EXPECT_THROW(FitRotationalModel(bare, All(bare), none, no_plane), DataError);

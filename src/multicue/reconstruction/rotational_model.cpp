@@ -1,6 +1,7 @@
 #include "multicue/reconstruction/rotational_model.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -86,6 +87,284 @@ AxisFit EvaluateDirection(const std::vector<Sample>& samples, std::size_t stride
     return fit;
 }
 
+/// The spread of the contour about an axis: the points' (height, radius) pairs are fitted by a
+/// linear spline in height (knots about `step` apart, a light first-difference penalty bridging
+/// empty stretches) with Huber weights (scale `tolerance`); points of the inner surface (normal
+/// towards the axis: the inside of a bowl or pitcher) share the spline less a constant wall
+/// thickness fitted with it. The cost is the mean Huber loss of the radius residuals. A true axis
+/// gives a thin profile; a tilted or shifted one smears it.
+class ProfileObjective {
+  public:
+    ProfileObjective(std::vector<Eigen::Vector3d> points, std::vector<char> inner, bool caps,
+                     double step, double tolerance)
+        : points_(std::move(points)),
+          inner_(std::move(inner)),
+          caps_(caps),
+          step_(step),
+          tolerance_(tolerance) {}
+
+    std::size_t size() const { return points_.size(); }
+
+    double operator()(const Eigen::Vector3d& a, const Eigen::Vector3d& c) const {
+        const std::size_t n = points_.size();
+        h_.resize(n);
+        rho_.resize(n);
+        double h_min = std::numeric_limits<double>::infinity(), h_max = -h_min;
+        for (std::size_t i = 0; i < n; ++i) {
+            const Eigen::Vector3d q = points_[i] - c;
+            double h = q.dot(a);
+            double rho = (q - h * a).norm();
+            if (caps_) std::swap(h, rho);
+            h_[i] = h;
+            rho_[i] = rho;
+            h_min = std::min(h_min, h);
+            h_max = std::max(h_max, h);
+        }
+        const double extent = std::max(h_max - h_min, 1e-6);
+        const std::size_t knots =
+            std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(extent / step_)) + 1);
+        const double spacing = extent / static_cast<double>(knots - 1);
+        k_.resize(n);
+        f_.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const double s = (h_[i] - h_min) / spacing;
+            const std::size_t k = std::min<std::size_t>(
+                knots - 2, static_cast<std::size_t>(std::max(0.0, std::floor(s))));
+            k_[i] = k;
+            f_[i] = std::clamp(s - static_cast<double>(k), 0.0, 1.0);
+        }
+        w_.assign(n, 1.0);
+        double cost = 0.0;
+        for (int iteration = 0; iteration < 3; ++iteration) {
+            const double thickness = Solve(knots);
+            cost = 0.0;
+            for (std::size_t i = 0; i < n; ++i) {
+                const double model = (1.0 - f_[i]) * x_[k_[i]] + f_[i] * x_[k_[i] + 1] -
+                                     (inner_[i] ? thickness : 0.0);
+                const double r = std::abs(rho_[i] - model);
+                w_[i] = r <= tolerance_ ? 1.0 : tolerance_ / r;
+                cost += r <= tolerance_ ? r * r : 2.0 * tolerance_ * r - tolerance_ * tolerance_;
+            }
+        }
+        return cost / static_cast<double>(n);
+    }
+
+  private:
+    /// Weighted least squares for the knot radii x_ and the wall thickness (returned): a
+    /// tridiagonal system bordered by one column, solved by the Thomas algorithm for two right
+    /// hand sides and the Schur complement of the thickness.
+    double Solve(std::size_t knots) const {
+        constexpr double kSmooth = 1e-2;
+        diag_.assign(knots, 0.0);
+        off_.assign(knots, 0.0);
+        rhs_.assign(knots, 0.0);
+        border_.assign(knots, 0.0);
+        double corner = 1e-6, corner_rhs = 0.0;
+        for (std::size_t k = 0; k + 1 < knots; ++k) {
+            diag_[k] += kSmooth;
+            diag_[k + 1] += kSmooth;
+            off_[k] -= kSmooth;
+        }
+        for (std::size_t i = 0; i < points_.size(); ++i) {
+            const std::size_t k = k_[i];
+            const double f = f_[i], g = 1.0 - f, w = w_[i];
+            diag_[k] += w * g * g;
+            diag_[k + 1] += w * f * f;
+            off_[k] += w * g * f;
+            rhs_[k] += w * g * rho_[i];
+            rhs_[k + 1] += w * f * rho_[i];
+            if (inner_[i]) {  // the model's thickness column is -1 for inner points
+                border_[k] -= w * g;
+                border_[k + 1] -= w * f;
+                corner += w;
+                corner_rhs -= w * rho_[i];
+            }
+        }
+        for (std::size_t k = 1; k < knots; ++k) {
+            const double m = off_[k - 1] / diag_[k - 1];
+            diag_[k] -= m * off_[k - 1];
+            rhs_[k] -= m * rhs_[k - 1];
+            border_[k] -= m * border_[k - 1];
+        }
+        x_.resize(knots);
+        y_.resize(knots);
+        const std::size_t last = knots - 1;
+        x_[last] = rhs_[last] / diag_[last];
+        y_[last] = border_[last] / diag_[last];
+        for (std::size_t k = last; k-- > 0;) {
+            x_[k] = (rhs_[k] - off_[k] * x_[k + 1]) / diag_[k];
+            y_[k] = (border_[k] - off_[k] * y_[k + 1]) / diag_[k];
+        }
+        // border^T x + corner * thickness = corner_rhs, with x = x_ - thickness * y_ (the
+        // border here is the original one: recompute it from the points).
+        double bx = 0.0, by = 0.0;
+        for (std::size_t i = 0; i < points_.size(); ++i) {
+            if (!inner_[i]) continue;
+            const std::size_t k = k_[i];
+            const double f = f_[i], g = 1.0 - f, w = w_[i];
+            bx -= w * (g * x_[k] + f * x_[k + 1]);
+            by -= w * (g * y_[k] + f * y_[k + 1]);
+        }
+        const double thickness = (corner_rhs - bx) / (corner - by);
+        for (std::size_t k = 0; k < knots; ++k) x_[k] -= thickness * y_[k];
+        return thickness;
+    }
+
+    std::vector<Eigen::Vector3d> points_;
+    std::vector<char> inner_;
+    bool caps_;
+    double step_, tolerance_;
+    mutable std::vector<double> h_, rho_, f_, w_, x_, y_, diag_, off_, rhs_, border_;
+    mutable std::vector<std::size_t> k_;
+};
+
+/// The level of an end of the object (a rim, a cap): for an axis through c with direction a, the
+/// second highest point in each of `bins` sectors around the axis; on a surface of revolution
+/// whose top is in view these agree. Both ends are tried (the axis has no sign here) and the
+/// more level one counts: the cost is the mean Huber loss of the levels' deviation from their
+/// median (0 with fewer than bins/4 sectors of at least 3 points).
+class RimObjective {
+  public:
+    RimObjective(std::vector<Eigen::Vector3d> points, int bins, double tolerance)
+        : points_(std::move(points)), bins_(bins), tolerance_(tolerance) {}
+
+    double operator()(const Eigen::Vector3d& a, const Eigen::Vector3d& c) const {
+        Eigen::Vector3d e1, e2;
+        OrthonormalBasis(a, e1, e2);
+        const auto bins = static_cast<std::size_t>(bins_);
+        const double lowest = -std::numeric_limits<double>::infinity();
+        // [0..bins): highest along +a, [bins..2 bins): highest along -a.
+        first_.assign(2 * bins, lowest);
+        second_.assign(2 * bins, lowest);
+        count_.assign(bins, 0);
+        for (const auto& p : points_) {
+            const Eigen::Vector3d q = p - c;
+            const double phi = std::atan2(q.dot(e2), q.dot(e1));
+            const auto b = static_cast<std::size_t>(
+                std::clamp(static_cast<int>((phi + kPi) / (2.0 * kPi) * bins_), 0, bins_ - 1));
+            const double h = q.dot(a);
+            ++count_[b];
+            for (const auto& [k, v] : {std::pair{b, h}, std::pair{b + bins, -h}}) {
+                if (v > first_[k]) {
+                    second_[k] = first_[k];
+                    first_[k] = v;
+                } else if (v > second_[k]) {
+                    second_[k] = v;
+                }
+            }
+        }
+        return std::min(LevelCost(0), LevelCost(bins));
+    }
+
+  private:
+    double LevelCost(std::size_t offset) const {
+        levels_.clear();
+        for (std::size_t b = 0; b < count_.size(); ++b) {
+            if (count_[b] >= 3) levels_.push_back(second_[offset + b]);
+        }
+        if (static_cast<int>(levels_.size()) < std::max(2, bins_ / 4)) return 0.0;
+        sorted_ = levels_;
+        const auto mid = sorted_.begin() + static_cast<std::ptrdiff_t>(sorted_.size() / 2);
+        std::nth_element(sorted_.begin(), mid, sorted_.end());
+        double cost = 0.0;
+        for (double level : levels_) {
+            const double r = std::abs(level - *mid);
+            cost += r <= tolerance_ ? r * r : 2.0 * tolerance_ * r - tolerance_ * tolerance_;
+        }
+        return cost / static_cast<double>(levels_.size());
+    }
+
+    std::vector<Eigen::Vector3d> points_;
+    int bins_;
+    double tolerance_;
+    mutable std::vector<double> first_, second_, levels_, sorted_;
+    mutable std::vector<int> count_;
+};
+
+/// Nelder-Mead simplex minimisation of `f` from `x0` with initial steps `scale`; stops when the
+/// simplex's cost spread falls below `tolerance` or after `max_evaluations`.
+template <int N, typename F>
+Eigen::Matrix<double, N, 1> NelderMead(const F& f, const Eigen::Matrix<double, N, 1>& x0,
+                                       const Eigen::Matrix<double, N, 1>& scale, double tolerance,
+                                       int max_evaluations) {
+    using Vec = Eigen::Matrix<double, N, 1>;
+    std::array<Vec, N + 1> x;
+    std::array<double, N + 1> y;
+    x[0] = x0;
+    for (int i = 0; i < N; ++i) {
+        x[i + 1] = x0;
+        x[i + 1][i] += scale[i];
+    }
+    int evaluations = 0;
+    for (int i = 0; i <= N; ++i, ++evaluations) y[i] = f(x[i]);
+    std::array<int, N + 1> order;
+    while (evaluations < max_evaluations) {
+        for (int i = 0; i <= N; ++i) order[i] = i;
+        std::sort(order.begin(), order.end(), [&](int a, int b) { return y[a] < y[b]; });
+        const int best = order[0], worst = order[N], second = order[N - 1];
+        if (y[worst] - y[best] <= tolerance) break;
+        Vec centroid = Vec::Zero();
+        for (int i = 0; i < N; ++i) centroid += x[order[i]];
+        centroid /= N;
+        const Vec reflected = centroid + (centroid - x[worst]);
+        const double y_reflected = f(reflected);
+        ++evaluations;
+        if (y_reflected < y[best]) {
+            const Vec expanded = centroid + 2.0 * (centroid - x[worst]);
+            const double y_expanded = f(expanded);
+            ++evaluations;
+            if (y_expanded < y_reflected) {
+                x[worst] = expanded;
+                y[worst] = y_expanded;
+            } else {
+                x[worst] = reflected;
+                y[worst] = y_reflected;
+            }
+        } else if (y_reflected < y[second]) {
+            x[worst] = reflected;
+            y[worst] = y_reflected;
+        } else {
+            const bool outside = y_reflected < y[worst];
+            const Vec contracted = outside ? Vec(centroid + 0.5 * (reflected - centroid))
+                                           : Vec(centroid + 0.5 * (x[worst] - centroid));
+            const double y_contracted = f(contracted);
+            ++evaluations;
+            if (y_contracted < std::min(y[worst], y_reflected)) {
+                x[worst] = contracted;
+                y[worst] = y_contracted;
+            } else {
+                for (int i = 1; i <= N; ++i) {
+                    x[order[i]] = x[best] + 0.5 * (x[order[i]] - x[best]);
+                    y[order[i]] = f(x[order[i]]);
+                    ++evaluations;
+                }
+            }
+        }
+    }
+    int best = 0;
+    for (int i = 1; i <= N; ++i) {
+        if (y[i] < y[best]) best = i;
+    }
+    return x[best];
+}
+
+/// The truncated line-to-line cost of the axis with direction `a` through `c`.
+double LineCost(const std::vector<Sample>& samples, const Eigen::Vector3d& a,
+                const Eigen::Vector3d& c, double t, double sin_parallel) {
+    double cost = 0.0;
+    for (const auto& sample : samples) {
+        const Eigen::Vector3d v = sample.n.cross(a);
+        const double s = v.norm();
+        if (s < sin_parallel) {
+            cost += 0.25 * t * t;
+            continue;
+        }
+        const double d = (v / s).dot(sample.p - c);
+        cost += std::min(d * d, t * t);
+    }
+    return cost;
+}
+
 /// About `count` directions spread evenly over the cap within max_tilt of `pole` (a hemisphere
 /// for 90 degrees): a Fibonacci spiral in height.
 std::vector<Eigen::Vector3d> CapDirections(const Eigen::Vector3d& pole, double max_tilt_rad,
@@ -125,6 +404,14 @@ void CheckParams(const RotationalFitParams& p) {
         bad(fmt::format("profile_step must be > 0, got {}", p.profile_step));
     if (!(p.inlier_threshold > 0.0f))
         bad(fmt::format("inlier_threshold must be > 0, got {}", p.inlier_threshold));
+    if (p.profile_points < 10)
+        bad(fmt::format("profile_points must be >= 10, got {}", p.profile_points));
+    if (!(p.rim_weight >= 0.0f && std::isfinite(p.rim_weight)))
+        bad(fmt::format("rim_weight must be >= 0, got {}", p.rim_weight));
+    if (!(p.cap_weight >= 0.0f && std::isfinite(p.cap_weight)))
+        bad(fmt::format("cap_weight must be >= 0, got {}", p.cap_weight));
+    if (!(p.profile_tolerance > 0.0f))
+        bad(fmt::format("profile_tolerance must be > 0, got {}", p.profile_tolerance));
     if (!(p.min_radius >= 0.0f)) bad(fmt::format("min_radius must be >= 0, got {}", p.min_radius));
 }
 
@@ -238,6 +525,111 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
         if (current.cost < best.cost) best = current;
     }
     if (!std::isfinite(best.cost)) return model;
+
+    // Second criterion: the thinnest contour (see the header). The point sets are fixed by the
+    // normal-line axis: side points consistent with it (a looser window), cap points, and all
+    // points for the level of the ends. The direction (2 angles) and position (2 offsets) are
+    // found by simplex searches: from the best few of a grid of directions within 30 degrees of
+    // the normal-line axis (each with its normal-line position), scored with the contour and the
+    // level of the ends; the best result is polished on the contour alone.
+    if (params.profile_refinement) {
+        const Eigen::Vector3d a0 = best.direction, c0 = best.center;
+        std::vector<Eigen::Vector3d> side, cap, all;
+        std::vector<char> inner, down;
+        const std::size_t refine_stride =
+            (samples.size() + params.profile_points - 1) / params.profile_points;
+        for (std::size_t k = 0; k < samples.size(); k += refine_stride) {
+            const Sample& sample = samples[k];
+            all.push_back(sample.p);
+            const Eigen::Vector3d v = sample.n.cross(a0);
+            const double s = v.norm();
+            const Eigen::Vector3d q = sample.p - c0;
+            if (s < sin_parallel) {
+                cap.push_back(sample.p);
+                down.push_back(sample.n.dot(a0) < 0.0 ? 1 : 0);
+                continue;
+            }
+            if (std::abs((v / s).dot(q)) > 2.0 * t) continue;
+            side.push_back(sample.p);
+            inner.push_back(sample.n.dot(q - q.dot(a0) * a0) < 0.0 ? 1 : 0);
+        }
+        if (side.size() >= 20) {
+            const ProfileObjective side_objective(std::move(side), std::move(inner), false,
+                                                  params.profile_step, params.profile_tolerance);
+            const ProfileObjective cap_objective(std::move(cap), std::move(down), true,
+                                                 params.profile_step, params.profile_tolerance);
+            const RimObjective rim_objective(std::move(all), 24, params.profile_tolerance);
+            double rim_weight = params.rim_weight;
+            auto objective = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& c) {
+                double sum = side_objective(a, c) * static_cast<double>(side_objective.size());
+                std::size_t count = side_objective.size();
+                if (params.cap_weight > 0.0f && cap_objective.size() >= 10) {
+                    sum += params.cap_weight * cap_objective(a, c) *
+                           static_cast<double>(cap_objective.size());
+                    count += cap_objective.size();
+                }
+                sum /= static_cast<double>(count);
+                if (rim_weight > 0.0) sum += rim_weight * rim_objective(a, c);
+                return sum;
+            };
+            Eigen::Vector3d e1, e2;
+            OrthonormalBasis(a0, e1, e2);
+            auto axis_of = [&](const Eigen::Vector4d& x, Eigen::Vector3d& a, Eigen::Vector3d& c) {
+                a = (a0 + x[0] * e1 + x[1] * e2).normalized();
+                c = c0 + x[2] * e1 + x[3] * e2;
+            };
+            auto cost = [&](const Eigen::Vector4d& x) {
+                Eigen::Vector3d a, c;
+                axis_of(x, a, c);
+                if (has_up && std::acos(std::clamp(std::abs(a.dot(pole)), 0.0, 1.0)) > max_tilt) {
+                    return std::numeric_limits<double>::infinity();
+                }
+                return objective(a, c);
+            };
+            const Eigen::Vector4d scale(0.05, 0.05, 0.005, 0.005);
+            const double tolerance = 1e-4 * params.profile_tolerance * params.profile_tolerance;
+            // Starts: directions within 30 degrees of the normal-line axis, each with the
+            // normal-line position for it; the best few are refined.
+            std::vector<std::pair<double, Eigen::Vector4d>> starts;
+            auto start_at = [&](const Eigen::Vector3d& d) {
+                if (d.dot(a0) < 0.5 ||
+                    (has_up && std::acos(std::clamp(std::abs(d.dot(pole)), 0.0, 1.0)) > max_tilt)) {
+                    return;
+                }
+                const AxisFit fit = EvaluateDirection(samples, 1, d, t, sin_parallel);
+                const Eigen::Vector4d x(d.dot(e1) / d.dot(a0), d.dot(e2) / d.dot(a0),
+                                        (fit.center - c0).dot(e1), (fit.center - c0).dot(e2));
+                starts.emplace_back(cost(x), x);
+            };
+            starts.emplace_back(cost(Eigen::Vector4d::Zero()), Eigen::Vector4d::Zero());
+            for (const auto& d : CapDirections(a0, 30.0 * kPi / 180.0, 150)) start_at(d);
+            const std::size_t refined = std::min<std::size_t>(3, starts.size());
+            std::partial_sort(starts.begin(), starts.begin() + static_cast<std::ptrdiff_t>(refined),
+                              starts.end(),
+                              [](const auto& l, const auto& r) { return l.first < r.first; });
+            Eigen::Vector4d x = starts.front().second;
+            double x_cost = std::numeric_limits<double>::infinity();
+            for (std::size_t k = 0; k < refined; ++k) {
+                Eigen::Vector4d y = starts[k].second;
+                for (int restart = 0; restart < 2; ++restart) {
+                    y = NelderMead<4>(cost, y, restart == 0 ? scale : Eigen::Vector4d(0.25 * scale),
+                                      tolerance, 400);
+                }
+                const double y_cost = cost(y);
+                if (y_cost < x_cost) {
+                    x = y;
+                    x_cost = y_cost;
+                }
+            }
+            rim_weight = 0.0;
+            for (int restart = 0; restart < 2; ++restart) {
+                x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
+            }
+            model.profile_spread = static_cast<float>(std::sqrt(cost(x)));
+            axis_of(x, best.direction, best.center);
+            best.cost = LineCost(samples, best.direction, best.center, t, sin_parallel);
+        }
+    }
 
     Eigen::Vector3d a = best.direction;
     Eigen::Index largest = 0;

@@ -14,6 +14,22 @@
 /// the direction (caps, bottoms) carry no information about the axis position and add a small
 /// constant cost. The cost is sum_i min(d_i^2, t^2): the truncated line-to-line distances.
 ///
+/// Refinement (profile_refinement). Where the normals barely constrain the direction (a shallow
+/// bowl's wall is close to a sphere, whose normal lines all meet in one point) the normal-line
+/// axis can be 20 degrees off. The contour itself is a second criterion: about the true axis the
+/// points' (height, radius) pairs lie on one thin curve, about a wrong one they smear. The side
+/// points (normal more than parallel_angle_deg from the normal-line axis, normal line within
+/// 2 line_threshold of it) are fitted by a linear spline of radius over height (knots about
+/// profile_step apart) with Huber weights of scale profile_tolerance; points of the inner surface
+/// (normal towards the axis: the inside of a bowl or pitcher) share the spline less a fitted wall
+/// thickness. Cap points (bottoms, lids) give the same with height over radius (cap_weight). A
+/// third score, the level of an end (rim_weight): the second highest point in each of 24 sectors
+/// around the axis, at either end, should be at one height. The axis direction (2 angles) and
+/// position (2 offsets) are found by Nelder-Mead from the best 3 of about 150 directions within
+/// 30 degrees of the normal-line axis scored with all three, and the best result is polished on
+/// the contour alone (the end level is biased on small tops such as a bottle's cap, where a
+/// millimetre is degrees). At most profile_points points take part.
+///
 /// Contour. Heights h_i = (p_i - c) . a and radii rho_i = |p_i - c - h_i a| of the points within
 /// line_threshold; the profile is the median radius per height bin of profile_step, empty bins
 /// filled by interpolation, smoothed by a 3-bin median. With a support plane the profile reaches
@@ -38,7 +54,13 @@ struct RotationalFitParams {
     /// With an up direction: the axis within this angle of up [deg] (90 = any axis; small values
     /// give an upright prior).
     float max_tilt_deg = 90.0f;
-    float profile_step = 0.005f;     ///< height bin of the contour [m]; > 0
+    float profile_step = 0.005f;  ///< height bin of the contour [m]; > 0
+    /// Refine the axis by the thinnest contour (see the file comment).
+    bool profile_refinement = true;
+    std::size_t profile_points = 1000;  ///< at most this many points in the refinement; >= 10
+    float profile_tolerance = 0.003f;   ///< Huber scale of the contour residuals [m]; > 0
+    float rim_weight = 1.0f;         ///< weight of the end level when choosing the start [-]; >= 0
+    float cap_weight = 1.0f;         ///< weight of the caps' height-over-radius spread [-]; >= 0
     float inlier_threshold = 0.01f;  ///< radial distance to the contour of an inlier [m]; > 0
     float min_radius = 0.003f;       ///< contour radii below this are raised to it [m]
 };
@@ -51,6 +73,9 @@ struct RotationalModel {
     std::vector<float> radii;    ///< radius at each height [m]
     float inlier_ratio = 0.0f;   ///< share of points within inlier_threshold of the surface [-]
     float axis_cost = 0.0f;      ///< mean truncated squared line distance, relative to t^2 [-]
+    /// Spread of the contour about the axis: root of the mean Huber loss of the radius residuals
+    /// of the side points (0 without profile refinement) [m].
+    float profile_spread = 0.0f;
 
     /// Radius at height h (linear interpolation; 0 outside the contour).
     float RadiusAt(float h) const;

@@ -228,6 +228,8 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     rot.Get("line_threshold", p.rotational.line_threshold, "normal line to axis distance [m]");
     rot.Get("profile_step", p.rotational.profile_step, "contour height bin [m]");
     rot.Get("inlier_threshold", p.rotational.inlier_threshold, "surface distance of an inlier [m]");
+    rot.Get("profile_refinement", p.rotational.profile_refinement,
+            "refine the axis by the thinnest contour and the level rim");
     auto ver = models.Section("verification");
     ver.Get("enabled", p.verify_models, "verify models against the frame's free space");
     ver.Get("voxel_size", p.verification.voxel_size, "occupancy cell [m]");
