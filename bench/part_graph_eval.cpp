@@ -5,7 +5,7 @@
 // categoriser's per-point accuracy on the same points, the multi-view gain (5 mm voxel votes) and
 // the time to categorise all parts of a 640x480 frame. Baselines on the same parts and points
 // (thesis Table 5.9), trained on the same training objects: a vocabulary of parts (k-means words
-// of the model's 24-value part descriptor and of the 24 statistical part features; part votes
+// of the model's mapped part descriptor and of the 24 statistical part features; part votes
 // through the words' categories, and bag-of-words histograms of objects classified by
 // --object-classifier) and a classifier of whole clusters (GRSD- and VFH). Per point and per
 // perceived object (truth: the majority category of its points), with confusion matrices and
