@@ -5,7 +5,7 @@
 // categoriser's per-point accuracy on the same points, the multi-view gain (5 mm voxel votes) and
 // the time to categorise all parts of a 640x480 frame. Baselines on the same parts and points
 // (thesis Table 5.9), trained on the same training objects: a vocabulary of parts (k-means words
-// of the model's 24-value part descriptor and of the 24 statistical part features; part votes
+// of the model's mapped part descriptor and of the 24 statistical part features; part votes
 // through the words' categories, and bag-of-words histograms of objects classified by
 // --object-classifier) and a classifier of whole clusters (GRSD- and VFH). Per point and per
 // perceived object (truth: the majority category of its points), with confusion matrices and
@@ -16,11 +16,20 @@
 //                        [--table-scenes N] [--table-views N] [--objects N] [--train-meshes 0|1]
 //                        [--blend-weight W] [--baselines 0|1] [--words N] [--activations N]
 //                        [--object-classifier SPEC] [--cluster-size-weight W] [--matrices 0|1]
+//                        [--grsd-weight W] [--elevation-weight W] [--rsd-weight W]
+//                        [--extent-weights A,B,C] [--upright-extents 0|1] [--variants
+//                        "k=10;ew=2,rw=1;..."]
+//
+// --variants: further part-graph settings on the same parts, each counted on its own. Recognition
+// keys k, dw, off, se, mp, cw, bal; descriptor keys gw, ew, rw, sw (GRSD-, elevation, curvature,
+// size weight), e1, e2, e3 (extent factors) and ue (upright extents 0|1), which train a further
+// model from the same training rows, graphs and sampling seeds.
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -247,7 +256,21 @@ int main(int argc, char** argv) {
             rp.size_exponent = std::strtof(argv[i + 1], nullptr);
         else if (!std::strcmp(argv[i], "--object-classifier"))
             object_spec = argv[i + 1];
-        else if (!std::strcmp(argv[i], "--cluster-size-weight"))
+        else if (!std::strcmp(argv[i], "--grsd-weight"))
+            model.descriptor_params.grsd_weight = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--elevation-weight"))
+            model.descriptor_params.elevation_weight = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--upright-extents"))
+            model.descriptor_params.upright_extents = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--rsd-weight"))
+            model.descriptor_params.rsd_weight = std::strtof(argv[i + 1], nullptr);
+        else if (!std::strcmp(argv[i], "--extent-weights")) {
+            auto& e = model.descriptor_params.extent_weights;
+            if (std::sscanf(argv[i + 1], "%f,%f,%f", &e[0], &e[1], &e[2]) != 3) {
+                std::fprintf(stderr, "--extent-weights needs A,B,C\n");
+                return 2;
+            }
+        } else if (!std::strcmp(argv[i], "--cluster-size-weight"))
             cluster_params.size_weight = std::strtof(argv[i + 1], nullptr);
         else {
             std::fprintf(stderr, "unknown option %s\n", argv[i]);
@@ -268,8 +291,13 @@ int main(int argc, char** argv) {
         o.mesh_turntable = train_meshes != 0;
     }
     std::vector<training::TrainingObject> train_objects;
+    const bool descriptor_variants =
+        variants.find("gw=") != std::string::npos || variants.find("ew=") != std::string::npos ||
+        variants.find("rw=") != std::string::npos || variants.find("sw=") != std::string::npos ||
+        variants.find("e1=") != std::string::npos || variants.find("e2=") != std::string::npos ||
+        variants.find("e3=") != std::string::npos || variants.find("ue=") != std::string::npos;
+    if (baselines || descriptor_variants) o.objects_out = &train_objects;
     if (baselines) {
-        o.objects_out = &train_objects;
         o.cluster_descriptors = true;
         o.cluster_params = cluster_params;
         o.part_statistics = true;
@@ -281,10 +309,18 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     std::printf(
         "training: %zu subgraphs, %zu buckets, %.1f s (%d procedural objects per category, %s, "
-        "%d table scenes x %d views; size weight %g, %s votes)\n",
+        "%d table scenes x %d views; size weight %g, extents x %g %g %g, GRSD- %g, elevation %g, "
+        "curvature %g, %s extents, %s votes)\n",
         model.num_rows(), model.num_buckets(), train_s, objects,
         library && train_meshes ? "even library meshes" : "no library meshes", table_scenes,
         table_views, double(model.descriptor_params.size_weight),
+        double(model.descriptor_params.extent_weights[0]),
+        double(model.descriptor_params.extent_weights[1]),
+        double(model.descriptor_params.extent_weights[2]),
+        double(model.descriptor_params.grsd_weight),
+        double(model.descriptor_params.elevation_weight),
+        double(model.descriptor_params.rsd_weight),
+        model.descriptor_params.upright_extents ? "upright" : "principal",
         rp.balanced ? "balanced" : "plain");
 
     // Baselines trained on the same objects.
@@ -339,6 +375,7 @@ int main(int argc, char** argv) {
     int num_methods = baselines ? int(kNumMethods) : int(kVocabModelParts);
     // Further part-graph recognition settings on the same model and parts ("k=10,dw=1;se=0.5").
     std::vector<PartGraphRecognitionParams> variant_params;
+    std::vector<std::shared_ptr<const PartGraphModel>> variant_models;
     {
         std::size_t begin = 0;
         while (begin < variants.size()) {
@@ -348,6 +385,8 @@ int main(int argc, char** argv) {
             begin = end + 1;
             if (spec.empty()) continue;
             PartGraphRecognitionParams vr = rp;
+            PartDescriptorParams vd = model.descriptor_params;
+            bool own_model = false;
             std::size_t b = 0;
             while (b < spec.size()) {
                 std::size_t e = spec.find(',', b);
@@ -375,12 +414,40 @@ int main(int argc, char** argv) {
                     vr.confidence_weighted = val != 0.0;
                 else if (key == "bal")
                     vr.balanced = val != 0.0;
-                else {
+                else if (key == "ue") {
+                    own_model = true;
+                    vd.upright_extents = val != 0.0;
+                } else if (key == "gw" || key == "ew" || key == "rw" || key == "sw" ||
+                           key == "e1" || key == "e2" || key == "e3") {
+                    own_model = true;
+                    float& w = key == "gw"   ? vd.grsd_weight
+                               : key == "ew" ? vd.elevation_weight
+                               : key == "rw" ? vd.rsd_weight
+                               : key == "sw" ? vd.size_weight
+                               : key == "e1" ? vd.extent_weights[0]
+                               : key == "e2" ? vd.extent_weights[1]
+                                             : vd.extent_weights[2];
+                    w = float(val);
+                } else {
                     std::fprintf(stderr, "bad variant key %s\n", key.c_str());
                     return 2;
                 }
             }
             variant_params.push_back(vr);
+            if (own_model) {
+                auto vm = std::make_shared<PartGraphModel>();
+                vm->graph_params = model.graph_params;
+                vm->descriptor_params = vd;
+                for (const auto& t : train_objects) {
+                    PartGraphTrainParams tp = o.train;
+                    tp.seed = t.train_seed;
+                    vm->AddObject(t.part_descriptors, t.graph, t.category, tp);
+                }
+                vm->Build();
+                variant_models.push_back(std::move(vm));
+            } else {
+                variant_models.push_back(nullptr);
+            }
             methods.push_back({});
             methods.back().name = "part-graph " + spec;
         }
@@ -427,7 +494,11 @@ int main(int argc, char** argv) {
                 }
             const auto a = std::chrono::steady_clock::now();
             const PartGraph graph = BuildPartGraph(scan, parts, model.graph_params);
-            const FeatureMatrix raw = ComputePartDescriptors(scan, parts, model.descriptor_params);
+            // Up as perceive knows it: the support plane's normal (camera -y without one).
+            const Eigen::Vector3f up = r.support.found ? Eigen::Vector3f(r.support.plane.head<3>())
+                                                       : Eigen::Vector3f::Zero();
+            const FeatureMatrix raw =
+                ComputePartDescriptors(scan, parts, model.descriptor_params, up);
             const PartGraphResult pg = RecognizeParts(model, graph, raw, rp);
             recog_ms +=
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
@@ -446,7 +517,8 @@ int main(int argc, char** argv) {
             for (std::size_t k = 0; k < parts.size(); ++k) ids[part_object[k]].push_back(k);
             for (std::size_t vi = 0; vi < variant_params.size(); ++vi) {
                 const int m = first_variant + int(vi);
-                const PartGraphResult vr = RecognizeParts(model, graph, raw, variant_params[vi]);
+                const PartGraphModel& vmodel = variant_models[vi] ? *variant_models[vi] : model;
+                const PartGraphResult vr = RecognizeParts(vmodel, graph, raw, variant_params[vi]);
                 for (std::size_t k = 0; k < parts.size(); ++k) {
                     part_pred[k][m] = vr.part_categories[k];
                 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -185,6 +186,149 @@ TEST(PartGraph, DescriptorsAreAdditive) {
     EXPECT_THROW(ComputePartDescriptors(no_normals, parts), DataError);
 }
 
+// A plane patch (normals +z) and the side of a 2 cm cylinder about z (radial normals).
+PointCloud PatchAndCylinder(std::vector<Indices>& parts) {
+    PointCloud c;
+    parts.assign(3, {});
+    for (int i = 0; i < 15; ++i)
+        for (int j = 0; j < 15; ++j) {
+            parts[0].push_back(static_cast<Index>(c.points.size()));
+            c.points.emplace_back(0.2f + 0.004f * i, 0.004f * j, 0.0f);
+            c.normals.emplace_back(0.0f, 0.0f, 1.0f);
+        }
+    for (int a = 0; a < 60; ++a)
+        for (int h = 0; h < 16; ++h) {
+            const float t = 2.0f * 3.14159265f * static_cast<float>(a) / 60.0f;
+            // Lower and upper half of the side are parts 1 and 2.
+            parts[h < 8 ? 1 : 2].push_back(static_cast<Index>(c.points.size()));
+            c.points.emplace_back(0.02f * std::cos(t), 0.02f * std::sin(t), 0.004f * h);
+            c.normals.emplace_back(std::cos(t), std::sin(t), 0.0f);
+        }
+    c.width = static_cast<std::uint32_t>(c.points.size());
+    c.height = 1;
+    return c;
+}
+
+TEST(PartGraph, ElevationAndCurvatureBlocks) {
+    std::vector<Indices> parts;
+    const PointCloud c = PatchAndCylinder(parts);
+    const Eigen::Vector3f z = Eigen::Vector3f::UnitZ();
+    const FeatureMatrix d = ComputePartDescriptors(c, parts, {}, z);
+    auto elevation = [&](const FeatureMatrix& m, int p) {
+        return Eigen::RowVectorXf(m.row(p).segment(kPartElevationOffset, kPartElevationSize));
+    };
+    auto curvature = [&](const FeatureMatrix& m, int p) {
+        return Eigen::RowVectorXf(m.row(p).segment(kPartRsdOffset, kPartRsdSize));
+    };
+    // Horizontal patch: every normal along up (last bin); cylinder side: all horizontal (first).
+    EXPECT_EQ(elevation(d, 0)[kPartElevationSize - 1], 225.0f);
+    EXPECT_EQ(elevation(d, 0).sum(), 225.0f);
+    EXPECT_EQ(elevation(d, 1)[0], 480.0f);
+    EXPECT_EQ(elevation(d, 1).sum(), 480.0f);
+    // Sign and length of up do not change the counts (the moments' frame turns); unknown up is
+    // the camera's -y.
+    const FeatureMatrix down = ComputePartDescriptors(c, parts, {}, Eigen::Vector3f(0, 0, -3));
+    EXPECT_TRUE(down.leftCols(kPartGrsdSize).isApprox(d.leftCols(kPartGrsdSize)));
+    EXPECT_TRUE(down.rightCols(kPartElevationSize + kPartRsdSize)
+                    .isApprox(d.rightCols(kPartElevationSize + kPartRsdSize)));
+    const FeatureMatrix cam = ComputePartDescriptors(c, parts, {});
+    EXPECT_EQ(elevation(cam, 0)[0], 225.0f);
+    EXPECT_TRUE(elevation(cam, 0).isApprox(
+        elevation(ComputePartDescriptors(c, parts, {}, -Eigen::Vector3f::UnitY()), 0)));
+    // Curvature: the plane is planar (r_min >= 10 cm), the 2 cm cylinder curved (< 3 cm).
+    EXPECT_EQ(curvature(d, 0)[2], curvature(d, 0).sum());
+    EXPECT_GT(curvature(d, 0).sum(), 0.0f);
+    const Eigen::RowVectorXf side = curvature(d, 1) + curvature(d, 2);
+    EXPECT_GT(side[0], 0.8f * side.sum());
+    // Additive: the union of parts 1 and 2 as one part has the sum of their rows.
+    const std::vector<Indices> joined = {parts[0], [&] {
+                                             Indices u = parts[1];
+                                             u.insert(u.end(), parts[2].begin(), parts[2].end());
+                                             return u;
+                                         }()};
+    const FeatureMatrix j = ComputePartDescriptors(c, joined, {}, z);
+    const std::vector<std::uint32_t> both = {1, 2};
+    const auto sum = SubgraphDescriptor(d, both);
+    for (int k = kPartElevationOffset; k < kPartDescriptorSize; ++k) {
+        EXPECT_EQ(j(1, k), sum[k]) << k;
+    }
+    for (int k = kPartMomentOffset; k < kPartMomentOffset + kPartMomentSize; ++k) {
+        EXPECT_NEAR(j(1, k), sum[k], 1e-4f * (1.0f + std::abs(sum[k]))) << k;
+    }
+    // Mapped: square-rooted unit-sum blocks times their weights.
+    PartGraphModel m;
+    m.descriptor_params.elevation_weight = 2.0f;
+    m.descriptor_params.rsd_weight = 0.5f;
+    float mapped[kPartMappedSize];
+    m.MapDescriptor(sum.data(), mapped);
+    float e2 = 0.0f, r2 = 0.0f;
+    for (int k = 0; k < kPartElevationSize; ++k)
+        e2 += mapped[kPartGrsdSize + 3 + k] * mapped[kPartGrsdSize + 3 + k];
+    for (int k = 0; k < kPartRsdSize; ++k) {
+        const float v = mapped[kPartGrsdSize + 3 + kPartElevationSize + k];
+        r2 += v * v;
+    }
+    EXPECT_NEAR(e2, 4.0f, 1e-4f);
+    EXPECT_NEAR(r2, 0.25f, 1e-4f);
+    EXPECT_NEAR(mapped[kPartGrsdSize + 3], 2.0f, 1e-5f);  // all in the first bin
+    // Weight 0: the block is empty.
+    m.descriptor_params.elevation_weight = 0.0f;
+    m.MapDescriptor(sum.data(), mapped);
+    for (int k = 0; k < kPartElevationSize; ++k) EXPECT_EQ(mapped[kPartGrsdSize + 3 + k], 0.0f);
+    // Bad input.
+    EXPECT_THROW(ComputePartDescriptors(c, parts, {}, Eigen::Vector3f(NAN, 0, 1)), InvalidArgument);
+    EXPECT_THROW(ComputePartDescriptors(c, parts, {.elevation_weight = -1.0f}), InvalidArgument);
+    EXPECT_THROW(ComputePartDescriptors(c, parts, {.extent_weights = {1.0f, INFINITY, 1.0f}}),
+                 InvalidArgument);
+}
+
+// Separate extent factors scale the largest, middle and smallest extent.
+TEST(PartGraph, ExtentWeights) {
+    std::vector<Indices> parts;
+    const PointCloud c = PatchAndCylinder(parts);
+    const FeatureMatrix d = ComputePartDescriptors(c, parts, {}, Eigen::Vector3f::UnitZ());
+    const std::vector<std::uint32_t> all = {0, 1, 2};
+    const auto raw = SubgraphDescriptor(d, all);
+    PartGraphModel m;
+    float a[kPartMappedSize], b[kPartMappedSize];
+    m.MapDescriptor(raw.data(), a);
+    m.descriptor_params.extent_weights = {0.5f, 1.0f, 3.0f};
+    m.MapDescriptor(raw.data(), b);
+    EXPECT_NEAR(b[kPartGrsdSize], 0.5f * a[kPartGrsdSize], 1e-4f);
+    EXPECT_NEAR(b[kPartGrsdSize + 1], a[kPartGrsdSize + 1], 1e-4f);
+    EXPECT_NEAR(b[kPartGrsdSize + 2], 3.0f * a[kPartGrsdSize + 2], 1e-4f);
+    EXPECT_GT(a[kPartGrsdSize + 2], 0.0f);
+}
+
+// Upright extents: the two extents on the support plane, then the one along up.
+TEST(PartGraph, UprightExtents) {
+    std::vector<Indices> parts;
+    const PointCloud c = ThreePatches(parts);  // horizontal 12 x 12 patches, 4 mm apart
+    const std::vector<Indices> one = {parts[2]};
+    PartGraphModel m;
+    m.descriptor_params.size_weight = 1.0f;
+    m.descriptor_params.upright_extents = true;
+    const double side = 0.004 * std::sqrt(143.0);
+    float out[kPartMappedSize];
+    const FeatureMatrix up_z = ComputePartDescriptors(c, one, {}, Eigen::Vector3f::UnitZ());
+    m.MapDescriptor(up_z.row(0).data(), out);
+    EXPECT_NEAR(out[kPartGrsdSize], side, 1e-4);
+    EXPECT_NEAR(out[kPartGrsdSize + 1], side, 1e-4);
+    EXPECT_NEAR(out[kPartGrsdSize + 2], 0.0, 1e-4);
+    // Seen with x as up, the patch is a wall: one extent on the plane, one along up.
+    const FeatureMatrix up_x = ComputePartDescriptors(c, one, {}, Eigen::Vector3f::UnitX());
+    m.MapDescriptor(up_x.row(0).data(), out);
+    EXPECT_NEAR(out[kPartGrsdSize], side, 1e-4);
+    EXPECT_NEAR(out[kPartGrsdSize + 1], 0.0, 1e-4);
+    EXPECT_NEAR(out[kPartGrsdSize + 2], side, 1e-4);
+    // Principal extents do not depend on up.
+    m.descriptor_params.upright_extents = false;
+    float a[kPartMappedSize], b[kPartMappedSize];
+    m.MapDescriptor(up_z.row(0).data(), a);
+    m.MapDescriptor(up_x.row(0).data(), b);
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[kPartGrsdSize + j], b[kPartGrsdSize + j], 1e-4f);
+}
+
 // The extents of a group come from its summed moments and equal those of the union's points.
 TEST(PartGraph, ExtentsFromSummedMoments) {
     std::vector<Indices> parts;
@@ -324,6 +468,25 @@ TEST(PartGraphModel, ClassifiesAndRoundTrips) {
     m.Save(path);
     const PartGraphModel l = PartGraphModel::Load(path);
     EXPECT_EQ(l.Serialize(), m.Serialize());
+    {  // every descriptor weight travels with the model
+        PartGraphModel w = SyntheticModel();
+        w.descriptor_params.size_weight = 7.0f;
+        w.descriptor_params.extent_weights = {0.5f, 1.5f, 2.5f};
+        w.descriptor_params.grsd_weight = 0.75f;
+        w.descriptor_params.elevation_weight = 3.0f;
+        w.descriptor_params.rsd_weight = 0.25f;
+        w.descriptor_params.upright_extents = true;
+        const PartGraphModel lw = PartGraphModel::Deserialize(w.Serialize(), "w");
+        EXPECT_EQ(lw.descriptor_params.size_weight, 7.0f);
+        EXPECT_EQ(lw.descriptor_params.extent_weights, w.descriptor_params.extent_weights);
+        EXPECT_EQ(lw.descriptor_params.grsd_weight, 0.75f);
+        EXPECT_EQ(lw.descriptor_params.elevation_weight, 3.0f);
+        EXPECT_EQ(lw.descriptor_params.rsd_weight, 0.25f);
+        EXPECT_TRUE(lw.descriptor_params.upright_extents);
+        EXPECT_EQ(lw.Serialize(), w.Serialize());
+        w.descriptor_params.rsd_weight = -1.0f;
+        EXPECT_THROW(PartGraphModel::Deserialize(w.Serialize(), "negative"), FormatError);
+    }
     const PartGraphResult r2 = RecognizeParts(l, q, d, {.max_parts = 2, .k = 3});
     EXPECT_EQ(r2.part_probabilities, r.part_probabilities);
 
@@ -361,12 +524,17 @@ TEST(PartGraphModel, CorruptFilesAreRejected) {
     EXPECT_THROW(PartGraphModel::Deserialize(bytes.substr(0, bytes.size() - 9), "cut"),
                  FormatError);
     EXPECT_THROW(PartGraphModel::Deserialize("not a model", "text"), FormatError);
-    // A file of the previous layout (version 1, GRSD- only) is refused by its version.
-    try {
-        PartGraphModel::Deserialize(ml::WrapContainer("MCPARTGR", 1, "old"), "old.mcpg");
-        ADD_FAILURE() << "version 1 accepted";
-    } catch (const FormatError& e) {
-        EXPECT_NE(std::string(e.what()).find("version 1"), std::string::npos) << e.what();
+    // Files of previous layouts (version 1: GRSD- only; 2: no elevation and curvature blocks)
+    // are refused by their version.
+    for (std::uint32_t old : {1u, 2u}) {
+        try {
+            PartGraphModel::Deserialize(ml::WrapContainer("MCPARTGR", old, "old"), "old.mcpg");
+            ADD_FAILURE() << "version " << old << " accepted";
+        } catch (const FormatError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find("version " + std::to_string(old)), std::string::npos) << msg;
+            EXPECT_NE(msg.find("reads version 3"), std::string::npos) << msg;
+        }
     }
     EXPECT_THROW(PartGraphModel::Load(dir.path() / "missing.mcpg"), IoError);
     PartGraphModel unbuilt;

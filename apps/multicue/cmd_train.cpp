@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "multicue/core/exceptions.hpp"
@@ -22,6 +23,8 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         training::PartGraphTrainingOptions t;
         std::size_t max_parts = 8;
         float size_weight = PartDescriptorParams{}.size_weight;
+        PartDescriptorParams d;
+        std::vector<float> extents;
     };
     auto o = std::make_shared<Options>();
     cmd->add_option("--out", o->out, "model file to write (.mcpg)")->required();
@@ -37,6 +40,16 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--size-weight", o->size_weight,
                     "weight of the group extents in the k-NN distance [1/m] (0: shape only)")
         ->capture_default_str();
+    cmd->add_option("--extent-weights", o->extents,
+                    "factors of the largest, middle and smallest extent (default 1 1 1)")
+        ->expected(3);
+    cmd->add_option("--grsd-weight", o->d.grsd_weight, "weight of the GRSD- block")
+        ->capture_default_str();
+    cmd->add_option("--elevation-weight", o->d.elevation_weight,
+                    "weight of the normal elevation block (0: unused)")
+        ->capture_default_str();
+    cmd->add_option("--rsd-weight", o->d.rsd_weight, "weight of the curvature block (0: unused)")
+        ->capture_default_str();
     cmd->add_option("--table-scenes", o->t.table_scenes,
                     "cluttered table scenes segmented by perceive (robot-head views)")
         ->capture_default_str();
@@ -51,6 +64,19 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         if (o->t.objects_per_category < 0) throw InvalidArgument("--objects must be >= 0");
         if (!(o->size_weight >= 0.0f) || !std::isfinite(o->size_weight)) {
             throw InvalidArgument("--size-weight must be >= 0 and finite");
+        }
+        auto weight_ok = [](float w) { return w >= 0.0f && std::isfinite(w); };
+        for (float w : o->extents) {
+            if (!weight_ok(w)) throw InvalidArgument("--extent-weights must be >= 0 and finite");
+        }
+        if (!weight_ok(o->d.grsd_weight)) {
+            throw InvalidArgument("--grsd-weight must be >= 0 and finite");
+        }
+        if (!weight_ok(o->d.elevation_weight)) {
+            throw InvalidArgument("--elevation-weight must be >= 0 and finite");
+        }
+        if (!weight_ok(o->d.rsd_weight)) {
+            throw InvalidArgument("--rsd-weight must be >= 0 and finite");
         }
         if (o->t.table_scenes < 0) throw InvalidArgument("--table-scenes must be >= 0");
         if (o->t.table_views < 1) throw InvalidArgument("--table-views must be >= 1");
@@ -73,7 +99,12 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
             static_cast<std::size_t>(std::max(o->t.table_scenes, 0));
         Progress progress("training part graphs", jobs);
         PartGraphModel model;
+        model.descriptor_params = o->d;
         model.descriptor_params.size_weight = o->size_weight;
+        if (o->extents.size() == 3) {
+            std::copy(o->extents.begin(), o->extents.end(),
+                      model.descriptor_params.extent_weights.begin());
+        }
         const bool complete = training::TrainPartGraphModel(model, o->t, &progress);
         progress.Finish();
         if (!complete) throw DataError("interrupted; no model written");

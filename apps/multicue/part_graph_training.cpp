@@ -179,13 +179,14 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
                 }
                 const auto parts = DecomposeObject(scan, object, perceive);
                 if (parts.empty()) continue;
-                Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params),
+                // Up (world z) in the scan's frame: the support plane's normal.
+                const Eigen::Vector3f up = poses[v].linear().transpose() * Eigen::Vector3f::UnitZ();
+                Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params, up),
                          BuildPartGraph(scan, parts, model.graph_params),
                          category,
                          {},
                          {}};
-                AddBaselineFeatures(s, scan, parts, object,
-                                    poses[v].linear().transpose() * Eigen::Vector3f::UnitZ(), o);
+                AddBaselineFeatures(s, scan, parts, object, up, o);
                 samples[j].push_back(std::move(s));
             }
             if (progress) progress->Advance();
@@ -214,6 +215,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
                 np.num_threads = 1;
                 SetNormals(scan, EstimateNormalsOrganized(scan, np));
                 const PerceiveResult r = Perceive(scan, pp);
+                const Eigen::Vector3f up = views[v].linear().transpose() * Eigen::Vector3f::UnitZ();
                 for (const auto& obj : r.objects) {
                     if (obj.parts.empty()) continue;
                     std::array<std::size_t, kNumCategories> hist{};
@@ -224,14 +226,13 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
                     const auto best = static_cast<std::size_t>(
                         std::max_element(hist.begin() + 1, hist.end()) - hist.begin());
                     if (hist[best] == 0 || 10 * hist[best] < 6 * obj.indices.size()) continue;
-                    Sample sample{ComputePartDescriptors(scan, obj.parts, model.descriptor_params),
-                                  BuildPartGraph(scan, obj.parts, model.graph_params),
-                                  static_cast<Category>(best),
-                                  {},
-                                  {}};
-                    AddBaselineFeatures(sample, scan, obj.parts, obj.indices,
-                                        views[v].linear().transpose() * Eigen::Vector3f::UnitZ(),
-                                        o);
+                    Sample sample{
+                        ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
+                        BuildPartGraph(scan, obj.parts, model.graph_params),
+                        static_cast<Category>(best),
+                        {},
+                        {}};
+                    AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
                     samples[jobs.size() + s].push_back(std::move(sample));
                 }
             }
@@ -246,9 +247,10 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             model.AddObject(samples[j][v].descriptors, samples[j][v].graph, samples[j][v].category,
                             tp);
             if (o.objects_out) {
-                o.objects_out->push_back(
-                    {std::move(samples[j][v].descriptors), std::move(samples[j][v].statistics),
-                     std::move(samples[j][v].cluster), samples[j][v].category});
+                o.objects_out->push_back({std::move(samples[j][v].descriptors),
+                                          std::move(samples[j][v].statistics),
+                                          std::move(samples[j][v].cluster), samples[j][v].category,
+                                          std::move(samples[j][v].graph), tp.seed});
             }
         }
     }

@@ -25,6 +25,8 @@ struct TrainingObject {
     FeatureMatrix part_statistics;   ///< the 24 features of every part (with part_statistics)
     FeatureVector cluster;           ///< ComputeClusterDescriptor (with cluster_descriptors)
     Category category = Category::kNone;
+    PartGraph graph;  ///< adjacency of its parts (to train further models on the same rows)
+    std::uint64_t train_seed = 0;  ///< PartGraphTrainParams::seed it was added with
 };
 
 struct PartGraphTrainingOptions {

@@ -39,10 +39,38 @@ struct SplitMix {
     std::uint64_t Below(std::uint64_t n) { return Next() % n; }
 };
 
+void ValidateDescriptorParams(const PartDescriptorParams& p) {
+    auto ok = [](float w) { return w >= 0.0f && std::isfinite(w); };
+    if (!ok(p.size_weight)) throw InvalidArgument("size_weight must be >= 0 and finite");
+    for (float w : p.extent_weights) {
+        if (!ok(w)) throw InvalidArgument("extent_weights must be >= 0 and finite");
+    }
+    if (!ok(p.grsd_weight)) throw InvalidArgument("grsd_weight must be >= 0 and finite");
+    if (!ok(p.elevation_weight)) {
+        throw InvalidArgument("elevation_weight must be >= 0 and finite");
+    }
+    if (!ok(p.rsd_weight)) throw InvalidArgument("rsd_weight must be >= 0 and finite");
+}
+
+// Unit-sum, square-rooted counts times `weight` (all zero when nothing was counted).
+void MapCounts(const float* in, int n, float weight, float* out) {
+    double sum = 0.0;
+    for (int j = 0; j < n; ++j) sum += std::max(in[j], 0.0f);
+    const double inv = sum > 0.0 ? 1.0 / sum : 0.0;
+    for (int j = 0; j < n; ++j) {
+        out[j] = weight * static_cast<float>(std::sqrt(std::max(in[j], 0.0f) * inv));
+    }
+}
+
 }  // namespace
 
 FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
-                                     const PartDescriptorParams& params) {
+                                     const PartDescriptorParams& params,
+                                     const Eigen::Vector3f& up_in) {
+    ValidateDescriptorParams(params);
+    if (!up_in.allFinite()) throw InvalidArgument("part descriptors: up must be finite");
+    const Eigen::Vector3f up =
+        up_in.norm() > 1e-6f ? Eigen::Vector3f(up_in.normalized()) : Eigen::Vector3f(0, -1, 0);
     FeatureMatrix out =
         FeatureMatrix::Zero(static_cast<Eigen::Index>(parts.size()), kPartDescriptorSize);
     // Union of the parts' finite points, as a cloud of its own.
@@ -74,14 +102,25 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
     sub.width = static_cast<std::uint32_t>(sub.points.size());
     sub.height = 1;
     if (sub.points.empty()) return out;
-    // Moments about the mean of all points (small numbers, still additive over parts).
+    // Moments about the mean of all points (small numbers, still additive over parts), in a frame
+    // whose z axis is up.
+    Eigen::Matrix3d frame;
+    {
+        const Eigen::Vector3d z = up.cast<double>();
+        const Eigen::Vector3d helper =
+            std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+        const Eigen::Vector3d x = (helper - helper.dot(z) * z).normalized();
+        frame.row(0) = x.transpose();
+        frame.row(1) = z.cross(x).transpose();
+        frame.row(2) = z.transpose();
+    }
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     for (const auto& q : sub.points) origin += q.cast<double>();
     origin /= static_cast<double>(sub.points.size());
     for (std::size_t p = 0; p < parts.size(); ++p) {
         double m[kPartMomentSize] = {};
         for (Index i : local[p]) {
-            const Eigen::Vector3d q = sub.points[i].cast<double>() - origin;
+            const Eigen::Vector3d q = frame * (sub.points[i].cast<double>() - origin);
             m[0] += 1.0;
             m[1] += q.x();
             m[2] += q.y();
@@ -94,11 +133,29 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
             m[9] += q.z() * q.z();
         }
         for (int j = 0; j < kPartMomentSize; ++j) {
-            out(static_cast<Eigen::Index>(p), kPartGrsdSize + j) = static_cast<float>(m[j]);
+            out(static_cast<Eigen::Index>(p), kPartMomentOffset + j) = static_cast<float>(m[j]);
+        }
+        // Elevation of the normals against up.
+        for (Index i : local[p]) {
+            const Eigen::Vector3f& nrm = sub.normals[i];
+            if (!nrm.allFinite() || !(nrm.squaredNorm() > 0.0f)) continue;
+            const float e = std::min(std::abs(nrm.normalized().dot(up)), 1.0f);
+            const int bin =
+                std::min(static_cast<int>(e * kPartElevationSize), kPartElevationSize - 1);
+            out(static_cast<Eigen::Index>(p), kPartElevationOffset + bin) += 1.0f;
         }
     }
     const KdTree tree(sub);
     const VoxelRsdResult voxels = ComputeVoxelRsd(sub, tree, params.voxels);
+    // Curvature counts: every point takes the minimum radius of its voxel.
+    for (std::size_t i = 0; i < sub.points.size(); ++i) {
+        const std::uint32_t v = voxels.point_voxel[i];
+        if (v == VoxelRsdResult::kNoVoxel) continue;
+        const float r = voxels.radii(static_cast<Eigen::Index>(v), 0);
+        if (!std::isfinite(r)) continue;
+        const int bin = r < 0.03f ? 0 : (r < 0.10f ? 1 : 2);
+        out(static_cast<Eigen::Index>(owner_part[i]), kPartRsdOffset + bin) += 1.0f;
+    }
     // Majority owner of every voxel.
     const std::size_t nv = voxels.size();
     std::vector<std::unordered_map<std::int32_t, std::uint32_t>> counts(nv);
@@ -197,25 +254,39 @@ std::size_t PartGraphModel::AddObject(const FeatureMatrix& descriptors, const Pa
 }
 
 void PartGraphModel::MapDescriptor(const float* in, float* out) const {
-    // Unit-sum, square-rooted GRSD- (Euclidean distance = Jeffries-Matusita).
-    double sum = 0.0;
-    for (int j = 0; j < kPartGrsdSize; ++j) sum += std::max(in[j], 0.0f);
-    const float inv = sum > 0.0 ? static_cast<float>(1.0 / sum) : 0.0f;
-    for (int j = 0; j < kPartGrsdSize; ++j) out[j] = std::sqrt(std::max(in[j], 0.0f) * inv);
+    const PartDescriptorParams& dp = descriptor_params;
+    // Unit-sum, square-rooted GRSD- (Euclidean distance = Jeffries-Matusita), elevation and
+    // curvature counts the same way.
+    MapCounts(in, kPartGrsdSize, dp.grsd_weight, out);
+    MapCounts(in + kPartElevationOffset, kPartElevationSize, dp.elevation_weight,
+              out + kPartGrsdSize + 3);
+    MapCounts(in + kPartRsdOffset, kPartRsdSize, dp.rsd_weight,
+              out + kPartGrsdSize + 3 + kPartElevationSize);
     // Extents of the group's points from its summed moments.
-    const float* m = in + kPartGrsdSize;
+    const float* m = in + kPartMomentOffset;
     for (int j = 0; j < 3; ++j) out[kPartGrsdSize + j] = 0.0f;
     const double n = m[0];
-    if (!(n >= 2.0) || descriptor_params.size_weight <= 0.0f) return;
+    if (!(n >= 2.0) || dp.size_weight <= 0.0f) return;
     const Eigen::Vector3d mean(m[1] / n, m[2] / n, m[3] / n);
     Eigen::Matrix3d c;
     c << m[4] / n, m[5] / n, m[6] / n, m[5] / n, m[7] / n, m[8] / n, m[6] / n, m[8] / n, m[9] / n;
     c -= mean * mean.transpose();
+    if (dp.upright_extents) {
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(c.topLeftCorner<2, 2>(),
+                                                                Eigen::EigenvaluesOnly);
+        const Eigen::Vector3d v(es.eigenvalues()[1], es.eigenvalues()[0], c(2, 2));
+        for (int j = 0; j < 3; ++j) {
+            const double extent = std::sqrt(12.0 * std::max(v[j], 0.0));
+            out[kPartGrsdSize + j] =
+                static_cast<float>(extent * dp.size_weight * dp.extent_weights[j]);
+        }
+        return;
+    }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c, Eigen::EigenvaluesOnly);
     const Eigen::Vector3d l = es.eigenvalues();  // ascending
     for (int j = 0; j < 3; ++j) {
         const double extent = std::sqrt(12.0 * std::max(l[2 - j], 0.0));
-        out[kPartGrsdSize + j] = static_cast<float>(extent * descriptor_params.size_weight);
+        out[kPartGrsdSize + j] = static_cast<float>(extent * dp.size_weight * dp.extent_weights[j]);
     }
 }
 
@@ -302,6 +373,11 @@ std::string PartGraphModel::Serialize() const {
     w.Put<float>(descriptor_params.voxels.rsd.radius);
     w.Put<float>(graph_params.adjacency_distance);
     w.Put<float>(descriptor_params.size_weight);
+    for (float e : descriptor_params.extent_weights) w.Put<float>(e);
+    w.Put<float>(descriptor_params.grsd_weight);
+    w.Put<float>(descriptor_params.elevation_weight);
+    w.Put<float>(descriptor_params.rsd_weight);
+    w.Put<std::uint8_t>(descriptor_params.upright_extents ? 1 : 0);
     w.Put<std::uint64_t>(train_max_parts);
     w.Put<std::uint64_t>(buckets_.size());
     for (const auto& [key, b] : buckets_) {
@@ -321,13 +397,24 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
     m.descriptor_params.voxels.rsd.radius = r.Get<float>();
     m.graph_params.adjacency_distance = r.Get<float>();
     m.descriptor_params.size_weight = r.Get<float>();
+    for (float& e : m.descriptor_params.extent_weights) e = r.Get<float>();
+    m.descriptor_params.grsd_weight = r.Get<float>();
+    m.descriptor_params.elevation_weight = r.Get<float>();
+    m.descriptor_params.rsd_weight = r.Get<float>();
+    const auto upright = r.Get<std::uint8_t>();
+    if (upright > 1) r.Fail("bad parameters");
+    m.descriptor_params.upright_extents = upright == 1;
     m.train_max_parts = r.Get<std::uint64_t>();
+    bool weights_ok = true;
+    try {
+        ValidateDescriptorParams(m.descriptor_params);
+    } catch (const InvalidArgument&) {
+        weights_ok = false;
+    }
     if (!(m.descriptor_params.voxels.voxel_size > 0.0f) ||
         !(m.graph_params.adjacency_distance > 0.0f) ||
-        !std::isfinite(m.descriptor_params.voxels.rsd.radius) ||
-        !(m.descriptor_params.size_weight >= 0.0f) ||
-        !std::isfinite(m.descriptor_params.size_weight) || m.train_max_parts == 0 ||
-        m.train_max_parts > kMaxSubgraphParts) {
+        !std::isfinite(m.descriptor_params.voxels.rsd.radius) || !weights_ok ||
+        m.train_max_parts == 0 || m.train_max_parts > kMaxSubgraphParts) {
         r.Fail("bad parameters");
     }
     const auto nb = r.Get<std::uint64_t>();
@@ -346,8 +433,7 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
         }
         for (std::size_t j = 0; j < b.rows.size(); ++j) {
             const float v = b.rows[j];
-            const bool grsd = static_cast<int>(j % kPartMappedSize) < kPartGrsdSize;
-            if (!std::isfinite(v) || v < 0.0f || (grsd && v > 1.0f)) r.Fail("bad descriptor");
+            if (!std::isfinite(v) || v < 0.0f) r.Fail("bad descriptor");
         }
         m.buckets_.emplace(key, std::move(b));
     }
@@ -366,9 +452,10 @@ PartGraphModel PartGraphModel::Load(const std::filesystem::path& path) {
 
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
                                const std::vector<Indices>& parts,
-                               const PartGraphRecognitionParams& params) {
+                               const PartGraphRecognitionParams& params,
+                               const Eigen::Vector3f& up) {
     const PartGraph graph = BuildPartGraph(cloud, parts, model.graph_params);
-    const FeatureMatrix d = ComputePartDescriptors(cloud, parts, model.descriptor_params);
+    const FeatureMatrix d = ComputePartDescriptors(cloud, parts, model.descriptor_params, up);
     return RecognizeParts(model, graph, d, params);
 }
 

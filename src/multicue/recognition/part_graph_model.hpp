@@ -5,13 +5,16 @@
 /// Descriptor of a part: GRSD- (features/grsd.hpp, 21 raw transition counts) of the 2.5 cm voxels
 /// the part owns in one voxel map computed over all given parts (a voxel belongs to the part with
 /// most points in it, ties to the lower part index; neighbours owned by other parts count as
-/// empty), followed by the part's point moments (count, first and second order sums). The
+/// empty), followed by the part's point moments (count, first and second order sums), a histogram
+/// of its normals' elevation against the up direction (|n . up| in 6 bins) and the counts of its
+/// points by the minimum radius of their RSD voxel (curved / mildly curved / planar). The
 /// descriptor of a group of parts is the plain sum of its parts' descriptors, so it is computed
 /// once per part and summed per subgraph. For the k-NN the GRSD- sum is normalised to unit sum and
 /// square-rooted (the Euclidean distance of two such vectors is then exactly the
-/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms), and the summed
+/// Jeffries-Matusita distance sqrt(2 (1 - sum sqrt(p_i q_i))) of the histograms), the summed
 /// moments give the covariance of the group's points, whose three extents (weighted) are
-/// appended; a k-d tree finds the nearest ones.
+/// appended, and the two count blocks are mapped like the GRSD- block, each with its own weight;
+/// a k-d tree finds the nearest ones.
 ///
 /// Model: a two-level hash table, number of parts -> sorted degree sequence -> the stored
 /// subgraph descriptors with their categories (one k-d tree per bucket). Recognition grows every
@@ -43,31 +46,58 @@ namespace multicue {
 /// Columns of the GRSD- block of a part descriptor.
 inline constexpr int kPartGrsdSize = 21;
 /// Columns of the moment block: point count, sums of x, y, z and of xx, xy, xz, yy, yz, zz (point
-/// coordinates relative to the mean of all parts given to ComputePartDescriptors).
+/// coordinates relative to the mean of all parts given to ComputePartDescriptors, in a frame whose
+/// z axis is the up direction).
 inline constexpr int kPartMomentSize = 10;
-/// Dimensions of a raw part descriptor (GRSD- counts, then moments); every column is additive.
-inline constexpr int kPartDescriptorSize = kPartGrsdSize + kPartMomentSize;
-/// Dimensions of a stored (mapped) descriptor: square-rooted unit-sum GRSD-, then the three
-/// extents of the group's points (sqrt(12 lambda) of their covariance, descending) times
-/// PartDescriptorParams::size_weight.
-inline constexpr int kPartMappedSize = kPartGrsdSize + 3;
-/// Version of the model file format (docs/part-graph.md). 2: moment block and extents.
-inline constexpr std::uint32_t kPartGraphModelVersion = 2;
+/// Columns of the elevation block: counts of the part's points whose |normal . up| falls in each
+/// of 6 equal bins of [0, 1] (0: horizontal normal, a vertical surface; 1: a horizontal surface).
+inline constexpr int kPartElevationSize = 6;
+/// Columns of the curvature block: counts of the part's points whose RSD voxel has r_min below
+/// 3 cm, in [3 cm, 10 cm), and at least 10 cm (curved / mildly curved / planar); points in a voxel
+/// without RSD count nowhere.
+inline constexpr int kPartRsdSize = 3;
+/// First column of each block of a raw part descriptor.
+inline constexpr int kPartMomentOffset = kPartGrsdSize;
+inline constexpr int kPartElevationOffset = kPartMomentOffset + kPartMomentSize;
+inline constexpr int kPartRsdOffset = kPartElevationOffset + kPartElevationSize;
+/// Dimensions of a raw part descriptor (GRSD- counts, moments, elevation counts, curvature
+/// counts); every column is additive.
+inline constexpr int kPartDescriptorSize = kPartRsdOffset + kPartRsdSize;
+/// Dimensions of a stored (mapped) descriptor: square-rooted unit-sum GRSD- times grsd_weight,
+/// then the three extents of the group's points (sqrt(12 lambda) of their covariance,
+/// descending) times size_weight and the extent's own factor, then the square-rooted unit-sum
+/// elevation and curvature counts times their weights.
+inline constexpr int kPartMappedSize = kPartGrsdSize + 3 + kPartElevationSize + kPartRsdSize;
+/// Version of the model file format (docs/part-graph.md). 2: moment block and extents. 3:
+/// elevation and curvature blocks, block weights.
+inline constexpr std::uint32_t kPartGraphModelVersion = 3;
 
 struct PartDescriptorParams {
     VoxelRsdParams voxels = {};  ///< GRSD- voxel map settings (2.5 cm voxels by default)
-    /// Weight of the extents in the k-NN distance [1/m], >= 0 (0: shape only, as in the thesis).
+    /// Weight of the extents in the k-NN distance [1/m], >= 0 (0: no size).
     /// A 5 cm difference in an extent then counts as much as a Jeffries-Matusita distance of
     /// 0.05 * size_weight.
     float size_weight = 32.0f;
+    /// Factors of the largest, middle and smallest extent (each times size_weight), >= 0.
+    std::array<float, 3> extent_weights = {1.0f, 1.0f, 1.0f};
+    float grsd_weight = 1.0f;       ///< weight of the GRSD- block, >= 0
+    float elevation_weight = 1.0f;  ///< weight of the elevation block, >= 0 (0: unused)
+    float rsd_weight = 0.5f;        ///< weight of the curvature block, >= 0 (0: unused)
+    /// Extents against up instead of principal extents: the larger and smaller extent of the
+    /// points projected on the support plane, then the extent along up (each sqrt(12 variance)).
+    bool upright_extents = false;
 };
 
 /// One row per part (parts x kPartDescriptorSize): GRSD- raw counts from a voxel map over the
-/// union of the parts' points, then the point moments. `cloud` needs normals. Parts without a
-/// voxel of their own get a zero GRSD- block. Throws InvalidArgument for an index out of range,
-/// DataError without normals (unless nothing is given).
+/// union of the parts' points, the point moments, the elevation counts against `up` and the
+/// curvature counts. `up` is the support plane's normal in the cloud's frame (its sign does not
+/// matter); a zero vector means unknown and falls back to the camera's -y axis (up in an image
+/// of a level camera). `cloud` needs normals. Parts without a voxel of their own get a zero
+/// GRSD- block. Throws InvalidArgument for an index out of range or a non-finite `up`, DataError
+/// without normals (unless nothing is given).
 FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
-                                     const PartDescriptorParams& params = {});
+                                     const PartDescriptorParams& params = {},
+                                     const Eigen::Vector3f& up = Eigen::Vector3f::Zero());
 
 /// Sum of the descriptor rows of `vertices`.
 Eigen::Matrix<float, 1, kPartDescriptorSize> SubgraphDescriptor(
@@ -158,11 +188,12 @@ class PartGraphModel {
 };
 
 /// Categorises parts: builds their graph (model.graph_params), descriptors
-/// (model.descriptor_params), and votes with every connected subgraph up to params.max_parts.
-/// Deterministic.
+/// (model.descriptor_params, `up` as in ComputePartDescriptors), and votes with every connected
+/// subgraph up to params.max_parts. Deterministic.
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
                                const std::vector<Indices>& parts,
-                               const PartGraphRecognitionParams& params = {});
+                               const PartGraphRecognitionParams& params = {},
+                               const Eigen::Vector3f& up = Eigen::Vector3f::Zero());
 /// Same from a ready graph and descriptors.
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
                                const FeatureMatrix& descriptors,

@@ -4,7 +4,7 @@
 /// perceived cluster (GRSD- and VFH) for a classifier of whole objects. See docs/part-graph.md.
 ///
 /// Vocabulary of parts. The feature vectors of the training parts (any fixed-length descriptor:
-/// the part-graph model's 24 mapped values, or the 24 statistical features of
+/// the part-graph model's mapped values (kPartMappedSize), or the 24 statistical features of
 /// features/part_stats.hpp) are clustered by k-means into words. A part activates its
 /// `activations` nearest words with p(A_i | f) proportional to 1 / (distance + 1e-6) (equation
 /// 4.3), normalised over the activated words. Two uses:

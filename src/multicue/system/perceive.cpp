@@ -120,7 +120,7 @@ std::vector<PerceivedObject> MergeOccluded(const PointCloud& cloud,
 // touching objects, as in section 5.1.1); object distributions are the point-weighted mean of
 // their parts'.
 static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
-                                  const PerceiveParams& params) {
+                                  const Eigen::Vector4f& plane, const PerceiveParams& params) {
     std::shared_ptr<const PartGraphModel> model = params.part_graph;
     if (!model) {
         if (params.part_graph_model.empty()) {
@@ -144,7 +144,8 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
             parts.push_back(part);
         }
     }
-    const PartGraphResult r = RecognizeParts(*model, cloud, parts, params.part_graph_recognition);
+    const PartGraphResult r =
+        RecognizeParts(*model, cloud, parts, params.part_graph_recognition, plane.head<3>());
     for (std::size_t k = 0; k < objects.size(); ++k) {
         objects[k].part_probabilities.clear();
         for (std::size_t id : ids[k])
@@ -198,7 +199,7 @@ static void Regroup(const PointCloud& cloud, std::vector<PerceivedObject>& objec
         if (params.categoriser != "rules") redo.push_back(o);
     }
     if (!redo.empty()) {
-        CategorizeByPartGraph(cloud, redo, params);
+        CategorizeByPartGraph(cloud, redo, plane, params);
         for (std::size_t r = 0; r < changed.size(); ++r) {
             objects[changed[r]].category = redo[r].category;
             RestrictCategories(objects[changed[r]].category, allowed);
@@ -821,7 +822,7 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
         },
         1);
     if (params.categoriser == "part-graph" || params.categoriser == "part-graph+rules") {
-        CategorizeByPartGraph(cloud, result.objects, params);
+        CategorizeByPartGraph(cloud, result.objects, plane, params);
     } else if (params.categoriser != "rules") {
         throw InvalidArgument(
             "category.categoriser must be rules, part-graph or part-graph+rules, got '" +
