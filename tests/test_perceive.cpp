@@ -38,6 +38,24 @@ const Scene& DemoScene() {
 }
 
 // Best F-measure of each ground-truth object against the predicted objects.
+// The perceived object holding most points of ground-truth label `label` (0 if none).
+std::uint32_t MajorityObject(const PointCloud& cloud, const PerceiveResult& r,
+                             std::uint32_t label) {
+    std::map<std::uint32_t, std::size_t> votes;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (cloud.labels[i] == label && r.point_objects[i] != 0) ++votes[r.point_objects[i]];
+    }
+    std::uint32_t best = 0;
+    std::size_t count = 0;
+    for (const auto& [id, n] : votes) {
+        if (n > count) {
+            best = id;
+            count = n;
+        }
+    }
+    return best;
+}
+
 std::map<std::uint32_t, double> BestOverlap(const PointCloud& truth, const PerceiveResult& r) {
     std::map<std::uint32_t, std::map<std::uint32_t, double>> inter;
     std::map<std::uint32_t, double> gsize, psize;
@@ -194,19 +212,7 @@ TEST(Perceive, StackedBoxesAreSplitAtTheLowerTopFace) {
     if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
     const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn22.pcd"));
     auto majority = [&](const PerceiveResult& r, std::uint32_t label) {
-        std::map<std::uint32_t, std::size_t> votes;
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            if (cloud.labels[i] == label && r.point_objects[i] != 0) ++votes[r.point_objects[i]];
-        }
-        std::uint32_t best = 0;
-        std::size_t count = 0;
-        for (const auto& [id, n] : votes) {
-            if (n > count) {
-                best = id;
-                count = n;
-            }
-        }
-        return best;
+        return MajorityObject(cloud, r, label);
     };
     PerceiveParams params;
     params.split_stacked = false;
@@ -226,19 +232,7 @@ TEST(Perceive, TouchingBoxesThatOneBoxExplainsPoorlyAreSplit) {
     if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
     const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn24.pcd"));
     auto majority = [&](const PerceiveResult& r, std::uint32_t label) {
-        std::map<std::uint32_t, std::size_t> votes;
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            if (cloud.labels[i] == label && r.point_objects[i] != 0) ++votes[r.point_objects[i]];
-        }
-        std::uint32_t best = 0;
-        std::size_t count = 0;
-        for (const auto& [id, n] : votes) {
-            if (n > count) {
-                best = id;
-                count = n;
-            }
-        }
-        return best;
+        return MajorityObject(cloud, r, label);
     };
     PerceiveParams params;
     params.split_touching = false;

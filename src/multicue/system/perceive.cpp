@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
@@ -215,6 +216,29 @@ static void Regroup(const PointCloud& cloud, std::vector<PerceivedObject>& objec
     for (std::size_t k = 0; k < objects.size(); ++k) objects[k].id = static_cast<int>(k + 1);
 }
 
+// The objects after a regrouping step: kept ones as they were, new ones (Add) to be categorised
+// and modelled again.
+struct Regrouped {
+    std::vector<PerceivedObject> objects;
+    std::vector<std::size_t> changed;
+    void Keep(PerceivedObject&& o) { objects.push_back(std::move(o)); }
+    void Add(PerceivedObject&& o) {
+        changed.push_back(objects.size());
+        objects.push_back(std::move(o));
+    }
+};
+
+static void FinishRegroup(const PointCloud& cloud, Regrouped& r,
+                          std::vector<PerceivedObject>& objects, const Eigen::Vector4f& plane,
+                          const PerceiveParams& params, const CategorySet& allowed,
+                          std::string_view what) {
+    if (!r.changed.empty()) {
+        Regroup(cloud, r.objects, r.changed, plane, params, allowed);
+        LogDebug("perceive: {} {} split", r.changed.size() / 2, what);
+    }
+    objects = std::move(r.objects);
+}
+
 // Objects whose cylinder models share their axis and radius and overlap along it are one
 // container seen as two surfaces (inside and outside); merged, categorised and modelled again.
 static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
@@ -375,12 +399,11 @@ static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& 
     const float scale = 1.0f / up.norm();
     auto height = [&](Index i) { return (up.dot(cloud.points[i]) + plane.w()) * scale; };
     const float cos_up = std::cos(10.0f * 3.14159265f / 180.0f);
-    std::vector<PerceivedObject> out;
-    std::vector<std::size_t> changed;
+    Regrouped out;
     for (auto& o : objects) {
         const Category c = o.category.category;
         if ((c != Category::kBox && c != Category::kFlat) || !cloud.HasNormals()) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         // Heights of the horizontal faces.
@@ -402,7 +425,7 @@ static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& 
         std::sort(faces.begin(), faces.end());
         if (faces.size() < 2 || faces.front() < params.stack_min_step ||
             faces.back() - faces.front() < params.stack_min_step) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         const float cut = faces.front() + 0.5f * params.stack_min_step;
@@ -416,7 +439,7 @@ static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& 
         }
         if (lower.indices.size() < params.min_object_points ||
             upper.indices.size() < params.min_object_points) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         const float one = FitUprightBox(cloud, o.indices, plane, params.box).inlier_ratio;
@@ -427,21 +450,14 @@ static void SplitStacked(const PointCloud& cloud, std::vector<PerceivedObject>& 
              FitUprightBox(cloud, upper.indices, plane, params.box).inlier_ratio * n_up) /
             (n_low + n_up);
         if (two < one + params.stack_min_gain) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
-        changed.push_back(out.size());
-        out.push_back(std::move(lower));
-        changed.push_back(out.size());
-        out.push_back(std::move(upper));
+        out.Add(std::move(lower));
+        out.Add(std::move(upper));
     }
-    if (changed.empty()) {
-        objects = std::move(out);
-        return;
-    }
-    Regroup(cloud, out, changed, plane, params, {Category::kBox, Category::kFlat});
-    LogDebug("perceive: {} stacked objects split", changed.size() / 2);
-    objects = std::move(out);
+    FinishRegroup(cloud, out, objects, plane, params, {Category::kBox, Category::kFlat},
+                  "stacked objects");
 }
 
 // Share of the solid `a` inside the solid `b`, from a 6 x 6 x 6 grid of cell centres in `a`.
@@ -492,8 +508,7 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
         for (Index i : points) n += BoxSurfaceDistance(box, cloud.points[i]) <= threshold;
         return points.empty() ? 0.0f : static_cast<float>(n) / static_cast<float>(points.size());
     };
-    std::vector<PerceivedObject> out;
-    std::vector<std::size_t> changed;
+    Regrouped out;
     for (auto& o : objects) {
         const Category c = o.category.category;
         const bool boxy = c == Category::kBox || c == Category::kFlat;
@@ -509,7 +524,7 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
             TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
         if (!boxy || !one.found || one_ratio >= params.min_model_inlier_ratio || big.size() < 2 ||
             several < params.several_min_ratio) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         std::sort(big.begin(), big.end(), [&](std::size_t a, std::size_t b) {
@@ -560,7 +575,7 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
             }
         }
         if (!found) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         // Whole parts go to the box nearer to most of their points; loose points to the nearer.
@@ -603,21 +618,14 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
             whole.category = o.category;
             whole.model = std::move(o.model);
             whole.centroid = o.centroid;
-            out.push_back(std::move(whole));
+            out.Keep(std::move(whole));
             continue;
         }
-        changed.push_back(out.size());
-        out.push_back(std::move(pa));
-        changed.push_back(out.size());
-        out.push_back(std::move(pb));
+        out.Add(std::move(pa));
+        out.Add(std::move(pb));
     }
-    if (changed.empty()) {
-        objects = std::move(out);
-        return;
-    }
-    Regroup(cloud, out, changed, plane, params, {Category::kBox, Category::kFlat});
-    LogDebug("perceive: {} touching boxes split", changed.size() / 2);
-    objects = std::move(out);
+    FinishRegroup(cloud, out, objects, plane, params, {Category::kBox, Category::kFlat},
+                  "touching boxes");
 }
 
 // Touching round objects that segmentation kept together (a can standing in a bowl): the parts
@@ -639,8 +647,7 @@ static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObj
         std::sort(all.begin(), all.end());
         return all;
     };
-    std::vector<PerceivedObject> out;
-    std::vector<std::size_t> changed;
+    Regrouped out;
     for (auto& o : objects) {
         const Category c = o.category.category;
         const bool round =
@@ -648,13 +655,13 @@ static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObj
         const double several =
             TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
         if (!round || o.parts.size() < 2 || several < params.several_min_ratio) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         const CylinderModel one = FitObjectCylinder(cloud, o.indices, plane, params.cylinder);
         const float one_ratio = one.found ? explained(one, o.indices) : 0.0f;
         if (!one.found || one_ratio >= params.min_model_inlier_ratio) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         std::vector<Indices> pa, pb;
@@ -663,7 +670,7 @@ static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObj
         }
         const Indices ga = gather(pa), gb = gather(pb);
         if (ga.size() < params.min_object_points || gb.size() < params.min_object_points) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         const CylinderModel a = FitObjectCylinder(cloud, ga, plane, params.cylinder);
@@ -690,7 +697,7 @@ static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObj
             keep = concentric || both < one_ratio + params.touching_min_gain;
         }
         if (keep) {
-            out.push_back(std::move(o));
+            out.Keep(std::move(o));
             continue;
         }
         // Points outside the parts go to the nearer cylinder.
@@ -704,18 +711,10 @@ static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObj
                                    CylinderSurfaceDistance(b, cloud.points[i]));
             (to_a ? oa : ob).indices.push_back(i);
         }
-        changed.push_back(out.size());
-        out.push_back(std::move(oa));
-        changed.push_back(out.size());
-        out.push_back(std::move(ob));
+        out.Add(std::move(oa));
+        out.Add(std::move(ob));
     }
-    if (changed.empty()) {
-        objects = std::move(out);
-        return;
-    }
-    Regroup(cloud, out, changed, plane, params);
-    LogDebug("perceive: {} touching round objects split", changed.size() / 2);
-    objects = std::move(out);
+    FinishRegroup(cloud, out, objects, plane, params, {}, "touching round objects");
 }
 
 PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
