@@ -256,5 +256,37 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
     EXPECT_TRUE(std::filesystem::exists(dir / "p" / "result.json"));
 }
 
+TEST(Cli, TrainFromAMeshFolderWithItsOwnLabelsFile) {
+    test::TempDir dir;
+    std::filesystem::create_directories(dir / "meshes");
+    {
+        // A 12 x 8 x 6 cm box.
+        std::ofstream obj(dir / "meshes" / "crate.obj");
+        for (int k = 0; k < 8; ++k) {
+            obj << "v " << (k & 1 ? 0.06 : -0.06) << ' ' << (k & 2 ? 0.04 : -0.04) << ' '
+                << (k & 4 ? 0.06 : 0.0) << '\n';
+        }
+        obj << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+        std::ofstream(dir / "elsewhere.csv") << "file,category\ncrate.obj,box\n";
+    }
+    const auto model = (dir / "m.mcpg").string();
+    const std::string small = " --objects 1 --views 1 --table-scenes 0";
+    const auto t =
+        RunCli("train --out " + model + small + " --meshes " + (dir / "meshes").string() +
+               " --labels " + (dir / "elsewhere.csv").string());
+    ASSERT_EQ(t.code, 0) << t.output;
+    EXPECT_TRUE(std::filesystem::exists(model));
+    const auto alone = RunCli("train --out " + (dir / "a.mcpg").string() + small + " --labels " +
+                              (dir / "elsewhere.csv").string());
+    EXPECT_EQ(alone.code, 2);
+    EXPECT_EQ(CountLines(alone.output), 1) << alone.output;
+    const auto missing =
+        RunCli("train --out " + (dir / "b.mcpg").string() + small + " --meshes " +
+               (dir / "meshes").string() + " --labels " + (dir / "none.csv").string());
+    EXPECT_EQ(missing.code, 1);
+    EXPECT_NE(missing.output.find("none.csv"), std::string::npos) << missing.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "b.mcpg"));
+}
+
 }  // namespace
 }  // namespace multicue

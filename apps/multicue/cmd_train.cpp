@@ -20,6 +20,7 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
     struct Options {
         std::string out;
         std::string meshes;
+        std::string labels;
         training::PartGraphTrainingOptions t;
         std::size_t max_parts = 8;
         float size_weight = PartDescriptorParams{}.size_weight;
@@ -30,6 +31,9 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--out", o->out, "model file to write (.mcpg)")->required();
     cmd->add_option("--meshes", o->meshes,
                     "mesh library folder with labels.csv (added to the procedural objects)");
+    cmd->add_option("--labels", o->labels,
+                    "labels CSV of the mesh library (columns file, category; default: "
+                    "MESHES/labels.csv; file names relative to MESHES)");
     cmd->add_option("--objects", o->t.objects_per_category, "procedural objects per category")
         ->capture_default_str();
     cmd->add_option("--max-meshes", o->t.max_meshes, "at most this many library meshes (0 = all)")
@@ -88,7 +92,11 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         if (o->max_parts < 1 || o->max_parts > 15) {
             throw InvalidArgument("--max-parts must be in [1, 15]");
         }
+        if (!o->labels.empty() && o->meshes.empty()) {
+            throw InvalidArgument("--labels needs --meshes (the folder its file names are in)");
+        }
         o->t.meshes = o->meshes;
+        o->t.labels = o->labels;
         o->t.num_threads = global.threads;
         o->t.train.max_parts = o->max_parts;
         o->t.train.seed = o->t.seed;

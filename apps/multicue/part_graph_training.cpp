@@ -108,7 +108,8 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
         }
     }
     if (!o.meshes.empty() && o.mesh_turntable) {
-        sim::ObjectSource source(sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories()), false);
+        sim::ObjectSource source(
+            sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories(), o.labels), false);
         int used = 0;
         for (std::size_t i = 0; i < source.library().size(); ++i) {
             if (static_cast<int>(i % static_cast<std::size_t>(o.mesh_modulo)) != o.mesh_remainder) {
@@ -130,7 +131,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
     if (o.table_scenes > 0) {
         std::optional<sim::ObjectSource> source;
         if (!o.meshes.empty()) {
-            auto all = sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories());
+            auto all = sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories(), o.labels);
             std::vector<sim::MeshEntry> selected;
             for (std::size_t i = 0; i < all.size(); ++i) {
                 if (static_cast<int>(i % static_cast<std::size_t>(o.mesh_modulo)) ==

@@ -34,6 +34,7 @@ struct PartGraphTrainingOptions {
     std::vector<std::string> categories = {};  ///< procedural categories (empty: all six)
     int views = 8;                             ///< turntable views per object
     std::filesystem::path meshes;  ///< mesh library folder with labels.csv (empty: none)
+    std::filesystem::path labels;  ///< another labels file for `meshes` (empty: its labels.csv)
     /// Library entries used: those whose index i satisfies i % mesh_modulo == mesh_remainder (a
     /// simple split of a library into training and test meshes).
     int mesh_modulo = 1;

@@ -222,8 +222,9 @@ std::pair<float, float> RealisticExtentRange(const std::string& category) {
 }
 
 std::vector<MeshEntry> ReadMeshLibrary(const std::filesystem::path& folder,
-                                       const std::vector<std::string>& categories) {
-    const auto csv = folder / "labels.csv";
+                                       const std::vector<std::string>& categories,
+                                       const std::filesystem::path& labels) {
+    const auto csv = labels.empty() ? folder / "labels.csv" : labels;
     std::ifstream in(csv);
     if (!in) throw IoError(fmt::format("{}: cannot open mesh library labels", csv.string()));
     std::vector<std::string> allowed = categories;

@@ -79,8 +79,11 @@ struct MeshEntry {
 /// file is missing and FormatError naming the line for a missing mesh file, an unknown category
 /// (one not in `categories`; default: every CategoryNames() entry but "none"), a bad scale or a
 /// malformed line.
+/// `labels` names another labels file (empty: FOLDER/labels.csv); its file names stay relative to
+/// FOLDER.
 std::vector<MeshEntry> ReadMeshLibrary(const std::filesystem::path& folder,
-                                       const std::vector<std::string>& categories = {});
+                                       const std::vector<std::string>& categories = {},
+                                       const std::filesystem::path& labels = {});
 
 /// Realistic range of the largest extent of an object of a category [m] (used to size shrunk
 /// library meshes and procedural objects): sphere 0.06-0.25, box 0.08-0.25, flat 0.14-0.35,
