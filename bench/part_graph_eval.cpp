@@ -16,6 +16,7 @@
 //                        [--table-scenes N] [--table-views N] [--objects N] [--train-meshes 0|1]
 //                        [--blend-weight W] [--baselines 0|1] [--words N] [--activations N]
 //                        [--object-classifier SPEC] [--cluster-size-weight W] [--matrices 0|1]
+//                        [--scene-matrices 0|1]
 //                        [--grsd-weight W] [--elevation-weight W] [--rsd-weight W]
 //                        [--extent-weights A,B,C] [--upright-extents 0|1] [--variants
 //                        "k=10;ew=2,rw=1;..."]
@@ -205,6 +206,7 @@ int main(int argc, char** argv) {
     PartGraphRecognitionParams rp;
     float blend_weight = 0.2f;
     int baselines = 1, matrices = 1;
+    bool scene_matrices = false;
     PartVocabularyParams vp;
     vp.words = 200;
     vp.num_threads = 0;
@@ -244,6 +246,8 @@ int main(int argc, char** argv) {
             baselines = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--matrices"))
             matrices = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--scene-matrices"))
+            scene_matrices = std::atoi(argv[i + 1]) != 0;
         else if (!std::strcmp(argv[i], "--words"))
             vp.words = std::strtoull(argv[i + 1], nullptr, 10);
         else if (!std::strcmp(argv[i], "--activations"))
@@ -663,6 +667,15 @@ int main(int argc, char** argv) {
                 multi.Add(kept[v].second[i], static_cast<int>(grid.CategoryAt(kept[v].first[i])));
                 single_in_multi.Add(kept[v].second[i], static_cast<int>(single[v][i]));
             }
+        }
+        if (scene_matrices) {
+            for (const auto& so : scene.objects) {
+                if (so.category == 0) continue;
+                std::printf("  object %u: %s (%s), scale %.3f\n", so.label,
+                            sim::CategoryNames()[so.category].c_str(), so.source.c_str(), so.scale);
+            }
+            PrintConfusion("  part-graph in this scene", methods[kPg].scene);
+            PrintConfusion("  rules in this scene", methods[kRules].scene);
         }
         for (auto& m : methods) m.EndScene();
         std::printf("scene %d: %zu objects, %zu frames done; part-graph %.3f, rules %.3f\n", s,
