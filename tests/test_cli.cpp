@@ -256,6 +256,35 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
     EXPECT_TRUE(std::filesystem::exists(dir / "p" / "result.json"));
 }
 
+TEST(Cli, PerceiveFusesTheFramesOfAManifest) {
+    test::TempDir dir;
+    const auto sim = (dir / "sim").string();
+    ASSERT_EQ(
+        RunCli("simulate scenes --out " + sim + " --scenes 1 --views 2 --objects 3,3 -q").code, 0);
+    const auto manifest = (dir / "sim" / "manifest.json").string();
+    const auto r = RunCli("perceive --manifest " + manifest + " --scene 0 --no-report -q --out " +
+                          (dir / "out").string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    for (const char* frame : {"scene_0000_view_00", "scene_0000_view_01"}) {
+        const auto json = ReadTextFile(dir / "out" / frame / "result.json");
+        EXPECT_NE(json.find("\"views\""), std::string::npos) << frame;
+        EXPECT_TRUE(std::filesystem::exists(dir / "out" / frame / "labels.pcd")) << frame;
+    }
+    const auto both = RunCli("perceive " + manifest + " --manifest " + manifest + " --out " +
+                             (dir / "x").string());
+    EXPECT_EQ(both.code, 2);
+    EXPECT_EQ(CountLines(both.output), 1) << both.output;
+    const auto scene =
+        RunCli("perceive --manifest " + manifest + " --scene 7 --out " + (dir / "x").string());
+    EXPECT_EQ(scene.code, 2);
+    { std::ofstream(dir / "bad.json") << R"({"scenes": [{"id": 0, "frames": [{"file": 1}]}]})"; }
+    const auto bad = RunCli("perceive --manifest " + (dir / "bad.json").string() + " --out " +
+                            (dir / "x").string());
+    EXPECT_EQ(bad.code, 1);
+    EXPECT_EQ(CountLines(bad.output), 1) << bad.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x"));
+}
+
 TEST(Cli, TrainFromAMeshFolderWithItsOwnLabelsFile) {
     test::TempDir dir;
     std::filesystem::create_directories(dir / "meshes");

@@ -15,6 +15,7 @@
 #include "multicue/sim/tabletop_scene.hpp"
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
+#include "multicue/system/perceive_views.hpp"
 #include "test_util.hpp"
 
 namespace multicue {
@@ -166,6 +167,83 @@ TEST(Perceive, GuidedFitsKeepTheDemoSceneModels) {
     }
     guided.guided_rsd.radius = -1.0f;
     EXPECT_THROW(Perceive(s.cloud, guided), InvalidArgument);
+}
+
+TEST(PerceiveViews, OneFrameOrTwoEqualFramesKeepTheCategories) {
+    const auto& s = DemoScene();
+    const PerceiveParams params;
+    std::vector<PerceiveResult> one{Perceive(s.cloud, params)};
+    const PerceiveResult before = one.front();
+    const Eigen::Isometry3f pose = sim::DefaultCameraPose(s.scene);
+    FuseViewCategories({&s.cloud}, {pose}, one, params);
+    std::vector<PerceiveResult> two{before, before};
+    FuseViewCategories({&s.cloud, &s.cloud}, {pose, pose}, two, params);
+    for (const auto* fused : {&one[0], &two[0], &two[1]}) {
+        ASSERT_EQ(fused->objects.size(), before.objects.size());
+        for (std::size_t k = 0; k < before.objects.size(); ++k) {
+            const auto& a = before.objects[k].category;
+            const auto& b = fused->objects[k].category;
+            EXPECT_EQ(a.category, b.category);
+            for (std::size_t c = 0; c < kNumCategories; ++c) {
+                EXPECT_NEAR(a.probabilities[c], b.probabilities[c], 1e-4f);
+            }
+        }
+        EXPECT_EQ(fused->point_objects, before.point_objects);
+    }
+}
+
+TEST(PerceiveViews, TheSurerViewWinsInEveryFrame) {
+    // Two registered frames of one scene; in the second, the first object is confidently another
+    // category. The voxel votes give both frames the better supported category.
+    const auto& s = DemoScene();
+    const PerceiveParams params;
+    std::vector<PerceiveResult> r{Perceive(s.cloud, params), Perceive(s.cloud, params)};
+    ASSERT_FALSE(r[0].objects.empty());
+    const Category first = r[0].objects[0].category.category;
+    const Category other = first == Category::kOther ? Category::kSphere : Category::kOther;
+    auto& changed = r[1].objects[0].category;
+    changed.probabilities.fill(0.0f);
+    changed.probabilities[static_cast<std::size_t>(other)] = 1.0f;
+    changed.category = other;
+    r[0].objects[0].category.probabilities.fill(0.0f);
+    r[0].objects[0].category.probabilities[static_cast<std::size_t>(first)] = 0.6f;
+    r[0].objects[0].category.probabilities[static_cast<std::size_t>(other)] = 0.4f;
+    // Frame 2 seen from elsewhere: its points in its own sensor frame, its pose maps them back.
+    const Eigen::Isometry3f pose = sim::DefaultCameraPose(s.scene);
+    Eigen::Isometry3f move = Eigen::Isometry3f::Identity();
+    move.translate(Eigen::Vector3f(0.3f, -0.1f, 0.2f));
+    move.rotate(Eigen::AngleAxisf(0.4f, Eigen::Vector3f::UnitY()));
+    PointCloud moved = s.cloud;
+    for (auto& p : moved.points) p = move * p;
+    moved.normals.clear();
+    FuseViewCategories({&s.cloud, &moved}, {pose, pose * move.inverse()}, r, params);
+    for (const auto& fused : r) {
+        EXPECT_EQ(fused.objects[0].category.category, other);
+        EXPECT_NEAR(fused.objects[0].category.probabilities[static_cast<std::size_t>(other)], 0.7f,
+                    0.02f);
+        const Index i = fused.objects[0].indices.front();
+        EXPECT_EQ(fused.point_categories[i], static_cast<std::uint8_t>(other));
+    }
+    // The second frame's object was refitted for its new category only if it changed there.
+    EXPECT_FALSE(r[0].objects[0].model.mesh.triangles.empty());
+}
+
+TEST(PerceiveViews, BadInput) {
+    const auto& s = DemoScene();
+    const PerceiveParams params;
+    std::vector<PerceiveResult> r{Perceive(s.cloud, params)};
+    const Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
+    EXPECT_THROW(FuseViewCategories({&s.cloud, &s.cloud}, {pose}, r, params), InvalidArgument);
+    EXPECT_THROW(FuseViewCategories({&s.cloud}, {pose}, r, params, {.voxel_size = 0.0f}),
+                 InvalidArgument);
+    Eigen::Isometry3f nan_pose = pose;
+    nan_pose.translation().x() = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(FuseViewCategories({&s.cloud}, {nan_pose}, r, params), InvalidArgument);
+    PointCloud other;
+    other.points.resize(3, Eigen::Vector3f::Zero());
+    EXPECT_THROW(FuseViewCategories({&other}, {pose}, r, params), InvalidArgument);
+    std::vector<PerceiveResult> none;
+    EXPECT_NO_THROW(FuseViewCategories({}, {}, none, params));
 }
 
 TEST(Perceive, DeterministicAndThreadIndependent) {

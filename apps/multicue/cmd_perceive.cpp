@@ -3,10 +3,12 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "cli_util.hpp"
 #include "commands.hpp"
@@ -20,6 +22,7 @@
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
+#include "multicue/system/perceive_views.hpp"
 #include "part_graph_training.hpp"
 
 namespace multicue::cli {
@@ -93,6 +96,101 @@ std::string Summary(const PerceiveResult& result, const std::filesystem::path& o
     return s;
 }
 
+/// One frame of a simulator manifest: its file and pose in the scene's world frame.
+struct ManifestFrame {
+    std::filesystem::path file;
+    Eigen::Isometry3f T_world_sensor = Eigen::Isometry3f::Identity();
+};
+
+/// The frames of scene `scene_id` (the first scene if negative) of a `multicue simulate scenes`
+/// manifest.json.
+std::vector<ManifestFrame> ReadManifestFrames(const std::filesystem::path& path, int scene_id) {
+    std::ifstream in(path);
+    if (!in) throw IoError(path.string() + ": cannot open the manifest");
+    nlohmann::json manifest;
+    try {
+        manifest = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw FormatError(path.string() + ": not a JSON manifest (" + e.what() + ")");
+    }
+    const auto where = path.string();
+    if (!manifest.is_object() || !manifest.contains("scenes") || !manifest["scenes"].is_array()) {
+        throw FormatError(where + ": no 'scenes' array (a manifest of `multicue simulate scenes`)");
+    }
+    const nlohmann::json* scene = nullptr;
+    for (const auto& s : manifest["scenes"]) {
+        if (scene_id < 0 || (s.contains("id") && s["id"] == scene_id)) {
+            scene = &s;
+            break;
+        }
+    }
+    if (scene == nullptr) {
+        throw InvalidArgument(fmt::format("{}: no scene with id {}", where, scene_id));
+    }
+    std::vector<ManifestFrame> frames;
+    try {
+        for (const auto& f : scene->at("frames")) {
+            ManifestFrame frame;
+            frame.file = path.parent_path() / f.at("file").get<std::string>();
+            const auto& T = f.at("T_world_sensor");
+            if (!T.is_array() || T.size() != 4) throw FormatError("T_world_sensor is not 4x4");
+            for (int r = 0; r < 4; ++r) {
+                if (!T[r].is_array() || T[r].size() != 4) {
+                    throw FormatError("T_world_sensor is not 4x4");
+                }
+                for (int c = 0; c < 4; ++c)
+                    frame.T_world_sensor.matrix()(r, c) = T[r][c].get<float>();
+            }
+            frames.push_back(std::move(frame));
+        }
+    } catch (const nlohmann::json::exception& e) {
+        throw FormatError(fmt::format("{}: bad frame entry ({})", where, e.what()));
+    } catch (const FormatError& e) {
+        throw FormatError(fmt::format("{}: {}", where, e.what()));
+    }
+    if (frames.empty()) throw FormatError(where + ": the scene has no frames");
+    return frames;
+}
+
+/// Several registered frames: perceived one by one, categories fused in a voxel grid, outputs
+/// written per frame into OUT/<frame name>/.
+void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
+                      const std::filesystem::path& out, const PerceiveOptions& options,
+                      bool quiet) {
+    const auto frames = ReadManifestFrames(manifest, scene_id);
+    std::vector<PointCloud> clouds;
+    std::vector<double> load_ms;
+    for (const auto& f : frames) {
+        const auto start = std::chrono::steady_clock::now();
+        clouds.push_back(ReadNonEmptyCloud(f.file));
+        load_ms.push_back(MsSince(start));
+    }
+    std::vector<PerceiveResult> results;
+    std::vector<const PointCloud*> cloud_ptrs;
+    std::vector<Eigen::Isometry3f> poses;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+        results.push_back(Perceive(clouds[k], options.pipeline));
+        cloud_ptrs.push_back(&clouds[k]);
+        poses.push_back(frames[k].T_world_sensor);
+    }
+    FuseViewCategories(cloud_ptrs, poses, results, options.pipeline);
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+        const auto dir = out / frames[k].file.stem();
+        auto json = PerceiveResultJson(frames[k].file.string(), results[k], {{"load", load_ms[k]}});
+        json["views"] = {{"frames", frames.size()}, {"voxel_size", ViewFusionParams{}.voxel_size}};
+        const std::string report =
+            options.report.enabled
+                ? PerceiveReportPage(clouds[k], results[k], json, options.report).Render()
+                : std::string();
+        WritePerceiveOutputs(dir, json, PerceiveLabelsCloud(clouds[k], results[k]),
+                             PerceiveModelsMesh(results[k]), report);
+        if (!quiet) {
+            std::printf("frame %zu of %zu: %s\n", k + 1, frames.size(), frames[k].file.c_str());
+            std::fputs(Summary(results[k], dir, options.report).c_str(), stdout);
+        }
+    }
+}
+
 }  // namespace
 
 void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
@@ -105,7 +203,14 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
     auto up = std::make_shared<std::string>();
     auto quiet = std::make_shared<bool>(false);
     auto no_report = std::make_shared<bool>(false);
-    cmd->add_option("INPUT", *in, "point cloud (.pcd or .ply), organized or not")->required();
+    auto manifest = std::make_shared<std::string>();
+    auto scene = std::make_shared<int>(-1);
+    cmd->add_option("INPUT", *in, "point cloud (.pcd or .ply), organized or not");
+    cmd->add_option("--manifest", *manifest,
+                    "several registered frames instead of INPUT: a manifest.json of `multicue "
+                    "simulate scenes`; categories are fused over its frames in 5 mm voxels and "
+                    "each frame's outputs go to OUT/<frame name>/");
+    cmd->add_option("--scene", *scene, "with --manifest: the scene id (default: the first scene)");
     cmd->add_option("--out", *out,
                     "output folder: result.json, labels.pcd, models.ply, report.html")
         ->required();
@@ -115,8 +220,18 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
                   "do not write report.html (same as \"report\": {\"enabled\": false})");
     cmd->add_flag("-q,--quiet", *quiet, "print nothing on success");
     cmd->callback([=, &global] {
+        if (in->empty() == manifest->empty()) {
+            throw InvalidArgument("perceive: give either INPUT or --manifest");
+        }
+        if (manifest->empty() && *scene >= 0) {
+            throw InvalidArgument("perceive: --scene needs --manifest");
+        }
         PerceiveOptions options = LoadParams(*config, *up, global.threads);
         if (*no_report) options.report.enabled = false;
+        if (!manifest->empty()) {
+            RunPerceiveViews(*manifest, *scene, *out, options, *quiet);
+            return;
+        }
         const auto start = std::chrono::steady_clock::now();
         const PointCloud cloud = ReadNonEmptyCloud(*in);
         const double load_ms = MsSince(start);
