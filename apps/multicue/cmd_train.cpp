@@ -34,6 +34,9 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--labels", o->labels,
                     "labels CSV of the mesh library (columns file, category; default: "
                     "MESHES/labels.csv; file names relative to MESHES)");
+    cmd->add_option("--axial-noise", o->t.kinect.axial_noise,
+                    "depth noise of the simulated sensor: sigma = this * z^2 [1/m]")
+        ->capture_default_str();
     cmd->add_option("--objects", o->t.objects_per_category, "procedural objects per category")
         ->capture_default_str();
     cmd->add_option("--max-meshes", o->t.max_meshes, "at most this many library meshes (0 = all)")

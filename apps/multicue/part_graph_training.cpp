@@ -169,7 +169,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             const sim::Scene scene = sim::MakeTurntableScene(jobs[j].object, tp, jobs[j].seed);
             const sim::RayCaster caster(scene);
             const auto poses = sim::TurntableViews(scene, o.views, tp);
-            sim::KinectParams kp;
+            sim::KinectParams kp = o.kinect;
             kp.num_threads = 1;
             const Category category = ParseCategory(jobs[j].object.category);
             for (std::size_t v = 0; v < poses.size(); ++v) {
@@ -204,7 +204,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             const sim::RayCaster caster(scenes[s]);
             const auto views =
                 sim::TableViewpoints(scenes[s], o.table_views, o.table_viewpoints, seed);
-            sim::KinectParams kp;
+            sim::KinectParams kp = o.kinect;
             kp.num_threads = 1;
             PerceiveParams pp = perceive;
             pp.num_threads = 1;

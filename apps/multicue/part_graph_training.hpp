@@ -13,6 +13,7 @@
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/sim/sensors.hpp"
 #include "multicue/recognition/part_vocabulary.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/system/perceive.hpp"
@@ -44,6 +45,7 @@ struct PartGraphTrainingOptions {
     std::uint64_t seed = 1;
     int num_threads = 0;
     float camera_distance = 1.0f;  ///< turntable camera distance [m]
+    sim::KinectParams kinect{};    ///< the simulated sensor of every training scan
     /// Cluttered table scenes (objects drawn from the selected library meshes, else procedural
     /// objects) scanned from `table_views` robot-head viewpoints each (sim::TableViewpoints) and
     /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
