@@ -13,9 +13,9 @@
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
-#include "multicue/sim/sensors.hpp"
 #include "multicue/recognition/part_vocabulary.hpp"
 #include "multicue/sim/scene_gen.hpp"
+#include "multicue/sim/sensors.hpp"
 #include "multicue/system/perceive.hpp"
 
 namespace multicue::training {
