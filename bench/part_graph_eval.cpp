@@ -302,7 +302,6 @@ int main(int argc, char** argv) {
         variants.find("e3=") != std::string::npos || variants.find("ue=") != std::string::npos;
     if (baselines || descriptor_variants) o.objects_out = &train_objects;
     if (baselines) {
-        o.cluster_descriptors = true;
         o.cluster_params = cluster_params;
         o.part_statistics = true;
     }
@@ -357,6 +356,8 @@ int main(int argc, char** argv) {
         kPg,
         kPgRules,
         kRules,
+        kPgObject,
+        kFusion3,
         kVocabModelParts,
         kVocabModelBow,
         kVocabStatsParts,
@@ -371,11 +372,13 @@ int main(int argc, char** argv) {
                   double(blend_weight));
     methods[kPgRules].name = blend_name;
     methods[kRules].name = "rule-based categoriser (perceive default)";
+    methods[kPgObject].name = "part-graph hashing, object categories (as perceive labels)";
     methods[kVocabModelParts].name = "vocabulary of parts, model descriptor, part votes";
     methods[kVocabModelBow].name = "vocabulary of parts, model descriptor, bag of words";
     methods[kVocabStatsParts].name = "vocabulary of parts, 24 part statistics, part votes";
     methods[kVocabStatsBow].name = "vocabulary of parts, 24 part statistics, bag of words";
     methods[kWhole].name = "whole cluster, GRSD- + VFH";
+    methods[kFusion3].name = "part-graph+rules+cluster (rules x part-graph x model's cluster k-NN)";
     int num_methods = baselines ? int(kNumMethods) : int(kVocabModelParts);
     // Further part-graph recognition settings on the same model and parts ("k=10,dw=1;se=0.5").
     std::vector<PartGraphRecognitionParams> variant_params;
@@ -563,15 +566,29 @@ int main(int argc, char** argv) {
                 std::vector<Category>& op = object_pred[ob];
                 const auto& c = r.objects[ob].category;
                 op[kRules] = c.category;
-                op[kPg] = op[kPgRules] = Category::kNone;
+                op[kPg] = op[kPgRules] = op[kPgObject] = Category::kNone;
                 if (!ids[ob].empty()) {
                     const auto merged = MergePartProbabilities(pg, parts, ids[ob]);
-                    op[kPg] = ArgMaxCategory(merged);
+                    op[kPg] = op[kPgObject] = ArgMaxCategory(merged);
                     // part-graph+rules per object (as perceive blends them).
                     op[kPgRules] = c.category == Category::kNone
                                        ? Category::kNone
                                        : ArgMaxCategory(BlendCategoryProbabilities(
                                              c.probabilities, merged, blend_weight));
+                }
+                // The three experts as perceive's "part-graph+rules+cluster" combines them.
+                op[kFusion3] = op[kPgRules];
+                if (op[kFusion3] != Category::kNone) {
+                    auto three = BlendCategoryProbabilities(
+                        c.probabilities, MergePartProbabilities(pg, parts, ids[ob]), 0.5f);
+                    ClusterDescriptorParams cp;
+                    cp.size_weight = model.cluster_size_weight;
+                    const auto cluster = model.ClassifyCluster(
+                        ComputeClusterDescriptor(scan, r.objects[ob].indices, cp), 5);
+                    if (*std::max_element(cluster.begin(), cluster.end()) > 0.0f) {
+                        three = BlendCategoryProbabilities(three, cluster, 1.0f / 3.0f);
+                    }
+                    op[kFusion3] = ArgMaxCategory(three);
                 }
                 if (!baselines) continue;
                 // Part votes merged per object (point-weighted), bags of words, whole cluster.

@@ -254,6 +254,23 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
                (dir / "blend.json").string() + " --out " + (dir / "p").string());
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_TRUE(std::filesystem::exists(dir / "p" / "result.json"));
+    // Three experts: rules, part-graph and the model's whole-object k-NN.
+    for (const char* k : {"5", "0"}) {
+        std::ofstream(dir / "three.json")
+            << R"({"category": {"categoriser": "part-graph+rules+cluster", "cluster_k": )" << k
+            << R"(, "part_graph_model": ")" << model << R"("}})";
+        const auto three = RunCli("perceive " + (dir / "demo" / "scene.pcd").string() +
+                                  " --no-report -q --config " + (dir / "three.json").string() +
+                                  " --out " + (dir / ("q" + std::string(k))).string());
+        if (std::string(k) == "0") {
+            EXPECT_EQ(three.code, 2) << three.output;
+            EXPECT_EQ(CountLines(three.output), 1) << three.output;
+        } else {
+            ASSERT_EQ(three.code, 0) << three.output;
+            EXPECT_NE(ReadTextFile(dir / "q5" / "result.json").find("\"probabilities\""),
+                      std::string::npos);
+        }
+    }
 }
 
 TEST(Cli, PerceiveFusesTheFramesOfAManifest) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -524,16 +525,16 @@ TEST(PartGraphModel, CorruptFilesAreRejected) {
     EXPECT_THROW(PartGraphModel::Deserialize(bytes.substr(0, bytes.size() - 9), "cut"),
                  FormatError);
     EXPECT_THROW(PartGraphModel::Deserialize("not a model", "text"), FormatError);
-    // Files of previous layouts (version 1: GRSD- only; 2: no elevation and curvature blocks)
-    // are refused by their version.
-    for (std::uint32_t old : {1u, 2u}) {
+    // Files of previous layouts (version 1: GRSD- only; 2: no elevation and curvature blocks;
+    // 3: no whole-object rows) are refused by their version.
+    for (std::uint32_t old : {1u, 2u, 3u}) {
         try {
             PartGraphModel::Deserialize(ml::WrapContainer("MCPARTGR", old, "old"), "old.mcpg");
             ADD_FAILURE() << "version " << old << " accepted";
         } catch (const FormatError& e) {
             const std::string msg = e.what();
             EXPECT_NE(msg.find("version " + std::to_string(old)), std::string::npos) << msg;
-            EXPECT_NE(msg.find("reads version 3"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("reads version 4"), std::string::npos) << msg;
         }
     }
     EXPECT_THROW(PartGraphModel::Load(dir.path() / "missing.mcpg"), IoError);
@@ -547,6 +548,45 @@ TEST(PartGraphModel, CorruptFilesAreRejected) {
     EXPECT_THROW(
         unbuilt.AddObject(FeatureMatrix::Zero(2, kPartDescriptorSize), g, Category::kBox, {}),
         InvalidArgument);
+}
+
+TEST(PartGraphModel, WholeObjectExpertFindsNearestRowsAndRoundTrips) {
+    PartGraphModel m = SyntheticModel();
+    EXPECT_EQ(m.num_clusters(), 0u);
+    const auto empty = m.ClassifyCluster(Eigen::VectorXf::Ones(4), 3);
+    EXPECT_EQ(*std::max_element(empty.begin(), empty.end()), 0.0f);
+    // Two clouds of rows: boxes near (1, 0, 0, 0), cylinders near (0, 1, 0, 0).
+    for (int i = 0; i < 6; ++i) {
+        Eigen::VectorXf box = Eigen::VectorXf::Zero(4), cyl = Eigen::VectorXf::Zero(4);
+        box[0] = 1.0f + 0.01f * float(i);
+        box[2] = 0.02f * float(i);
+        cyl[1] = 1.0f - 0.01f * float(i);
+        cyl[3] = 0.02f * float(i);
+        m.AddCluster(box, Category::kBox);
+        m.AddCluster(cyl, Category::kCylinder);
+    }
+    m.AddCluster(Eigen::VectorXf::Zero(4), Category::kBox);  // all zero: skipped
+    EXPECT_EQ(m.num_clusters(), 12u);
+    Eigen::VectorXf q = Eigen::VectorXf::Zero(4);
+    q[0] = 0.9f;
+    q[1] = 0.2f;
+    const auto p = m.ClassifyCluster(q, 5);
+    EXPECT_FLOAT_EQ(p[static_cast<std::size_t>(Category::kBox)], 1.0f);
+    const auto all = m.ClassifyCluster(q, 100);  // k above the row count: every row votes
+    EXPECT_FLOAT_EQ(all[static_cast<std::size_t>(Category::kCylinder)], 0.5f);
+    const auto wrong = m.ClassifyCluster(Eigen::VectorXf::Ones(3), 5);
+    EXPECT_EQ(*std::max_element(wrong.begin(), wrong.end()), 0.0f);
+    m.cluster_size_weight = 4.0f;
+    const PartGraphModel back = PartGraphModel::Deserialize(m.Serialize(), "round trip");
+    EXPECT_EQ(back.num_clusters(), 12u);
+    EXPECT_EQ(back.cluster_size_weight, 4.0f);
+    EXPECT_EQ(back.ClassifyCluster(q, 5), p);
+    EXPECT_EQ(back.Serialize(), m.Serialize());
+    EXPECT_THROW(m.AddCluster(Eigen::VectorXf::Ones(5), Category::kBox), InvalidArgument);
+    EXPECT_THROW(m.AddCluster(Eigen::VectorXf::Ones(4), Category::kNone), InvalidArgument);
+    Eigen::VectorXf nan = Eigen::VectorXf::Ones(4);
+    nan[1] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(m.AddCluster(nan, Category::kBox), InvalidArgument);
 }
 
 TEST(PartGraphModel, VoxelVotesAccumulateViews) {

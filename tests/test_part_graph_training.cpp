@@ -79,7 +79,6 @@ TEST(PartGraphTraining, TableScenesAddPerceivedObjects) {
         o.num_threads = threads;
         if (baselines) {
             o.objects_out = &objects;
-            o.cluster_descriptors = true;
             o.part_statistics = true;
         }
         PartGraphModel m;

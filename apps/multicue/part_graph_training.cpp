@@ -78,8 +78,9 @@ struct Sample {
 void AddBaselineFeatures(Sample& s, const PointCloud& scan, const std::vector<Indices>& parts,
                          const Indices& object, const Eigen::Vector3f& up,
                          const PartGraphTrainingOptions& o) {
+    // The model keeps each object's whole-cluster descriptor (its third expert).
+    s.cluster = ComputeClusterDescriptor(scan, object, o.cluster_params);
     if (!o.objects_out) return;
-    if (o.cluster_descriptors) s.cluster = ComputeClusterDescriptor(scan, object, o.cluster_params);
     if (o.part_statistics) s.statistics = ComputePartStatisticsRows(scan, parts, up);
 }
 
@@ -240,6 +241,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             if (progress) progress->Advance();
         },
         1);
+    model.cluster_size_weight = o.cluster_params.size_weight;
     // Added in job order: the model does not depend on the thread count.
     for (std::size_t j = 0; j < samples.size(); ++j) {
         for (std::size_t v = 0; v < samples[j].size(); ++v) {
@@ -247,6 +249,7 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             tp.seed = sim::SubSeed(o.train.seed, j * 1000 + v);
             model.AddObject(samples[j][v].descriptors, samples[j][v].graph, samples[j][v].category,
                             tp);
+            model.AddCluster(samples[j][v].cluster, samples[j][v].category);
             if (o.objects_out) {
                 o.objects_out->push_back({std::move(samples[j][v].descriptors),
                                           std::move(samples[j][v].statistics),

@@ -24,7 +24,7 @@ namespace multicue::training {
 struct TrainingObject {
     FeatureMatrix part_descriptors;  ///< raw part descriptors (ComputePartDescriptors)
     FeatureMatrix part_statistics;   ///< the 24 features of every part (with part_statistics)
-    FeatureVector cluster;           ///< ComputeClusterDescriptor (with cluster_descriptors)
+    FeatureVector cluster;           ///< ComputeClusterDescriptor (always computed)
     Category category = Category::kNone;
     PartGraph graph;  ///< adjacency of its parts (to train further models on the same rows)
     std::uint64_t train_seed = 0;  ///< PartGraphTrainParams::seed it was added with
@@ -58,7 +58,6 @@ struct PartGraphTrainingOptions {
     /// When set, receives every labelled object added to the model, in a fixed order (turntable
     /// scans, then table-scene objects).
     std::vector<TrainingObject>* objects_out = nullptr;
-    bool cluster_descriptors = false;  ///< fill TrainingObject::cluster
     ClusterDescriptorParams cluster_params{};
     bool part_statistics = false;  ///< fill TrainingObject::part_statistics (up = world z)
 };

@@ -7,6 +7,7 @@
 #include <random>
 #include <unordered_map>
 
+#include <fmt/format.h>
 #include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
@@ -367,6 +368,42 @@ std::array<std::size_t, kNumCategories> PartGraphModel::rows_per_category() cons
     return n;
 }
 
+void PartGraphModel::AddCluster(const Eigen::VectorXf& descriptor, Category category) {
+    if (category == Category::kNone || static_cast<std::size_t>(category) >= kNumCategories) {
+        throw InvalidArgument("AddCluster: the category must be one of the six");
+    }
+    if (!descriptor.allFinite()) throw InvalidArgument("AddCluster: non-finite descriptor");
+    if (descriptor.size() == 0 || descriptor.cwiseAbs().sum() == 0.0f) return;
+    const auto dims = static_cast<std::size_t>(descriptor.size());
+    if (cluster_dims_ != 0 && dims != cluster_dims_) {
+        throw InvalidArgument(
+            fmt::format("AddCluster: {} values, the model's rows have {}", dims, cluster_dims_));
+    }
+    cluster_dims_ = dims;
+    cluster_rows_.insert(cluster_rows_.end(), descriptor.data(), descriptor.data() + dims);
+    cluster_labels_.push_back(static_cast<std::uint8_t>(category));
+}
+
+std::array<float, kNumCategories> PartGraphModel::ClassifyCluster(const Eigen::VectorXf& descriptor,
+                                                                  std::size_t k) const {
+    std::array<float, kNumCategories> out{};
+    if (cluster_labels_.empty() || k == 0 ||
+        static_cast<std::size_t>(descriptor.size()) != cluster_dims_ ||
+        descriptor.cwiseAbs().sum() == 0.0f || !descriptor.allFinite()) {
+        return out;
+    }
+    std::vector<std::pair<float, std::size_t>> d(cluster_labels_.size());
+    for (std::size_t i = 0; i < cluster_labels_.size(); ++i) {
+        const Eigen::Map<const Eigen::VectorXf> row(cluster_rows_.data() + i * cluster_dims_,
+                                                    static_cast<Eigen::Index>(cluster_dims_));
+        d[i] = {(row - descriptor).squaredNorm(), i};
+    }
+    k = std::min(k, d.size());
+    std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
+    for (std::size_t i = 0; i < k; ++i) out[cluster_labels_[d[i].second]] += 1.0f / float(k);
+    return out;
+}
+
 std::string PartGraphModel::Serialize() const {
     ml::ByteWriter w;
     w.Put<float>(descriptor_params.voxels.voxel_size);
@@ -385,6 +422,10 @@ std::string PartGraphModel::Serialize() const {
         w.PutVector(b.labels);
         w.PutVector(b.rows);
     }
+    w.Put<float>(cluster_size_weight);
+    w.Put<std::uint64_t>(cluster_dims_);
+    w.PutVector(cluster_labels_);
+    w.PutVector(cluster_rows_);
     return ml::WrapContainer(kMagic, kPartGraphModelVersion, w.bytes());
 }
 
@@ -436,6 +477,23 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
             if (!std::isfinite(v) || v < 0.0f) r.Fail("bad descriptor");
         }
         m.buckets_.emplace(key, std::move(b));
+    }
+    m.cluster_size_weight = r.Get<float>();
+    if (!(m.cluster_size_weight >= 0.0f) || !std::isfinite(m.cluster_size_weight)) {
+        r.Fail("bad cluster parameters");
+    }
+    m.cluster_dims_ = r.Get<std::uint64_t>();
+    m.cluster_labels_ = r.GetVector<std::uint8_t>();
+    m.cluster_rows_ = r.GetVector<float>();
+    if (m.cluster_rows_.size() != m.cluster_labels_.size() * m.cluster_dims_ ||
+        (m.cluster_dims_ == 0) != m.cluster_labels_.empty()) {
+        r.Fail("bad cluster rows");
+    }
+    for (auto l : m.cluster_labels_) {
+        if (l == 0 || l >= kNumCategories) r.Fail("bad category");
+    }
+    for (float v : m.cluster_rows_) {
+        if (!std::isfinite(v)) r.Fail("bad cluster descriptor");
     }
     if (!r.AtEnd()) r.Fail("trailing bytes");
     m.Build();

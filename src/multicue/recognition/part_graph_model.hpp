@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/core/types.hpp"
@@ -70,7 +72,7 @@ inline constexpr int kPartDescriptorSize = kPartRsdOffset + kPartRsdSize;
 inline constexpr int kPartMappedSize = kPartGrsdSize + 3 + kPartElevationSize + kPartRsdSize;
 /// Version of the model file format (docs/part-graph.md). 2: moment block and extents. 3:
 /// elevation and curvature blocks, block weights.
-inline constexpr std::uint32_t kPartGraphModelVersion = 3;
+inline constexpr std::uint32_t kPartGraphModelVersion = 4;
 
 struct PartDescriptorParams {
     VoxelRsdParams voxels = {};  ///< GRSD- voxel map settings (2.5 cm voxels by default)
@@ -167,6 +169,20 @@ class PartGraphModel {
     /// The stored form of a raw descriptor (kPartMappedSize values into `out`).
     void MapDescriptor(const float* raw, float* out) const;
 
+    /// Whole-object expert stored with the model (the whole-cluster baseline of Table 5.9, used
+    /// as a third cue): one ComputeClusterDescriptor row per training object and its category.
+    /// All rows must have the same length; an all-zero descriptor is skipped. Throws
+    /// InvalidArgument for kNone, a length mismatch or non-finite values.
+    void AddCluster(const Eigen::VectorXf& descriptor, Category category);
+    /// Category frequencies of the k nearest stored cluster rows (Euclidean, ties by index); all
+    /// zero when none are stored or `descriptor` is all zero or of another length.
+    std::array<float, kNumCategories> ClassifyCluster(const Eigen::VectorXf& descriptor,
+                                                      std::size_t k) const;
+    std::size_t num_clusters() const { return cluster_labels_.size(); }
+    /// ClusterDescriptorParams::size_weight the cluster rows were computed with (other
+    /// parameters at their defaults) [1/m].
+    float cluster_size_weight = 0.0f;
+
     std::size_t num_rows() const;
     std::size_t num_buckets() const { return buckets_.size(); }
     const std::map<std::uint64_t, Bucket>& buckets() const { return buckets_; }
@@ -185,6 +201,9 @@ class PartGraphModel {
     std::map<std::size_t, std::vector<std::uint64_t>> keys_by_size_;
     std::array<float, kNumCategories> class_weight_{};  ///< 1 / share of rows (Build)
     bool built_ = false;
+    std::size_t cluster_dims_ = 0;
+    std::vector<float> cluster_rows_;
+    std::vector<std::uint8_t> cluster_labels_;
 };
 
 /// Categorises parts: builds their graph (model.graph_params), descriptors

@@ -16,6 +16,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/recognition/part_vocabulary.hpp"
 #include "multicue/search/kdtree.hpp"
 
 namespace multicue {
@@ -156,6 +157,15 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
         auto p = MergePartProbabilities(r, parts, ids[k]);
         if (params.categoriser == "part-graph+rules") {
             p = BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
+        } else if (params.categoriser == "part-graph+rules+cluster") {
+            p = BlendCategoryProbabilities(c.probabilities, p, 0.5f);
+            ClusterDescriptorParams cp;
+            cp.size_weight = model->cluster_size_weight;
+            const auto cluster = model->ClassifyCluster(
+                ComputeClusterDescriptor(cloud, objects[k].indices, cp), params.cluster_k);
+            float total = 0.0f;
+            for (float x : cluster) total += x;
+            if (total > 0.0f) p = BlendCategoryProbabilities(p, cluster, 1.0f / 3.0f);
         }
         c.probabilities = p;
         c.category = ArgMaxCategory(p);
@@ -820,11 +830,14 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
             o.centroid = Centroid(cloud, o.indices);
         },
         1);
-    if (params.categoriser == "part-graph" || params.categoriser == "part-graph+rules") {
+    if (params.categoriser == "part-graph" || params.categoriser == "part-graph+rules" ||
+        params.categoriser == "part-graph+rules+cluster") {
+        if (params.cluster_k < 1) throw InvalidArgument("category.cluster_k must be >= 1");
         CategorizeByPartGraph(cloud, result.objects, plane, params);
     } else if (params.categoriser != "rules") {
         throw InvalidArgument(
-            "category.categoriser must be rules, part-graph or part-graph+rules, got '" +
+            "category.categoriser must be rules, part-graph, part-graph+rules or "
+            "part-graph+rules+cluster, got '" +
             params.categoriser + "'");
     }
     timer.Done("categories");

@@ -61,8 +61,12 @@ struct PerceiveParams {
     /// categories, probabilities and per-point labels then come from the parts' votes; the rule
     /// result stays the input of the model fits' "upright" details only), or "part-graph+rules"
     /// (both: per category rules^(1 - w) * part-graph^w, w = part_graph_weight, each
-    /// distribution floored at 0.01 first, then normalised).
+    /// distribution floored at 0.01 first, then normalised), or "part-graph+rules+cluster" (three
+    /// experts with equal weight: rules^(1/3) * part-graph^(1/3) * cluster^(1/3), cluster being
+    /// the model's whole-object k-NN on GRSD- and VFH, PartGraphModel::ClassifyCluster, k =
+    /// cluster_k; without cluster rows in the model, as "part-graph+rules" with w = 0.5).
     std::string categoriser = "rules";
+    std::size_t cluster_k = 5;  ///< neighbours of the whole-object expert [-]; >= 1
     /// Part-graph model file; empty = `part_graph` must be set (the CLI then uses the default
     /// model, trained once and cached).
     std::string part_graph_model;
