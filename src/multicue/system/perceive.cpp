@@ -36,9 +36,9 @@ class StageTimer {
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
-// Normals unless the input brings them; organized frames take the image-space path and compute
-// them for the region of interest only.
-void EnsureNormals(PointCloud& cloud, const Indices& roi, const PerceiveParams& params) {
+}  // namespace
+
+void EnsurePerceiveNormals(PointCloud& cloud, const Indices& roi, const PerceiveParams& params) {
     if (cloud.HasNormals() && cloud.HasCurvature()) return;
     NormalsResult normals;
     if (cloud.IsOrganized()) {
@@ -55,6 +55,8 @@ void EnsureNormals(PointCloud& cloud, const Indices& roi, const PerceiveParams& 
     }
     SetNormals(cloud, std::move(normals));
 }
+
+namespace {
 
 ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& roi,
                                 const PerceiveParams& params) {
@@ -249,6 +251,19 @@ static void FinishRegroup(const PointCloud& cloud, Regrouped& r,
     objects = std::move(r.objects);
 }
 
+// Two cylinders on one axis with about one radius (models.concentric): the inside and outside
+// of one container, or two such containers stacked (their overlap along the axis tells).
+static bool CoaxialSameRadius(const CylinderModel& a, const CylinderModel& b,
+                              const PerceiveParams& params) {
+    const Eigen::Vector3f axis = a.axis.normalized();
+    const Eigen::Vector3f d = b.center - a.center;
+    return std::abs(axis.dot(b.axis.normalized())) >=
+               std::cos(params.concentric_angle_deg * 3.14159265f / 180.0f) &&
+           (d - d.dot(axis) * axis).norm() <= params.concentric_distance &&
+           std::abs(a.radius - b.radius) <=
+               params.concentric_radius_ratio * std::max(a.radius, b.radius);
+}
+
 // Objects whose cylinder models share their axis and radius and overlap along it are one
 // container seen as two surfaces (inside and outside); merged, categorised and modelled again.
 static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
@@ -258,7 +273,6 @@ static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject
         throw InvalidArgument("models.concentric: angle, distance and radius ratio must be >= 0");
     }
     const std::size_t n = objects.size();
-    const float cos_angle = std::cos(params.concentric_angle_deg * 3.14159265f / 180.0f);
     auto cylinder = [&](std::size_t k) -> const CylinderModel* {
         const auto& m = objects[k].model;
         return m.cylinder && m.cylinder->found ? &*m.cylinder : nullptr;
@@ -276,15 +290,9 @@ static void MergeConcentric(const PointCloud& cloud, std::vector<PerceivedObject
         for (std::size_t j = i + 1; j < n; ++j) {
             const CylinderModel* b = cylinder(j);
             if (b == nullptr) continue;
-            const Eigen::Vector3f axis = a->axis.normalized();
-            if (std::abs(axis.dot(b->axis.normalized())) < cos_angle) continue;
-            const Eigen::Vector3f d = b->center - a->center;
-            if ((d - d.dot(axis) * axis).norm() > params.concentric_distance) continue;
-            if (std::abs(a->radius - b->radius) >
-                params.concentric_radius_ratio * std::max(a->radius, b->radius)) {
-                continue;
-            }
-            if (std::abs(d.dot(axis)) > 0.5f * (a->height + b->height)) continue;  // stacked
+            if (!CoaxialSameRadius(*a, *b, params)) continue;
+            const float along = (b->center - a->center).dot(a->axis.normalized());
+            if (std::abs(along) > 0.5f * (a->height + b->height)) continue;  // stacked
             root[find(j)] = find(i);
             any = true;
         }
@@ -589,47 +597,32 @@ static void SplitTouchingBoxes(const PointCloud& cloud, std::vector<PerceivedObj
             continue;
         }
         // Whole parts go to the box nearer to most of their points; loose points to the nearer.
-        PerceivedObject pa, pb;
-        for (auto& part : o.parts) {
+        auto nearer_a = [&](Index i) {
+            return BoxSurfaceDistance(best_a, cloud.points[i]) <=
+                   BoxSurfaceDistance(best_b, cloud.points[i]);
+        };
+        std::vector<bool> part_to_a(o.parts.size());
+        std::vector<std::pair<Index, bool>> owner;  // part point -> goes to a
+        for (std::size_t k = 0; k < o.parts.size(); ++k) {
             std::size_t to_a = 0;
-            for (Index i : part) {
-                to_a += BoxSurfaceDistance(best_a, cloud.points[i]) <=
-                        BoxSurfaceDistance(best_b, cloud.points[i]);
-            }
-            (2 * to_a >= part.size() ? pa : pb).parts.push_back(std::move(part));
+            for (Index i : o.parts[k]) to_a += nearer_a(i);
+            part_to_a[k] = 2 * to_a >= o.parts[k].size();
+            for (Index i : o.parts[k]) owner.emplace_back(i, part_to_a[k]);
         }
-        Indices in_parts;
-        for (const auto* g : {&pa, &pb}) {
-            for (const auto& part : g->parts) {
-                in_parts.insert(in_parts.end(), part.begin(), part.end());
-            }
-        }
-        std::sort(in_parts.begin(), in_parts.end());
+        std::sort(owner.begin(), owner.end());
+        PerceivedObject pa, pb;
         for (Index i : o.indices) {
-            bool to_a = false;
-            if (std::binary_search(in_parts.begin(), in_parts.end(), i)) {
-                to_a = std::any_of(pa.parts.begin(), pa.parts.end(), [&](const Indices& part) {
-                    return std::binary_search(part.begin(), part.end(), i);
-                });
-            } else {
-                to_a = BoxSurfaceDistance(best_a, cloud.points[i]) <=
-                       BoxSurfaceDistance(best_b, cloud.points[i]);
-            }
+            const auto it = std::lower_bound(owner.begin(), owner.end(), std::pair{i, false});
+            const bool to_a = it != owner.end() && it->first == i ? it->second : nearer_a(i);
             (to_a ? pa : pb).indices.push_back(i);
         }
         if (pa.indices.size() < params.min_object_points ||
             pb.indices.size() < params.min_object_points) {
-            // Put the object back together.
-            PerceivedObject whole;
-            whole.indices = std::move(o.indices);
-            for (auto* g : {&pa, &pb}) {
-                for (auto& part : g->parts) whole.parts.push_back(std::move(part));
-            }
-            whole.category = o.category;
-            whole.model = std::move(o.model);
-            whole.centroid = o.centroid;
-            out.Keep(std::move(whole));
+            out.Keep(std::move(o));
             continue;
+        }
+        for (std::size_t k = 0; k < o.parts.size(); ++k) {
+            (part_to_a[k] ? pa : pb).parts.push_back(std::move(o.parts[k]));
         }
         out.Add(std::move(pa));
         out.Add(std::move(pb));
@@ -694,14 +687,7 @@ static void SplitTouchingRound(const PointCloud& cloud, std::vector<PerceivedObj
                               CylinderSurfaceDistance(b, cloud.points[i])) <= threshold;
             }
             const float both = static_cast<float>(n) / static_cast<float>(o.indices.size());
-            const Eigen::Vector3f axis = a.axis.normalized();
-            const Eigen::Vector3f d = b.center - a.center;
-            const bool concentric =
-                std::abs(axis.dot(b.axis.normalized())) >=
-                    std::cos(params.concentric_angle_deg * 3.14159265f / 180.0f) &&
-                (d - d.dot(axis) * axis).norm() <= params.concentric_distance &&
-                std::abs(a.radius - b.radius) <=
-                    params.concentric_radius_ratio * std::max(a.radius, b.radius);
+            const bool concentric = CoaxialSameRadius(a, b, params);
             LogDebug("perceive: touching round {} | {}: {:.2f} (one cylinder {:.2f}){}", ga.size(),
                      gb.size(), both, one_ratio, concentric ? ", concentric" : "");
             keep = concentric || both < one_ratio + params.touching_min_gain;
@@ -759,7 +745,7 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     }
     timer.Done("support_plane");
 
-    EnsureNormals(cloud, roi, params);
+    EnsurePerceiveNormals(cloud, roi, params);
     timer.Done("normals");
 
     ClusteringResult clusters = ClusterObjects(cloud, roi, params);

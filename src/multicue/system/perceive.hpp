@@ -225,6 +225,10 @@ struct PerceiveResult {
 ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
                         const Eigen::Vector4f& plane, const PerceiveParams& params);
 
+/// Normals as perceive computes them, unless `cloud` has normals and curvature already:
+/// organized frames take the image-space path for the points `roi` only, others k-NN PCA.
+void EnsurePerceiveNormals(PointCloud& cloud, const Indices& roi, const PerceiveParams& params);
+
 /// Runs the pipeline. The cloud must hold at least one finite point (DataError otherwise); normals
 /// are computed unless the cloud has them. Throws InvalidArgument for bad parameters.
 PerceiveResult Perceive(const PointCloud& cloud, const PerceiveParams& params);

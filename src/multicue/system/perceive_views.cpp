@@ -5,8 +5,6 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
-#include "multicue/search/kdtree.hpp"
-#include "multicue/surface/normals.hpp"
 
 namespace multicue {
 namespace {
@@ -17,28 +15,6 @@ using Distribution = std::array<float, kNumCategories>;
 // on simulated clutter this fuses better than the parts' own distributions.
 std::vector<Distribution> PointVotes(const PerceivedObject& o) {
     return std::vector<Distribution>(o.indices.size(), o.category.probabilities);
-}
-
-// The frame with normals as perceive computes them for its objects (needed to model again).
-PointCloud WithNormals(const PointCloud& cloud, const PerceiveResult& result,
-                       const PerceiveParams& params) {
-    PointCloud c = cloud;
-    if (c.HasNormals() && c.HasCurvature()) return c;
-    if (c.IsOrganized()) {
-        OrganizedNormalParams p = params.organized_normals;
-        p.num_threads = params.num_threads;
-        p.mask.assign(c.size(), 0);
-        for (const auto& o : result.objects) {
-            for (Index i : o.indices) p.mask[i] = 1;
-        }
-        SetNormals(c, EstimateNormalsOrganized(c, p));
-    } else {
-        NormalParams p = params.normals;
-        p.num_threads = params.num_threads;
-        const KdTree tree(c);
-        SetNormals(c, EstimateNormals(c, tree, p));
-    }
-    return c;
 }
 
 }  // namespace
@@ -102,7 +78,12 @@ void FuseViewCategories(const std::vector<const PointCloud*>& clouds,
             if (o.category.category != before) changed.push_back(k);
         }
         if (!fusion.remodel || changed.empty()) continue;
-        const PointCloud cloud = WithNormals(*clouds[f], r, params);
+        // The frame with normals as perceive computes them for its objects.
+        PointCloud cloud = *clouds[f];
+        Indices objects;
+        for (const auto& o : r.objects)
+            objects.insert(objects.end(), o.indices.begin(), o.indices.end());
+        EnsurePerceiveNormals(cloud, objects, params);
         const Eigen::Vector4f plane = r.support.found ? r.support.plane : Eigen::Vector4f::Zero();
         for (std::size_t k : changed)
             r.objects[k].model = ModelObject(cloud, r.objects[k], plane, params);
