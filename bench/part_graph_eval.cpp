@@ -22,7 +22,10 @@
 //                        "k=10;ew=2,rw=1;..."]
 //
 // --variants: further part-graph settings on the same parts, each counted on its own. Recognition
-// keys k, dw, off, se, mp, cw, bal; descriptor keys gw, ew, rw, sw (GRSD-, elevation, curvature,
+// keys k, dw, off, se, mp, cw, bal, and wo (only subgraphs inside one perceived object, 0|1) and
+// ow (weight of each whole object's own vote), which pass the objects as part groups (without
+// them the main rows' subgraphs may span objects); descriptor keys gw, ew, rw, sw (GRSD-,
+// elevation, curvature,
 // size weight), e1, e2, e3 (extent factors) and ue (upright extents 0|1), which train a further
 // model from the same training rows, graphs and sampling seeds.
 
@@ -421,6 +424,10 @@ int main(int argc, char** argv) {
                     vr.confidence_weighted = val != 0.0;
                 else if (key == "bal")
                     vr.balanced = val != 0.0;
+                else if (key == "wo")
+                    vr.within_groups = val != 0.0;
+                else if (key == "ow")
+                    vr.group_weight = float(val);
                 else if (key == "ue") {
                     own_model = true;
                     vd.upright_extents = val != 0.0;
@@ -494,10 +501,12 @@ int main(int argc, char** argv) {
             const PerceiveResult r = Perceive(scan, pp);
             std::vector<Indices> parts;
             std::vector<std::size_t> part_object;
+            std::vector<std::uint32_t> part_groups;
             for (std::size_t ob = 0; ob < r.objects.size(); ++ob)
                 for (const auto& p : r.objects[ob].parts) {
                     parts.push_back(p);
                     part_object.push_back(ob);
+                    part_groups.push_back(static_cast<std::uint32_t>(ob));
                 }
             const auto a = std::chrono::steady_clock::now();
             const PartGraph graph = BuildPartGraph(scan, parts, model.graph_params);
@@ -525,7 +534,8 @@ int main(int argc, char** argv) {
             for (std::size_t vi = 0; vi < variant_params.size(); ++vi) {
                 const int m = first_variant + int(vi);
                 const PartGraphModel& vmodel = variant_models[vi] ? *variant_models[vi] : model;
-                const PartGraphResult vr = RecognizeParts(vmodel, graph, raw, variant_params[vi]);
+                const PartGraphResult vr =
+                    RecognizeParts(vmodel, graph, raw, variant_params[vi], part_groups);
                 for (std::size_t k = 0; k < parts.size(); ++k) {
                     part_pred[k][m] = vr.part_categories[k];
                 }

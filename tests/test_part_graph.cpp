@@ -509,6 +509,61 @@ TEST(PartGraphModel, ClassifiesAndRoundTrips) {
     EXPECT_THROW(RecognizeParts(l, tri, d), InvalidArgument);
 }
 
+// Objects as groups of parts: single parts look like flat (GRSD- column 6) and sphere (column
+// 15) parts, but together they are the two parts of a box; only the whole object's own vote
+// knows it. Subgraphs across objects do not vote when restricted to groups.
+TEST(PartGraphModel, GroupsRestrictSubgraphsAndVoteAsWholes) {
+    PartGraphModel m;
+    PartGraph pair(2);
+    pair.AddEdge(0, 1);
+    for (int obj = 0; obj < 4; ++obj) {
+        FeatureMatrix box = FeatureMatrix::Zero(2, kPartDescriptorSize);
+        box(0, 6) = 50.0f;
+        box(1, 15) = 50.0f;
+        box(0, 0) = box(1, 0) = 3.0f;
+        FeatureMatrix flat = FeatureMatrix::Zero(2, kPartDescriptorSize);
+        flat(0, 6) = flat(1, 6) = 50.0f;
+        FeatureMatrix ball = FeatureMatrix::Zero(2, kPartDescriptorSize);
+        ball(0, 15) = ball(1, 15) = 50.0f;
+        const std::uint64_t seed = 1u + static_cast<std::uint64_t>(obj);
+        m.AddObject(box, pair, Category::kBox, {.max_parts = 2, .seed = seed});
+        m.AddObject(flat, pair, Category::kFlat, {.max_parts = 2, .seed = seed});
+        m.AddObject(ball, pair, Category::kSphere, {.max_parts = 2, .seed = seed});
+    }
+    m.Build();
+    FeatureMatrix q = FeatureMatrix::Zero(2, kPartDescriptorSize);
+    q(0, 6) = 50.0f;
+    q(1, 15) = 50.0f;
+    PartGraphRecognitionParams rp{.max_parts = 1, .k = 4, .balanced = false};
+    const std::vector<std::uint32_t> one{0, 0}, two{0, 1};
+    const PartGraphResult parts_only = RecognizeParts(m, pair, q, rp, one);
+    EXPECT_EQ(parts_only.part_categories[0], Category::kFlat);
+    EXPECT_EQ(parts_only.part_categories[1], Category::kSphere);
+    EXPECT_EQ(parts_only.subgraphs, 2u);
+    rp.group_weight = 3.0f;
+    const PartGraphResult whole = RecognizeParts(m, pair, q, rp, one);
+    EXPECT_EQ(whole.part_categories[0], Category::kBox);
+    EXPECT_EQ(whole.part_categories[1], Category::kBox);
+    EXPECT_EQ(whole.subgraphs, 3u);
+    // Two objects: each whole is a single part, nothing spans them.
+    const PartGraphResult apart = RecognizeParts(m, pair, q, rp, two);
+    EXPECT_EQ(apart.part_categories[0], Category::kFlat);
+    EXPECT_EQ(apart.part_categories[1], Category::kSphere);
+    rp.group_weight = 0.0f;
+    rp.max_parts = 2;
+    EXPECT_EQ(RecognizeParts(m, pair, q, rp, two).subgraphs, 2u);
+    EXPECT_EQ(RecognizeParts(m, pair, q, rp).subgraphs, 3u);  // no groups: the pair votes
+    rp.within_groups = false;
+    EXPECT_EQ(RecognizeParts(m, pair, q, rp, two).subgraphs, 3u);
+    // Deterministic, and bad groups or weights are refused.
+    rp.group_weight = 1.0f;
+    EXPECT_EQ(RecognizeParts(m, pair, q, rp, one).part_probabilities,
+              RecognizeParts(m, pair, q, rp, one).part_probabilities);
+    EXPECT_THROW(RecognizeParts(m, pair, q, rp, std::vector<std::uint32_t>{0}), InvalidArgument);
+    rp.group_weight = -1.0f;
+    EXPECT_THROW(RecognizeParts(m, pair, q, rp, one), InvalidArgument);
+}
+
 TEST(PartGraphModel, CorruptFilesAreRejected) {
     const PartGraphModel m = SyntheticModel();
     test::TempDir dir;

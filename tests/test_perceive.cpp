@@ -448,6 +448,16 @@ TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
         for (float v : o.category.probabilities) sum += v;
         EXPECT_NEAR(sum, 1.0f, 1e-5f);
     }
+    // Groups only inside objects and each whole object's own vote: still the model's category.
+    p.part_graph_recognition.group_weight = 2.0f;
+    for (const auto& o : Perceive(s.cloud, p).objects) {
+        if (o.category.category != Category::kNone) {
+            EXPECT_EQ(o.category.category, Category::kSphere);
+        }
+    }
+    p.part_graph_recognition.group_weight = -1.0f;
+    EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
+    p.part_graph_recognition.group_weight = 0.0f;
     p.part_graph_weight = 1.5f;
     EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
     p.part_graph_weight = 0.5f;

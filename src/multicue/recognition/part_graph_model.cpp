@@ -511,16 +511,62 @@ PartGraphModel PartGraphModel::Load(const std::filesystem::path& path) {
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
                                const std::vector<Indices>& parts,
                                const PartGraphRecognitionParams& params,
-                               const Eigen::Vector3f& up) {
+                               const Eigen::Vector3f& up, std::span<const std::uint32_t> groups) {
     const PartGraph graph = BuildPartGraph(cloud, parts, model.graph_params);
     const FeatureMatrix d = ComputePartDescriptors(cloud, parts, model.descriptor_params, up);
-    return RecognizeParts(model, graph, d, params);
+    return RecognizeParts(model, graph, d, params, groups);
 }
+
+namespace {
+
+// The graph without the edges between parts of different groups.
+PartGraph WithinGroups(const PartGraph& graph, std::span<const std::uint32_t> groups) {
+    PartGraph out(graph.size());
+    for (std::uint32_t a = 0; a < graph.size(); ++a) {
+        for (std::uint32_t b : graph.Neighbours(a)) {
+            if (a < b && groups[a] == groups[b]) out.AddEdge(a, b);
+        }
+    }
+    return out;
+}
+
+// Connected components of each group's parts (edges inside the group only), each ascending.
+std::vector<std::vector<std::uint32_t>> GroupComponents(const PartGraph& graph,
+                                                        std::span<const std::uint32_t> groups) {
+    std::vector<std::vector<std::uint32_t>> out;
+    std::vector<bool> seen(graph.size(), false);
+    for (std::uint32_t s = 0; s < graph.size(); ++s) {
+        if (seen[s]) continue;
+        std::vector<std::uint32_t> comp{s};
+        seen[s] = true;
+        for (std::size_t i = 0; i < comp.size(); ++i) {
+            for (std::uint32_t b : graph.Neighbours(comp[i])) {
+                if (!seen[b] && groups[b] == groups[s]) {
+                    seen[b] = true;
+                    comp.push_back(b);
+                }
+            }
+        }
+        std::sort(comp.begin(), comp.end());
+        out.push_back(std::move(comp));
+    }
+    return out;
+}
+
+}  // namespace
 
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
                                const FeatureMatrix& descriptors,
-                               const PartGraphRecognitionParams& params) {
+                               const PartGraphRecognitionParams& params,
+                               std::span<const std::uint32_t> groups) {
     if (params.k == 0) throw InvalidArgument("k must be >= 1");
+    if (!(params.group_weight >= 0.0f) || !std::isfinite(params.group_weight)) {
+        throw InvalidArgument("group_weight must be >= 0 and finite");
+    }
+    if (!groups.empty() && groups.size() != graph.size()) {
+        throw InvalidArgument(fmt::format("groups must have one entry per part ({}), got {}",
+                                          graph.size(), groups.size()));
+    }
     if (!(params.size_exponent >= 0.0f)) throw InvalidArgument("size_exponent must be >= 0");
     if (!(params.distance_offset > 0.0f) || !std::isfinite(params.distance_offset)) {
         throw InvalidArgument("distance_offset must be > 0 and finite");
@@ -535,26 +581,38 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     result.part_categories.assign(n, Category::kNone);
     if (n == 0) return result;
     const std::size_t max_parts = std::min(params.max_parts, model.train_max_parts);
-    EnumerateConnectedSubgraphs(graph, max_parts, [&](std::span<const std::uint32_t> vs) {
+    const bool restrict = !groups.empty() && params.within_groups;
+    const PartGraph restricted = restrict ? WithinGroups(graph, groups) : PartGraph();
+    const PartGraph& g = restrict ? restricted : graph;
+    // One subgraph's vote on its parts: `scale` times (confidence or 1).
+    auto vote = [&](std::span<const std::uint32_t> vs, float scale) {
         const Row desc = SubgraphDescriptor(descriptors, vs);
-        if (GrsdSum(desc.data()) <= 0.0f) return true;
+        if (GrsdSum(desc.data()) <= 0.0f) return;
         bool fallback = false;
-        const auto p = model.Classify(SubgraphKey(graph, vs), desc.data(), params.k, &fallback,
+        const auto p = model.Classify(SubgraphKey(g, vs), desc.data(), params.k, &fallback,
                                       params.balanced,
                                       params.distance_weighted ? params.distance_offset : 0.0f);
         float conf = *std::max_element(p.begin(), p.end());
-        if (conf <= 0.0f) return true;
+        if (conf <= 0.0f) return;
         ++result.subgraphs;
         if (fallback) ++result.fallbacks;
-        const float w = (params.confidence_weighted ? conf : 1.0f) /
-                        std::pow(static_cast<float>(vs.size()), params.size_exponent);
+        const float w = (params.confidence_weighted ? conf : 1.0f) * scale;
         for (std::uint32_t v : vs) {
             for (std::size_t c = 0; c < kNumCategories; ++c) {
                 result.part_probabilities[v][c] += w * p[c];
             }
         }
+    };
+    EnumerateConnectedSubgraphs(g, max_parts, [&](std::span<const std::uint32_t> vs) {
+        vote(vs, 1.0f / std::pow(static_cast<float>(vs.size()), params.size_exponent));
         return result.subgraphs < params.max_subgraphs;
     });
+    if (!groups.empty() && params.group_weight > 0.0f) {
+        for (const auto& comp : GroupComponents(graph, groups)) {
+            if (comp.size() > model.train_max_parts) continue;
+            vote(comp, params.group_weight);
+        }
+    }
     for (std::size_t v = 0; v < n; ++v) {
         auto& p = result.part_probabilities[v];
         const float sum = std::accumulate(p.begin(), p.end(), 0.0f);

@@ -127,6 +127,13 @@ struct PartGraphRecognitionParams {
     bool distance_weighted = false;
     float distance_offset = 0.05f;       ///< > 0
     std::size_t max_subgraphs = 200000;  ///< enumeration cap per scene
+    /// With part groups (objects): only subgraphs inside one group vote; adjacency between parts
+    /// of different groups is ignored.
+    bool within_groups = true;
+    /// With part groups: every connected component of a group's parts (of at most the model's
+    /// train_max_parts parts) also votes as one subgraph, with weight group_weight times its
+    /// confidence on each of its parts (a single part's own vote has weight confidence), >= 0.
+    float group_weight = 0.0f;
 };
 
 /// Per-part and per-group category distributions (indexed by Category; kNone stays 0 unless a
@@ -212,11 +219,15 @@ class PartGraphModel {
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
                                const std::vector<Indices>& parts,
                                const PartGraphRecognitionParams& params = {},
-                               const Eigen::Vector3f& up = Eigen::Vector3f::Zero());
-/// Same from a ready graph and descriptors.
+                               const Eigen::Vector3f& up = Eigen::Vector3f::Zero(),
+                               std::span<const std::uint32_t> groups = {});
+/// Same from a ready graph and descriptors. `groups` (empty, or one id per part) assigns the
+/// parts to objects for PartGraphRecognitionParams::within_groups and group_weight; without
+/// groups every connected subgraph of the whole graph votes.
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
                                const FeatureMatrix& descriptors,
-                               const PartGraphRecognitionParams& params = {});
+                               const PartGraphRecognitionParams& params = {},
+                               std::span<const std::uint32_t> groups = {});
 
 /// Distribution of a group of parts (an object): point-count weighted mean of the parts'
 /// distributions (`part_ids` index into the result); kNone with probability 1 when empty.

@@ -141,15 +141,17 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
         model = cached;
     }
     std::vector<Indices> parts;
+    std::vector<std::uint32_t> groups;
     std::vector<std::vector<std::size_t>> ids(objects.size());
     for (std::size_t k = 0; k < objects.size(); ++k) {
         for (const auto& part : objects[k].parts) {
             ids[k].push_back(parts.size());
             parts.push_back(part);
+            groups.push_back(static_cast<std::uint32_t>(k));
         }
     }
-    const PartGraphResult r =
-        RecognizeParts(*model, cloud, parts, params.part_graph_recognition, plane.head<3>());
+    const PartGraphResult r = RecognizeParts(*model, cloud, parts, params.part_graph_recognition,
+                                             plane.head<3>(), groups);
     for (std::size_t k = 0; k < objects.size(); ++k) {
         objects[k].part_probabilities.clear();
         for (std::size_t id : ids[k])
@@ -722,6 +724,10 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     ResolveThreadCount(params.num_threads);  // validates
     if (!(params.part_graph_weight >= 0.0f && params.part_graph_weight <= 1.0f)) {
         throw InvalidArgument("category.part_graph_weight must be in [0, 1]");
+    }
+    const float object_weight = params.part_graph_recognition.group_weight;
+    if (!(object_weight >= 0.0f) || !std::isfinite(object_weight)) {
+        throw InvalidArgument("category.part_graph_object_weight must be >= 0 and finite");
     }
     PerceiveResult result;
     result.points = input.size();

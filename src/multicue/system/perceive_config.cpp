@@ -108,6 +108,10 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     cat.Get("part_graph_k", p.part_graph_recognition.k, "neighbours voting per group");
     cat.Get("part_graph_balanced", p.part_graph_recognition.balanced,
             "divide votes by the category's share of the model's rows");
+    cat.Get("part_graph_within_objects", p.part_graph_recognition.within_groups,
+            "only groups of parts inside one perceived object vote");
+    cat.Get("part_graph_object_weight", p.part_graph_recognition.group_weight,
+            "weight of each whole object's own vote (0: none)");
     cat.Get("part_graph_weight", p.part_graph_weight,
             "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
     cat.Get("cluster_k", p.cluster_k,
