@@ -510,8 +510,8 @@ PartGraphModel PartGraphModel::Load(const std::filesystem::path& path) {
 
 PartGraphResult RecognizeParts(const PartGraphModel& model, const PointCloud& cloud,
                                const std::vector<Indices>& parts,
-                               const PartGraphRecognitionParams& params,
-                               const Eigen::Vector3f& up, std::span<const std::uint32_t> groups) {
+                               const PartGraphRecognitionParams& params, const Eigen::Vector3f& up,
+                               std::span<const std::uint32_t> groups) {
     const PartGraph graph = BuildPartGraph(cloud, parts, model.graph_params);
     const FeatureMatrix d = ComputePartDescriptors(cloud, parts, model.descriptor_params, up);
     return RecognizeParts(model, graph, d, params, groups);
@@ -589,9 +589,9 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
         const Row desc = SubgraphDescriptor(descriptors, vs);
         if (GrsdSum(desc.data()) <= 0.0f) return;
         bool fallback = false;
-        const auto p = model.Classify(SubgraphKey(g, vs), desc.data(), params.k, &fallback,
-                                      params.balanced,
-                                      params.distance_weighted ? params.distance_offset : 0.0f);
+        const auto p =
+            model.Classify(SubgraphKey(g, vs), desc.data(), params.k, &fallback, params.balanced,
+                           params.distance_weighted ? params.distance_offset : 0.0f);
         float conf = *std::max_element(p.begin(), p.end());
         if (conf <= 0.0f) return;
         ++result.subgraphs;
