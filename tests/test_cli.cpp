@@ -243,6 +243,10 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
     EXPECT_EQ(bad.code, 2);
     EXPECT_EQ(CountLines(bad.output), 1) << bad.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "bad.mcpg"));
+    const auto bad_q = RunCli("train --out " + (dir / "bad.mcpg").string() + " --rsd-quantile 0");
+    EXPECT_EQ(bad_q.code, 2);
+    EXPECT_EQ(CountLines(bad_q.output), 1) << bad_q.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.mcpg"));
     ASSERT_EQ(RunCli("demo --no-report --out " + (dir / "demo").string()).code, 0);
     {
         std::ofstream(dir / "blend.json")

@@ -100,6 +100,42 @@ TEST(Rsd, PlanesAreFlat) {
     EXPECT_GT(flat, inner * 95 / 100);
 }
 
+// Heavy-tailed normal noise (every tenth normal tilted by 30 degrees, as at depth steps of a
+// real sensor): with the extreme angles (angle_quantile 1, section 2.5.1) the plane looks curved
+// everywhere; with the 80th percentile it is a plane almost everywhere (small first bins hold
+// few neighbours), and spheres keep their radius.
+TEST(Rsd, AngleQuantileIgnoresNormalOutliers) {
+    PointCloud plane = test::Plane(0.2f, 0.8f, 0.003f);
+    const Eigen::Vector3f tilted =
+        Eigen::AngleAxisf(0.5236f, Eigen::Vector3f::UnitX()) * plane.normals[0];
+    for (std::size_t i = 0; i < plane.size(); i += 10) plane.normals[i] = tilted;
+    const KdTree tree(plane);
+    auto flat_share = [&](const RsdParams& p) {
+        const FeatureMatrix rsd = ComputeRsd(plane, tree, p);
+        std::size_t flat = 0, inner = 0;
+        for (Eigen::Index i = 0; i < rsd.rows(); ++i) {
+            // The tilted points themselves see all others tilted; count the rest.
+            if (i % 10 == 0 || plane.points[i].head<2>().cwiseAbs().maxCoeff() > 0.07f) continue;
+            ++inner;
+            flat += rsd(i, 0) > 0.1f ? 1 : 0;
+        }
+        return static_cast<double>(flat) / static_cast<double>(inner);
+    };
+    EXPECT_LT(flat_share({}), 0.05);
+    EXPECT_GT(flat_share({.angle_quantile = 0.8f}), 0.85);
+    EXPECT_EQ(ComputeRsd(plane, tree, {.angle_quantile = 1.0f}), ComputeRsd(plane, tree, {}));
+    for (float radius : {0.035f, 0.1f}) {
+        const PointCloud sphere = test::Sphere(radius, {0.0f, 0.0f, 1.0f}, 0.004f);
+        const KdTree st(sphere);
+        const auto r_min = Column(ComputeRsd(sphere, st, {.angle_quantile = 0.8f}), 0);
+        std::vector<float> err;
+        for (float r : r_min) err.push_back(std::abs(r - radius));
+        EXPECT_LT(Quantile(err, 0.9), 0.015f) << radius;
+    }
+    EXPECT_THROW(ComputeRsd(plane, tree, {.angle_quantile = 0.0f}), InvalidArgument);
+    EXPECT_THROW(ComputeRsd(plane, tree, {.angle_quantile = 1.5f}), InvalidArgument);
+}
+
 TEST(Rsd, PclOrderGivesCapTimesFactorsOnAPlane) {
     const PointCloud plane = test::Plane(0.1f, 0.8f, 0.004f);
     const KdTree tree(plane);

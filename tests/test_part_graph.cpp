@@ -477,7 +477,9 @@ TEST(PartGraphModel, ClassifiesAndRoundTrips) {
         w.descriptor_params.elevation_weight = 3.0f;
         w.descriptor_params.rsd_weight = 0.25f;
         w.descriptor_params.upright_extents = true;
+        w.descriptor_params.voxels.rsd.angle_quantile = 0.65f;
         const PartGraphModel lw = PartGraphModel::Deserialize(w.Serialize(), "w");
+        EXPECT_EQ(lw.descriptor_params.voxels.rsd.angle_quantile, 0.65f);
         EXPECT_EQ(lw.descriptor_params.size_weight, 7.0f);
         EXPECT_EQ(lw.descriptor_params.extent_weights, w.descriptor_params.extent_weights);
         EXPECT_EQ(lw.descriptor_params.grsd_weight, 0.75f);
@@ -581,15 +583,15 @@ TEST(PartGraphModel, CorruptFilesAreRejected) {
                  FormatError);
     EXPECT_THROW(PartGraphModel::Deserialize("not a model", "text"), FormatError);
     // Files of previous layouts (version 1: GRSD- only; 2: no elevation and curvature blocks;
-    // 3: no whole-object rows) are refused by their version.
-    for (std::uint32_t old : {1u, 2u, 3u}) {
+    // 3: no whole-object rows; 4: no RSD angle quantile) are refused by their version.
+    for (std::uint32_t old : {1u, 2u, 3u, 4u}) {
         try {
             PartGraphModel::Deserialize(ml::WrapContainer("MCPARTGR", old, "old"), "old.mcpg");
             ADD_FAILURE() << "version " << old << " accepted";
         } catch (const FormatError& e) {
             const std::string msg = e.what();
             EXPECT_NE(msg.find("version " + std::to_string(old)), std::string::npos) << msg;
-            EXPECT_NE(msg.find("reads version 4"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("reads version 5"), std::string::npos) << msg;
         }
     }
     EXPECT_THROW(PartGraphModel::Load(dir.path() / "missing.mcpg"), IoError);

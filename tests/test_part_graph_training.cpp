@@ -19,7 +19,7 @@ const std::vector<std::string> kCats = {"sphere", "box", "cylinder"};
 PartGraphModel TinyModel(int threads) {
     training::PartGraphTrainingOptions o;
     o.categories = kCats;
-    o.objects_per_category = 3;
+    o.objects_per_category = 5;
     o.views = 3;
     o.table_scenes = 0;
     o.seed = 11;

@@ -57,6 +57,10 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         ->capture_default_str();
     cmd->add_option("--rsd-weight", o->d.rsd_weight, "weight of the curvature block (0: unused)")
         ->capture_default_str();
+    cmd->add_option("--rsd-quantile", o->d.voxels.rsd.angle_quantile,
+                    "RSD: share of a distance bin's normal angles at or below its largest, (0, 1] "
+                    "(1: the extreme angle)")
+        ->capture_default_str();
     cmd->add_option("--table-scenes", o->t.table_scenes,
                     "cluttered table scenes segmented by perceive (robot-head views)")
         ->capture_default_str();
@@ -85,6 +89,8 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         if (!weight_ok(o->d.rsd_weight)) {
             throw InvalidArgument("--rsd-weight must be >= 0 and finite");
         }
+        const float q = o->d.voxels.rsd.angle_quantile;
+        if (!(q > 0.0f && q <= 1.0f)) throw InvalidArgument("--rsd-quantile must be in (0, 1]");
         if (o->t.table_scenes < 0) throw InvalidArgument("--table-scenes must be >= 0");
         if (o->t.table_views < 1) throw InvalidArgument("--table-views must be >= 1");
         if (!(o->t.table_viewpoints.max_distance > 0.0f)) {

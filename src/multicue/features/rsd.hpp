@@ -48,6 +48,11 @@ struct RsdParams {
     bool correct_bias = true;     ///< scale r_min by 1.1 and r_max by 0.9 (see above)
     bool pcl_compatible = false;  ///< PCL's factor assignment and order (see above)
     int num_threads = 0;          ///< 0 = all cores; never changes the result
+    /// Which angle of a bin counts as its largest: the one this share of the bin's neighbours
+    /// does not exceed (and the smallest symmetrically, 1 - share), in (0, 1]. 1 (default) takes
+    /// the extreme angles as section 2.5.1 and PCL do; below 1 the tails of the normal noise of
+    /// a real sensor no longer make planes look curved (docs/part-graph.md).
+    float angle_quantile = 1.0f;
 };
 
 /// RSD of every point of `cloud` (with normals) from neighbourhoods in `tree` (built from this

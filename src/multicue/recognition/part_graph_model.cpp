@@ -408,6 +408,7 @@ std::string PartGraphModel::Serialize() const {
     ml::ByteWriter w;
     w.Put<float>(descriptor_params.voxels.voxel_size);
     w.Put<float>(descriptor_params.voxels.rsd.radius);
+    w.Put<float>(descriptor_params.voxels.rsd.angle_quantile);
     w.Put<float>(graph_params.adjacency_distance);
     w.Put<float>(descriptor_params.size_weight);
     for (float e : descriptor_params.extent_weights) w.Put<float>(e);
@@ -436,6 +437,7 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
     PartGraphModel m;
     m.descriptor_params.voxels.voxel_size = r.Get<float>();
     m.descriptor_params.voxels.rsd.radius = r.Get<float>();
+    m.descriptor_params.voxels.rsd.angle_quantile = r.Get<float>();
     m.graph_params.adjacency_distance = r.Get<float>();
     m.descriptor_params.size_weight = r.Get<float>();
     for (float& e : m.descriptor_params.extent_weights) e = r.Get<float>();
@@ -454,8 +456,10 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
     }
     if (!(m.descriptor_params.voxels.voxel_size > 0.0f) ||
         !(m.graph_params.adjacency_distance > 0.0f) ||
-        !std::isfinite(m.descriptor_params.voxels.rsd.radius) || !weights_ok ||
-        m.train_max_parts == 0 || m.train_max_parts > kMaxSubgraphParts) {
+        !std::isfinite(m.descriptor_params.voxels.rsd.radius) ||
+        !(m.descriptor_params.voxels.rsd.angle_quantile > 0.0f &&
+          m.descriptor_params.voxels.rsd.angle_quantile <= 1.0f) ||
+        !weights_ok || m.train_max_parts == 0 || m.train_max_parts > kMaxSubgraphParts) {
         r.Fail("bad parameters");
     }
     const auto nb = r.Get<std::uint64_t>();

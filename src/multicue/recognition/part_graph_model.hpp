@@ -71,11 +71,15 @@ inline constexpr int kPartDescriptorSize = kPartRsdOffset + kPartRsdSize;
 /// elevation and curvature counts times their weights.
 inline constexpr int kPartMappedSize = kPartGrsdSize + 3 + kPartElevationSize + kPartRsdSize;
 /// Version of the model file format (docs/part-graph.md). 2: moment block and extents. 3:
-/// elevation and curvature blocks, block weights.
-inline constexpr std::uint32_t kPartGraphModelVersion = 4;
+/// elevation and curvature blocks, block weights. 4: whole-object rows. 5: the RSD angle
+/// quantile.
+inline constexpr std::uint32_t kPartGraphModelVersion = 5;
 
 struct PartDescriptorParams {
-    VoxelRsdParams voxels = {};  ///< GRSD- voxel map settings (2.5 cm voxels by default)
+    /// GRSD- voxel map settings: 2.5 cm voxels; the RSD takes the 80th percentile angle of each
+    /// distance bin as its largest (RsdParams::angle_quantile), so that the normal noise of a
+    /// real Kinect does not turn planes into curved surfaces (docs/part-graph.md).
+    VoxelRsdParams voxels = {.voxel_size = 0.025f, .rsd = {.angle_quantile = 0.8f}};
     /// Weight of the extents in the k-NN distance [1/m], >= 0 (0: no size).
     /// A 5 cm difference in an extent then counts as much as a Jeffries-Matusita distance of
     /// 0.05 * size_weight.

@@ -248,9 +248,9 @@ PartMesh MakeRevolutionMesh(const std::vector<ProfilePoint>& profile,
 
 const std::vector<std::pair<std::string, std::string>>& ProceduralKinds() {
     static const std::vector<std::pair<std::string, std::string>> kinds = {
-        {"ball", "sphere"},  {"bowl", "sphere"},   {"box", "box"},        {"flat_box", "flat"},
-        {"can", "cylinder"}, {"cup", "cylinder"},  {"mug", "cylinder"},   {"bottle", "cylinder"},
-        {"plate", "plate"},  {"pitcher", "other"}, {"irregular", "other"}};
+        {"ball", "sphere"},     {"bowl", "sphere"},  {"box", "box"},       {"flat_box", "flat"},
+        {"can", "cylinder"},    {"cup", "cylinder"}, {"mug", "cylinder"},  {"tin", "cylinder"},
+        {"bottle", "cylinder"}, {"plate", "plate"},  {"pitcher", "other"}, {"irregular", "other"}};
     return kinds;
 }
 
@@ -275,6 +275,11 @@ ProceduralObject MakeProceduralKind(const std::string& kind, StreamRng& rng) {
     } else if (kind == "cup") {
         const float rb = U(rng, 0.025f, 0.04f);
         o.mesh = Cup(rb, rb * U(rng, 1.0f, 1.25f), U(rng, 0.07f, 0.12f), 0.003f);
+    } else if (kind == "tin") {
+        // Biscuit and cake tins, plastic tubs upside down: wide and low.
+        const float r = U(rng, 0.065f, 0.1f), h = U(rng, 0.06f, 0.12f);
+        o.mesh = MakeRevolutionMesh({{0, 0, 0}, {r, 0, 1}, {r, h, 2}, {0, h, 2}},
+                                    {"bottom", "body", "top"});
     } else if (kind == "mug") {
         o.mesh = Mug(rng);
     } else if (kind == "bottle") {

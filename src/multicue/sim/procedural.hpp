@@ -27,8 +27,8 @@ const std::vector<std::pair<std::string, std::string>>& ProceduralKinds();
 /// A random object of `category` (a random kind of that category). Throws InvalidArgument for an
 /// unknown category.
 ProceduralObject MakeProceduralObject(const std::string& category, StreamRng& rng);
-/// A random object of one kind ("ball", "bowl", "box", "flat_box", "can", "cup", "mug", "bottle",
-/// "plate", "pitcher", "irregular"). Throws InvalidArgument for an unknown kind.
+/// A random object of one kind ("ball", "bowl", "box", "flat_box", "can", "cup", "mug", "tin",
+/// "bottle", "plate", "pitcher", "irregular"). Throws InvalidArgument for an unknown kind.
 ProceduralObject MakeProceduralKind(const std::string& kind, StreamRng& rng);
 
 /// An axis-aligned box with its base centred at the origin on z = 0; one part `part`.

@@ -72,7 +72,7 @@ struct PerceiveParams {
     std::string part_graph_model;
     std::shared_ptr<const PartGraphModel> part_graph;  ///< loaded model (wins over the file)
     PartGraphRecognitionParams part_graph_recognition{};
-    float part_graph_weight = 0.5f;      ///< weight w of the part-graph votes in "part-graph+rules"
+    float part_graph_weight = 0.3f;      ///< weight w of the part-graph votes in "part-graph+rules"
     BoxFitParams box{};                  ///< box models of box and flat objects
     CylinderModelParams cylinder = [] {  ///< cylinder models of cylindrical objects
         CylinderModelParams p;
