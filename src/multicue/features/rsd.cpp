@@ -49,42 +49,39 @@ Eigen::Vector2f RadiiFromNeighbours(const PointCloud& cloud, const Eigen::Vector
     max_abs_cos[0] = 1.0f;
     min_abs_cos[0] = 1.0f;
     const float bins_per_m = static_cast<float>(bins) / max_dist;
-    if (params.angle_quantile >= 1.0f) {
-        for (std::size_t k = 0; k < count; ++k) {
-            const Index j = neighbours[k];
-            const Eigen::Vector3f& n = cloud.normals[j];
-            const float d = (cloud.points[j] - ref).norm();
-            if (!(d <= max_dist) || !n.allFinite()) continue;
-            const float c = std::min(1.0f, std::abs(n.dot(ref_normal)));
-            const int b = std::min(bins - 1, static_cast<int>(d * bins_per_m));
+    // With angle_quantile < 1 the |cos| of each bin are kept and their quantiles taken below:
+    // the share q of the angles lies at or below the one taken as largest, 1 - q at or below
+    // the one taken as smallest.
+    const bool quantile = params.angle_quantile < 1.0f;
+    thread_local std::array<std::vector<float>, kMaxBins> per_bin;
+    if (quantile) {
+        for (int b = 0; b < bins; ++b) per_bin[b].clear();
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+        const Index j = neighbours[k];
+        const Eigen::Vector3f& n = cloud.normals[j];
+        const float d = (cloud.points[j] - ref).norm();
+        if (!(d <= max_dist) || !n.allFinite()) continue;
+        const float c = std::min(1.0f, std::abs(n.dot(ref_normal)));
+        const int b = std::min(bins - 1, static_cast<int>(d * bins_per_m));
+        if (quantile) {
+            per_bin[b].push_back(c);
+        } else {
             max_abs_cos[b] = std::max(max_abs_cos[b], c);
             min_abs_cos[b] = std::min(min_abs_cos[b], c);
         }
-    } else {
-        // Quantiles of |cos| per bin: the share q of the angles lies at or below the one taken
-        // as largest, 1 - q at or below the one taken as smallest.
-        thread_local std::array<std::vector<float>, kMaxBins> per_bin;
-        for (int b = 0; b < bins; ++b) per_bin[b].clear();
-        for (std::size_t k = 0; k < count; ++k) {
-            const Index j = neighbours[k];
-            const Eigen::Vector3f& n = cloud.normals[j];
-            const float d = (cloud.points[j] - ref).norm();
-            if (!(d <= max_dist) || !n.allFinite()) continue;
-            const float c = std::min(1.0f, std::abs(n.dot(ref_normal)));
-            per_bin[std::min(bins - 1, static_cast<int>(d * bins_per_m))].push_back(c);
-        }
-        for (int b = 0; b < bins; ++b) {
-            auto& v = per_bin[b];
-            if (v.empty()) continue;
-            const std::size_t last = v.size() - 1;
-            const auto low = static_cast<std::size_t>(
-                std::lround((1.0 - params.angle_quantile) * static_cast<double>(last)));
-            std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(low), v.end());
-            min_abs_cos[b] = std::min(min_abs_cos[b], v[low]);  // largest angle
-            const std::size_t high = last - low;
-            std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(high), v.end());
-            max_abs_cos[b] = std::max(max_abs_cos[b], v[high]);  // smallest angle
-        }
+    }
+    for (int b = 0; quantile && b < bins; ++b) {
+        auto& v = per_bin[b];
+        if (v.empty()) continue;
+        const std::size_t last = v.size() - 1;
+        const auto low = static_cast<std::size_t>(
+            std::lround((1.0 - params.angle_quantile) * static_cast<double>(last)));
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(low), v.end());
+        min_abs_cos[b] = std::min(min_abs_cos[b], v[low]);  // largest angle
+        const std::size_t high = last - low;
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(high), v.end());
+        max_abs_cos[b] = std::max(max_abs_cos[b], v[high]);  // smallest angle
     }
     double aa_min = 0.0, ad_min = 0.0, aa_max = 0.0, ad_max = 0.0;
     for (int b = 0; b < bins; ++b) {
