@@ -51,6 +51,8 @@ void ValidateDescriptorParams(const PartDescriptorParams& p) {
         throw InvalidArgument("elevation_weight must be >= 0 and finite");
     }
     if (!ok(p.rsd_weight)) throw InvalidArgument("rsd_weight must be >= 0 and finite");
+    const float q = p.voxels.rsd.angle_quantile;
+    if (!(q > 0.0f && q <= 1.0f)) throw InvalidArgument("RSD angle_quantile must be in (0, 1]");
 }
 
 // Unit-sum, square-rooted counts times `weight` (all zero when nothing was counted).
@@ -456,10 +458,8 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
     }
     if (!(m.descriptor_params.voxels.voxel_size > 0.0f) ||
         !(m.graph_params.adjacency_distance > 0.0f) ||
-        !std::isfinite(m.descriptor_params.voxels.rsd.radius) ||
-        !(m.descriptor_params.voxels.rsd.angle_quantile > 0.0f &&
-          m.descriptor_params.voxels.rsd.angle_quantile <= 1.0f) ||
-        !weights_ok || m.train_max_parts == 0 || m.train_max_parts > kMaxSubgraphParts) {
+        !std::isfinite(m.descriptor_params.voxels.rsd.radius) || !weights_ok ||
+        m.train_max_parts == 0 || m.train_max_parts > kMaxSubgraphParts) {
         r.Fail("bad parameters");
     }
     const auto nb = r.Get<std::uint64_t>();
@@ -534,9 +534,8 @@ PartGraph WithinGroups(const PartGraph& graph, std::span<const std::uint32_t> gr
     return out;
 }
 
-// Connected components of each group's parts (edges inside the group only), each ascending.
-std::vector<std::vector<std::uint32_t>> GroupComponents(const PartGraph& graph,
-                                                        std::span<const std::uint32_t> groups) {
+// Connected components of a graph, each ascending.
+std::vector<std::vector<std::uint32_t>> Components(const PartGraph& graph) {
     std::vector<std::vector<std::uint32_t>> out;
     std::vector<bool> seen(graph.size(), false);
     for (std::uint32_t s = 0; s < graph.size(); ++s) {
@@ -545,7 +544,7 @@ std::vector<std::vector<std::uint32_t>> GroupComponents(const PartGraph& graph,
         seen[s] = true;
         for (std::size_t i = 0; i < comp.size(); ++i) {
             for (std::uint32_t b : graph.Neighbours(comp[i])) {
-                if (!seen[b] && groups[b] == groups[s]) {
+                if (!seen[b]) {
                     seen[b] = true;
                     comp.push_back(b);
                 }
@@ -585,9 +584,10 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     result.part_categories.assign(n, Category::kNone);
     if (n == 0) return result;
     const std::size_t max_parts = std::min(params.max_parts, model.train_max_parts);
-    const bool restrict = !groups.empty() && params.within_groups;
-    const PartGraph restricted = restrict ? WithinGroups(graph, groups) : PartGraph();
-    const PartGraph& g = restrict ? restricted : graph;
+    // The groups' own graph: what votes with within_groups, and whose components are the
+    // wholes of group_weight.
+    const PartGraph within = groups.empty() ? PartGraph() : WithinGroups(graph, groups);
+    const PartGraph& g = !groups.empty() && params.within_groups ? within : graph;
     // One subgraph's vote on its parts: `scale` times (confidence or 1).
     auto vote = [&](std::span<const std::uint32_t> vs, float scale) {
         const Row desc = SubgraphDescriptor(descriptors, vs);
@@ -612,7 +612,7 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
         return result.subgraphs < params.max_subgraphs;
     });
     if (!groups.empty() && params.group_weight > 0.0f) {
-        for (const auto& comp : GroupComponents(graph, groups)) {
+        for (const auto& comp : Components(within)) {
             if (comp.size() > model.train_max_parts) continue;
             vote(comp, params.group_weight);
         }

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/sim/scene.hpp"
 
 namespace multicue::sim {
 namespace {
@@ -105,15 +106,7 @@ Eigen::Isometry3f DefaultCameraPose(const TableTopScene& scene) {
     const Eigen::Vector2f mid = (scene.table_min + scene.table_max) / 2;
     const Eigen::Vector3f target(mid.x(), mid.y(), scene.table_height);
     const Eigen::Vector3f eye(mid.x(), scene.table_min.y() - 0.5f, scene.table_height + 0.6f);
-    const Eigen::Vector3f z = (target - eye).normalized();
-    const Eigen::Vector3f x = z.cross(Eigen::Vector3f::UnitZ()).normalized();
-    const Eigen::Vector3f y = z.cross(x);
-    Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-    T.linear().col(0) = x;
-    T.linear().col(1) = y;
-    T.linear().col(2) = z;
-    T.translation() = eye;
-    return T;
+    return LookAt(eye, target);
 }
 
 TableTopScene MakeDemoScene() {

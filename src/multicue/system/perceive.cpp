@@ -725,10 +725,6 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     if (!(params.part_graph_weight >= 0.0f && params.part_graph_weight <= 1.0f)) {
         throw InvalidArgument("category.part_graph_weight must be in [0, 1]");
     }
-    const float object_weight = params.part_graph_recognition.group_weight;
-    if (!(object_weight >= 0.0f) || !std::isfinite(object_weight)) {
-        throw InvalidArgument("category.part_graph_object_weight must be >= 0 and finite");
-    }
     PerceiveResult result;
     result.points = input.size();
     StageTimer timer(result.timings_ms);
