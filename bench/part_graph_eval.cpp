@@ -501,13 +501,11 @@ int main(int argc, char** argv) {
             }
             const PerceiveResult r = Perceive(scan, pp);
             std::vector<Indices> parts;
-            std::vector<std::size_t> part_object;
-            std::vector<std::uint32_t> part_groups;
+            std::vector<std::uint32_t> part_object;  // also the recognition's part groups
             for (std::size_t ob = 0; ob < r.objects.size(); ++ob)
                 for (const auto& p : r.objects[ob].parts) {
                     parts.push_back(p);
-                    part_object.push_back(ob);
-                    part_groups.push_back(static_cast<std::uint32_t>(ob));
+                    part_object.push_back(static_cast<std::uint32_t>(ob));
                 }
             const auto a = std::chrono::steady_clock::now();
             const PartGraph graph = BuildPartGraph(scan, parts, model.graph_params);
@@ -536,7 +534,7 @@ int main(int argc, char** argv) {
                 const int m = first_variant + int(vi);
                 const PartGraphModel& vmodel = variant_models[vi] ? *variant_models[vi] : model;
                 const PartGraphResult vr =
-                    RecognizeParts(vmodel, graph, raw, variant_params[vi], part_groups);
+                    RecognizeParts(vmodel, graph, raw, variant_params[vi], part_object);
                 for (std::size_t k = 0; k < parts.size(); ++k) {
                     part_pred[k][m] = vr.part_categories[k];
                 }

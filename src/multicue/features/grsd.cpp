@@ -121,21 +121,6 @@ FeatureVector GrsdMinusBoundaryCorrection(const VoxelRsdResult& voxels,
     return correction;
 }
 
-std::vector<std::uint32_t> VoxelsOfPoints(const VoxelRsdResult& voxels, const Indices& points) {
-    std::vector<std::uint32_t> out;
-    out.reserve(points.size());
-    for (Index i : points) {
-        if (i >= voxels.point_voxel.size()) {
-            throw InvalidArgument(fmt::format("point index {} is out of range ({} points)", i,
-                                              voxels.point_voxel.size()));
-        }
-        if (voxels.point_voxel[i] != VoxelRsdResult::kNoVoxel) out.push_back(voxels.point_voxel[i]);
-    }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
-}
-
 namespace {
 
 VoxelRsdResult ClusterVoxels(const PointCloud& cluster, const GrsdParams& params) {

@@ -66,9 +66,6 @@ FeatureVector GrsdMinusBoundaryCorrection(const VoxelRsdResult& voxels,
                                           std::span<const std::uint32_t> a,
                                           std::span<const std::uint32_t> b);
 
-/// The voxels of a voxel map that contain at least one of the given points (ascending, unique).
-std::vector<std::uint32_t> VoxelsOfPoints(const VoxelRsdResult& voxels, const Indices& points);
-
 /// GRSD- of a whole cluster (with normals): builds the k-d tree and the voxel map of the cluster
 /// and counts all its voxels. Throws InvalidArgument without normals or on bad parameters; an
 /// empty cluster gives zeros.
