@@ -21,13 +21,15 @@
 //                        [--extent-weights A,B,C] [--upright-extents 0|1] [--variants
 //                        "k=10;ew=2,rw=1;..."]
 //
-// --variants: further part-graph settings on the same parts, each counted on its own. Recognition
-// keys k, dw, off, se, mp, cw, bal, and wo (only subgraphs inside one perceived object, 0|1) and
-// ow (weight of each whole object's own vote), which pass the objects as part groups (without
-// them the main rows' subgraphs may span objects); descriptor keys gw, ew, rw, sw (GRSD-,
-// elevation, curvature,
-// size weight), e1, e2, e3 (extent factors) and ue (upright extents 0|1), which train a further
-// model from the same training rows, graphs and sampling seeds.
+// The main rows recognise and blend as perceive does by default (PerceiveParams: the perceived
+// objects as part groups, its category priors and part-graph weight; --blend-weight overrides the
+// weight). --variants: further part-graph settings on the same parts, each counted three times
+// (part labels, object labels, object labels blended with the rules). Recognition keys k, dw,
+// off, se, mp, cw, bal, wo (only subgraphs inside one perceived object, 0|1), ow (weight of each
+// whole object's own vote) and the category priors ps, pb, pf, pc, pp, po (sphere, box, flat,
+// cylinder, plate, other); descriptor keys gw, ew, rw, sw (GRSD-, elevation, curvature, size
+// weight), e1, e2, e3 (extent factors) and ue (upright extents 0|1), which train a further model
+// from the same training rows, graphs and sampling seeds.
 
 #include <chrono>
 #include <cmath>
@@ -206,8 +208,9 @@ int main(int argc, char** argv) {
     int scenes = 4, max_meshes = 60;
     std::uint64_t seed = 1;
     PartGraphModel model;
-    PartGraphRecognitionParams rp;
-    float blend_weight = 0.2f;
+    // Recognition and blend as perceive runs them (parts grouped by object, its category priors).
+    PartGraphRecognitionParams rp = PerceiveParams{}.part_graph_recognition;
+    float blend_weight = PerceiveParams{}.part_graph_weight;
     int baselines = 1, matrices = 1;
     bool scene_matrices = false;
     PartVocabularyParams vp;
@@ -428,7 +431,15 @@ int main(int argc, char** argv) {
                     vr.within_groups = val != 0.0;
                 else if (key == "ow")
                     vr.group_weight = float(val);
-                else if (key == "ue") {
+                else if (key.size() == 2 && key[0] == 'p') {  // prior: ps, pb, pf, pc, pp, po
+                    const std::string_view ids = "sbfcpo";
+                    const auto at = ids.find(key[1]);
+                    if (at == std::string_view::npos) {
+                        std::fprintf(stderr, "bad variant key %s\n", key.c_str());
+                        return 2;
+                    }
+                    vr.category_priors[at + 1] = float(val);
+                } else if (key == "ue") {
                     own_model = true;
                     vd.upright_extents = val != 0.0;
                 } else if (key == "gw" || key == "ew" || key == "rw" || key == "sw" ||
@@ -464,9 +475,16 @@ int main(int argc, char** argv) {
             }
             methods.push_back({});
             methods.back().name = "part-graph " + spec;
+            methods.push_back({});
+            methods.back().name = "part-graph " + spec + ", object labels";
+            methods.push_back({});
+            methods.back().name = "part-graph " + spec + ", +rules";
         }
     }
-    const int first_variant = int(methods.size()) - int(variant_params.size());
+    // Three rows per variant: part labels, each object's merged label, that blended with the
+    // rules (--blend-weight).
+    constexpr int kVariantRows = 3;
+    const int first_variant = int(methods.size()) - kVariantRows * int(variant_params.size());
 
     std::optional<sim::ObjectSource> source;
     if (library) {
@@ -514,7 +532,7 @@ int main(int argc, char** argv) {
                                                        : Eigen::Vector3f::Zero();
             const FeatureMatrix raw =
                 ComputePartDescriptors(scan, parts, model.descriptor_params, up);
-            const PartGraphResult pg = RecognizeParts(model, graph, raw, rp);
+            const PartGraphResult pg = RecognizeParts(model, graph, raw, rp, part_object);
             recog_ms +=
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a)
                     .count();
@@ -531,7 +549,7 @@ int main(int argc, char** argv) {
             std::vector<std::vector<std::size_t>> ids(r.objects.size());
             for (std::size_t k = 0; k < parts.size(); ++k) ids[part_object[k]].push_back(k);
             for (std::size_t vi = 0; vi < variant_params.size(); ++vi) {
-                const int m = first_variant + int(vi);
+                const int m = first_variant + kVariantRows * int(vi);
                 const PartGraphModel& vmodel = variant_models[vi] ? *variant_models[vi] : model;
                 const PartGraphResult vr =
                     RecognizeParts(vmodel, graph, raw, variant_params[vi], part_object);
@@ -540,8 +558,13 @@ int main(int argc, char** argv) {
                 }
                 for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
                     if (!ids[ob].empty()) {
-                        object_pred[ob][m] =
-                            ArgMaxCategory(MergePartProbabilities(vr, parts, ids[ob]));
+                        const auto merged = MergePartProbabilities(vr, parts, ids[ob]);
+                        const auto& c = r.objects[ob].category;
+                        object_pred[ob][m] = object_pred[ob][m + 1] = ArgMaxCategory(merged);
+                        object_pred[ob][m + 2] = c.category == Category::kNone
+                                                     ? Category::kNone
+                                                     : ArgMaxCategory(BlendCategoryProbabilities(
+                                                           c.probabilities, merged, blend_weight));
                     }
                 }
             }
@@ -651,8 +674,9 @@ int main(int argc, char** argv) {
                         ++hist[t];
                         for (int m = 0; m < int(methods.size()); ++m) {
                             if (m >= num_methods && m < first_variant) continue;
-                            const bool per_part = m == kPg || m == kVocabModelParts ||
-                                                  m == kVocabStatsParts || m >= first_variant;
+                            const bool per_part =
+                                m == kPg || m == kVocabModelParts || m == kVocabStatsParts ||
+                                (m >= first_variant && (m - first_variant) % kVariantRows == 0);
                             Category pred = per_part ? part_pred[k][m] : object_pred[ob][m];
                             if (m == kRules) pred = static_cast<Category>(r.point_categories[i]);
                             methods[m].AddPoint(t, pred);

@@ -251,8 +251,18 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
     {
         std::ofstream(dir / "blend.json")
             << R"({"category": {"categoriser": "part-graph+rules", "part_graph_weight": 0.5, )"
+            << R"("part_graph_priors": {"other": 0.5, "plate": 2}, )"
+            << R"("part_graph_model": ")" << model << R"("}})";
+        std::ofstream(dir / "bad_prior.json")
+            << R"({"category": {"categoriser": "part-graph", "part_graph_priors": {"box": -1}, )"
             << R"("part_graph_model": ")" << model << R"("}})";
     }
+    const auto bad_prior =
+        RunCli("perceive " + (dir / "demo" / "scene.pcd").string() + " --no-report -q --config " +
+               (dir / "bad_prior.json").string() + " --out " + (dir / "bp").string());
+    EXPECT_EQ(bad_prior.code, 2) << bad_prior.output;
+    EXPECT_EQ(CountLines(bad_prior.output), 1) << bad_prior.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bp" / "result.json"));
     const auto r =
         RunCli("perceive " + (dir / "demo" / "scene.pcd").string() + " --no-report -q --config " +
                (dir / "blend.json").string() + " --out " + (dir / "p").string());

@@ -566,6 +566,37 @@ TEST(PartGraphModel, GroupsRestrictSubgraphsAndVoteAsWholes) {
     EXPECT_THROW(RecognizeParts(m, pair, q, rp, one), InvalidArgument);
 }
 
+TEST(PartGraphModel, CategoryPriorsScaleTheVotes) {
+    // Every stored row of one descriptor: 3 of "other", 2 of cylinder.
+    PartGraphModel m;
+    PartGraph single(1);
+    FeatureMatrix d = FeatureMatrix::Zero(1, kPartDescriptorSize);
+    d(0, 6) = 50.0f;
+    for (int i = 0; i < 3; ++i) m.AddObject(d, single, Category::kOther, {.max_parts = 1});
+    for (int i = 0; i < 2; ++i) m.AddObject(d, single, Category::kCylinder, {.max_parts = 1});
+    m.Build();
+    PartGraphRecognitionParams rp{.k = 5, .balanced = false};
+    const PartGraphResult plain = RecognizeParts(m, single, d, rp);
+    EXPECT_EQ(plain.part_categories[0], Category::kOther);
+    EXPECT_NEAR(plain.part_probabilities[0][static_cast<std::size_t>(Category::kOther)], 0.6f,
+                1e-5f);
+    // Priors multiply the accumulated votes: 3 x 0.5 < 2 x 1.
+    rp.category_priors[static_cast<std::size_t>(Category::kOther)] = 0.5f;
+    const PartGraphResult shifted = RecognizeParts(m, single, d, rp);
+    EXPECT_EQ(shifted.part_categories[0], Category::kCylinder);
+    EXPECT_NEAR(shifted.part_probabilities[0][static_cast<std::size_t>(Category::kCylinder)],
+                2.0f / 3.5f, 1e-5f);
+    // Uniform priors of any scale change nothing; bad priors are refused.
+    rp.category_priors.fill(4.0f);
+    EXPECT_EQ(RecognizeParts(m, single, d, rp).part_probabilities, plain.part_probabilities);
+    rp.category_priors[static_cast<std::size_t>(Category::kBox)] = -1.0f;
+    EXPECT_THROW(RecognizeParts(m, single, d, rp), InvalidArgument);
+    rp.category_priors.fill(std::numeric_limits<float>::quiet_NaN());
+    EXPECT_THROW(RecognizeParts(m, single, d, rp), InvalidArgument);
+    rp.category_priors.fill(0.0f);
+    EXPECT_THROW(RecognizeParts(m, single, d, rp), InvalidArgument);
+}
+
 TEST(PartGraphModel, CorruptFilesAreRejected) {
     const PartGraphModel m = SyntheticModel();
     test::TempDir dir;

@@ -574,6 +574,15 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     if (!(params.distance_offset > 0.0f) || !std::isfinite(params.distance_offset)) {
         throw InvalidArgument("distance_offset must be > 0 and finite");
     }
+    float prior_sum = 0.0f;
+    for (std::size_t c = 1; c < kNumCategories; ++c) {
+        const float w = params.category_priors[c];
+        if (!(w >= 0.0f) || !std::isfinite(w)) {
+            throw InvalidArgument("category priors must be >= 0 and finite");
+        }
+        prior_sum += w;
+    }
+    if (!(prior_sum > 0.0f)) throw InvalidArgument("category priors: at least one must be > 0");
     if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
         (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
         throw InvalidArgument("descriptors must have one row of kPartDescriptorSize per part");
@@ -619,6 +628,7 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     }
     for (std::size_t v = 0; v < n; ++v) {
         auto& p = result.part_probabilities[v];
+        for (std::size_t c = 1; c < kNumCategories; ++c) p[c] *= params.category_priors[c];
         const float sum = std::accumulate(p.begin(), p.end(), 0.0f);
         if (sum > 0.0f) {
             for (float& x : p) x /= sum;

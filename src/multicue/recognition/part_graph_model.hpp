@@ -118,6 +118,13 @@ struct PartGraphTrainParams {
     std::uint64_t seed = 1;  ///< sampling seed
 };
 
+/// Equal prior weights for every category.
+constexpr std::array<float, kNumCategories> UniformCategoryPriors() {
+    std::array<float, kNumCategories> p{};
+    for (float& x : p) x = 1.0f;
+    return p;
+}
+
 struct PartGraphRecognitionParams {
     std::size_t max_parts = 4;   ///< largest subgraph grown in a scene (Figure 5.14 a), [1, 15]
     std::size_t k = 5;           ///< neighbours voting per subgraph, >= 1
@@ -138,6 +145,10 @@ struct PartGraphRecognitionParams {
     /// train_max_parts parts) also votes as one subgraph, with weight group_weight times its
     /// confidence on each of its parts (a single part's own vote has weight confidence), >= 0.
     float group_weight = 0.0f;
+    /// Prior weight of each category (indexed by Category, kNone ignored), multiplied into every
+    /// part's accumulated votes before they are normalised: the scenes' category frequencies
+    /// relative to the balanced training votes, each >= 0 and finite, at least one > 0.
+    std::array<float, kNumCategories> category_priors = UniformCategoryPriors();
 };
 
 /// Per-part and per-group category distributions (indexed by Category; kNone stays 0 unless a

@@ -71,8 +71,17 @@ struct PerceiveParams {
     /// model, trained once and cached).
     std::string part_graph_model;
     std::shared_ptr<const PartGraphModel> part_graph;  ///< loaded model (wins over the file)
-    PartGraphRecognitionParams part_graph_recognition{};
-    float part_graph_weight = 0.3f;      ///< weight w of the part-graph votes in "part-graph+rules"
+    /// Part-graph recognition as perceive runs it: parts grouped by object, and "other" with a
+    /// third of the weight of the other categories. The balanced votes treat every category as
+    /// equally likely, while "other" (pitchers, tools, irregular shapes) is the rarest category
+    /// on tables and the one whose training shapes overlap most with cups, mugs and bottles
+    /// (docs/part-graph.md, "Category priors").
+    PartGraphRecognitionParams part_graph_recognition = [] {
+        PartGraphRecognitionParams p;
+        p.category_priors[static_cast<std::size_t>(Category::kOther)] = 0.3f;
+        return p;
+    }();
+    float part_graph_weight = 0.4f;      ///< weight w of the part-graph votes in "part-graph+rules"
     BoxFitParams box{};                  ///< box models of box and flat objects
     CylinderModelParams cylinder = [] {  ///< cylinder models of cylindrical objects
         CylinderModelParams p;

@@ -112,6 +112,11 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
             "only groups of parts inside one perceived object vote");
     cat.Get("part_graph_object_weight", p.part_graph_recognition.group_weight,
             "weight of each whole object's own vote (0: none)");
+    auto priors = cat.Section("part_graph_priors");
+    for (std::size_t c = 1; c < kNumCategories; ++c) {
+        priors.Get(std::string(kCategoryNames[c]), p.part_graph_recognition.category_priors[c],
+                   "prior weight of this category's part-graph votes (>= 0)");
+    }
     cat.Get("part_graph_weight", p.part_graph_weight,
             "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
     cat.Get("cluster_k", p.cluster_k,
