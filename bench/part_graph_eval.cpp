@@ -615,8 +615,10 @@ int main(int argc, char** argv) {
                         c.probabilities, MergePartProbabilities(pg, parts, ids[ob]), 0.5f);
                     ClusterDescriptorParams cp;
                     cp.size_weight = model.cluster_size_weight;
-                    const auto cluster = model.ClassifyCluster(
-                        ComputeClusterDescriptor(scan, r.objects[ob].indices, cp), 5);
+                    const auto cluster = ApplyCategoryPriors(
+                        model.ClassifyCluster(
+                            ComputeClusterDescriptor(scan, r.objects[ob].indices, cp), 5),
+                        rp.category_priors);
                     if (*std::max_element(cluster.begin(), cluster.end()) > 0.0f) {
                         three = BlendCategoryProbabilities(three, cluster, 1.0f / 3.0f);
                     }

@@ -595,6 +595,15 @@ TEST(PartGraphModel, CategoryPriorsScaleTheVotes) {
     EXPECT_THROW(RecognizeParts(m, single, d, rp), InvalidArgument);
     rp.category_priors.fill(0.0f);
     EXPECT_THROW(RecognizeParts(m, single, d, rp), InvalidArgument);
+    // The same weighting of any distribution (the whole-object expert's in perceive).
+    std::array<float, kNumCategories> p{}, priors = UniformCategoryPriors();
+    p[static_cast<std::size_t>(Category::kOther)] = 0.6f;
+    p[static_cast<std::size_t>(Category::kCylinder)] = 0.4f;
+    priors[static_cast<std::size_t>(Category::kOther)] = 0.5f;
+    const auto q = ApplyCategoryPriors(p, priors);
+    EXPECT_NEAR(q[static_cast<std::size_t>(Category::kCylinder)], 0.4f / 0.7f, 1e-6f);
+    EXPECT_NEAR(q[static_cast<std::size_t>(Category::kOther)], 0.3f / 0.7f, 1e-6f);
+    EXPECT_EQ(ApplyCategoryPriors({}, priors), (std::array<float, kNumCategories>{}));
 }
 
 TEST(PartGraphModel, CorruptFilesAreRejected) {

@@ -664,6 +664,18 @@ std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& 
     return p;
 }
 
+std::array<float, kNumCategories> ApplyCategoryPriors(
+    const std::array<float, kNumCategories>& p, const std::array<float, kNumCategories>& priors) {
+    std::array<float, kNumCategories> out = p;
+    float sum = 0.0f;
+    for (std::size_t c = 1; c < kNumCategories; ++c) out[c] *= priors[c];
+    for (float x : out) sum += x;
+    if (sum > 0.0f) {
+        for (float& x : out) x /= sum;
+    }
+    return out;
+}
+
 std::array<float, kNumCategories> BlendCategoryProbabilities(
     const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
     float w) {

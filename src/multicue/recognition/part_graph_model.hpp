@@ -250,6 +250,10 @@ std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& 
                                                          const std::vector<Indices>& parts,
                                                          const std::vector<std::size_t>& part_ids);
 
+/// `p` times `priors` per category (kNone kept as is), normalised; all zero stays all zero.
+std::array<float, kNumCategories> ApplyCategoryPriors(
+    const std::array<float, kNumCategories>& p, const std::array<float, kNumCategories>& priors);
+
 /// Product of experts of two category distributions: per real category
 /// max(a, 0.01)^(1 - w) * max(b, 0.01)^w, normalised (kNone gets 0). InvalidArgument unless
 /// w is in [0, 1].

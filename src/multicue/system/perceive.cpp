@@ -165,8 +165,10 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
             p = BlendCategoryProbabilities(c.probabilities, p, 0.5f);
             ClusterDescriptorParams cp;
             cp.size_weight = model->cluster_size_weight;
-            const auto cluster = model->ClassifyCluster(
-                ComputeClusterDescriptor(cloud, objects[k].indices, cp), params.cluster_k);
+            const auto cluster = ApplyCategoryPriors(
+                model->ClassifyCluster(ComputeClusterDescriptor(cloud, objects[k].indices, cp),
+                                       params.cluster_k),
+                params.part_graph_recognition.category_priors);
             float total = 0.0f;
             for (float x : cluster) total += x;
             if (total > 0.0f) p = BlendCategoryProbabilities(p, cluster, 1.0f / 3.0f);
