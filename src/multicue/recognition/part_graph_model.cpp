@@ -628,13 +628,8 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
     }
     for (std::size_t v = 0; v < n; ++v) {
         auto& p = result.part_probabilities[v];
-        for (std::size_t c = 1; c < kNumCategories; ++c) p[c] *= params.category_priors[c];
-        const float sum = std::accumulate(p.begin(), p.end(), 0.0f);
-        if (sum > 0.0f) {
-            for (float& x : p) x /= sum;
-        } else {
-            p[0] = 1.0f;
-        }
+        p = ApplyCategoryPriors(p, params.category_priors);
+        if (p == std::array<float, kNumCategories>{}) p[0] = 1.0f;  // no vote
         result.part_categories[v] = ArgMaxCategory(p);
     }
     return result;

@@ -75,7 +75,7 @@ struct PerceiveParams {
     /// third of the weight of the other categories. The balanced votes treat every category as
     /// equally likely, while "other" (pitchers, tools, irregular shapes) is the rarest category
     /// on tables and the one whose training shapes overlap most with cups, mugs and bottles
-    /// (docs/part-graph.md, "Category priors").
+    /// (docs/part-graph.md, "Current defaults on fifty scenes").
     PartGraphRecognitionParams part_graph_recognition = [] {
         PartGraphRecognitionParams p;
         p.category_priors[static_cast<std::size_t>(Category::kOther)] = 0.3f;
