@@ -19,7 +19,16 @@
 //                        [--scene-matrices 0|1]
 //                        [--grsd-weight W] [--elevation-weight W] [--rsd-weight W]
 //                        [--extent-weights A,B,C] [--upright-extents 0|1] [--variants
-//                        "k=10;ew=2,rw=1;..."]
+//                        "k=10;ew=2,rw=1;..."] [--stacker-scenes N] [--stacker-views N]
+//                        [--dump FILE.csv] [--even-test 0|1] [--procedural-test 0|1]
+//
+// --stacker-scenes trains the model's stacker (row "stacked"). --dump writes one CSV row per
+// perceived object: seed, scene, view, source mesh, truth, points, the six probabilities of the
+// rules, the part-graph and the whole-object expert, the rules' six scores and their geometric
+// evidence (CategoryResult: extents, height, box score, axis area, planar part ratio, cylinder
+// side / cap / coverage / radius, sphere ratio / radius, footprint fill, side face ratio,
+// upright). --even-test tests on scenes of the training meshes, --procedural-test on procedural
+// objects (both for fitting combinations of the experts outside the test objects).
 //
 // The main rows recognise and blend as perceive does by default (PerceiveParams: the perceived
 // objects as part groups, its category priors and part-graph weight; --blend-weight overrides the
@@ -35,6 +44,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -218,6 +228,10 @@ int main(int argc, char** argv) {
     vp.num_threads = 0;
     std::string object_spec = "knn:k=5";
     std::string variants;
+    int stacker_scenes = 0, stacker_views = 6;  // held-out scenes training the stacker
+    bool even_test = false;        // test scenes of the training meshes (seen instances)
+    bool procedural_test = false;  // test scenes of procedural objects even with a library
+    std::string dump_path;  // one CSV row per perceived object: truth, experts, rule evidence
     ClusterDescriptorParams cluster_params;
     int table_scenes = training::PartGraphTrainingOptions{}.table_scenes, table_views = 4,
         objects = 8, train_meshes = 1;
@@ -250,6 +264,16 @@ int main(int argc, char** argv) {
             train_meshes = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--baselines"))
             baselines = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--stacker-scenes"))
+            stacker_scenes = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--stacker-views"))
+            stacker_views = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--even-test"))
+            even_test = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--procedural-test"))
+            procedural_test = std::atoi(argv[i + 1]) != 0;
+        else if (!std::strcmp(argv[i], "--dump"))
+            dump_path = argv[i + 1];
         else if (!std::strcmp(argv[i], "--matrices"))
             matrices = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--scene-matrices"))
@@ -293,6 +317,8 @@ int main(int argc, char** argv) {
     o.objects_per_category = objects;
     o.table_scenes = table_scenes;
     o.table_views = table_views;
+    o.stacker_scenes = stacker_scenes;
+    o.stacker_views = stacker_views;
     if (library) {
         o.meshes = meshes;
         o.mesh_modulo = 2;
@@ -331,6 +357,10 @@ int main(int argc, char** argv) {
         double(model.descriptor_params.rsd_weight),
         model.descriptor_params.upright_extents ? "upright" : "principal",
         rp.balanced ? "balanced" : "plain");
+    if (model.stacker.trained()) {
+        std::printf("stacker: %zu perceived objects of %d held-out scenes x %d views\n",
+                    model.stacker.train_rows(), stacker_scenes, stacker_views);
+    }
 
     // Baselines trained on the same objects.
     VocabularyBaseline vocab_model, vocab_stats;
@@ -364,6 +394,7 @@ int main(int argc, char** argv) {
         kRules,
         kPgObject,
         kFusion3,
+        kStacked,
         kVocabModelParts,
         kVocabModelBow,
         kVocabStatsParts,
@@ -385,6 +416,7 @@ int main(int argc, char** argv) {
     methods[kVocabStatsBow].name = "vocabulary of parts, 24 part statistics, bag of words";
     methods[kWhole].name = "whole cluster, GRSD- + VFH";
     methods[kFusion3].name = "part-graph+rules+cluster (rules x part-graph x model's cluster k-NN)";
+    methods[kStacked].name = "stacked (level-1 classifier over the three experts)";
     int num_methods = baselines ? int(kNumMethods) : int(kVocabModelParts);
     // Further part-graph recognition settings on the same model and parts ("k=10,dw=1;se=0.5").
     std::vector<PartGraphRecognitionParams> variant_params;
@@ -485,19 +517,26 @@ int main(int argc, char** argv) {
     // rules (--blend-weight).
     constexpr int kVariantRows = 3;
     const int first_variant = int(methods.size()) - kVariantRows * int(variant_params.size());
+    const auto skip = [&](int m) {
+        return (m >= num_methods && m < first_variant) ||
+               (m == kStacked && !model.stacker.trained());
+    };
 
     std::optional<sim::ObjectSource> source;
-    if (library) {
+    if (library && !procedural_test) {
         auto all = sim::ReadMeshLibrary(meshes, sim::TabletopCategories());
         std::vector<sim::MeshEntry> test;
-        for (std::size_t i = 1; i < all.size(); i += 2) test.push_back(all[i]);
+        for (std::size_t i = even_test ? 0 : 1; i < all.size(); i += 2) test.push_back(all[i]);
         source.emplace(std::move(test), false);
     } else {
         source.emplace();
     }
     PerceiveParams pp;
+    std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
     Counts part, multi, single_in_multi;
+    Counts ceiling;  // every perceived object named by the majority truth of its points
     Counts multi_obj, single_obj;  // votes with each object's distribution (as perceive fuses)
+    Counts multi_prod;             // the same votes as log(p + 0.01) - log(0.01): product rule
     double recog_ms = 0.0;
     std::size_t frames = 0, parts_total = 0;
     sim::TableSceneParams sp;
@@ -506,7 +545,7 @@ int main(int argc, char** argv) {
         const sim::Scene scene = sim::MakeTableScene(sp, *source, seed * 1000 + s);
         const sim::RayCaster caster(scene);
         const auto views = sim::TableViewpoints(scene, 6, {}, seed * 1000 + s);
-        VoxelVoteGrid grid(0.005f), grid_obj(0.005f);
+        VoxelVoteGrid grid(0.005f), grid_obj(0.005f), grid_prod(0.005f);
         std::vector<std::pair<std::vector<Eigen::Vector3f>, std::vector<int>>> kept;
         std::vector<std::vector<Category>> single, single_o;
         for (std::size_t v = 0; v < views.size(); ++v) {
@@ -594,6 +633,7 @@ int main(int argc, char** argv) {
                     part_pred[k][kVocabStatsParts] = ArgMaxCategory(vs_part[k]);
                 }
             }
+            std::vector<std::array<float, kNumCategories>> object_cluster(r.objects.size());
             for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
                 std::vector<Category>& op = object_pred[ob];
                 const auto& c = r.objects[ob].category;
@@ -619,10 +659,15 @@ int main(int argc, char** argv) {
                         model.ClassifyCluster(
                             ComputeClusterDescriptor(scan, r.objects[ob].indices, cp), 5),
                         rp.category_priors);
+                    object_cluster[ob] = cluster;
                     if (*std::max_element(cluster.begin(), cluster.end()) > 0.0f) {
                         three = BlendCategoryProbabilities(three, cluster, 1.0f / 3.0f);
                     }
                     op[kFusion3] = ArgMaxCategory(three);
+                    if (model.stacker.trained()) {
+                        op[kStacked] = ArgMaxCategory(model.stacker.Predict(
+                            StackerInputs(c, MergePartProbabilities(pg, parts, ids[ob]), cluster)));
+                    }
                 }
                 if (!baselines) continue;
                 // Part votes merged per object (point-weighted), bags of words, whole cluster.
@@ -675,7 +720,7 @@ int main(int argc, char** argv) {
                         if (t < 1 || t >= static_cast<int>(kNumCategories)) continue;
                         ++hist[t];
                         for (int m = 0; m < int(methods.size()); ++m) {
-                            if (m >= num_methods && m < first_variant) continue;
+                            if (skip(m)) continue;
                             const bool per_part =
                                 m == kPg || m == kVocabModelParts || m == kVocabStatsParts ||
                                 (m >= first_variant && (m - first_variant) % kVariantRows == 0);
@@ -687,8 +732,41 @@ int main(int argc, char** argv) {
                 }
                 const auto best = std::max_element(hist.begin(), hist.end()) - hist.begin();
                 if (hist[best] == 0) continue;
+                for (std::size_t t = 1; t < kNumCategories; ++t)
+                    for (std::size_t n = 0; n < hist[t]; ++n) ceiling.Add(int(t), int(best));
+                if (dump && !ids[ob].empty()) {
+                    std::map<std::uint32_t, std::size_t> owners;
+                    for (Index i : r.objects[ob].indices) ++owners[scan.labels[i]];
+                    std::uint32_t owner = 0;
+                    std::size_t most = 0;
+                    for (auto [l, n] : owners)
+                        if (n > most) most = n, owner = l;
+                    std::string src = "?";
+                    for (const auto& so : scene.objects)
+                        if (so.label == owner) src = so.source;
+                    const auto& c = r.objects[ob].category;
+                    const auto pgp = MergePartProbabilities(pg, parts, ids[ob]);
+                    std::fprintf(dump, "%llu,%d,%zu,\"%s\",%d,%zu", (unsigned long long)seed, s, v,
+                                 src.c_str(), int(best), r.objects[ob].indices.size());
+                    for (std::size_t q = 1; q < kNumCategories; ++q)
+                        std::fprintf(dump, ",%g", double(c.probabilities[q]));
+                    for (std::size_t q = 1; q < kNumCategories; ++q)
+                        std::fprintf(dump, ",%g", double(pgp[q]));
+                    for (std::size_t q = 1; q < kNumCategories; ++q)
+                        std::fprintf(dump, ",%g", double(object_cluster[ob][q]));
+                    for (std::size_t q = 1; q < kNumCategories; ++q)
+                        std::fprintf(dump, ",%g", double(c.scores[q]));
+                    std::fprintf(dump, ",%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%d\n",
+                                 double(c.extents[0]), double(c.extents[1]), double(c.extents[2]),
+                                 double(c.height), double(c.box_score), double(c.axis_area),
+                                 double(c.planar_part_ratio), double(c.cylinder_inlier_ratio),
+                                 double(c.cylinder_cap_ratio), double(c.cylinder_coverage),
+                                 double(c.cylinder_radius), double(c.sphere_inlier_ratio),
+                                 double(c.sphere_radius), double(c.footprint_fill),
+                                 double(c.side_face_ratio), int(c.upright));
+                }
                 for (int m = 0; m < int(methods.size()); ++m) {
-                    if (m >= num_methods && m < first_variant) continue;
+                    if (skip(m)) continue;
                     methods[m].object.Add(static_cast<int>(best), int(object_pred[ob][m]));
                 }
             }
@@ -719,6 +797,9 @@ int main(int argc, char** argv) {
             }
             grid.Add(world, votes);
             grid_obj.Add(world, votes_o);
+            for (auto& vo : votes_o)
+                for (float& x : vo) x = std::log(x + 0.01f) - std::log(0.01f);
+            grid_prod.Add(world, votes_o);
             kept.emplace_back(std::move(world), std::move(truth));
             single.push_back(std::move(pred));
             single_o.push_back(std::move(pred_o));
@@ -730,6 +811,8 @@ int main(int argc, char** argv) {
                 multi_obj.Add(kept[v].second[i],
                               static_cast<int>(grid_obj.CategoryAt(kept[v].first[i])));
                 single_obj.Add(kept[v].second[i], static_cast<int>(single_o[v][i]));
+                multi_prod.Add(kept[v].second[i],
+                               static_cast<int>(grid_prod.CategoryAt(kept[v].first[i])));
             }
         }
         if (scene_matrices) {
@@ -749,7 +832,7 @@ int main(int argc, char** argv) {
     }
     if (matrices) {
         for (int m = 0; m < int(methods.size()); ++m) {
-            if (m >= num_methods && m < first_variant) continue;
+            if (skip(m)) continue;
             PrintConfusion(("per point, " + methods[m].name).c_str(), methods[m].point);
             PrintConfusion(("per object, " + methods[m].name).c_str(), methods[m].object);
         }
@@ -759,22 +842,29 @@ int main(int argc, char** argv) {
                 scenes, methods[kPg].point.Total(), methods[kPg].object.Total());
     std::printf("%-56s %9s %9s %19s\n", "method", "per point", "per object", "per scene mean+-sd");
     for (int m = 0; m < int(methods.size()); ++m) {
-        if (m >= num_methods && m < first_variant) continue;
+        if (skip(m)) continue;
         const auto [mean, sd] = MeanStd(methods[m].scene_accuracy);
         std::printf("%-56s %9.3f %9.3f %11.3f +- %.3f\n", methods[m].name.c_str(),
                     methods[m].point.Accuracy(), methods[m].object.Accuracy(), mean, sd);
     }
     std::printf("per part (segment), part-graph hashing: %.3f\n", part.Accuracy());
+    std::printf(
+        "ceiling of per-object labels (each perceived object named by its points' majority "
+        "truth): %.3f per point\n",
+        ceiling.Accuracy());
     std::printf("multi-view (6 views, 5 mm voxel votes): %.3f per point vs %.3f single views\n",
                 multi.Accuracy(), single_in_multi.Accuracy());
     std::printf(
         "multi-view, object votes (each point votes with its object's distribution, as perceive "
         "--manifest fuses): %.3f per point vs %.3f single views\n",
         multi_obj.Accuracy(), single_obj.Accuracy());
+    std::printf("multi-view, object votes, product rule: %.3f per point vs %.3f single views\n",
+                multi_prod.Accuracy(), single_obj.Accuracy());
     std::printf(
         "categorising all parts of a 640x480 frame: %.1f ms mean over %zu frames "
         "(%.1f parts per frame; graph, GRSD- and votes; 1 thread)\n",
         recog_ms / double(std::max<std::size_t>(frames, 1)), frames,
         double(parts_total) / double(std::max<std::size_t>(frames, 1)));
+    if (dump) std::fclose(dump);
     return 0;
 }

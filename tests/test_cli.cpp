@@ -285,6 +285,30 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
                       std::string::npos);
         }
     }
+    // The stacked categoriser: refused (one line, no result) with a model without a stacker,
+    // works with one trained on held-out scenes.
+    const auto stacked_model = (dir / "stacked.mcpg").string();
+    const auto ts = RunCli("train --out " + stacked_model +
+                           " --objects 1 --views 1 --table-scenes 0 --stacker-scenes 1 "
+                           "--stacker-views 1");
+    ASSERT_EQ(ts.code, 0) << ts.output;
+    EXPECT_NE(ts.output.find("stacker"), std::string::npos) << ts.output;
+    for (const std::string& m : {model, stacked_model}) {
+        std::ofstream(dir / "stacked.json") << R"({"category": {"categoriser": "stacked", )"
+                                            << R"("part_graph_model": ")" << m << R"("}})";
+        const auto out = dir / (m == model ? "s0" : "s1");
+        const auto st = RunCli("perceive " + (dir / "demo" / "scene.pcd").string() +
+                               " --no-report -q --config " + (dir / "stacked.json").string() +
+                               " --out " + out.string());
+        if (m == model) {
+            EXPECT_EQ(st.code, 2) << st.output;
+            EXPECT_EQ(CountLines(st.output), 1) << st.output;
+            EXPECT_FALSE(std::filesystem::exists(out / "result.json"));
+        } else {
+            ASSERT_EQ(st.code, 0) << st.output;
+            EXPECT_TRUE(std::filesystem::exists(out / "result.json"));
+        }
+    }
 }
 
 TEST(Cli, PerceiveFusesTheFramesOfAManifest) {

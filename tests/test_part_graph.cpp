@@ -623,15 +623,16 @@ TEST(PartGraphModel, CorruptFilesAreRejected) {
                  FormatError);
     EXPECT_THROW(PartGraphModel::Deserialize("not a model", "text"), FormatError);
     // Files of previous layouts (version 1: GRSD- only; 2: no elevation and curvature blocks;
-    // 3: no whole-object rows; 4: no RSD angle quantile) are refused by their version.
-    for (std::uint32_t old : {1u, 2u, 3u, 4u}) {
+    // 3: no whole-object rows; 4: no RSD angle quantile; 5: no stacker) are refused by their
+    // version.
+    for (std::uint32_t old : {1u, 2u, 3u, 4u, 5u}) {
         try {
             PartGraphModel::Deserialize(ml::WrapContainer("MCPARTGR", old, "old"), "old.mcpg");
             ADD_FAILURE() << "version " << old << " accepted";
         } catch (const FormatError& e) {
             const std::string msg = e.what();
             EXPECT_NE(msg.find("version " + std::to_string(old)), std::string::npos) << msg;
-            EXPECT_NE(msg.find("reads version 5"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("reads version 6"), std::string::npos) << msg;
         }
     }
     EXPECT_THROW(PartGraphModel::Load(dir.path() / "missing.mcpg"), IoError);
@@ -699,6 +700,83 @@ TEST(PartGraphModel, VoxelVotesAccumulateViews) {
     EXPECT_EQ(grid.CategoryAt(Eigen::Vector3f(1, 1, 1)), Category::kNone);
     EXPECT_THROW(grid.Add({p}, {}), InvalidArgument);
     EXPECT_THROW(VoxelVoteGrid(0.0f), InvalidArgument);
+}
+
+// The stacker recovers a known rule from noisy experts: the truth is the category that the
+// part-graph and cluster experts both raise, while the rules' distribution is pure noise.
+TEST(CategoryStacker, LearnsWhichExpertToTrust) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    auto make = [&](int n, std::vector<std::array<float, kStackerInputSize>>& x,
+                    std::vector<Category>& y) {
+        for (int i = 0; i < n; ++i) {
+            const auto truth = static_cast<std::size_t>(1 + i % 6);
+            CategoryResult rules;
+            for (std::size_t c = 1; c < kNumCategories; ++c) rules.probabilities[c] = u(rng);
+            CategoryDistribution pg{}, cl{};
+            for (std::size_t c = 1; c < kNumCategories; ++c) {
+                pg[c] = 0.3f * u(rng);
+                cl[c] = 0.3f * u(rng);
+            }
+            pg[truth] += 0.5f;
+            cl[truth] += 0.4f;
+            rules.extents = Eigen::Vector3f(0.1f + 0.01f * u(rng), 0.05f, 0.02f);
+            x.push_back(StackerInputs(rules, pg, cl));
+            y.push_back(static_cast<Category>(truth));
+        }
+    };
+    std::vector<std::array<float, kStackerInputSize>> xt, xv;
+    std::vector<Category> yt, yv;
+    make(600, xt, yt);
+    make(300, xv, yv);
+    CategoryStacker s;
+    EXPECT_FALSE(s.trained());
+    EXPECT_THROW(s.Predict(xv[0]), InvalidArgument);
+    s.Fit(xt, yt);
+    ASSERT_TRUE(s.trained());
+    EXPECT_EQ(s.train_rows(), 600u);
+    int correct = 0;
+    for (std::size_t i = 0; i < xv.size(); ++i) {
+        const auto p = s.Predict(xv[i]);
+        EXPECT_EQ(p[0], 0.0f);
+        float sum = 0.0f;
+        for (float v : p) sum += v;
+        EXPECT_NEAR(sum, 1.0f, 1e-5f);
+        correct += ArgMaxCategory(p) == yv[i];
+    }
+    EXPECT_GE(correct, 285) << correct << " of 300";
+    // Deterministic, and the parameters round-trip exactly.
+    CategoryStacker again;
+    again.Fit(xt, yt);
+    EXPECT_EQ(again.Parameters(), s.Parameters());
+    const CategoryStacker back = CategoryStacker::FromParameters(s.Parameters(), "stacker");
+    EXPECT_EQ(back.Predict(xv[7]), s.Predict(xv[7]));
+    EXPECT_FALSE(CategoryStacker::FromParameters({}, "empty").trained());
+    // Non-finite inputs count as 0 instead of poisoning the output.
+    auto nan_row = xv[0];
+    nan_row[30] = std::numeric_limits<float>::quiet_NaN();
+    for (float v : s.Predict(nan_row)) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(CategoryStacker, RefusesBadInput) {
+    CategoryStacker s;
+    std::vector<std::array<float, kStackerInputSize>> x(3);
+    EXPECT_THROW(s.Fit({}, {}), InvalidArgument);
+    EXPECT_THROW(s.Fit(x, {Category::kBox}), InvalidArgument);
+    EXPECT_THROW(s.Fit(x, {Category::kBox, Category::kNone, Category::kFlat}), InvalidArgument);
+    const std::vector<Category> y = {Category::kBox, Category::kFlat, Category::kBox};
+    EXPECT_THROW(s.Fit(x, y, {.l2 = -1.0f}), InvalidArgument);
+    EXPECT_THROW(s.Fit(x, y, {.iterations = 0}), InvalidArgument);
+    EXPECT_THROW(s.Fit(x, y, {.step = 0.0f}), InvalidArgument);
+    EXPECT_FALSE(s.trained());
+    s.Fit(x, y);  // constant inputs: the prior of the training rows
+    EXPECT_EQ(ArgMaxCategory(s.Predict(x[0])), Category::kBox);
+    auto params = s.Parameters();
+    params.pop_back();
+    EXPECT_THROW(CategoryStacker::FromParameters(params, "cut"), FormatError);
+    params = s.Parameters();
+    params[5] = std::numeric_limits<float>::infinity();
+    EXPECT_THROW(CategoryStacker::FromParameters(params, "inf"), FormatError);
 }
 
 }  // namespace

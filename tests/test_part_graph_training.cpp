@@ -4,11 +4,13 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/recognition/part_graph_model.hpp"
+#include "multicue/sim/objects.hpp"
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/raycaster.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "multicue/system/perceive.hpp"
 #include "part_graph_training.hpp"
 
 namespace multicue {
@@ -102,6 +104,61 @@ TEST(PartGraphTraining, TableScenesAddPerceivedObjects) {
     EXPECT_EQ(m.Serialize(), train(2, false).Serialize());
     training::PartGraphTrainingOptions bad;
     bad.table_scenes = -1;
+    PartGraphModel unused;
+    EXPECT_THROW(training::TrainPartGraphModel(unused, bad), InvalidArgument);
+}
+
+// Held-out table scenes train the stacker: the same model and stacker whatever the thread count,
+// and perceive's "stacked" categoriser then runs on it.
+TEST(PartGraphTraining, StackerScenesTrainTheStacker) {
+    auto train = [&](int threads) {
+        training::PartGraphTrainingOptions o;
+        o.categories = kCats;
+        o.objects_per_category = 2;
+        o.views = 2;
+        o.table_scenes = 0;
+        o.stacker_scenes = 2;
+        o.stacker_views = 1;
+        o.seed = 7;
+        o.num_threads = threads;
+        PartGraphModel m;
+        EXPECT_TRUE(training::TrainPartGraphModel(m, o));
+        return m;
+    };
+    const PartGraphModel m = train(1);
+    ASSERT_TRUE(m.stacker.trained());
+    EXPECT_GT(m.stacker.train_rows(), 2u);
+    EXPECT_EQ(m.Serialize(), train(2).Serialize());
+    const PartGraphModel back = PartGraphModel::Deserialize(m.Serialize(), "round trip");
+    EXPECT_TRUE(back.stacker.trained());
+
+    sim::TableSceneParams sp;
+    sim::ObjectSource source(kCats);
+    const auto scene = sim::MakeTableScene(sp, source, 123);
+    const auto pose = sim::TableViewpoints(scene, 1, {}, 4).at(0);
+    PointCloud scan = sim::ScanKinect(scene, pose, sim::KinectParams{}, 3);
+    PerceiveParams pp;
+    pp.categoriser = "stacked";
+    pp.part_graph = std::make_shared<const PartGraphModel>(back);
+    const PerceiveResult r = Perceive(scan, pp);
+    ASSERT_FALSE(r.objects.empty());
+    for (const auto& o : r.objects) {
+        if (o.category.category == Category::kNone) continue;
+        float sum = 0.0f;
+        for (float p : o.category.probabilities) sum += p;
+        EXPECT_NEAR(sum, 1.0f, 1e-4f);
+        EXPECT_EQ(o.category.probabilities[0], 0.0f);
+    }
+    // A model without a stacker is refused by name.
+    pp.part_graph = std::make_shared<const PartGraphModel>(TinyModel(0));
+    try {
+        Perceive(scan, pp);
+        ADD_FAILURE() << "stacked categoriser ran without a stacker";
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("stacker"), std::string::npos) << e.what();
+    }
+    training::PartGraphTrainingOptions bad;
+    bad.stacker_scenes = -1;
     PartGraphModel unused;
     EXPECT_THROW(training::TrainPartGraphModel(unused, bad), InvalidArgument);
 }

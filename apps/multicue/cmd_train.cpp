@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
+#include "multicue/sim/mesh.hpp"
 #include "part_graph_training.hpp"
 
 namespace multicue::cli {
@@ -66,6 +67,12 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         ->capture_default_str();
     cmd->add_option("--table-views", o->t.table_views, "views per table scene")
         ->capture_default_str();
+    cmd->add_option("--stacker-scenes", o->t.stacker_scenes,
+                    "further table scenes whose perceived objects train the stacker over the "
+                    "experts (perceive's \"stacked\" categoriser; 0: none)")
+        ->capture_default_str();
+    cmd->add_option("--stacker-views", o->t.stacker_views, "views per stacker scene")
+        ->capture_default_str();
     cmd->add_option("--table-distance", o->t.table_viewpoints.max_distance,
                     "largest horizontal camera distance from the table centre [m]")
         ->capture_default_str();
@@ -93,6 +100,8 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         if (!(q > 0.0f && q <= 1.0f)) throw InvalidArgument("--rsd-quantile must be in (0, 1]");
         if (o->t.table_scenes < 0) throw InvalidArgument("--table-scenes must be >= 0");
         if (o->t.table_views < 1) throw InvalidArgument("--table-views must be >= 1");
+        if (o->t.stacker_scenes < 0) throw InvalidArgument("--stacker-scenes must be >= 0");
+        if (o->t.stacker_views < 1) throw InvalidArgument("--stacker-views must be >= 1");
         if (!(o->t.table_viewpoints.max_distance > 0.0f)) {
             throw InvalidArgument("--table-distance must be > 0");
         }
@@ -110,10 +119,16 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         o->t.train.max_parts = o->max_parts;
         o->t.train.seed = o->t.seed;
         InstallInterruptHandler();
-        const std::size_t jobs =
-            static_cast<std::size_t>(o->t.objects_per_category) * 6 +
-            (o->meshes.empty() ? 0 : static_cast<std::size_t>(std::max(o->t.max_meshes, 0))) +
-            static_cast<std::size_t>(std::max(o->t.table_scenes, 0));
+        std::size_t meshes = 0;  // library meshes on the turntable (one progress step each)
+        if (!o->meshes.empty()) {
+            meshes = sim::ReadMeshLibrary(o->meshes, sim::TabletopCategories(), o->labels).size();
+            if (o->t.max_meshes > 0) {
+                meshes = std::min(meshes, static_cast<std::size_t>(o->t.max_meshes));
+            }
+        }
+        const std::size_t jobs = static_cast<std::size_t>(o->t.objects_per_category) * 6 + meshes +
+                                 static_cast<std::size_t>(std::max(o->t.table_scenes, 0)) +
+                                 static_cast<std::size_t>(std::max(o->t.stacker_scenes, 0));
         Progress progress("training part graphs", jobs);
         PartGraphModel model;
         model.descriptor_params = o->d;
@@ -133,6 +148,10 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
                      "cylinder %zu, plate %zu, other %zu) -> %s\n",
                      model.num_rows(), model.num_buckets(), per[1], per[2], per[3], per[4], per[5],
                      per[6], o->out.c_str());
+        if (model.stacker.trained()) {
+            std::fprintf(stderr, "train: stacker over the experts from %zu perceived objects\n",
+                         model.stacker.train_rows());
+        }
     });
 }
 

@@ -84,6 +84,87 @@ void AddBaselineFeatures(Sample& s, const PointCloud& scan, const std::vector<In
     if (o.part_statistics) s.statistics = ComputePartStatisticsRows(scan, parts, up);
 }
 
+// The stacker's training rows: every perceived object of the held-out scenes with its majority
+// truth, the experts computed exactly as perceive's "stacked" categoriser computes them. Frames
+// are perceived in parallel; rows are collected in scene and view order.
+bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
+                  const PartGraphTrainingOptions& o, Progress* progress) {
+    std::vector<std::vector<std::pair<std::array<float, kStackerInputSize>, Category>>> rows(
+        scenes.size());
+    std::atomic<bool> stopped{false};
+    PerceiveParams pp;
+    pp.num_threads = 1;
+    ParallelFor(
+        scenes.size(), o.num_threads,
+        [&](std::size_t s) {
+            if (InterruptRequested()) {
+                stopped = true;
+                return;
+            }
+            const std::uint64_t seed = sim::SubSeed(o.seed, 9500000u + s);
+            const sim::RayCaster caster(scenes[s]);
+            const auto views =
+                sim::TableViewpoints(scenes[s], o.stacker_views, o.table_viewpoints, seed);
+            sim::KinectParams kp = o.kinect;
+            kp.num_threads = 1;
+            for (std::size_t v = 0; v < views.size(); ++v) {
+                PointCloud scan = sim::ScanKinect(caster, views[v], kp, seed + v);
+                const auto* truth = scan.FindExtraField("category");
+                if (!truth) continue;
+                OrganizedNormalParams np = pp.organized_normals;
+                np.num_threads = 1;
+                SetNormals(scan, EstimateNormalsOrganized(scan, np));
+                const PerceiveResult r = Perceive(scan, pp);
+                std::vector<Indices> parts;
+                std::vector<std::uint32_t> groups;
+                std::vector<std::vector<std::size_t>> ids(r.objects.size());
+                for (std::size_t k = 0; k < r.objects.size(); ++k) {
+                    for (const auto& part : r.objects[k].parts) {
+                        ids[k].push_back(parts.size());
+                        parts.push_back(part);
+                        groups.push_back(static_cast<std::uint32_t>(k));
+                    }
+                }
+                const Eigen::Vector3f up = r.support.found
+                                               ? Eigen::Vector3f(r.support.plane.head<3>())
+                                               : Eigen::Vector3f::Zero();
+                const PartGraphResult pg =
+                    RecognizeParts(model, scan, parts, pp.part_graph_recognition, up, groups);
+                for (std::size_t k = 0; k < r.objects.size(); ++k) {
+                    const auto& obj = r.objects[k];
+                    if (ids[k].empty() || obj.category.category == Category::kNone) continue;
+                    std::array<std::size_t, kNumCategories> hist{};
+                    for (Index i : obj.indices) {
+                        const int t = static_cast<int>(truth->data[i]);
+                        if (t >= 0 && t < static_cast<int>(kNumCategories)) ++hist[t];
+                    }
+                    const auto best = static_cast<std::size_t>(
+                        std::max_element(hist.begin() + 1, hist.end()) - hist.begin());
+                    if (hist[best] == 0) continue;
+                    rows[s].emplace_back(
+                        StackerInputs(obj.category, MergePartProbabilities(pg, parts, ids[k]),
+                                      ClusterExpert(model, scan, obj.indices, pp)),
+                        static_cast<Category>(best));
+                }
+            }
+            if (progress) progress->Advance();
+        },
+        1);
+    if (stopped) return false;
+    std::vector<std::array<float, kStackerInputSize>> inputs;
+    std::vector<Category> truth;
+    for (const auto& scene_rows : rows) {
+        for (const auto& [x, c] : scene_rows) {
+            inputs.push_back(x);
+            truth.push_back(c);
+        }
+    }
+    if (inputs.empty()) throw DataError("stacker scenes: no perceived object with a category");
+    model.stacker.Fit(inputs, truth, o.stacker);
+    LogInfo("stacker: {} objects from {} held-out scenes", inputs.size(), scenes.size());
+    return true;
+}
+
 }  // namespace
 
 bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& o,
@@ -128,9 +209,12 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
         throw InvalidArgument("table_scenes must be >= 0 and table_views >= 1");
     }
     // Table scenes, drawn sequentially (the object source caches meshes), scanned in parallel.
+    if (o.stacker_scenes < 0 || o.stacker_views < 1) {
+        throw InvalidArgument("stacker_scenes must be >= 0 and stacker_views >= 1");
+    }
     std::vector<sim::Scene> scenes;
-    if (o.table_scenes > 0) {
-        std::optional<sim::ObjectSource> source;
+    std::optional<sim::ObjectSource> source;
+    if (o.table_scenes > 0 || o.stacker_scenes > 0) {
         if (!o.meshes.empty()) {
             auto all = sim::ReadMeshLibrary(o.meshes, sim::TabletopCategories(), o.labels);
             std::vector<sim::MeshEntry> selected;
@@ -147,8 +231,11 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
         } else {
             source.emplace(o.categories);
         }
-        sim::TableSceneParams sp;
-        sp.clutter = 0.6f;
+    }
+    sim::TableSceneParams scene_params;
+    scene_params.clutter = 0.6f;
+    {
+        const auto& sp = scene_params;
         for (int s = 0; s < o.table_scenes; ++s) {
             scenes.push_back(sim::MakeTableScene(
                 sp, *source, sim::SubSeed(o.seed, 7000000u + std::uint64_t(s))));
@@ -259,6 +346,14 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
         }
     }
     model.Build();
+    if (o.stacker_scenes > 0 && !stopped) {
+        std::vector<sim::Scene> held_out;
+        for (int s = 0; s < o.stacker_scenes; ++s) {
+            held_out.push_back(sim::MakeTableScene(
+                scene_params, *source, sim::SubSeed(o.seed, 9000000u + std::uint64_t(s))));
+        }
+        if (!TrainStacker(model, held_out, o, progress)) stopped = true;
+    }
     return !stopped;
 }
 

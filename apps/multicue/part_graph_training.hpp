@@ -54,6 +54,13 @@ struct PartGraphTrainingOptions {
     int table_scenes = 20;
     int table_views = 4;
     sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
+    /// Further table scenes of the same objects (other seeds), perceived after the model is
+    /// built, whose objects train the model's stacker (CategoryStacker: the rules, part-graph
+    /// and whole-object experts as perceive computes them, and the rules' geometric evidence).
+    /// 0: no stacker.
+    int stacker_scenes = 0;
+    int stacker_views = 6;
+    CategoryStackerParams stacker{};
     PartGraphTrainParams train{};
     /// When set, receives every labelled object added to the model, in a fixed order (turntable
     /// scans, then table-scene objects).

@@ -429,6 +429,7 @@ std::string PartGraphModel::Serialize() const {
     w.Put<std::uint64_t>(cluster_dims_);
     w.PutVector(cluster_labels_);
     w.PutVector(cluster_rows_);
+    w.PutVector(stacker.Parameters());
     return ml::WrapContainer(kMagic, kPartGraphModelVersion, w.bytes());
 }
 
@@ -499,6 +500,7 @@ PartGraphModel PartGraphModel::Deserialize(const std::string& bytes, const std::
     for (float v : m.cluster_rows_) {
         if (!std::isfinite(v)) r.Fail("bad cluster descriptor");
     }
+    m.stacker = CategoryStacker::FromParameters(r.GetVector<float>(), what);
     if (!r.AtEnd()) r.Fail("trailing bytes");
     m.Build();
     return m;

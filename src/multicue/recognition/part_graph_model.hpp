@@ -40,6 +40,7 @@
 #include "multicue/features/feature_common.hpp"
 #include "multicue/features/rsd.hpp"
 #include "multicue/ml/knn.hpp"
+#include "multicue/recognition/category_stacker.hpp"
 #include "multicue/recognition/geometric_category.hpp"
 #include "multicue/recognition/part_graph.hpp"
 
@@ -73,7 +74,7 @@ inline constexpr int kPartMappedSize = kPartGrsdSize + 3 + kPartElevationSize + 
 /// Version of the model file format (docs/part-graph.md). 2: moment block and extents. 3:
 /// elevation and curvature blocks, block weights. 4: whole-object rows. 5: the RSD angle
 /// quantile.
-inline constexpr std::uint32_t kPartGraphModelVersion = 5;
+inline constexpr std::uint32_t kPartGraphModelVersion = 6;
 
 struct PartDescriptorParams {
     /// GRSD- voxel map settings: 2.5 cm voxels; the RSD takes the 80th percentile angle of each
@@ -204,6 +205,9 @@ class PartGraphModel {
     /// ClusterDescriptorParams::size_weight the cluster rows were computed with (other
     /// parameters at their defaults) [1/m].
     float cluster_size_weight = 0.0f;
+    /// Level-1 classifier over the rules, part-graph and whole-object experts (perceive's
+    /// "stacked" categoriser); untrained unless the model was trained with stacker scenes.
+    CategoryStacker stacker;
 
     std::size_t num_rows() const;
     std::size_t num_buckets() const { return buckets_.size(); }

@@ -120,6 +120,15 @@ std::vector<PerceivedObject> MergeOccluded(const PointCloud& cloud,
 
 }  // namespace
 
+CategoryDistribution ClusterExpert(const PartGraphModel& model, const PointCloud& cloud,
+                                   const Indices& object, const PerceiveParams& params) {
+    ClusterDescriptorParams cp;
+    cp.size_weight = model.cluster_size_weight;
+    return ApplyCategoryPriors(
+        model.ClassifyCluster(ComputeClusterDescriptor(cloud, object, cp), params.cluster_k),
+        params.part_graph_recognition.category_priors);
+}
+
 // Part-graph hashing over the parts of every object (one graph for the scene, so groups may span
 // touching objects, as in section 5.1.1); object distributions are the point-weighted mean of
 // their parts'.
@@ -162,16 +171,19 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
         if (params.categoriser == "part-graph+rules") {
             p = BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
         } else if (params.categoriser == "part-graph+rules+cluster") {
+            const auto cluster = ClusterExpert(*model, cloud, objects[k].indices, params);
             p = BlendCategoryProbabilities(c.probabilities, p, 0.5f);
-            ClusterDescriptorParams cp;
-            cp.size_weight = model->cluster_size_weight;
-            const auto cluster = ApplyCategoryPriors(
-                model->ClassifyCluster(ComputeClusterDescriptor(cloud, objects[k].indices, cp),
-                                       params.cluster_k),
-                params.part_graph_recognition.category_priors);
             float total = 0.0f;
             for (float x : cluster) total += x;
             if (total > 0.0f) p = BlendCategoryProbabilities(p, cluster, 1.0f / 3.0f);
+        } else if (params.categoriser == "stacked") {
+            if (!model->stacker.trained()) {
+                throw InvalidArgument(
+                    "category.categoriser stacked needs a part-graph model with a stacker "
+                    "(multicue train --stacker-scenes N)");
+            }
+            const auto cluster = ClusterExpert(*model, cloud, objects[k].indices, params);
+            p = model->stacker.Predict(StackerInputs(c, p, cluster));
         }
         c.probabilities = p;
         c.category = ArgMaxCategory(p);
@@ -821,13 +833,13 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
         },
         1);
     if (params.categoriser == "part-graph" || params.categoriser == "part-graph+rules" ||
-        params.categoriser == "part-graph+rules+cluster") {
+        params.categoriser == "part-graph+rules+cluster" || params.categoriser == "stacked") {
         if (params.cluster_k < 1) throw InvalidArgument("category.cluster_k must be >= 1");
         CategorizeByPartGraph(cloud, result.objects, plane, params);
     } else if (params.categoriser != "rules") {
         throw InvalidArgument(
-            "category.categoriser must be rules, part-graph, part-graph+rules or "
-            "part-graph+rules+cluster, got '" +
+            "category.categoriser must be rules, part-graph, part-graph+rules, "
+            "part-graph+rules+cluster or stacked, got '" +
             params.categoriser + "'");
     }
     timer.Done("categories");

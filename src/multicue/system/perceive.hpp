@@ -64,7 +64,9 @@ struct PerceiveParams {
     /// distribution floored at 0.01 first, then normalised), or "part-graph+rules+cluster" (three
     /// experts with equal weight: rules^(1/3) * part-graph^(1/3) * cluster^(1/3), cluster being
     /// the model's whole-object k-NN on GRSD- and VFH, PartGraphModel::ClassifyCluster, k =
-    /// cluster_k; without cluster rows in the model, as "part-graph+rules" with w = 0.5).
+    /// cluster_k; without cluster rows in the model, as "part-graph+rules" with w = 0.5), or
+    /// "stacked" (the model's level-1 classifier over the three experts and the rules' geometric
+    /// evidence, CategoryStacker; the model must have been trained with stacker scenes).
     std::string categoriser = "rules";
     std::size_t cluster_k = 5;  ///< neighbours of the whole-object expert [-]; >= 1
     /// Part-graph model file; empty = `part_graph` must be set (the CLI then uses the default
@@ -233,6 +235,12 @@ struct PerceiveResult {
 /// support plane (zero for none). Used by Perceive; throws InvalidArgument for bad parameters.
 ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
                         const Eigen::Vector4f& plane, const PerceiveParams& params);
+
+/// The whole-object expert as perceive runs it: the model's cluster k-NN (params.cluster_k) on
+/// the object's GRSD- and VFH descriptor, weighted by the part-graph category priors; all zero
+/// when the model has no cluster rows.
+CategoryDistribution ClusterExpert(const PartGraphModel& model, const PointCloud& cloud,
+                                   const Indices& object, const PerceiveParams& params);
 
 /// Normals as perceive computes them, unless `cloud` has normals and curvature already:
 /// organized frames take the image-space path for the points `roi` only, others k-NN PCA.

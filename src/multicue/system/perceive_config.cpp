@@ -100,7 +100,8 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
 
     auto cat = config.Section("category");
     cat.Get("categoriser", p.categoriser,
-            "rules, part-graph, part-graph+rules or part-graph+rules+cluster (docs/part-graph.md)");
+            "rules, part-graph, part-graph+rules, part-graph+rules+cluster or stacked "
+            "(docs/part-graph.md)");
     cat.Get("part_graph_model", p.part_graph_model,
             "part-graph model file (empty: the default model, trained once and cached)");
     cat.Get("part_graph_max_parts", p.part_graph_recognition.max_parts,
@@ -120,7 +121,7 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     cat.Get("part_graph_weight", p.part_graph_weight,
             "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
     cat.Get("cluster_k", p.cluster_k,
-            "neighbours of the whole-object expert in part-graph+rules+cluster");
+            "neighbours of the whole-object expert (part-graph+rules+cluster, stacked)");
     auto& c = p.category;
     cat.Get("min_points", c.min_points, "fewer usable points give category none");
     cat.Get("max_points", c.max_points, "evidence uses at most this many points");
