@@ -535,8 +535,9 @@ int main(int argc, char** argv) {
     std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
     Counts part, multi, single_in_multi;
     Counts ceiling;  // every perceived object named by the majority truth of its points
-    Counts multi_obj, single_obj;  // votes with each object's distribution (as perceive fuses)
-    Counts multi_prod;             // the same votes as log(p + 0.01) - log(0.01): product rule
+    Counts multi_obj, single_obj;      // votes with each object's distribution (as perceive fuses)
+    Counts multi_prod;                 // the same votes as log(p + 0.01) - log(0.01): product rule
+    Counts multi_three, single_three;  // object votes of part-graph+rules+cluster
     double recog_ms = 0.0;
     std::size_t frames = 0, parts_total = 0;
     sim::TableSceneParams sp;
@@ -545,9 +546,9 @@ int main(int argc, char** argv) {
         const sim::Scene scene = sim::MakeTableScene(sp, *source, seed * 1000 + s);
         const sim::RayCaster caster(scene);
         const auto views = sim::TableViewpoints(scene, 6, {}, seed * 1000 + s);
-        VoxelVoteGrid grid(0.005f), grid_obj(0.005f), grid_prod(0.005f);
+        VoxelVoteGrid grid(0.005f), grid_obj(0.005f), grid_prod(0.005f), grid_three(0.005f);
         std::vector<std::pair<std::vector<Eigen::Vector3f>, std::vector<int>>> kept;
-        std::vector<std::vector<Category>> single, single_o;
+        std::vector<std::vector<Category>> single, single_o, single_3;
         for (std::size_t v = 0; v < views.size(); ++v) {
             PointCloud scan = sim::ScanKinect(caster, views[v], {}, seed * 7919 + s * 10 + v);
             const auto* gt_field = scan.FindExtraField("category");
@@ -634,6 +635,7 @@ int main(int argc, char** argv) {
                 }
             }
             std::vector<std::array<float, kNumCategories>> object_cluster(r.objects.size());
+            std::vector<std::array<float, kNumCategories>> object_three(r.objects.size());
             for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
                 std::vector<Category>& op = object_pred[ob];
                 const auto& c = r.objects[ob].category;
@@ -664,6 +666,7 @@ int main(int argc, char** argv) {
                         three = BlendCategoryProbabilities(three, cluster, 1.0f / 3.0f);
                     }
                     op[kFusion3] = ArgMaxCategory(three);
+                    object_three[ob] = three;
                     if (model.stacker.trained()) {
                         op[kStacked] = ArgMaxCategory(model.stacker.Predict(
                             StackerInputs(c, MergePartProbabilities(pg, parts, ids[ob]), cluster)));
@@ -774,7 +777,8 @@ int main(int argc, char** argv) {
             std::vector<std::array<float, kNumCategories>> votes;
             std::vector<int> truth;
             std::vector<Category> pred, pred_o;
-            std::vector<std::array<float, kNumCategories>> votes_o;
+            std::vector<std::array<float, kNumCategories>> votes_o, votes_3;
+            std::vector<Category> pred_3;
             std::vector<std::array<float, kNumCategories>> object_p(r.objects.size());
             for (std::size_t ob = 0; ob < r.objects.size(); ++ob) {
                 if (!ids[ob].empty()) object_p[ob] = MergePartProbabilities(pg, parts, ids[ob]);
@@ -791,6 +795,8 @@ int main(int argc, char** argv) {
                     pred.push_back(pg.part_categories[k]);
                     votes_o.push_back(object_p[part_object[k]]);
                     pred_o.push_back(ArgMaxCategory(object_p[part_object[k]]));
+                    votes_3.push_back(object_three[part_object[k]]);
+                    pred_3.push_back(object_pred[part_object[k]][kFusion3]);
                 }
                 const auto best = std::max_element(hist.begin(), hist.end()) - hist.begin();
                 if (hist[best] > 0) part.Add(static_cast<int>(best), int(pg.part_categories[k]));
@@ -800,9 +806,11 @@ int main(int argc, char** argv) {
             for (auto& vo : votes_o)
                 for (float& x : vo) x = std::log(x + 0.01f) - std::log(0.01f);
             grid_prod.Add(world, votes_o);
+            grid_three.Add(world, votes_3);
             kept.emplace_back(std::move(world), std::move(truth));
             single.push_back(std::move(pred));
             single_o.push_back(std::move(pred_o));
+            single_3.push_back(std::move(pred_3));
         }
         for (std::size_t v = 0; v < kept.size(); ++v) {
             for (std::size_t i = 0; i < kept[v].first.size(); ++i) {
@@ -813,6 +821,9 @@ int main(int argc, char** argv) {
                 single_obj.Add(kept[v].second[i], static_cast<int>(single_o[v][i]));
                 multi_prod.Add(kept[v].second[i],
                                static_cast<int>(grid_prod.CategoryAt(kept[v].first[i])));
+                multi_three.Add(kept[v].second[i],
+                                static_cast<int>(grid_three.CategoryAt(kept[v].first[i])));
+                single_three.Add(kept[v].second[i], static_cast<int>(single_3[v][i]));
             }
         }
         if (scene_matrices) {
@@ -860,6 +871,10 @@ int main(int argc, char** argv) {
         multi_obj.Accuracy(), single_obj.Accuracy());
     std::printf("multi-view, object votes, product rule: %.3f per point vs %.3f single views\n",
                 multi_prod.Accuracy(), single_obj.Accuracy());
+    std::printf(
+        "multi-view, object votes of part-graph+rules+cluster: %.3f per point vs %.3f single "
+        "views\n",
+        multi_three.Accuracy(), single_three.Accuracy());
     std::printf(
         "categorising all parts of a 640x480 frame: %.1f ms mean over %zu frames "
         "(%.1f parts per frame; graph, GRSD- and votes; 1 thread)\n",
