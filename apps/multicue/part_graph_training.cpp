@@ -84,6 +84,40 @@ void AddBaselineFeatures(Sample& s, const PointCloud& scan, const std::vector<In
     if (o.part_statistics) s.statistics = ComputePartStatisticsRows(scan, parts, up);
 }
 
+// Each view of a table scene scanned by the simulated Kinect, with perceive's normals, perceived
+// by `pp` (single-threaded: scenes run in parallel) and handed to `fn(scan, result, truth, pose)`
+// (truth: the per-point category field).
+template <typename Fn>
+void PerceiveTableViews(const sim::Scene& scene, int views, std::uint64_t seed,
+                        const PartGraphTrainingOptions& o, const PerceiveParams& pp, Fn&& fn) {
+    const sim::RayCaster caster(scene);
+    const auto poses = sim::TableViewpoints(scene, views, o.table_viewpoints, seed);
+    sim::KinectParams kp = o.kinect;
+    kp.num_threads = 1;
+    for (std::size_t v = 0; v < poses.size(); ++v) {
+        PointCloud scan = sim::ScanKinect(caster, poses[v], kp, seed + v);
+        const auto* truth = scan.FindExtraField("category");
+        if (!truth) continue;
+        OrganizedNormalParams np = pp.organized_normals;
+        np.num_threads = 1;
+        SetNormals(scan, EstimateNormalsOrganized(scan, np));
+        const PerceiveResult r = Perceive(scan, pp);
+        fn(scan, r, *truth, poses[v]);
+    }
+}
+
+// The most frequent category of an object's points (not kNone) and its count.
+std::pair<Category, std::size_t> MajorityCategory(const Indices& object, const ExtraField& truth) {
+    std::array<std::size_t, kNumCategories> hist{};
+    for (Index i : object) {
+        const int t = static_cast<int>(truth.data[i]);
+        if (t >= 0 && t < static_cast<int>(kNumCategories)) ++hist[t];
+    }
+    const auto best =
+        static_cast<std::size_t>(std::max_element(hist.begin() + 1, hist.end()) - hist.begin());
+    return {static_cast<Category>(best), hist[best]};
+}
+
 // The stacker's training rows: every perceived object of the held-out scenes with its majority
 // truth, the experts computed exactly as perceive's "stacked" categoriser computes them. Frames
 // are perceived in parallel; rows are collected in scene and view order.
@@ -101,52 +135,36 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
                 stopped = true;
                 return;
             }
-            const std::uint64_t seed = sim::SubSeed(o.seed, 9500000u + s);
-            const sim::RayCaster caster(scenes[s]);
-            const auto views =
-                sim::TableViewpoints(scenes[s], o.stacker_views, o.table_viewpoints, seed);
-            sim::KinectParams kp = o.kinect;
-            kp.num_threads = 1;
-            for (std::size_t v = 0; v < views.size(); ++v) {
-                PointCloud scan = sim::ScanKinect(caster, views[v], kp, seed + v);
-                const auto* truth = scan.FindExtraField("category");
-                if (!truth) continue;
-                OrganizedNormalParams np = pp.organized_normals;
-                np.num_threads = 1;
-                SetNormals(scan, EstimateNormalsOrganized(scan, np));
-                const PerceiveResult r = Perceive(scan, pp);
-                std::vector<Indices> parts;
-                std::vector<std::uint32_t> groups;
-                std::vector<std::vector<std::size_t>> ids(r.objects.size());
-                for (std::size_t k = 0; k < r.objects.size(); ++k) {
-                    for (const auto& part : r.objects[k].parts) {
-                        ids[k].push_back(parts.size());
-                        parts.push_back(part);
-                        groups.push_back(static_cast<std::uint32_t>(k));
+            PerceiveTableViews(
+                scenes[s], o.stacker_views, sim::SubSeed(o.seed, 9500000u + s), o, pp,
+                [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
+                    const Eigen::Isometry3f&) {
+                    std::vector<Indices> parts;
+                    std::vector<std::uint32_t> groups;
+                    std::vector<std::vector<std::size_t>> ids(r.objects.size());
+                    for (std::size_t k = 0; k < r.objects.size(); ++k) {
+                        for (const auto& part : r.objects[k].parts) {
+                            ids[k].push_back(parts.size());
+                            parts.push_back(part);
+                            groups.push_back(static_cast<std::uint32_t>(k));
+                        }
                     }
-                }
-                const Eigen::Vector3f up = r.support.found
-                                               ? Eigen::Vector3f(r.support.plane.head<3>())
-                                               : Eigen::Vector3f::Zero();
-                const PartGraphResult pg =
-                    RecognizeParts(model, scan, parts, pp.part_graph_recognition, up, groups);
-                for (std::size_t k = 0; k < r.objects.size(); ++k) {
-                    const auto& obj = r.objects[k];
-                    if (ids[k].empty() || obj.category.category == Category::kNone) continue;
-                    std::array<std::size_t, kNumCategories> hist{};
-                    for (Index i : obj.indices) {
-                        const int t = static_cast<int>(truth->data[i]);
-                        if (t >= 0 && t < static_cast<int>(kNumCategories)) ++hist[t];
+                    const Eigen::Vector3f up = r.support.found
+                                                   ? Eigen::Vector3f(r.support.plane.head<3>())
+                                                   : Eigen::Vector3f::Zero();
+                    const PartGraphResult pg =
+                        RecognizeParts(model, scan, parts, pp.part_graph_recognition, up, groups);
+                    for (std::size_t k = 0; k < r.objects.size(); ++k) {
+                        const auto& obj = r.objects[k];
+                        if (ids[k].empty() || obj.category.category == Category::kNone) continue;
+                        const auto [best, count] = MajorityCategory(obj.indices, truth);
+                        if (count == 0) continue;
+                        rows[s].emplace_back(
+                            StackerInputs(obj.category, MergePartProbabilities(pg, parts, ids[k]),
+                                          ClusterExpert(model, scan, obj.indices, pp)),
+                            best);
                     }
-                    const auto best = static_cast<std::size_t>(
-                        std::max_element(hist.begin() + 1, hist.end()) - hist.begin());
-                    if (hist[best] == 0) continue;
-                    rows[s].emplace_back(
-                        StackerInputs(obj.category, MergePartProbabilities(pg, parts, ids[k]),
-                                      ClusterExpert(model, scan, obj.indices, pp)),
-                        static_cast<Category>(best));
-                }
-            }
+                });
             if (progress) progress->Advance();
         },
         1);
@@ -288,43 +306,27 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
                 stopped = true;
                 return;
             }
-            const std::uint64_t seed = sim::SubSeed(o.seed, 8000000u + s);
-            const sim::RayCaster caster(scenes[s]);
-            const auto views =
-                sim::TableViewpoints(scenes[s], o.table_views, o.table_viewpoints, seed);
-            sim::KinectParams kp = o.kinect;
-            kp.num_threads = 1;
             PerceiveParams pp = perceive;
             pp.num_threads = 1;
-            for (std::size_t v = 0; v < views.size(); ++v) {
-                PointCloud scan = sim::ScanKinect(caster, views[v], kp, seed + v);
-                const auto* truth = scan.FindExtraField("category");
-                if (!truth) continue;
-                OrganizedNormalParams np = pp.organized_normals;
-                np.num_threads = 1;
-                SetNormals(scan, EstimateNormalsOrganized(scan, np));
-                const PerceiveResult r = Perceive(scan, pp);
-                const Eigen::Vector3f up = views[v].linear().transpose() * Eigen::Vector3f::UnitZ();
-                for (const auto& obj : r.objects) {
-                    if (obj.parts.empty()) continue;
-                    std::array<std::size_t, kNumCategories> hist{};
-                    for (Index i : obj.indices) {
-                        const int t = static_cast<int>(truth->data[i]);
-                        if (t >= 0 && t < static_cast<int>(kNumCategories)) ++hist[t];
+            PerceiveTableViews(
+                scenes[s], o.table_views, sim::SubSeed(o.seed, 8000000u + s), o, pp,
+                [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
+                    const Eigen::Isometry3f& pose) {
+                    const Eigen::Vector3f up = pose.linear().transpose() * Eigen::Vector3f::UnitZ();
+                    for (const auto& obj : r.objects) {
+                        if (obj.parts.empty()) continue;
+                        const auto [best, count] = MajorityCategory(obj.indices, truth);
+                        if (count == 0 || 10 * count < 6 * obj.indices.size()) continue;
+                        Sample sample{
+                            ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
+                            BuildPartGraph(scan, obj.parts, model.graph_params),
+                            best,
+                            {},
+                            {}};
+                        AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
+                        samples[jobs.size() + s].push_back(std::move(sample));
                     }
-                    const auto best = static_cast<std::size_t>(
-                        std::max_element(hist.begin() + 1, hist.end()) - hist.begin());
-                    if (hist[best] == 0 || 10 * hist[best] < 6 * obj.indices.size()) continue;
-                    Sample sample{
-                        ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
-                        BuildPartGraph(scan, obj.parts, model.graph_params),
-                        static_cast<Category>(best),
-                        {},
-                        {}};
-                    AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
-                    samples[jobs.size() + s].push_back(std::move(sample));
-                }
-            }
+                });
             if (progress) progress->Advance();
         },
         1);
