@@ -215,7 +215,7 @@ VocabularyBaseline TrainVocabulary(const std::vector<FeatureMatrix>& object_part
 
 int main(int argc, char** argv) {
     std::string meshes = std::string(MULTICUE_SHARED_DATA_DIR) + "/meshes/tabletop";
-    int scenes = 4, max_meshes = 60;
+    int scenes = 4, max_meshes = 0;  // 0: every even-indexed mesh
     std::uint64_t seed = 1;
     PartGraphModel model;
     // Recognition and blend as perceive runs them (parts grouped by object, its category priors).

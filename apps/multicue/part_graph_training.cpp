@@ -375,7 +375,8 @@ std::filesystem::path DefaultPartGraphModelPath() {
         base = std::filesystem::temp_directory_path();
     }
     return base / "multicue" /
-           ("part-graph-default-v" + std::to_string(kPartGraphModelVersion) + ".mcpg");
+           ("part-graph-default-v" + std::to_string(kPartGraphModelVersion) + "." +
+            std::to_string(kDefaultTrainingRevision) + ".mcpg");
 }
 
 PartGraphModel LoadOrTrainDefaultPartGraphModel() {

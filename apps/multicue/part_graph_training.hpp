@@ -51,7 +51,7 @@ struct PartGraphTrainingOptions {
     /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
     /// one category adds its parts as one labelled object. Closer to real frames than the
     /// turntable. 0: none.
-    int table_scenes = 20;
+    int table_scenes = 40;
     int table_views = 4;
     sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
     /// Further table scenes of the same objects (other seeds), perceived after the model is
@@ -89,8 +89,12 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
 /// The default model: procedural objects only, `multicue train` defaults.
 PartGraphModel TrainDefaultPartGraphModel(Progress* progress = nullptr);
 
+/// Revision of the default model's training settings (2: 40 table scenes); part of the cache
+/// name, so that a cached model of older defaults is not read.
+inline constexpr int kDefaultTrainingRevision = 2;
+
 /// Where the default model is cached: $XDG_CACHE_HOME/multicue (else ~/.cache/multicue, else the
-/// system temp folder) / part-graph-default-v<model format version>.mcpg.
+/// system temp folder) / part-graph-default-v<model format version>.<training revision>.mcpg.
 std::filesystem::path DefaultPartGraphModelPath();
 
 /// Loads the cached default model, training and caching it first when it is missing.
