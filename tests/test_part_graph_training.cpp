@@ -18,18 +18,24 @@ namespace {
 
 const std::vector<std::string> kCats = {"sphere", "box", "cylinder"};
 
-PartGraphModel TinyModel(int threads) {
+// A model of a few turntable objects of kCats (no table scenes), trained to completion.
+PartGraphModel TrainSmall(int objects, int views, std::uint64_t seed, int threads,
+                          int stacker_scenes = 0) {
     training::PartGraphTrainingOptions o;
     o.categories = kCats;
-    o.objects_per_category = 5;
-    o.views = 3;
+    o.objects_per_category = objects;
+    o.views = views;
     o.table_scenes = 0;
-    o.seed = 11;
+    o.stacker_scenes = stacker_scenes;
+    o.stacker_views = 1;
+    o.seed = seed;
     o.num_threads = threads;
     PartGraphModel m;
     EXPECT_TRUE(training::TrainPartGraphModel(m, o));
     return m;
 }
+
+PartGraphModel TinyModel(int threads) { return TrainSmall(5, 3, 11, threads); }
 
 TEST(PartGraphTraining, RecognisesHeldOutObjects) {
     const PartGraphModel m = TinyModel(0);
@@ -111,20 +117,7 @@ TEST(PartGraphTraining, TableScenesAddPerceivedObjects) {
 // Held-out table scenes train the stacker: the same model and stacker whatever the thread count,
 // and perceive's "stacked" categoriser then runs on it.
 TEST(PartGraphTraining, StackerScenesTrainTheStacker) {
-    auto train = [&](int threads) {
-        training::PartGraphTrainingOptions o;
-        o.categories = kCats;
-        o.objects_per_category = 2;
-        o.views = 2;
-        o.table_scenes = 0;
-        o.stacker_scenes = 2;
-        o.stacker_views = 1;
-        o.seed = 7;
-        o.num_threads = threads;
-        PartGraphModel m;
-        EXPECT_TRUE(training::TrainPartGraphModel(m, o));
-        return m;
-    };
+    auto train = [](int threads) { return TrainSmall(2, 2, 7, threads, 2); };
     const PartGraphModel m = train(1);
     ASSERT_TRUE(m.stacker.trained());
     EXPECT_GT(m.stacker.train_rows(), 2u);

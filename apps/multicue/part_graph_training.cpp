@@ -84,6 +84,22 @@ void AddBaselineFeatures(Sample& s, const PointCloud& scan, const std::vector<In
     if (o.part_statistics) s.statistics = ComputePartStatisticsRows(scan, parts, up);
 }
 
+// ParallelFor (one item per task) that skips the remaining items once an interrupt was
+// requested, and then sets `stopped`.
+template <typename Fn>
+void InterruptibleFor(std::size_t n, int threads, std::atomic<bool>& stopped, Fn&& fn) {
+    ParallelFor(
+        n, threads,
+        [&](std::size_t i) {
+            if (InterruptRequested()) {
+                stopped = true;
+                return;
+            }
+            fn(i);
+        },
+        1);
+}
+
 // Each view of a table scene scanned by the simulated Kinect, with perceive's normals, perceived
 // by `pp` (single-threaded: scenes run in parallel) and handed to `fn(scan, result, truth, pose)`
 // (truth: the per-point category field).
@@ -128,46 +144,39 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
     std::atomic<bool> stopped{false};
     PerceiveParams pp;
     pp.num_threads = 1;
-    ParallelFor(
-        scenes.size(), o.num_threads,
-        [&](std::size_t s) {
-            if (InterruptRequested()) {
-                stopped = true;
-                return;
-            }
-            PerceiveTableViews(
-                scenes[s], o.stacker_views, sim::SubSeed(o.seed, 9500000u + s), o, pp,
-                [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
-                    const Eigen::Isometry3f&) {
-                    std::vector<Indices> parts;
-                    std::vector<std::uint32_t> groups;
-                    std::vector<std::vector<std::size_t>> ids(r.objects.size());
-                    for (std::size_t k = 0; k < r.objects.size(); ++k) {
-                        for (const auto& part : r.objects[k].parts) {
-                            ids[k].push_back(parts.size());
-                            parts.push_back(part);
-                            groups.push_back(static_cast<std::uint32_t>(k));
-                        }
+    InterruptibleFor(scenes.size(), o.num_threads, stopped, [&](std::size_t s) {
+        PerceiveTableViews(
+            scenes[s], o.stacker_views, sim::SubSeed(o.seed, 9500000u + s), o, pp,
+            [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
+                const Eigen::Isometry3f&) {
+                std::vector<Indices> parts;
+                std::vector<std::uint32_t> groups;
+                std::vector<std::vector<std::size_t>> ids(r.objects.size());
+                for (std::size_t k = 0; k < r.objects.size(); ++k) {
+                    for (const auto& part : r.objects[k].parts) {
+                        ids[k].push_back(parts.size());
+                        parts.push_back(part);
+                        groups.push_back(static_cast<std::uint32_t>(k));
                     }
-                    const Eigen::Vector3f up = r.support.found
-                                                   ? Eigen::Vector3f(r.support.plane.head<3>())
-                                                   : Eigen::Vector3f::Zero();
-                    const PartGraphResult pg =
-                        RecognizeParts(model, scan, parts, pp.part_graph_recognition, up, groups);
-                    for (std::size_t k = 0; k < r.objects.size(); ++k) {
-                        const auto& obj = r.objects[k];
-                        if (ids[k].empty() || obj.category.category == Category::kNone) continue;
-                        const auto [best, count] = MajorityCategory(obj.indices, truth);
-                        if (count == 0) continue;
-                        rows[s].emplace_back(
-                            StackerInputs(obj.category, MergePartProbabilities(pg, parts, ids[k]),
-                                          ClusterExpert(model, scan, obj.indices, pp)),
-                            best);
-                    }
-                });
-            if (progress) progress->Advance();
-        },
-        1);
+                }
+                const Eigen::Vector3f up = r.support.found
+                                               ? Eigen::Vector3f(r.support.plane.head<3>())
+                                               : Eigen::Vector3f::Zero();
+                const PartGraphResult pg =
+                    RecognizeParts(model, scan, parts, pp.part_graph_recognition, up, groups);
+                for (std::size_t k = 0; k < r.objects.size(); ++k) {
+                    const auto& obj = r.objects[k];
+                    if (ids[k].empty() || obj.category.category == Category::kNone) continue;
+                    const auto [best, count] = MajorityCategory(obj.indices, truth);
+                    if (count == 0) continue;
+                    rows[s].emplace_back(
+                        StackerInputs(obj.category, MergePartProbabilities(pg, parts, ids[k]),
+                                      ClusterExpert(model, scan, obj.indices, pp)),
+                        best);
+                }
+            });
+        if (progress) progress->Advance();
+    });
     if (stopped) return false;
     std::vector<std::array<float, kStackerInputSize>> inputs;
     std::vector<Category> truth;
@@ -263,73 +272,59 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
     std::vector<std::vector<Sample>> samples(jobs.size() + scenes.size());
     std::atomic<bool> stopped{false};
     const PerceiveParams perceive;
-    ParallelFor(
-        jobs.size(), o.num_threads,
-        [&](std::size_t j) {
-            if (InterruptRequested()) {
-                stopped = true;
-                return;
+    InterruptibleFor(jobs.size(), o.num_threads, stopped, [&](std::size_t j) {
+        sim::TurntableParams tp;
+        tp.distance = o.camera_distance;
+        const sim::Scene scene = sim::MakeTurntableScene(jobs[j].object, tp, jobs[j].seed);
+        const sim::RayCaster caster(scene);
+        const auto poses = sim::TurntableViews(scene, o.views, tp);
+        sim::KinectParams kp = o.kinect;
+        kp.num_threads = 1;
+        const Category category = ParseCategory(jobs[j].object.category);
+        for (std::size_t v = 0; v < poses.size(); ++v) {
+            PointCloud scan = sim::ScanKinect(caster, poses[v], kp, jobs[j].seed + v);
+            Indices object;
+            for (std::size_t i = 0; i < scan.size(); ++i) {
+                if (scan.labels[i] == 20 && scan.IsFinite(i)) object.push_back(Index(i));
             }
-            sim::TurntableParams tp;
-            tp.distance = o.camera_distance;
-            const sim::Scene scene = sim::MakeTurntableScene(jobs[j].object, tp, jobs[j].seed);
-            const sim::RayCaster caster(scene);
-            const auto poses = sim::TurntableViews(scene, o.views, tp);
-            sim::KinectParams kp = o.kinect;
-            kp.num_threads = 1;
-            const Category category = ParseCategory(jobs[j].object.category);
-            for (std::size_t v = 0; v < poses.size(); ++v) {
-                PointCloud scan = sim::ScanKinect(caster, poses[v], kp, jobs[j].seed + v);
-                Indices object;
-                for (std::size_t i = 0; i < scan.size(); ++i) {
-                    if (scan.labels[i] == 20 && scan.IsFinite(i)) object.push_back(Index(i));
+            const auto parts = DecomposeObject(scan, object, perceive);
+            if (parts.empty()) continue;
+            // Up (world z) in the scan's frame: the support plane's normal.
+            const Eigen::Vector3f up = poses[v].linear().transpose() * Eigen::Vector3f::UnitZ();
+            Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params, up),
+                     BuildPartGraph(scan, parts, model.graph_params),
+                     category,
+                     {},
+                     {}};
+            AddBaselineFeatures(s, scan, parts, object, up, o);
+            samples[j].push_back(std::move(s));
+        }
+        if (progress) progress->Advance();
+    });
+    InterruptibleFor(scenes.size(), o.num_threads, stopped, [&](std::size_t s) {
+        PerceiveParams pp = perceive;
+        pp.num_threads = 1;
+        PerceiveTableViews(
+            scenes[s], o.table_views, sim::SubSeed(o.seed, 8000000u + s), o, pp,
+            [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
+                const Eigen::Isometry3f& pose) {
+                const Eigen::Vector3f up = pose.linear().transpose() * Eigen::Vector3f::UnitZ();
+                for (const auto& obj : r.objects) {
+                    if (obj.parts.empty()) continue;
+                    const auto [best, count] = MajorityCategory(obj.indices, truth);
+                    if (count == 0 || 10 * count < 6 * obj.indices.size()) continue;
+                    Sample sample{
+                        ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
+                        BuildPartGraph(scan, obj.parts, model.graph_params),
+                        best,
+                        {},
+                        {}};
+                    AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
+                    samples[jobs.size() + s].push_back(std::move(sample));
                 }
-                const auto parts = DecomposeObject(scan, object, perceive);
-                if (parts.empty()) continue;
-                // Up (world z) in the scan's frame: the support plane's normal.
-                const Eigen::Vector3f up = poses[v].linear().transpose() * Eigen::Vector3f::UnitZ();
-                Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params, up),
-                         BuildPartGraph(scan, parts, model.graph_params),
-                         category,
-                         {},
-                         {}};
-                AddBaselineFeatures(s, scan, parts, object, up, o);
-                samples[j].push_back(std::move(s));
-            }
-            if (progress) progress->Advance();
-        },
-        1);
-    ParallelFor(
-        scenes.size(), o.num_threads,
-        [&](std::size_t s) {
-            if (InterruptRequested()) {
-                stopped = true;
-                return;
-            }
-            PerceiveParams pp = perceive;
-            pp.num_threads = 1;
-            PerceiveTableViews(
-                scenes[s], o.table_views, sim::SubSeed(o.seed, 8000000u + s), o, pp,
-                [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
-                    const Eigen::Isometry3f& pose) {
-                    const Eigen::Vector3f up = pose.linear().transpose() * Eigen::Vector3f::UnitZ();
-                    for (const auto& obj : r.objects) {
-                        if (obj.parts.empty()) continue;
-                        const auto [best, count] = MajorityCategory(obj.indices, truth);
-                        if (count == 0 || 10 * count < 6 * obj.indices.size()) continue;
-                        Sample sample{
-                            ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
-                            BuildPartGraph(scan, obj.parts, model.graph_params),
-                            best,
-                            {},
-                            {}};
-                        AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
-                        samples[jobs.size() + s].push_back(std::move(sample));
-                    }
-                });
-            if (progress) progress->Advance();
-        },
-        1);
+            });
+        if (progress) progress->Advance();
+    });
     model.cluster_size_weight = o.cluster_params.size_weight;
     // Added in job order: the model does not depend on the thread count.
     for (std::size_t j = 0; j < samples.size(); ++j) {
