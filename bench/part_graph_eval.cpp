@@ -532,7 +532,13 @@ int main(int argc, char** argv) {
         source.emplace();
     }
     PerceiveParams pp;
+    PerceiveParams expert_params = pp;  // the experts as perceive runs them, with these votes
+    expert_params.part_graph_recognition = rp;
     std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
+    if (!dump_path.empty() && !dump) {
+        std::fprintf(stderr, "cannot write %s\n", dump_path.c_str());
+        return 2;
+    }
     Counts part, multi, single_in_multi;
     Counts ceiling;  // every perceived object named by the majority truth of its points
     Counts multi_obj, single_obj;      // votes with each object's distribution (as perceive fuses)
@@ -653,23 +659,15 @@ int main(int argc, char** argv) {
                 // The three experts as perceive's "part-graph+rules+cluster" combines them.
                 op[kFusion3] = op[kPgRules];
                 if (op[kFusion3] != Category::kNone) {
-                    auto three = BlendCategoryProbabilities(
-                        c.probabilities, MergePartProbabilities(pg, parts, ids[ob]), 0.5f);
-                    ClusterDescriptorParams cp;
-                    cp.size_weight = model.cluster_size_weight;
-                    const auto cluster = ApplyCategoryPriors(
-                        model.ClassifyCluster(
-                            ComputeClusterDescriptor(scan, r.objects[ob].indices, cp), 5),
-                        rp.category_priors);
+                    const auto merged = MergePartProbabilities(pg, parts, ids[ob]);
+                    const auto cluster =
+                        ClusterExpert(model, scan, r.objects[ob].indices, expert_params);
                     object_cluster[ob] = cluster;
-                    if (*std::max_element(cluster.begin(), cluster.end()) > 0.0f) {
-                        three = BlendCategoryProbabilities(three, cluster, 1.0f / 3.0f);
-                    }
-                    op[kFusion3] = ArgMaxCategory(three);
-                    object_three[ob] = three;
+                    object_three[ob] = BlendThreeExperts(c.probabilities, merged, cluster);
+                    op[kFusion3] = ArgMaxCategory(object_three[ob]);
                     if (model.stacker.trained()) {
-                        op[kStacked] = ArgMaxCategory(model.stacker.Predict(
-                            StackerInputs(c, MergePartProbabilities(pg, parts, ids[ob]), cluster)));
+                        op[kStacked] = ArgMaxCategory(
+                            model.stacker.Predict(StackerInputs(c, merged, cluster)));
                     }
                 }
                 if (!baselines) continue;

@@ -149,30 +149,17 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
             scenes[s], o.stacker_views, sim::SubSeed(o.seed, 9500000u + s), o, pp,
             [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
                 const Eigen::Isometry3f&) {
-                std::vector<Indices> parts;
-                std::vector<std::uint32_t> groups;
-                std::vector<std::vector<std::size_t>> ids(r.objects.size());
-                for (std::size_t k = 0; k < r.objects.size(); ++k) {
-                    for (const auto& part : r.objects[k].parts) {
-                        ids[k].push_back(parts.size());
-                        parts.push_back(part);
-                        groups.push_back(static_cast<std::uint32_t>(k));
-                    }
-                }
-                const Eigen::Vector3f up = r.support.found
-                                               ? Eigen::Vector3f(r.support.plane.head<3>())
-                                               : Eigen::Vector3f::Zero();
-                const PartGraphResult pg =
-                    RecognizeParts(model, scan, parts, pp.part_graph_recognition, up, groups);
+                const Eigen::Vector4f plane =
+                    r.support.found ? r.support.plane : Eigen::Vector4f::Zero();
+                const PartGraphVotes pg = VotePartGraph(model, scan, r.objects, plane, pp);
                 for (std::size_t k = 0; k < r.objects.size(); ++k) {
                     const auto& obj = r.objects[k];
-                    if (ids[k].empty() || obj.category.category == Category::kNone) continue;
+                    if (obj.parts.empty() || obj.category.category == Category::kNone) continue;
                     const auto [best, count] = MajorityCategory(obj.indices, truth);
                     if (count == 0) continue;
-                    rows[s].emplace_back(
-                        StackerInputs(obj.category, MergePartProbabilities(pg, parts, ids[k]),
-                                      ClusterExpert(model, scan, obj.indices, pp)),
-                        best);
+                    rows[s].emplace_back(StackerInputs(obj.category, pg.objects[k],
+                                                       ClusterExpert(model, scan, obj.indices, pp)),
+                                         best);
                 }
             });
         if (progress) progress->Advance();
@@ -235,10 +222,10 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
     if (o.table_scenes < 0 || o.table_views < 1) {
         throw InvalidArgument("table_scenes must be >= 0 and table_views >= 1");
     }
-    // Table scenes, drawn sequentially (the object source caches meshes), scanned in parallel.
     if (o.stacker_scenes < 0 || o.stacker_views < 1) {
         throw InvalidArgument("stacker_scenes must be >= 0 and stacker_views >= 1");
     }
+    // Table scenes, drawn sequentially (the object source caches meshes), scanned in parallel.
     std::vector<sim::Scene> scenes;
     std::optional<sim::ObjectSource> source;
     if (o.table_scenes > 0 || o.stacker_scenes > 0) {
@@ -261,12 +248,9 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
     }
     sim::TableSceneParams scene_params;
     scene_params.clutter = 0.6f;
-    {
-        const auto& sp = scene_params;
-        for (int s = 0; s < o.table_scenes; ++s) {
-            scenes.push_back(sim::MakeTableScene(
-                sp, *source, sim::SubSeed(o.seed, 7000000u + std::uint64_t(s))));
-        }
+    for (int s = 0; s < o.table_scenes; ++s) {
+        scenes.push_back(sim::MakeTableScene(scene_params, *source,
+                                             sim::SubSeed(o.seed, 7000000u + std::uint64_t(s))));
     }
     if (progress) progress->Advance(0);
     std::vector<std::vector<Sample>> samples(jobs.size() + scenes.size());

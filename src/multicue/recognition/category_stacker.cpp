@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 #include <fmt/format.h>
 
@@ -14,6 +15,14 @@ namespace {
 constexpr float kFloor = 0.01f;
 
 float Finite(float v) { return std::isfinite(v) ? v : 0.0f; }
+
+// Softmax in place: exp(s - max s), normalised to sum 1.
+void Softmax(std::span<double> s) {
+    const double top = *std::max_element(s.begin(), s.end());
+    double sum = 0.0;
+    for (double& v : s) sum += (v = std::exp(v - top));
+    for (double& v : s) v /= sum;
+}
 
 }  // namespace
 
@@ -83,18 +92,14 @@ void CategoryStacker::Fit(const std::vector<std::array<float, kStackerInputSize>
         std::fill(gb.begin(), gb.end(), 0.0);
         for (std::size_t i = 0; i < rows; ++i) {
             const double* zi = &z[i * d];
-            double top = -1e300;
             for (std::size_t c = 0; c < k; ++c) {
-                double s = b[c];
-                for (std::size_t j = 0; j < d; ++j) s += zi[j] * w[j * k + c];
-                p[c] = s;
-                top = std::max(top, s);
+                p[c] = b[c];
+                for (std::size_t j = 0; j < d; ++j) p[c] += zi[j] * w[j * k + c];
             }
-            double sum = 0.0;
-            for (double& v : p) sum += (v = std::exp(v - top));
+            Softmax(p);
             const std::size_t t = static_cast<std::size_t>(truth[i]) - 1;
             for (std::size_t c = 0; c < k; ++c) {
-                const double g = (p[c] / sum - (c == t ? 1.0 : 0.0)) / double(rows);
+                const double g = (p[c] - (c == t ? 1.0 : 0.0)) / double(rows);
                 gb[c] += g;
                 for (std::size_t j = 0; j < d; ++j) gw[j * k + c] += g * zi[j];
             }
@@ -117,11 +122,9 @@ CategoryDistribution CategoryStacker::Predict(
         const double zj = (double(Finite(input[j])) - mean_[j]) * scale_[j];
         for (std::size_t c = 0; c < k; ++c) s[c] += zj * weights_[j * k + c];
     }
-    const double top = *std::max_element(s.begin(), s.end());
-    double sum = 0.0;
-    for (double& v : s) sum += (v = std::exp(v - top));
+    Softmax(s);
     CategoryDistribution out{};
-    for (std::size_t c = 0; c < k; ++c) out[c + 1] = float(s[c] / sum);
+    for (std::size_t c = 0; c < k; ++c) out[c + 1] = float(s[c]);
     return out;
 }
 

@@ -129,6 +129,39 @@ CategoryDistribution ClusterExpert(const PartGraphModel& model, const PointCloud
         params.part_graph_recognition.category_priors);
 }
 
+PartGraphVotes VotePartGraph(const PartGraphModel& model, const PointCloud& cloud,
+                             const std::vector<PerceivedObject>& objects,
+                             const Eigen::Vector4f& plane, const PerceiveParams& params) {
+    std::vector<Indices> parts;
+    std::vector<std::uint32_t> groups;
+    std::vector<std::vector<std::size_t>> ids(objects.size());
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        for (const auto& part : objects[k].parts) {
+            ids[k].push_back(parts.size());
+            parts.push_back(part);
+            groups.push_back(static_cast<std::uint32_t>(k));
+        }
+    }
+    const PartGraphResult r =
+        RecognizeParts(model, cloud, parts, params.part_graph_recognition, plane.head<3>(), groups);
+    PartGraphVotes out;
+    out.parts.resize(objects.size());
+    out.objects.resize(objects.size());
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        for (std::size_t id : ids[k]) out.parts[k].push_back(r.part_probabilities[id]);
+        out.objects[k] = MergePartProbabilities(r, parts, ids[k]);
+    }
+    return out;
+}
+
+CategoryDistribution BlendThreeExperts(const CategoryDistribution& rules,
+                                       const CategoryDistribution& part_graph,
+                                       const CategoryDistribution& cluster) {
+    const CategoryDistribution two = BlendCategoryProbabilities(rules, part_graph, 0.5f);
+    if (*std::max_element(cluster.begin(), cluster.end()) <= 0.0f) return two;
+    return BlendCategoryProbabilities(two, cluster, 1.0f / 3.0f);
+}
+
 // Part-graph hashing over the parts of every object (one graph for the scene, so groups may span
 // touching objects, as in section 5.1.1); object distributions are the point-weighted mean of
 // their parts'.
@@ -149,33 +182,17 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
         }
         model = cached;
     }
-    std::vector<Indices> parts;
-    std::vector<std::uint32_t> groups;
-    std::vector<std::vector<std::size_t>> ids(objects.size());
+    PartGraphVotes votes = VotePartGraph(*model, cloud, objects, plane, params);
     for (std::size_t k = 0; k < objects.size(); ++k) {
-        for (const auto& part : objects[k].parts) {
-            ids[k].push_back(parts.size());
-            parts.push_back(part);
-            groups.push_back(static_cast<std::uint32_t>(k));
-        }
-    }
-    const PartGraphResult r = RecognizeParts(*model, cloud, parts, params.part_graph_recognition,
-                                             plane.head<3>(), groups);
-    for (std::size_t k = 0; k < objects.size(); ++k) {
-        objects[k].part_probabilities.clear();
-        for (std::size_t id : ids[k])
-            objects[k].part_probabilities.push_back(r.part_probabilities[id]);
+        objects[k].part_probabilities = std::move(votes.parts[k]);
         CategoryResult& c = objects[k].category;
-        if (c.category == Category::kNone || ids[k].empty()) continue;  // too few points
-        auto p = MergePartProbabilities(r, parts, ids[k]);
+        if (c.category == Category::kNone || objects[k].parts.empty()) continue;  // too few points
+        auto p = votes.objects[k];
         if (params.categoriser == "part-graph+rules") {
             p = BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
         } else if (params.categoriser == "part-graph+rules+cluster") {
-            const auto cluster = ClusterExpert(*model, cloud, objects[k].indices, params);
-            p = BlendCategoryProbabilities(c.probabilities, p, 0.5f);
-            float total = 0.0f;
-            for (float x : cluster) total += x;
-            if (total > 0.0f) p = BlendCategoryProbabilities(p, cluster, 1.0f / 3.0f);
+            p = BlendThreeExperts(c.probabilities, p,
+                                  ClusterExpert(*model, cloud, objects[k].indices, params));
         } else if (params.categoriser == "stacked") {
             if (!model->stacker.trained()) {
                 throw InvalidArgument(

@@ -242,6 +242,24 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
 CategoryDistribution ClusterExpert(const PartGraphModel& model, const PointCloud& cloud,
                                    const Indices& object, const PerceiveParams& params);
 
+/// The part-graph expert as perceive runs it: one graph over the parts of all `objects`, each
+/// part grouped with its object (params.part_graph_recognition), up from `plane` (a, b, c, d;
+/// zero when unknown).
+struct PartGraphVotes {
+    std::vector<std::vector<CategoryDistribution>> parts;  ///< per object, one per part
+    std::vector<CategoryDistribution> objects;  ///< per object: point-weighted merge of its parts
+};
+PartGraphVotes VotePartGraph(const PartGraphModel& model, const PointCloud& cloud,
+                             const std::vector<PerceivedObject>& objects,
+                             const Eigen::Vector4f& plane, const PerceiveParams& params);
+
+/// "part-graph+rules+cluster": rules^(1/3) * part-graph^(1/3) * cluster^(1/3) (each floored at
+/// 0.01, BlendCategoryProbabilities); an all-zero cluster expert (a model without cluster rows)
+/// leaves rules^(1/2) * part-graph^(1/2).
+CategoryDistribution BlendThreeExperts(const CategoryDistribution& rules,
+                                       const CategoryDistribution& part_graph,
+                                       const CategoryDistribution& cluster);
+
 /// Normals as perceive computes them, unless `cloud` has normals and curvature already:
 /// organized frames take the image-space path for the points `roi` only, others k-NN PCA.
 void EnsurePerceiveNormals(PointCloud& cloud, const Indices& roi, const PerceiveParams& params);
