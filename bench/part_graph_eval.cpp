@@ -21,6 +21,7 @@
 //                        [--extent-weights A,B,C] [--upright-extents 0|1] [--variants
 //                        "k=10;ew=2,rw=1;..."] [--stacker-scenes N] [--stacker-views N]
 //                        [--dump FILE.csv] [--even-test 0|1] [--procedural-test 0|1]
+//                        [--expert-weights R,P,C]
 //
 // --stacker-scenes trains the model's stacker (row "stacked"). --dump writes one CSV row per
 // perceived object: seed, scene, view, source mesh, truth, points, the six probabilities of the
@@ -232,6 +233,7 @@ int main(int argc, char** argv) {
     bool even_test = false;        // test scenes of the training meshes (seen instances)
     bool procedural_test = false;  // test scenes of procedural objects even with a library
     std::string dump_path;  // one CSV row per perceived object: truth, experts, rule evidence
+    Eigen::Vector3f expert_weights = PerceiveParams{}.expert_weights;
     ClusterDescriptorParams cluster_params;
     int table_scenes = training::PartGraphTrainingOptions{}.table_scenes, table_views = 4,
         objects = 8, train_meshes = 1;
@@ -302,6 +304,12 @@ int main(int argc, char** argv) {
             auto& e = model.descriptor_params.extent_weights;
             if (std::sscanf(argv[i + 1], "%f,%f,%f", &e[0], &e[1], &e[2]) != 3) {
                 std::fprintf(stderr, "--extent-weights needs A,B,C\n");
+                return 2;
+            }
+        } else if (!std::strcmp(argv[i], "--expert-weights")) {
+            auto& w = expert_weights;
+            if (std::sscanf(argv[i + 1], "%f,%f,%f", &w[0], &w[1], &w[2]) != 3) {
+                std::fprintf(stderr, "--expert-weights needs R,P,C\n");
                 return 2;
             }
         } else if (!std::strcmp(argv[i], "--cluster-size-weight"))
@@ -534,6 +542,7 @@ int main(int argc, char** argv) {
     PerceiveParams pp;
     PerceiveParams expert_params = pp;  // the experts as perceive runs them, with these votes
     expert_params.part_graph_recognition = rp;
+    expert_params.expert_weights = expert_weights;
     std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
     if (!dump_path.empty() && !dump) {
         std::fprintf(stderr, "cannot write %s\n", dump_path.c_str());
@@ -663,7 +672,8 @@ int main(int argc, char** argv) {
                     const auto cluster =
                         ClusterExpert(model, scan, r.objects[ob].indices, expert_params);
                     object_cluster[ob] = cluster;
-                    object_three[ob] = BlendThreeExperts(c.probabilities, merged, cluster);
+                    object_three[ob] = BlendThreeExperts(c.probabilities, merged, cluster,
+                                                         expert_params.expert_weights);
                     op[kFusion3] = ArgMaxCategory(object_three[ob]);
                     if (model.stacker.trained()) {
                         op[kStacked] = ArgMaxCategory(

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -268,21 +270,32 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
                (dir / "blend.json").string() + " --out " + (dir / "p").string());
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_TRUE(std::filesystem::exists(dir / "p" / "result.json"));
-    // Three experts: rules, part-graph and the model's whole-object k-NN.
-    for (const char* k : {"5", "0"}) {
+    // Three experts: rules, part-graph and the model's whole-object k-NN; bad neighbour counts
+    // and weights are refused with one line and no result.
+    const std::vector<std::pair<std::string, bool>> three_configs{
+        {R"("cluster_k": 5)", true},
+        {R"("expert_weights": [0.2, 0.7, 0.1])", true},
+        {R"("cluster_k": 0)", false},
+        {R"("expert_weights": [1, -1, 1])", false},
+        {R"("expert_weights": [1, 1])", false}};
+    for (std::size_t i = 0; i < three_configs.size(); ++i) {
+        const auto& [keys, ok] = three_configs[i];
         std::ofstream(dir / "three.json")
-            << R"({"category": {"categoriser": "part-graph+rules+cluster", "cluster_k": )" << k
+            << R"({"category": {"categoriser": "part-graph+rules+cluster", )" << keys
             << R"(, "part_graph_model": ")" << model << R"("}})";
+        std::filesystem::path out = dir / "q";
+        out += std::to_string(i);
         const auto three = RunCli("perceive " + (dir / "demo" / "scene.pcd").string() +
                                   " --no-report -q --config " + (dir / "three.json").string() +
-                                  " --out " + (dir / ("q" + std::string(k))).string());
-        if (std::string(k) == "0") {
-            EXPECT_EQ(three.code, 2) << three.output;
-            EXPECT_EQ(CountLines(three.output), 1) << three.output;
-        } else {
+                                  " --out " + out.string());
+        if (ok) {
             ASSERT_EQ(three.code, 0) << three.output;
-            EXPECT_NE(ReadTextFile(dir / "q5" / "result.json").find("\"probabilities\""),
+            EXPECT_NE(ReadTextFile(out / "result.json").find("\"probabilities\""),
                       std::string::npos);
+        } else {
+            EXPECT_EQ(three.code, 2) << keys << ": " << three.output;
+            EXPECT_EQ(CountLines(three.output), 1) << three.output;
+            EXPECT_FALSE(std::filesystem::exists(out / "result.json"));
         }
     }
     // The stacked categoriser: refused (one line, no result) with a model without a stacker,

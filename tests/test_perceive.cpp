@@ -465,6 +465,52 @@ TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
     EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
 }
 
+// The three experts' weighted product: one expert's weight alone gives its ranking, the
+// weights set who wins a disagreement, a missing cluster expert is left out, bad weights throw.
+TEST(Perceive, BlendThreeExpertsWeighsTheExperts) {
+    auto dist = [](Category c, float p) {
+        CategoryDistribution d{};
+        for (std::size_t k = 1; k < kNumCategories; ++k) d[k] = (1.0f - p) / 5.0f;
+        d[static_cast<std::size_t>(c)] = p;
+        return d;
+    };
+    const auto rules = dist(Category::kBox, 0.6f);
+    const auto part_graph = dist(Category::kFlat, 0.7f);
+    const auto cluster = dist(Category::kCylinder, 0.8f);
+    auto winner = [&](const Eigen::Vector3f& w, const CategoryDistribution& c) {
+        const auto p = BlendThreeExperts(rules, part_graph, c, w);
+        float sum = 0.0f;
+        for (float v : p) sum += v;
+        EXPECT_NEAR(sum, 1.0f, 1e-5f);
+        EXPECT_EQ(p[0], 0.0f);
+        return ArgMaxCategory(p);
+    };
+    EXPECT_EQ(winner({1, 0, 0}, cluster), Category::kBox);
+    EXPECT_EQ(winner({0, 1, 0}, cluster), Category::kFlat);
+    EXPECT_EQ(winner({0, 0, 1}, cluster), Category::kCylinder);
+    EXPECT_EQ(winner({0.25f, 0.6f, 0.15f}, cluster), Category::kFlat);
+    EXPECT_EQ(winner({3, 1, 1}, cluster), Category::kBox);
+    // Scaling the weights changes nothing.
+    EXPECT_EQ(BlendThreeExperts(rules, part_graph, cluster, {1, 2, 3}),
+              BlendThreeExperts(rules, part_graph, cluster, {2, 4, 6}));
+    // Without cluster rows the cluster expert is all zero and drops out.
+    const CategoryDistribution none{};
+    EXPECT_EQ(winner({0.25f, 0.6f, 0.15f}, none), Category::kFlat);
+    EXPECT_EQ(winner({0, 0, 1}, none), Category::kBox);  // nothing else weighted: the rules
+    // Equal weights agree with the two-step blend of rules and part-graph when there is no cluster.
+    const auto two = BlendCategoryProbabilities(rules, part_graph, 0.5f);
+    const auto three = BlendThreeExperts(rules, part_graph, none, Eigen::Vector3f::Ones());
+    for (std::size_t k = 0; k < kNumCategories; ++k) EXPECT_NEAR(three[k], two[k], 1e-6f);
+    EXPECT_THROW(BlendThreeExperts(rules, part_graph, cluster, {-1, 1, 1}), InvalidArgument);
+    EXPECT_THROW(BlendThreeExperts(rules, part_graph, cluster, {0, 0, 0}), InvalidArgument);
+    EXPECT_THROW(BlendThreeExperts(rules, part_graph, cluster,
+                                   {std::numeric_limits<float>::quiet_NaN(), 1, 1}),
+                 InvalidArgument);
+    PerceiveParams bad;
+    bad.expert_weights = {1, -1, 1};
+    EXPECT_THROW(Perceive(DemoScene().cloud, bad), InvalidArgument);
+}
+
 TEST(PerceiveOutput, FilesFollowTheContract) {
     test::TempDir dir;
     const auto& s = DemoScene();

@@ -154,12 +154,35 @@ PartGraphVotes VotePartGraph(const PartGraphModel& model, const PointCloud& clou
     return out;
 }
 
+static void CheckExpertWeights(const Eigen::Vector3f& w) {
+    if (!w.allFinite() || !(w.minCoeff() >= 0.0f) || !(w.sum() > 0.0f)) {
+        throw InvalidArgument("category.expert_weights must be finite, >= 0 and not all 0");
+    }
+}
+
 CategoryDistribution BlendThreeExperts(const CategoryDistribution& rules,
                                        const CategoryDistribution& part_graph,
-                                       const CategoryDistribution& cluster) {
-    const CategoryDistribution two = BlendCategoryProbabilities(rules, part_graph, 0.5f);
-    if (*std::max_element(cluster.begin(), cluster.end()) <= 0.0f) return two;
-    return BlendCategoryProbabilities(two, cluster, 1.0f / 3.0f);
+                                       const CategoryDistribution& cluster,
+                                       const Eigen::Vector3f& weights) {
+    CheckExpertWeights(weights);
+    const bool has_cluster = *std::max_element(cluster.begin(), cluster.end()) > 0.0f;
+    const std::array<const CategoryDistribution*, 3> experts{&rules, &part_graph, &cluster};
+    const float total = has_cluster ? weights.sum() : weights[0] + weights[1];
+    if (!(total > 0.0f)) return rules;  // only the cluster expert was weighted, and it is absent
+    constexpr float kFloor = 0.01f;
+    CategoryDistribution p{};
+    float sum = 0.0f;
+    for (std::size_t c = 1; c < kNumCategories; ++c) {
+        float log_p = 0.0f;
+        for (std::size_t e = 0; e < (has_cluster ? 3u : 2u); ++e) {
+            log_p += weights[static_cast<Eigen::Index>(e)] / total *
+                     std::log(std::max((*experts[e])[c], kFloor));
+        }
+        p[c] = std::exp(log_p);
+        sum += p[c];
+    }
+    for (float& x : p) x /= sum;
+    return p;
 }
 
 // Part-graph hashing over the parts of every object (one graph for the scene, so groups may span
@@ -192,7 +215,8 @@ static void CategorizeByPartGraph(const PointCloud& cloud, std::vector<Perceived
             p = BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
         } else if (params.categoriser == "part-graph+rules+cluster") {
             p = BlendThreeExperts(c.probabilities, p,
-                                  ClusterExpert(*model, cloud, objects[k].indices, params));
+                                  ClusterExpert(*model, cloud, objects[k].indices, params),
+                                  params.expert_weights);
         } else if (params.categoriser == "stacked") {
             if (!model->stacker.trained()) {
                 throw InvalidArgument(
@@ -756,6 +780,7 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& params) {
     if (!(params.part_graph_weight >= 0.0f && params.part_graph_weight <= 1.0f)) {
         throw InvalidArgument("category.part_graph_weight must be in [0, 1]");
     }
+    CheckExpertWeights(params.expert_weights);
     PerceiveResult result;
     result.points = input.size();
     StageTimer timer(result.timings_ms);

@@ -62,9 +62,9 @@ struct PerceiveParams {
     /// result stays the input of the model fits' "upright" details only), or "part-graph+rules"
     /// (both: per category rules^(1 - w) * part-graph^w, w = part_graph_weight, each
     /// distribution floored at 0.01 first, then normalised), or "part-graph+rules+cluster" (three
-    /// experts with equal weight: rules^(1/3) * part-graph^(1/3) * cluster^(1/3), cluster being
-    /// the model's whole-object k-NN on GRSD- and VFH, PartGraphModel::ClassifyCluster, k =
-    /// cluster_k; without cluster rows in the model, as "part-graph+rules" with w = 0.5), or
+    /// experts: rules^a * part-graph^b * cluster^c, (a, b, c) = expert_weights normalised, cluster
+    /// being the model's whole-object k-NN on GRSD- and VFH, PartGraphModel::ClassifyCluster, k =
+    /// cluster_k; without cluster rows in the model, rules and part-graph alone), or
     /// "stacked" (the model's level-1 classifier over the three experts and the rules' geometric
     /// evidence, CategoryStacker; the model must have been trained with stacker scenes).
     std::string categoriser = "rules";
@@ -83,7 +83,12 @@ struct PerceiveParams {
         p.category_priors[static_cast<std::size_t>(Category::kOther)] = 0.3f;
         return p;
     }();
-    float part_graph_weight = 0.4f;      ///< weight w of the part-graph votes in "part-graph+rules"
+    float part_graph_weight = 0.4f;  ///< weight w of the part-graph votes in "part-graph+rules"
+    /// Weights of the rules, the part-graph and the cluster expert in "part-graph+rules+cluster"
+    /// (normalised to sum 1; BlendThreeExperts). Chosen on simulated clutter scenes of seeds
+    /// other than those part_graph_eval reports (docs/part-graph.md, "Weighting the three
+    /// experts"); equal weights were the default before.
+    Eigen::Vector3f expert_weights{0.25f, 0.65f, 0.10f};
     BoxFitParams box{};                  ///< box models of box and flat objects
     CylinderModelParams cylinder = [] {  ///< cylinder models of cylindrical objects
         CylinderModelParams p;
@@ -253,12 +258,14 @@ PartGraphVotes VotePartGraph(const PartGraphModel& model, const PointCloud& clou
                              const std::vector<PerceivedObject>& objects,
                              const Eigen::Vector4f& plane, const PerceiveParams& params);
 
-/// "part-graph+rules+cluster": rules^(1/3) * part-graph^(1/3) * cluster^(1/3) (each floored at
-/// 0.01, BlendCategoryProbabilities); an all-zero cluster expert (a model without cluster rows)
-/// leaves rules^(1/2) * part-graph^(1/2).
+/// "part-graph+rules+cluster": rules^a * part-graph^b * cluster^c, normalised, with (a, b, c) =
+/// `weights` / their sum and each probability floored at 0.01 first; an all-zero cluster expert
+/// (a model without cluster rows) leaves rules and part-graph, their weights renormalised.
+/// Throws InvalidArgument for negative, non-finite or all-zero weights.
 CategoryDistribution BlendThreeExperts(const CategoryDistribution& rules,
                                        const CategoryDistribution& part_graph,
-                                       const CategoryDistribution& cluster);
+                                       const CategoryDistribution& cluster,
+                                       const Eigen::Vector3f& weights = Eigen::Vector3f::Ones());
 
 /// Normals as perceive computes them, unless `cloud` has normals and curvature already:
 /// organized frames take the image-space path for the points `roi` only, others k-NN PCA.

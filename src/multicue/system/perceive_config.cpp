@@ -120,6 +120,8 @@ void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& p) {
     }
     cat.Get("part_graph_weight", p.part_graph_weight,
             "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
+    cat.Get("expert_weights", p.expert_weights,
+            "weights of the rules, part-graph and cluster experts in part-graph+rules+cluster");
     cat.Get("cluster_k", p.cluster_k,
             "neighbours of the whole-object expert (part-graph+rules+cluster, stacked)");
     auto& c = p.category;
