@@ -23,8 +23,9 @@
 //                        [--dump FILE.csv] [--even-test 0|1] [--procedural-test 0|1]
 //                        [--expert-weights R,P,C]
 //
-// --stacker-scenes trains the model's stacker (row "stacked"). --dump writes one CSV row per
-// perceived object: seed, scene, view, source mesh, truth, points, the six probabilities of the
+// --table-scenes defaults to what multicue train takes: 40, or 80 when the model trains on library
+// meshes. --stacker-scenes trains the model's stacker (row "stacked"). --dump writes one CSV row
+// per perceived object: seed, scene, view, source mesh, truth, points, the six probabilities of the
 // rules, the part-graph and the whole-object expert, the rules' six scores and their geometric
 // evidence (CategoryResult: extents, height, box score, axis area, planar part ratio, cylinder
 // side / cap / coverage / radius, sphere ratio / radius, footprint fill, side face ratio,
@@ -235,7 +236,7 @@ int main(int argc, char** argv) {
     std::string dump_path;  // one CSV row per perceived object: truth, experts, rule evidence
     Eigen::Vector3f expert_weights = PerceiveParams{}.expert_weights;
     ClusterDescriptorParams cluster_params;
-    int table_scenes = training::PartGraphTrainingOptions{}.table_scenes, table_views = 4,
+    int table_scenes = -1, table_views = 4,  // table scenes -1: as multicue train
         objects = 8, train_meshes = 1;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--meshes"))
@@ -320,6 +321,10 @@ int main(int argc, char** argv) {
         }
     }
     const bool library = std::filesystem::exists(std::filesystem::path(meshes) / "labels.csv");
+    if (table_scenes < 0) {
+        table_scenes = library && train_meshes ? training::kLibraryTableScenes
+                                               : training::PartGraphTrainingOptions{}.table_scenes;
+    }
     training::PartGraphTrainingOptions o;
     o.seed = seed;
     o.objects_per_category = objects;

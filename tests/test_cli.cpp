@@ -373,6 +373,7 @@ TEST(Cli, TrainFromAMeshFolderWithItsOwnLabelsFile) {
                " --labels " + (dir / "elsewhere.csv").string());
     ASSERT_EQ(t.code, 0) << t.output;
     EXPECT_TRUE(std::filesystem::exists(model));
+    EXPECT_NE(t.output.find("; 0 table scenes)"), std::string::npos) << t.output;
     const auto alone = RunCli("train --out " + (dir / "a.mcpg").string() + small + " --labels " +
                               (dir / "elsewhere.csv").string());
     EXPECT_EQ(alone.code, 2);

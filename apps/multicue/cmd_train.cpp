@@ -62,9 +62,11 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
                     "RSD: share of a distance bin's normal angles at or below its largest, (0, 1] "
                     "(1: the extreme angle)")
         ->capture_default_str();
-    cmd->add_option("--table-scenes", o->t.table_scenes,
-                    "cluttered table scenes segmented by perceive (robot-head views)")
-        ->capture_default_str();
+    CLI::Option* table_scenes =
+        cmd->add_option("--table-scenes", o->t.table_scenes,
+                        "cluttered table scenes segmented by perceive (robot-head views); "
+                        "default 40, " +
+                            std::to_string(training::kLibraryTableScenes) + " with --meshes");
     cmd->add_option("--table-views", o->t.table_views, "views per table scene")
         ->capture_default_str();
     cmd->add_option("--stacker-scenes", o->t.stacker_scenes,
@@ -77,7 +79,10 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
                     "largest horizontal camera distance from the table centre [m]")
         ->capture_default_str();
     cmd->add_option("--seed", o->t.seed, "random seed")->capture_default_str();
-    cmd->callback([o, &global] {
+    cmd->callback([o, &global, table_scenes] {
+        if (table_scenes->count() == 0 && !o->meshes.empty()) {
+            o->t.table_scenes = training::kLibraryTableScenes;
+        }
         if (o->t.views < 1) throw InvalidArgument("--views must be >= 1");
         if (o->t.objects_per_category < 0) throw InvalidArgument("--objects must be >= 0");
         if (!(o->size_weight >= 0.0f) || !std::isfinite(o->size_weight)) {
@@ -145,9 +150,9 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         const auto per = model.rows_per_category();
         std::fprintf(stderr,
                      "train: %zu subgraphs in %zu buckets (sphere %zu, box %zu, flat %zu, "
-                     "cylinder %zu, plate %zu, other %zu) -> %s\n",
+                     "cylinder %zu, plate %zu, other %zu; %d table scenes) -> %s\n",
                      model.num_rows(), model.num_buckets(), per[1], per[2], per[3], per[4], per[5],
-                     per[6], o->out.c_str());
+                     per[6], o->t.table_scenes, o->out.c_str());
         if (model.stacker.trained()) {
             std::fprintf(stderr, "train: stacker over the experts from %zu perceived objects\n",
                          model.stacker.train_rows());

@@ -30,6 +30,9 @@ struct TrainingObject {
     std::uint64_t train_seed = 0;  ///< PartGraphTrainParams::seed it was added with
 };
 
+/// Table scenes of a model trained on a mesh library: more varied objects gain from more scenes.
+inline constexpr int kLibraryTableScenes = 80;
+
 struct PartGraphTrainingOptions {
     int objects_per_category = 8;              ///< procedural objects per category (0: none)
     std::vector<std::string> categories = {};  ///< procedural categories (empty: all six)
@@ -50,7 +53,9 @@ struct PartGraphTrainingOptions {
     /// objects) scanned from `table_views` robot-head viewpoints each (sim::TableViewpoints) and
     /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
     /// one category adds its parts as one labelled object. Closer to real frames than the
-    /// turntable. 0: none.
+    /// turntable. 0: none. `multicue train` and part_graph_eval take kLibraryTableScenes when they
+    /// train on a mesh library (docs/part-graph.md, "A single configuration for simulated and
+    /// real scenes").
     int table_scenes = 40;
     int table_views = 4;
     sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
