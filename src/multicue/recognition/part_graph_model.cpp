@@ -673,19 +673,41 @@ std::array<float, kNumCategories> ApplyCategoryPriors(
     return out;
 }
 
-std::array<float, kNumCategories> BlendCategoryProbabilities(
-    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
-    float w) {
-    if (!(w >= 0.0f && w <= 1.0f)) throw InvalidArgument("blend weight must be in [0, 1]");
+CategoryDistribution WeightedProductOfExperts(std::span<const CategoryDistribution* const> experts,
+                                              std::span<const float> weights) {
+    if (experts.size() != weights.size()) {
+        throw InvalidArgument("product of experts: one weight per expert");
+    }
+    float total = 0.0f;
+    for (float w : weights) {
+        if (!(w >= 0.0f) || !std::isfinite(w)) {
+            throw InvalidArgument("product of experts: weights must be >= 0 and finite");
+        }
+        total += w;
+    }
+    if (!(total > 0.0f)) throw InvalidArgument("product of experts: all weights are 0");
     constexpr float kFloor = 0.01f;
-    std::array<float, kNumCategories> p{};
+    CategoryDistribution p{};
     float sum = 0.0f;
     for (std::size_t c = 1; c < kNumCategories; ++c) {
-        p[c] = std::pow(std::max(a[c], kFloor), 1.0f - w) * std::pow(std::max(b[c], kFloor), w);
+        float log_p = 0.0f;
+        for (std::size_t e = 0; e < experts.size(); ++e) {
+            log_p += weights[e] / total * std::log(std::max((*experts[e])[c], kFloor));
+        }
+        p[c] = std::exp(log_p);
         sum += p[c];
     }
     for (float& x : p) x /= sum;
     return p;
+}
+
+std::array<float, kNumCategories> BlendCategoryProbabilities(
+    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
+    float w) {
+    if (!(w >= 0.0f && w <= 1.0f)) throw InvalidArgument("blend weight must be in [0, 1]");
+    const std::array<const CategoryDistribution*, 2> experts{&a, &b};
+    const std::array<float, 2> weights{1.0f - w, w};
+    return WeightedProductOfExperts(experts, weights);
 }
 
 Category ArgMaxCategory(const std::array<float, kNumCategories>& p) {

@@ -258,6 +258,12 @@ std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& 
 std::array<float, kNumCategories> ApplyCategoryPriors(
     const std::array<float, kNumCategories>& p, const std::array<float, kNumCategories>& priors);
 
+/// Weighted product of experts: per real category the product over the experts of
+/// max(p, 0.01)^(w / sum of the weights), normalised (kNone gets 0). InvalidArgument unless there
+/// is one weight per expert, each >= 0 and finite, and not all 0.
+CategoryDistribution WeightedProductOfExperts(std::span<const CategoryDistribution* const> experts,
+                                              std::span<const float> weights);
+
 /// Product of experts of two category distributions: per real category
 /// max(a, 0.01)^(1 - w) * max(b, 0.01)^w, normalised (kNone gets 0). InvalidArgument unless
 /// w is in [0, 1].

@@ -165,24 +165,13 @@ CategoryDistribution BlendThreeExperts(const CategoryDistribution& rules,
                                        const CategoryDistribution& cluster,
                                        const Eigen::Vector3f& weights) {
     CheckExpertWeights(weights);
-    const bool has_cluster = *std::max_element(cluster.begin(), cluster.end()) > 0.0f;
     const std::array<const CategoryDistribution*, 3> experts{&rules, &part_graph, &cluster};
-    const float total = has_cluster ? weights.sum() : weights[0] + weights[1];
-    if (!(total > 0.0f)) return rules;  // only the cluster expert was weighted, and it is absent
-    constexpr float kFloor = 0.01f;
-    CategoryDistribution p{};
-    float sum = 0.0f;
-    for (std::size_t c = 1; c < kNumCategories; ++c) {
-        float log_p = 0.0f;
-        for (std::size_t e = 0; e < (has_cluster ? 3u : 2u); ++e) {
-            log_p += weights[static_cast<Eigen::Index>(e)] / total *
-                     std::log(std::max((*experts[e])[c], kFloor));
-        }
-        p[c] = std::exp(log_p);
-        sum += p[c];
-    }
-    for (float& x : p) x /= sum;
-    return p;
+    const std::array<float, 3> w{weights[0], weights[1], weights[2]};
+    // A model without cluster rows gives an all-zero cluster expert: it drops out.
+    const bool has_cluster = *std::max_element(cluster.begin(), cluster.end()) > 0.0f;
+    const std::size_t n = has_cluster ? 3 : 2;
+    if (!(w[0] + w[1] > 0.0f) && !has_cluster) return rules;  // only the absent one was weighted
+    return WeightedProductOfExperts(std::span(experts).first(n), std::span(w).first(n));
 }
 
 // Part-graph hashing over the parts of every object (one graph for the scene, so groups may span
