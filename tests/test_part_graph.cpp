@@ -425,6 +425,14 @@ TEST(PartGraphModel, BlendIsAWeightedProductOfExperts) {
     EXPECT_NEAR(sum, 1.0f, 1e-6f);
     EXPECT_THROW(BlendCategoryProbabilities(a, b, -0.1f), InvalidArgument);
     EXPECT_THROW(BlendCategoryProbabilities(a, b, 1.1f), InvalidArgument);
+    // The general form: a lone weighted expert keeps its ranking; bad weights are refused.
+    const std::array<const CategoryDistribution*, 2> experts{&a, &b};
+    const std::array<float, 2> only_a{3.0f, 0.0f}, negative{1.0f, -1.0f}, zero{0.0f, 0.0f};
+    const std::array<float, 1> one{1.0f};
+    EXPECT_EQ(ArgMaxCategory(WeightedProductOfExperts(experts, only_a)), Category::kBox);
+    EXPECT_THROW(WeightedProductOfExperts(experts, negative), InvalidArgument);
+    EXPECT_THROW(WeightedProductOfExperts(experts, zero), InvalidArgument);
+    EXPECT_THROW(WeightedProductOfExperts(experts, one), InvalidArgument);
 }
 
 // A model over synthetic descriptors: two categories with distinct histograms.
