@@ -31,7 +31,8 @@ int main(int argc, char** argv) {
     std::array<std::vector<std::size_t>, 3> single;
     std::array<std::vector<std::size_t>, 3> merged;
     PerceiveParams params;
-    params.split_touching = params.split_stacked = params.merge_concentric = false;
+    params.models.touching.enabled = params.models.stacked.enabled =
+        params.models.concentric.enabled = false;
     for (int a = 1; a < argc; ++a) {
         PointCloud cloud;
         try {

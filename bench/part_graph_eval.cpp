@@ -63,7 +63,7 @@
 #include "multicue/sim/sensors.hpp"
 #include "multicue/surface/normals.hpp"
 #include "multicue/system/perceive.hpp"
-#include "part_graph_training.hpp"
+#include "multicue/training/part_graph_training.hpp"
 
 using namespace multicue;
 
@@ -221,8 +221,8 @@ int main(int argc, char** argv) {
     std::uint64_t seed = 1;
     PartGraphModel model;
     // Recognition and blend as perceive runs them (parts grouped by object, its category priors).
-    PartGraphRecognitionParams rp = PerceiveParams{}.part_graph_recognition;
-    float blend_weight = PerceiveParams{}.part_graph_weight;
+    PartGraphRecognitionParams rp = CategorizationParams{}.part_graph;
+    float blend_weight = CategorizationParams{}.part_graph_weight;
     int baselines = 1, matrices = 1;
     bool scene_matrices = false;
     PartVocabularyParams vp;
@@ -234,7 +234,7 @@ int main(int argc, char** argv) {
     bool even_test = false;        // test scenes of the training meshes (seen instances)
     bool procedural_test = false;  // test scenes of procedural objects even with a library
     std::string dump_path;  // one CSV row per perceived object: truth, experts, rule evidence
-    Eigen::Vector3f expert_weights = PerceiveParams{}.expert_weights;
+    Eigen::Vector3f expert_weights = CategorizationParams{}.expert_weights;
     ClusterDescriptorParams cluster_params;
     int table_scenes = -1, table_views = 4,  // table scenes -1: as multicue train
         objects = 8, train_meshes = 1;
@@ -545,8 +545,8 @@ int main(int argc, char** argv) {
         source.emplace();
     }
     PerceiveParams pp;
-    PerceiveParams expert_params = pp;  // the experts as perceive runs them, with these votes
-    expert_params.part_graph_recognition = rp;
+    CategorizationParams expert_params = pp.category;  // the experts as perceive runs them
+    expert_params.part_graph = rp;
     expert_params.expert_weights = expert_weights;
     std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
     if (!dump_path.empty() && !dump) {
@@ -574,7 +574,7 @@ int main(int argc, char** argv) {
             const auto* gt_field = scan.FindExtraField("category");
             if (!gt_field) throw DataError("scan without category field");
             {  // normals as perceive computes them; perceive keeps them
-                OrganizedNormalParams np = pp.organized_normals;
+                OrganizedNormalParams np = pp.normals.organized;
                 SetNormals(scan, EstimateNormalsOrganized(scan, np));
             }
             const PerceiveResult r = Perceive(scan, pp);

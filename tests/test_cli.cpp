@@ -170,7 +170,7 @@ TEST(Cli, PerceiveWritesTheContractAndRefusesBadInput) {
     }
     const std::string before = ReadTextFile(out / "result.json");
     {
-        std::ofstream(dir / "typo.json") << R"({"objects": {"min_pionts": 3}})";
+        std::ofstream(dir / "typo.json") << R"({"clustering": {"min_pionts": 3}})";
         std::ofstream(dir / "bad.json") << "{ nope";
     }
     struct Case {
@@ -253,10 +253,10 @@ TEST(Cli, TrainPartGraphAndPerceiveWithTheBlend) {
     {
         std::ofstream(dir / "blend.json")
             << R"({"category": {"categoriser": "part-graph+rules", "part_graph_weight": 0.5, )"
-            << R"("part_graph_priors": {"other": 0.5, "plate": 2}, )"
+            << R"("part_graph": {"category_priors": {"other": 0.5, "plate": 2}}, )"
             << R"("part_graph_model": ")" << model << R"("}})";
         std::ofstream(dir / "bad_prior.json")
-            << R"({"category": {"categoriser": "part-graph", "part_graph_priors": {"box": -1}, )"
+            << R"({"category": {"categoriser": "part-graph", "part_graph": {"category_priors": {"box": -1}}, )"
             << R"("part_graph_model": ")" << model << R"("}})";
     }
     const auto bad_prior =

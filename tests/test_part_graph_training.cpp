@@ -11,7 +11,7 @@
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
 #include "multicue/system/perceive.hpp"
-#include "part_graph_training.hpp"
+#include "multicue/training/part_graph_training.hpp"
 
 namespace multicue {
 namespace {
@@ -131,9 +131,9 @@ TEST(PartGraphTraining, StackerScenesTrainTheStacker) {
     const auto pose = sim::TableViewpoints(scene, 1, {}, 4).at(0);
     PointCloud scan = sim::ScanKinect(scene, pose, sim::KinectParams{}, 3);
     PerceiveParams pp;
-    pp.categoriser = "stacked";
-    pp.part_graph = std::make_shared<const PartGraphModel>(back);
-    const PerceiveResult r = Perceive(scan, pp);
+    pp.category.categoriser = Categoriser::kStacked;
+    PerceiveModels models{std::make_shared<const PartGraphModel>(back)};
+    const PerceiveResult r = Perceive(scan, pp, models);
     ASSERT_FALSE(r.objects.empty());
     for (const auto& o : r.objects) {
         if (o.category.category == Category::kNone) continue;
@@ -143,9 +143,9 @@ TEST(PartGraphTraining, StackerScenesTrainTheStacker) {
         EXPECT_EQ(o.category.probabilities[0], 0.0f);
     }
     // A model without a stacker is refused by name.
-    pp.part_graph = std::make_shared<const PartGraphModel>(TinyModel(0));
+    models.part_graph = std::make_shared<const PartGraphModel>(TinyModel(0));
     try {
-        Perceive(scan, pp);
+        Perceive(scan, pp, models);
         ADD_FAILURE() << "stacked categoriser ran without a stacker";
     } catch (const InvalidArgument& e) {
         EXPECT_NE(std::string(e.what()).find("stacker"), std::string::npos) << e.what();

@@ -122,7 +122,7 @@ TEST(Perceive, OccludedBoxIsOneObject) {
     sp.T_world_camera = sim::DefaultCameraPose(scene);
     const PointCloud cloud = sim::ScanTableTopScene(scene, sp);
     PerceiveParams off;
-    off.merge_occluded = false;
+    off.occlusion.enabled = false;
     EXPECT_EQ(Perceive(cloud, off).objects.size(), 3u);
     const PerceiveResult r = Perceive(cloud, PerceiveParams{});
     ASSERT_EQ(r.objects.size(), 2u);
@@ -147,7 +147,7 @@ TEST(Perceive, GuidedFitsKeepTheDemoSceneModels) {
     // RSD-guided sampling changes which samples are drawn, not what the models converge to.
     const auto& s = DemoScene();
     PerceiveParams guided;
-    guided.guided_fits = true;
+    guided.models.guided_fits = true;
     const PerceiveResult a = Perceive(s.cloud, PerceiveParams{});
     const PerceiveResult b = Perceive(s.cloud, guided);
     ASSERT_EQ(a.objects.size(), b.objects.size());
@@ -165,7 +165,7 @@ TEST(Perceive, GuidedFitsKeepTheDemoSceneModels) {
         }
         EXPECT_TRUE(a.objects[k].part_probabilities.empty());  // rule-based categories
     }
-    guided.guided_rsd.radius = -1.0f;
+    guided.models.guided_rsd.radius = -1.0f;
     EXPECT_THROW(Perceive(s.cloud, guided), InvalidArgument);
 }
 
@@ -270,17 +270,17 @@ TEST(Perceive, InsideAndOutsideOfAPotAreOneObject) {
     if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
     const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn38.pcd"));
     PerceiveParams params;
-    params.merge_contained = false;  // would join them as well
-    params.merge_concentric = false;
+    params.models.contained.enabled = false;  // would join them as well
+    params.models.concentric.enabled = false;
     const std::size_t apart = Perceive(cloud, params).objects.size();
-    params.merge_concentric = true;
+    params.models.concentric.enabled = true;
     const PerceiveResult merged = Perceive(cloud, params);
     EXPECT_EQ(merged.objects.size(), 4u);  // the ground truth's four objects
     EXPECT_LT(merged.objects.size(), apart);
     for (const auto& o : merged.objects) {
         EXPECT_EQ(o.id, static_cast<int>(&o - merged.objects.data()) + 1);
     }
-    params.concentric_distance = -1.0f;
+    params.models.concentric.distance = -1.0f;
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
@@ -293,14 +293,14 @@ TEST(Perceive, StackedBoxesAreSplitAtTheLowerTopFace) {
         return MajorityObject(cloud, r, label);
     };
     PerceiveParams params;
-    params.split_stacked = false;
+    params.models.stacked.enabled = false;
     const PerceiveResult together = Perceive(cloud, params);
     EXPECT_EQ(majority(together, 30), majority(together, 40));
-    params.split_stacked = true;
+    params.models.stacked.enabled = true;
     const PerceiveResult split = Perceive(cloud, params);
     EXPECT_NE(majority(split, 30), majority(split, 40));
     EXPECT_NE(majority(split, 30), 0u);
-    params.stack_min_step = 0.0f;
+    params.models.stacked.min_step = 0.0f;
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
@@ -313,10 +313,10 @@ TEST(Perceive, TouchingBoxesThatOneBoxExplainsPoorlyAreSplit) {
         return MajorityObject(cloud, r, label);
     };
     PerceiveParams params;
-    params.split_touching = false;
+    params.models.touching.enabled = false;
     const PerceiveResult together = Perceive(cloud, params);
     EXPECT_EQ(majority(together, 20), majority(together, 40));
-    params.split_touching = true;
+    params.models.touching.enabled = true;
     const PerceiveResult split = Perceive(cloud, params);
     EXPECT_NE(majority(split, 20), majority(split, 40));
     EXPECT_NE(majority(split, 40), 0u);
@@ -327,7 +327,7 @@ TEST(Perceive, TouchingBoxesThatOneBoxExplainsPoorlyAreSplit) {
             EXPECT_TRUE(c == Category::kBox || c == Category::kFlat) << CategoryName(c);
         }
     }
-    params.touching_max_parts = 1;
+    params.models.touching.max_parts = 1;
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
@@ -345,10 +345,10 @@ TEST(Perceive, CanStandingInABowlIsSplitByTwoCylinders) {
         return votes;
     };
     PerceiveParams params;
-    params.split_touching_round = false;
+    params.models.touching.round_enabled = false;
     const PerceiveResult together = Perceive(cloud, params);
     EXPECT_EQ(together.objects.size(), 1u);
-    params.split_touching_round = true;
+    params.models.touching.round_enabled = true;
     const PerceiveResult split = Perceive(cloud, params);
     ASSERT_EQ(split.objects.size(), 2u);
     for (const std::uint32_t label : {20u, 30u}) {
@@ -361,10 +361,10 @@ TEST(Perceive, CanStandingInABowlIsSplitByTwoCylinders) {
         EXPECT_GT(best, 9 * all / 10) << "label " << label;
     }
     // A Poisson model that expects many parts per object does not try the split.
-    params.part_counts.other_mean = 30.0;
-    params.part_counts.round_mean = 30.0;
+    params.models.part_counts.other_mean = 30.0;
+    params.models.part_counts.round_mean = 30.0;
     EXPECT_EQ(Perceive(cloud, params).objects.size(), 1u);
-    params.several_min_ratio = -1.0f;
+    params.models.several_min_ratio = -1.0f;
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
@@ -386,17 +386,17 @@ TEST(Perceive, PiecesInsideABowlJoinIt) {
         return all ? static_cast<double>(best) / static_cast<double>(all) : 0.0;
     };
     PerceiveParams params;
-    params.merge_contained = false;
+    params.models.contained.enabled = false;
     const PerceiveResult apart = Perceive(cloud, params);
     EXPECT_LT(best_share(apart, 4), 0.8);
-    params.merge_contained = true;
+    params.models.contained.enabled = true;
     const PerceiveResult joined = Perceive(cloud, params);
     EXPECT_LT(joined.objects.size(), apart.objects.size());
     EXPECT_GT(best_share(joined, 4), 0.83);  // a rim strip stays apart
     for (const std::uint32_t other : {2u, 3u}) {
         EXPECT_GT(best_share(joined, other), 0.85) << "object " << other;
     }
-    params.contained_min_share = 0.0f;
+    params.models.contained.min_share = 0.0f;
     EXPECT_THROW(Perceive(cloud, params), InvalidArgument);
 }
 
@@ -407,7 +407,7 @@ TEST(Perceive, BadInput) {
     nan_only.SetUnorganized();
     EXPECT_THROW(Perceive(nan_only, {}), DataError);
     PerceiveParams bad;
-    bad.cluster_tolerance = -1.0f;
+    bad.clustering.tolerance = -1.0f;
     EXPECT_THROW(Perceive(DemoScene().cloud, bad), InvalidArgument);
     bad = {};
     bad.num_threads = -3;
@@ -431,16 +431,16 @@ TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
     }
     model->Build();
     PerceiveParams p;
-    p.part_graph = model;
-    p.categoriser = "part-graph+rules";
-    p.part_graph_weight = 0.0f;
-    const PerceiveResult w0 = Perceive(s.cloud, p);
+    const PerceiveModels models{model};
+    p.category.categoriser = Categoriser::kPartGraphRules;
+    p.category.part_graph_weight = 0.0f;
+    const PerceiveResult w0 = Perceive(s.cloud, p, models);
     ASSERT_EQ(w0.objects.size(), rules.objects.size());
     for (std::size_t k = 0; k < w0.objects.size(); ++k) {
         EXPECT_EQ(w0.objects[k].category.category, rules.objects[k].category.category);
     }
-    p.part_graph_weight = 1.0f;
-    const PerceiveResult w1 = Perceive(s.cloud, p);
+    p.category.part_graph_weight = 1.0f;
+    const PerceiveResult w1 = Perceive(s.cloud, p, models);
     for (const auto& o : w1.objects) {
         if (o.category.category == Category::kNone) continue;
         EXPECT_EQ(o.category.category, Category::kSphere);
@@ -449,19 +449,20 @@ TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
         EXPECT_NEAR(sum, 1.0f, 1e-5f);
     }
     // Groups only inside objects and each whole object's own vote: still the model's category.
-    p.part_graph_recognition.group_weight = 2.0f;
-    for (const auto& o : Perceive(s.cloud, p).objects) {
+    p.category.part_graph.group_weight = 2.0f;
+    for (const auto& o : Perceive(s.cloud, p, models).objects) {
         if (o.category.category != Category::kNone) {
             EXPECT_EQ(o.category.category, Category::kSphere);
         }
     }
-    p.part_graph_recognition.group_weight = -1.0f;
-    EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
-    p.part_graph_recognition.group_weight = 0.0f;
-    p.part_graph_weight = 1.5f;
-    EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
-    p.part_graph_weight = 0.5f;
-    p.categoriser = "votes";
+    p.category.part_graph.group_weight = -1.0f;
+    EXPECT_THROW(Perceive(s.cloud, p, models), InvalidArgument);
+    p.category.part_graph.group_weight = 0.0f;
+    p.category.part_graph_weight = 1.5f;
+    EXPECT_THROW(Perceive(s.cloud, p, models), InvalidArgument);
+    p.category.part_graph_weight = 0.5f;
+    EXPECT_THROW(ParseCategoriser("votes"), InvalidArgument);
+    // The learned categorisers need their model, whatever the scene.
     EXPECT_THROW(Perceive(s.cloud, p), InvalidArgument);
 }
 
@@ -507,7 +508,7 @@ TEST(Perceive, BlendThreeExpertsWeighsTheExperts) {
                                    {std::numeric_limits<float>::quiet_NaN(), 1, 1}),
                  InvalidArgument);
     PerceiveParams bad;
-    bad.expert_weights = {1, -1, 1};
+    bad.category.expert_weights = {1, -1, 1};
     EXPECT_THROW(Perceive(DemoScene().cloud, bad), InvalidArgument);
 }
 
@@ -591,17 +592,17 @@ TEST(PerceiveConfig, DumpParsesBackAndUnknownKeysFail) {
     PerceiveParams p;
     ReadPerceiveParams(again, p);
     EXPECT_NO_THROW(again.CheckAllUsed());
-    EXPECT_EQ(p.min_object_points, defaults.min_object_points);
+    EXPECT_EQ(p.clustering.min_points, defaults.clustering.min_points);
     EXPECT_FALSE(p.support.up.has_value());
 
-    auto typo = io::ConfigSection::Parse(R"({"objects": {"min_pionts": 5}})", "t.json");
+    auto typo = io::ConfigSection::Parse(R"({"clustering": {"min_pionts": 5}})", "t.json");
     ReadPerceiveParams(typo, p);
     EXPECT_THROW(typo.CheckAllUsed(), InvalidArgument);
     auto set = io::ConfigSection::Parse(
-        R"({"support": {"up": [0, -1, 0]}, "objects": {"min_points": 42}})", "t.json");
+        R"({"support": {"up": [0, -1, 0]}, "clustering": {"min_points": 42}})", "t.json");
     ReadPerceiveParams(set, p);
     set.CheckAllUsed();
-    EXPECT_EQ(p.min_object_points, 42u);
+    EXPECT_EQ(p.clustering.min_points, 42u);
     ASSERT_TRUE(p.support.up.has_value());
     EXPECT_EQ(*p.support.up, Eigen::Vector3f(0, -1, 0));
 }

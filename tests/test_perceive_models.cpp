@@ -52,6 +52,12 @@ PerceiveParams Params() {
     return p;
 }
 
+ModelParams Models() {
+    ModelParams p;
+    p.num_threads = 1;
+    return p;
+}
+
 TEST(PerceiveModels, ModelInFreeSpaceIsRejectedAndReplacedByAMesh) {
     // Two plates 24 cm apart, one object categorised as a box: the box closes the gap, where the
     // sensor sees the wall behind.
@@ -63,7 +69,7 @@ TEST(PerceiveModels, ModelInFreeSpaceIsRejectedAndReplacedByAMesh) {
     AddWall(cloud);
     Finish(cloud);
     object.category.category = Category::kBox;
-    const ObjectModel m = ModelObject(cloud, object, kPlane, Params());
+    const ObjectModel m = ModelObject(cloud, object, kPlane, Models());
     ASSERT_TRUE(m.verification.has_value());
     EXPECT_GT(m.verification->invalid, 0.25f);
     EXPECT_FALSE(m.verification->accepted);
@@ -79,7 +85,7 @@ TEST(PerceiveModels, ModelInFreeSpaceIsRejectedAndReplacedByAMesh) {
     }
 
     // Without the fallback the box stays, marked as not accepted.
-    PerceiveParams p = Params();
+    ModelParams p = Models();
     p.mesh_fallback = false;
     const ObjectModel kept = ModelObject(cloud, object, kPlane, p);
     EXPECT_TRUE(kept.box.has_value());
@@ -93,7 +99,7 @@ TEST(PerceiveModels, ModelMatchingTheScanIsAccepted) {
     AddWall(cloud);
     Finish(cloud);
     object.category.category = Category::kBox;
-    const ObjectModel m = ModelObject(cloud, object, kPlane, Params());
+    const ObjectModel m = ModelObject(cloud, object, kPlane, Models());
     ASSERT_TRUE(m.box.has_value());
     ASSERT_TRUE(m.verification.has_value());
     EXPECT_TRUE(m.accepted);
@@ -116,15 +122,15 @@ TEST(PerceiveModels, ModelInsideTheTableIsRejected) {
     Finish(cloud);
     object.category.category = Category::kOther;
     const Eigen::Vector4f high_table(0.0f, -1.0f, 0.0f, 0.2f);
-    const ObjectModel m = ModelObject(cloud, object, high_table, Params());
+    const ObjectModel m = ModelObject(cloud, object, high_table, Models());
     ASSERT_TRUE(m.verification.has_value());
     EXPECT_GT(m.verification->invalid, 0.4f);
     EXPECT_FALSE(m.accepted);
     EXPECT_EQ(m.replaced, "box");
     // The same plate on the real table is fine.
-    EXPECT_TRUE(ModelObject(cloud, object, kPlane, Params()).accepted);
+    EXPECT_TRUE(ModelObject(cloud, object, kPlane, Models()).accepted);
     // A model too large for the grid is not verified (no error).
-    PerceiveParams p = Params();
+    ModelParams p = Models();
     p.verification.max_cells = 1000;
     const ObjectModel unverified = ModelObject(cloud, object, high_table, p);
     EXPECT_FALSE(unverified.verification.has_value());
@@ -172,7 +178,7 @@ TEST(PerceiveModels, HandleOfAGoodCylinderIsAttached) {
     object.indices = body;
     object.indices.insert(object.indices.end(), handle.begin(), handle.end());
     object.category.category = Category::kCylinder;
-    const ObjectModel m = ModelObject(cloud, object, kPlane, Params());
+    const ObjectModel m = ModelObject(cloud, object, kPlane, Models());
     ASSERT_TRUE(m.cylinder.has_value());
     EXPECT_NEAR(m.cylinder->radius, 0.04f, 0.004f);
     EXPECT_TRUE(m.accepted);
@@ -194,7 +200,7 @@ TEST(PerceiveModels, HandleOfAGoodCylinderIsAttached) {
     PerceivedObject plain_object;
     plain_object.indices = body;
     plain_object.category.category = Category::kCylinder;
-    EXPECT_EQ(ModelObject(cloud, plain_object, kPlane, Params()).attached_triangles, 0u);
+    EXPECT_EQ(ModelObject(cloud, plain_object, kPlane, Models()).attached_triangles, 0u);
 }
 
 TEST(PerceiveModels, BadParameters) {
@@ -203,13 +209,13 @@ TEST(PerceiveModels, BadParameters) {
     PerceivedObject object;
     object.indices = body;
     object.category.category = Category::kCylinder;
-    PerceiveParams p = Params();
-    p.min_model_inlier_ratio = 1.5f;
+    ModelParams p = Models();
+    p.min_inlier_ratio = 1.5f;
     EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
-    p = Params();
-    p.model_mesh.search_radius = 0.0f;
+    p = Models();
+    p.mesh.search_radius = 0.0f;
     EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
-    p = Params();
+    p = Models();
     p.verification.voxel_size = -1.0f;
     EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
 }
@@ -227,7 +233,7 @@ TEST(PerceiveModels, VerificationOfOrganizedFramesMatchesAllRays) {
     PointCloud flat = organized;
     flat.width = static_cast<std::uint32_t>(flat.size());
     flat.height = 1;
-    PerceiveParams p = Params();
+    ModelParams p = Models();
     p.mesh_fallback = false;
     p.min_attached_points = 0;
     for (const auto& o : r.objects) {

@@ -61,7 +61,7 @@ void Run(MeshOptions& o, int threads) {
     o.gp3.num_threads = threads;
     o.gp3.per_label = o.per_label;
     o.gp3.search_radius = o.radius > 0.0f ? o.radius : 1.0f;  // validated before any reading
-    ValidateTriangulationParams(o.gp3);
+    o.gp3.Validate();
 
     TriangleMesh existing;
     if (!o.append.empty()) {

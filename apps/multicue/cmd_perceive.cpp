@@ -23,7 +23,7 @@
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
 #include "multicue/system/perceive_views.hpp"
-#include "part_graph_training.hpp"
+#include "multicue/training/part_graph_training.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -33,14 +33,17 @@ double MsSince(std::chrono::steady_clock::time_point start) {
         .count();
 }
 
-/// Everything a parameter file sets: the pipeline and the report.
+/// Everything a parameter file sets (the pipeline and the report), and the models it names.
 struct PerceiveOptions {
     PerceiveParams pipeline;
     ReportParams report;
+    PerceiveModels models;
 };
 
+/// The parameters of `config_path` (none: the defaults) with the command line's, checked; with
+/// `load_models`, the categoriser's models loaded (the default model trained once if needed).
 PerceiveOptions LoadParams(const std::string& config_path, const std::string& up, int threads,
-                           bool load_model = true) {
+                           bool load_models = true) {
     PerceiveOptions options;
     if (!config_path.empty()) {
         auto config = io::ConfigSection::Load(config_path);
@@ -50,12 +53,13 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
     }
     if (!up.empty()) options.pipeline.support.up = ParseVector3(up, "--up");
     if (threads != 0) options.pipeline.num_threads = threads;
-    auto& pl = options.pipeline;
-    if (load_model && pl.categoriser.starts_with("part-graph") && !pl.part_graph &&
-        pl.part_graph_model.empty()) {
-        pl.part_graph =
-            std::make_shared<const PartGraphModel>(training::LoadOrTrainDefaultPartGraphModel());
+    try {
+        options.pipeline.Validate();
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument(
+            fmt::format("{}: {}", config_path.empty() ? "parameters" : config_path, e.what()));
     }
+    if (load_models) options.models = training::LoadPerceiveModels(options.pipeline);
     return options;
 }
 
@@ -63,7 +67,7 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
 PerceiveResult RunPerceive(const PointCloud& cloud, const std::string& input_name,
                            const std::filesystem::path& out, const PerceiveOptions& options,
                            double load_ms) {
-    const PerceiveResult result = Perceive(cloud, options.pipeline);
+    const PerceiveResult result = Perceive(cloud, options.pipeline, options.models);
     const auto json = PerceiveResultJson(input_name, result, {{"load", load_ms}});
     const std::string report =
         options.report.enabled ? PerceiveReportPage(cloud, result, json, options.report).Render()
@@ -169,7 +173,7 @@ void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
     std::vector<const PointCloud*> cloud_ptrs;
     std::vector<Eigen::Isometry3f> poses;
     for (std::size_t k = 0; k < frames.size(); ++k) {
-        results.push_back(Perceive(clouds[k], options.pipeline));
+        results.push_back(Perceive(clouds[k], options.pipeline, options.models));
         cloud_ptrs.push_back(&clouds[k]);
         poses.push_back(frames[k].T_world_sensor);
     }
@@ -244,21 +248,26 @@ void AddConfigCommand(CLI::App& app, const GlobalOptions& /*global*/) {
     auto* cmd = app.add_subcommand(
         "config", "Print the default parameters of perceive (JSON with comments) or check a file");
     auto dump = std::make_shared<bool>(false);
+    auto markdown = std::make_shared<bool>(false);
     auto check = std::make_shared<std::string>();
     cmd->add_flag("--dump", *dump, "print every parameter with its default and meaning");
-    cmd->add_option("--check", *check, "read a parameter file and report the first problem");
+    cmd->add_flag("--markdown", *markdown,
+                  "print the parameter reference as Markdown tables (docs/configuration.md)");
+    cmd->add_option("--check", *check,
+                    "read a parameter file and report the first problem (unknown key, wrong type "
+                    "or value out of range)");
     cmd->callback([=] {
         if (!check->empty()) {
             LoadParams(*check, "", 0, false);
             std::printf("%s: ok\n", check->c_str());
             return;
         }
-        if (!*dump) throw InvalidArgument("config: give --dump or --check FILE");
+        if (!*dump && !*markdown) throw InvalidArgument("config: give --dump, --markdown or --check FILE");
         auto section = io::ConfigSection::Dump();
         PerceiveOptions options;
         ReadPerceiveParams(section, options.pipeline);
         ReadReportParams(section, options.report);
-        std::fputs(section.DumpText().c_str(), stdout);
+        std::fputs((*markdown ? section.DumpMarkdown() : section.DumpText()).c_str(), stdout);
     });
 }
 

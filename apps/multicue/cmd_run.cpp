@@ -19,6 +19,7 @@
 #include "multicue/io/config.hpp"
 #include "multicue/io/file_utils.hpp"
 #include "multicue/system/executive.hpp"
+#include "multicue/training/part_graph_training.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -248,7 +249,8 @@ void AddRunCommand(CLI::App& app, const GlobalOptions& global) {
         std::optional<ObjectDatabase> db;
         if (!t.database.empty())
             db = ObjectDatabase::Open(t.database, DatabaseMode::kCreateOrWrite);
-        PerceptionExecutive executive(db ? &*db : nullptr, params);
+        PerceptionExecutive executive(db ? &*db : nullptr, params,
+                                      training::LoadPerceiveModels(params.perceive));
         const auto plan = executive.Plan(t.task);
 
         InstallInterruptHandler();

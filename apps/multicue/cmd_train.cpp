@@ -11,7 +11,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/sim/mesh.hpp"
-#include "part_graph_training.hpp"
+#include "multicue/training/part_graph_training.hpp"
 
 namespace multicue::cli {
 

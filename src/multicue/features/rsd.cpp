@@ -120,6 +120,8 @@ Eigen::Vector2f RadiiFromNeighbours(const PointCloud& cloud, const Eigen::Vector
 
 }  // namespace
 
+void RsdParams::Validate() const { CheckRsdParams(*this); }
+
 Eigen::Vector2f RsdOfNeighbourhood(const PointCloud& cloud, const Eigen::Vector3f& reference,
                                    const Eigen::Vector3f& reference_normal,
                                    const Indices& neighbours, const RsdParams& params) {

@@ -53,6 +53,8 @@ struct RsdParams {
     /// the extreme angles as section 2.5.1 and PCL do; below 1 the tails of the normal noise of
     /// a real sensor no longer make planes look curved (docs/part-graph.md).
     float angle_quantile = 1.0f;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 /// RSD of every point of `cloud` (with normals) from neighbourhoods in `tree` (built from this

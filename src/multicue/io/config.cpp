@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
 #include "multicue/io/file_utils.hpp"
 
 namespace multicue::io {
@@ -160,6 +161,94 @@ void ConfigSection::Get(const std::string& key, std::optional<Eigen::Vector3f>& 
     }
 }
 
+void ConfigSection::GetChoice(const std::string& key, std::string& value,
+                              std::span<const std::string_view> choices, const std::string& help) {
+    std::string list;
+    for (const auto& c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
+    if (Lookup(key) == nullptr) {
+        Record(key, value, help.empty() ? "one of " + list : help + " (" + list + ")");
+        return;
+    }
+    Get(key, value, help);
+    for (const auto& c : choices) {
+        if (c == value) return;
+    }
+    throw InvalidArgument(fmt::format("{}: '{}' must be one of {}, got '{}'", state_->source,
+                                      Join(path_, key), list, value));
+}
+
+namespace {
+
+// The object at a dotted path below `root`, or null.
+nlohmann::json* Find(nlohmann::json& root, const std::string& path) {
+    nlohmann::json* node = &root;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t dot = path.find('.', start);
+        const std::string part = path.substr(start, dot == std::string::npos ? dot : dot - start);
+        if (!node->is_object() || !node->contains(part)) return nullptr;
+        node = &(*node)[part];
+        if (dot == std::string::npos) return node;
+        start = dot + 1;
+    }
+}
+
+// Moves `from` into `into`: values are set, sections merged; false when a value is in both.
+bool MergeInto(nlohmann::json& into, nlohmann::json&& from) {
+    if (!into.is_object() || !from.is_object()) return false;
+    for (auto it = from.begin(); it != from.end(); ++it) {
+        if (!into.contains(it.key())) {
+            into[it.key()] = std::move(it.value());
+        } else if (!MergeInto(into[it.key()], std::move(it.value()))) {
+            return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace
+
+void ConfigSection::Rename(const std::string& old_key, const std::string& new_key) {
+    const std::string from = Join(path_, old_key), to = Join(path_, new_key);
+    nlohmann::json* value = Find(state_->root, from);
+    if (value == nullptr) return;
+    nlohmann::json moved = std::move(*value);
+    // Remove the old key, then the sections it leaves empty.
+    std::string parent = from;
+    while (true) {
+        const std::size_t dot = parent.rfind('.');
+        nlohmann::json* owner = dot == std::string::npos ? &state_->root
+                                                         : Find(state_->root, parent.substr(0, dot));
+        owner->erase(dot == std::string::npos ? parent : parent.substr(dot + 1));
+        if (dot == std::string::npos || !owner->empty()) break;
+        parent = parent.substr(0, dot);
+    }
+    // Create the new key's sections.
+    nlohmann::json* node = &state_->root;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t dot = to.find('.', start);
+        const std::string part = to.substr(start, dot == std::string::npos ? dot : dot - start);
+        if (dot == std::string::npos) {
+            if (!node->contains(part)) {
+                (*node)[part] = std::move(moved);
+            } else if (!MergeInto((*node)[part], std::move(moved))) {
+                throw InvalidArgument(fmt::format("{}: '{}' is given twice, also by its former name '{}'",
+                                                  state_->source, to, from));
+            }
+            break;
+        }
+        if (!node->contains(part)) (*node)[part] = nlohmann::json::object();
+        node = &(*node)[part];
+        if (!node->is_object()) {
+            throw InvalidArgument(
+                fmt::format("{}: '{}' must be an object", state_->source, to.substr(0, dot)));
+        }
+        start = dot + 1;
+    }
+    LogWarning("{}: '{}' is now called '{}'", state_->source, from, to);
+}
+
 ConfigSection ConfigSection::Section(const std::string& key) {
     const nlohmann::json* j = Lookup(key);
     if (j != nullptr && !j->is_object()) TypeError(key, "an object");
@@ -168,6 +257,55 @@ ConfigSection ConfigSection::Section(const std::string& key) {
 
 void ConfigSection::CheckAllUsed() const {
     CheckUsed(state_->root, "", state_->used, state_->source);
+}
+
+namespace {
+
+void WriteMarkdownRows(const nlohmann::ordered_json& j, const std::string& path,
+                       const std::vector<std::pair<std::string, std::string>>& help,
+                       std::string& out) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        const std::string full = Join(path, it.key());
+        if (it.value().is_object()) {
+            WriteMarkdownRows(it.value(), full, help, out);
+            continue;
+        }
+        std::string text;
+        for (const auto& [p, h] : help) {
+            if (p == full) text = h;
+        }
+        std::string escaped;
+        for (char c : text) escaped += c == '|' ? std::string("\\|") : std::string(1, c);
+        out += fmt::format("| `{}` | `{}` | {} |\n", full, it.value().dump(), escaped);
+    }
+}
+
+}  // namespace
+
+std::vector<std::string> ConfigSection::RecordedKeys() const {
+    std::vector<std::string> keys;
+    for (const auto& [key, text] : state_->help) keys.push_back(key);
+    return keys;
+}
+
+std::string ConfigSection::DumpMarkdown() const {
+    std::string out;
+    std::string loose;  // top-level values
+    for (auto it = state_->defaults.begin(); it != state_->defaults.end(); ++it) {
+        if (it.value().is_object()) continue;
+        nlohmann::ordered_json one = nlohmann::ordered_json::object();
+        one[it.key()] = it.value();
+        WriteMarkdownRows(one, "", state_->help, loose);
+    }
+    const std::string header = "| key | default | meaning |\n|---|---|---|\n";
+    if (!loose.empty()) out += header + loose + "\n";
+    for (auto it = state_->defaults.begin(); it != state_->defaults.end(); ++it) {
+        if (!it.value().is_object()) continue;
+        std::string rows;
+        WriteMarkdownRows(it.value(), it.key(), state_->help, rows);
+        out += "## " + it.key() + "\n\n" + header + rows + "\n";
+    }
+    return out;
 }
 
 std::string ConfigSection::DumpText() const {

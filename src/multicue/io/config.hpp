@@ -7,7 +7,9 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
@@ -36,14 +38,30 @@ class ConfigSection {
     void Get(const std::string& key, std::optional<Eigen::Vector3f>& value,
              const std::string& help = "");
 
+    /// A string that must be one of `choices`; InvalidArgument naming `section.key` and the
+    /// choices otherwise. The dump lists the choices after the help text.
+    void GetChoice(const std::string& key, std::string& value,
+                   std::span<const std::string_view> choices, const std::string& help = "");
+
     /// Nested section `key` (empty if absent).
     ConfigSection Section(const std::string& key);
+
+    /// A key of an earlier release: when the file has `old_key` (a dotted path below this
+    /// section; a value or a whole section), it is read as `new_key` and a warning names both.
+    /// Sections are merged into an existing new section; a value given under both names is an
+    /// InvalidArgument. Sections left empty by the move are removed. Nothing in dump mode.
+    void Rename(const std::string& old_key, const std::string& new_key);
 
     /// Throws InvalidArgument naming the first key that no Get()/Section() asked for.
     void CheckAllUsed() const;
 
     /// The recorded defaults (dump mode) as pretty JSON with help texts as "//" comments.
     std::string DumpText() const;
+    /// The full key paths recorded so far (dump mode), in the order they were recorded.
+    std::vector<std::string> RecordedKeys() const;
+    /// The recorded defaults (dump mode) as a Markdown table: key path, default, meaning; one
+    /// table per top-level section, each under a `## section` heading.
+    std::string DumpMarkdown() const;
 
   private:
     struct State;

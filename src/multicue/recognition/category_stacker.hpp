@@ -12,11 +12,10 @@
 #include <vector>
 
 #include "multicue/core/types.hpp"
+#include "multicue/recognition/category_distribution.hpp"
 #include "multicue/recognition/geometric_category.hpp"
 
 namespace multicue {
-
-using CategoryDistribution = std::array<float, kNumCategories>;
 
 /// Number of stacker inputs: 3 x 6 expert log-probabilities and 18 geometric values.
 inline constexpr std::size_t kStackerInputSize = 36;

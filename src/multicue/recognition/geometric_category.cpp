@@ -251,7 +251,8 @@ Category ParseCategory(std::string_view name) {
         name));
 }
 
-void ValidateCategoryParams(const CategoryParams& p) {
+void CategoryParams::Validate() const {
+    const CategoryParams& p = *this;
     Require(p.min_points >= 1, "min_points must be >= 1, got {}", p.min_points);
     Require(p.max_points >= p.min_points, "max_points must be >= min_points ({}), got {}",
             p.min_points, p.max_points);
@@ -317,7 +318,7 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
                                 const std::vector<Indices>& parts,
                                 const Eigen::Vector4f& support_plane,
                                 const CategoryParams& params) {
-    ValidateCategoryParams(params);
+    params.Validate();
     const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
     auto check = [&](const Indices& idx) {
         for (Index i : idx) {

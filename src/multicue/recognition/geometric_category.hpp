@@ -112,6 +112,8 @@ struct CategoryParams {
     std::uint64_t seed = 1;      ///< RANSAC seed; equal seeds give identical results [-]
     int num_threads = 0;         ///< threads of the RANSAC fits (0 = all cores); never changes the
                                  ///< result
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct CategoryResult {
@@ -164,8 +166,5 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
                                 const std::vector<Indices>& parts,
                                 const Eigen::Vector4f& support_plane,
                                 const CategoryParams& params = {});
-
-/// Throws InvalidArgument if a field of `params` is out of its domain.
-void ValidateCategoryParams(const CategoryParams& params);
 
 }  // namespace multicue

@@ -560,31 +560,35 @@ std::vector<std::vector<std::uint32_t>> Components(const PartGraph& graph) {
 
 }  // namespace
 
-PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
-                               const FeatureMatrix& descriptors,
-                               const PartGraphRecognitionParams& params,
-                               std::span<const std::uint32_t> groups) {
-    if (params.k == 0) throw InvalidArgument("k must be >= 1");
-    if (!(params.group_weight >= 0.0f) || !std::isfinite(params.group_weight)) {
+void PartGraphRecognitionParams::Validate() const {
+    if (k == 0) throw InvalidArgument("k must be >= 1");
+    if (!(group_weight >= 0.0f) || !std::isfinite(group_weight)) {
         throw InvalidArgument("group_weight must be >= 0 and finite");
     }
-    if (!groups.empty() && groups.size() != graph.size()) {
-        throw InvalidArgument(fmt::format("groups must have one entry per part ({}), got {}",
-                                          graph.size(), groups.size()));
-    }
-    if (!(params.size_exponent >= 0.0f)) throw InvalidArgument("size_exponent must be >= 0");
-    if (!(params.distance_offset > 0.0f) || !std::isfinite(params.distance_offset)) {
+    if (!(size_exponent >= 0.0f)) throw InvalidArgument("size_exponent must be >= 0");
+    if (!(distance_offset > 0.0f) || !std::isfinite(distance_offset)) {
         throw InvalidArgument("distance_offset must be > 0 and finite");
     }
     float prior_sum = 0.0f;
     for (std::size_t c = 1; c < kNumCategories; ++c) {
-        const float w = params.category_priors[c];
+        const float w = category_priors[c];
         if (!(w >= 0.0f) || !std::isfinite(w)) {
             throw InvalidArgument("category priors must be >= 0 and finite");
         }
         prior_sum += w;
     }
     if (!(prior_sum > 0.0f)) throw InvalidArgument("category priors: at least one must be > 0");
+}
+
+PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& graph,
+                               const FeatureMatrix& descriptors,
+                               const PartGraphRecognitionParams& params,
+                               std::span<const std::uint32_t> groups) {
+    params.Validate();
+    if (!groups.empty() && groups.size() != graph.size()) {
+        throw InvalidArgument(fmt::format("groups must have one entry per part ({}), got {}",
+                                          graph.size(), groups.size()));
+    }
     if (static_cast<std::size_t>(descriptors.rows()) != graph.size() ||
         (descriptors.rows() > 0 && descriptors.cols() != kPartDescriptorSize)) {
         throw InvalidArgument("descriptors must have one row of kPartDescriptorSize per part");
@@ -659,63 +663,6 @@ std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& 
     }
     for (float& x : p) x = static_cast<float>(x / total);
     return p;
-}
-
-std::array<float, kNumCategories> ApplyCategoryPriors(
-    const std::array<float, kNumCategories>& p, const std::array<float, kNumCategories>& priors) {
-    std::array<float, kNumCategories> out = p;
-    float sum = 0.0f;
-    for (std::size_t c = 1; c < kNumCategories; ++c) out[c] *= priors[c];
-    for (float x : out) sum += x;
-    if (sum > 0.0f) {
-        for (float& x : out) x /= sum;
-    }
-    return out;
-}
-
-CategoryDistribution WeightedProductOfExperts(std::span<const CategoryDistribution* const> experts,
-                                              std::span<const float> weights) {
-    if (experts.size() != weights.size()) {
-        throw InvalidArgument("product of experts: one weight per expert");
-    }
-    float total = 0.0f;
-    for (float w : weights) {
-        if (!(w >= 0.0f) || !std::isfinite(w)) {
-            throw InvalidArgument("product of experts: weights must be >= 0 and finite");
-        }
-        total += w;
-    }
-    if (!(total > 0.0f)) throw InvalidArgument("product of experts: all weights are 0");
-    constexpr float kFloor = 0.01f;
-    CategoryDistribution p{};
-    float sum = 0.0f;
-    for (std::size_t c = 1; c < kNumCategories; ++c) {
-        float log_p = 0.0f;
-        for (std::size_t e = 0; e < experts.size(); ++e) {
-            log_p += weights[e] / total * std::log(std::max((*experts[e])[c], kFloor));
-        }
-        p[c] = std::exp(log_p);
-        sum += p[c];
-    }
-    for (float& x : p) x /= sum;
-    return p;
-}
-
-std::array<float, kNumCategories> BlendCategoryProbabilities(
-    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
-    float w) {
-    if (!(w >= 0.0f && w <= 1.0f)) throw InvalidArgument("blend weight must be in [0, 1]");
-    const std::array<const CategoryDistribution*, 2> experts{&a, &b};
-    const std::array<float, 2> weights{1.0f - w, w};
-    return WeightedProductOfExperts(experts, weights);
-}
-
-Category ArgMaxCategory(const std::array<float, kNumCategories>& p) {
-    std::size_t best = 0;
-    for (std::size_t c = 1; c < kNumCategories; ++c) {
-        if (p[c] > p[best]) best = c;
-    }
-    return static_cast<Category>(best);
 }
 
 VoxelVoteGrid::VoxelVoteGrid(float voxel_size) : voxel_(voxel_size) {

@@ -40,6 +40,7 @@
 #include "multicue/features/feature_common.hpp"
 #include "multicue/features/rsd.hpp"
 #include "multicue/ml/knn.hpp"
+#include "multicue/recognition/category_distribution.hpp"
 #include "multicue/recognition/category_stacker.hpp"
 #include "multicue/recognition/geometric_category.hpp"
 #include "multicue/recognition/part_graph.hpp"
@@ -119,13 +120,6 @@ struct PartGraphTrainParams {
     std::uint64_t seed = 1;  ///< sampling seed
 };
 
-/// Equal prior weights for every category.
-constexpr std::array<float, kNumCategories> UniformCategoryPriors() {
-    std::array<float, kNumCategories> p{};
-    for (float& x : p) x = 1.0f;
-    return p;
-}
-
 struct PartGraphRecognitionParams {
     std::size_t max_parts = 4;   ///< largest subgraph grown in a scene (Figure 5.14 a), [1, 15]
     std::size_t k = 5;           ///< neighbours voting per subgraph, >= 1
@@ -150,6 +144,8 @@ struct PartGraphRecognitionParams {
     /// part's accumulated votes before they are normalised: the scenes' category frequencies
     /// relative to the balanced training votes, each >= 0 and finite, at least one > 0.
     std::array<float, kNumCategories> category_priors = UniformCategoryPriors();
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 /// Per-part and per-group category distributions (indexed by Category; kNone stays 0 unless a
@@ -253,26 +249,6 @@ PartGraphResult RecognizeParts(const PartGraphModel& model, const PartGraph& gra
 std::array<float, kNumCategories> MergePartProbabilities(const PartGraphResult& result,
                                                          const std::vector<Indices>& parts,
                                                          const std::vector<std::size_t>& part_ids);
-
-/// `p` times `priors` per category (kNone kept as is), normalised; all zero stays all zero.
-std::array<float, kNumCategories> ApplyCategoryPriors(
-    const std::array<float, kNumCategories>& p, const std::array<float, kNumCategories>& priors);
-
-/// Weighted product of experts: per real category the product over the experts of
-/// max(p, 0.01)^(w / sum of the weights), normalised (kNone gets 0). InvalidArgument unless there
-/// is one weight per expert, each >= 0 and finite, and not all 0.
-CategoryDistribution WeightedProductOfExperts(std::span<const CategoryDistribution* const> experts,
-                                              std::span<const float> weights);
-
-/// Product of experts of two category distributions: per real category
-/// max(a, 0.01)^(1 - w) * max(b, 0.01)^w, normalised (kNone gets 0). InvalidArgument unless
-/// w is in [0, 1].
-std::array<float, kNumCategories> BlendCategoryProbabilities(
-    const std::array<float, kNumCategories>& a, const std::array<float, kNumCategories>& b,
-    float w);
-
-/// The most probable category of a distribution (ties to the lower value).
-Category ArgMaxCategory(const std::array<float, kNumCategories>& p);
 
 /// Multi-view accumulation (section 5.3, Figure 5.16): per-point category votes of registered
 /// frames summed in a voxel grid (5 mm by default); each point then takes the category of its

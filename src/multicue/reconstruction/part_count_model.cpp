@@ -16,6 +16,15 @@ double Poisson(double lambda, std::size_t k) {
 
 }  // namespace
 
+void PartCountParams::Validate() const {
+    for (const double mean : {flat_mean, round_mean, other_mean}) {
+        if (!(mean > 0.0) || !std::isfinite(mean)) {
+            throw InvalidArgument("part count means must be > 0 and finite, got " +
+                                  std::to_string(mean));
+        }
+    }
+}
+
 ObjectType ObjectTypeOf(Category category) {
     switch (category) {
         case Category::kBox:

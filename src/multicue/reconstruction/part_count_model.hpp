@@ -25,6 +25,8 @@ struct PartCountParams {
 
     /// The thesis's means (its segmentation makes fewer parts).
     static PartCountParams Thesis() { return {0.876, 2.166, 3.317}; }
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 /// The type of a geometric category: box, flat and plate are flat; sphere and cylinder round;

@@ -275,6 +275,9 @@ FootprintRectangle RunRectangleRansac(const PointCloud& cloud, const SideFootpri
 }
 }  // namespace
 
+void BoxFitParams::Validate() const { ValidateBoxParams(*this); }
+void CylinderModelParams::Validate() const { ValidateCylinderParams(*this); }
+
 float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p) {
     const Eigen::Vector3f q = (box.axes.transpose() * (p - box.center)).cwiseAbs();
     const Eigen::Vector3f half = 0.5f * box.extents;

@@ -55,6 +55,8 @@ struct BoxFitParams {
                                    ///< (FitFootprintRectangle) proposes an orientation too
     int rectangle_iterations = 500;  ///< its sample cap, >= 1 [samples]
     std::uint64_t seed = 1;          ///< its sampler seed [-]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct FootprintRectangleParams {
@@ -166,6 +168,8 @@ struct CylinderModelParams {
     std::size_t min_cap_points = 10;  ///< a cap fixes its end of the axis segment only with at
                                       ///< least this many points [points]; >= 1
     float inlier_threshold = 0.01f;   ///< distance to the surface for inlier_ratio [m]; > 0
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 /// Cylinder of an object (cans, cups, bottles; section 5.4.2.1).

@@ -423,6 +423,8 @@ float Median(std::vector<float>& v) {
 
 }  // namespace
 
+void RotationalFitParams::Validate() const { CheckParams(*this); }
+
 float RotationalModel::RadiusAt(float h) const {
     if (heights.empty() || h < heights.front() || h > heights.back()) return 0.0f;
     const auto it = std::upper_bound(heights.begin(), heights.end(), h);

@@ -53,6 +53,21 @@ void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p) {
 
 }  // namespace
 
+void VerificationParams::Validate() const {
+    if (!(voxel_size > 0.0f)) {
+        throw InvalidArgument(fmt::format("verification: voxel_size must be > 0, got {}", voxel_size));
+    }
+    if (!(margin >= 0.0f)) throw InvalidArgument("verification: margin must be >= 0");
+    if (tolerance_voxels < 0) throw InvalidArgument("verification: tolerance_voxels must be >= 0");
+    if (!(max_invalid_ratio >= 0.0f && max_invalid_ratio <= 1.0f)) {
+        throw InvalidArgument("verification: max_invalid_ratio must be in [0, 1]");
+    }
+    if (!(sample_spacing > 0.0f)) {
+        throw InvalidArgument(
+            fmt::format("verification: sample_spacing must be > 0, got {}", sample_spacing));
+    }
+}
+
 std::vector<Eigen::Vector3f> SampleMeshSurface(const TriangleMesh& mesh, float spacing) {
     if (!(spacing > 0.0f))
         throw InvalidArgument(fmt::format("sample spacing must be > 0, got {}", spacing));
@@ -101,16 +116,7 @@ std::vector<Eigen::Vector3f> SampleMeshSurface(const TriangleMesh& mesh, float s
 VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan,
                                const Eigen::Vector3f& sensor_origin,
                                const VerificationParams& params) {
-    if (!(params.voxel_size > 0.0f)) {
-        throw InvalidArgument(
-            fmt::format("verification: voxel_size must be > 0, got {}", params.voxel_size));
-    }
-    if (!(params.margin >= 0.0f)) throw InvalidArgument("verification: margin must be >= 0");
-    if (params.tolerance_voxels < 0)
-        throw InvalidArgument("verification: tolerance_voxels must be >= 0");
-    if (!(params.max_invalid_ratio >= 0.0f && params.max_invalid_ratio <= 1.0f)) {
-        throw InvalidArgument("verification: max_invalid_ratio must be in [0, 1]");
-    }
+    params.Validate();
     if (!sensor_origin.allFinite())
         throw InvalidArgument("verification: sensor origin must be finite");
     VerificationResult result;

@@ -28,8 +28,7 @@ std::uint64_t PackKey(const Eigen::Vector3i& c) {
            static_cast<std::uint64_t>(c.z() + kBias);
 }
 
-void Validate(const PointCloud& cloud, const ConvexitySplitParams& p) {
-    if (!cloud.HasNormals()) throw DataError("convexity split needs normals");
+void CheckParams(const ConvexitySplitParams& p) {
     if (!(p.patch_size > 0.0f) || !std::isfinite(p.patch_size)) {
         throw InvalidArgument(fmt::format("patch_size must be > 0, got {}", p.patch_size));
     }
@@ -64,11 +63,14 @@ float Median(std::vector<float> values) {
 
 }  // namespace
 
+void ConvexitySplitParams::Validate() const { CheckParams(*this); }
+
 ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& object,
                                       const std::vector<Indices>& parts,
                                       const ConvexitySplitParams& params,
                                       const Eigen::Vector4f& support_plane) {
-    Validate(cloud, params);
+    params.Validate();
+    if (!cloud.HasNormals()) throw DataError("convexity split needs normals");
     ConvexitySplitResult result;
     if (object.empty()) return result;
     if (parts.size() < 2) {

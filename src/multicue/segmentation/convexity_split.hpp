@@ -32,6 +32,8 @@ struct ConvexitySplitParams {
     float bend_angle_deg = 35.0f;
     float max_top_difference = 0.015f;  ///< groups across a bend join when their highest points
                                         ///< above the support plane differ less than this [m]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct ConvexitySplitResult {

@@ -208,4 +208,30 @@ ClusteringResult EuclideanClusteringOrganized(const PointCloud& organized,
                   params.max_cluster_size, params.compute_labels);
 }
 
+void ObjectClusteringParams::Validate() const {
+    CheckClusterParams(tolerance, min_points, max_points);
+    if (organized_half_window < 1) {
+        throw InvalidArgument(
+            fmt::format("organized_half_window must be >= 1 pixel, got {}", organized_half_window));
+    }
+}
+
+ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
+                                const ObjectClusteringParams& params) {
+    params.Validate();
+    if (cloud.IsOrganized()) {
+        return EuclideanClusteringOrganized(cloud, {.tolerance = params.tolerance,
+                                                    .min_cluster_size = params.min_points,
+                                                    .max_cluster_size = params.max_points,
+                                                    .subset = region,
+                                                    .half_window = params.organized_half_window});
+    }
+    const KdTree tree(cloud, region);
+    return EuclideanClustering(cloud, tree,
+                               {.tolerance = params.tolerance,
+                                .min_cluster_size = params.min_points,
+                                .max_cluster_size = params.max_points,
+                                .subset = region});
+}
+
 }  // namespace multicue

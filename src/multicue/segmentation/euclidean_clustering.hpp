@@ -90,4 +90,23 @@ ClusteringResult EuclideanClustering(const PointCloud& cloud, const KdTree& tree
 ClusteringResult EuclideanClusteringOrganized(const PointCloud& organized,
                                               const OrganizedClusteringParams& params);
 
+/// Object hypotheses: the clusters of a region of a frame (thesis section 2.4, the points above
+/// a table).
+struct ObjectClusteringParams {
+    float tolerance = 0.015f;         ///< points closer than this are one object [m]; > 0
+    std::size_t min_points = 150;     ///< smaller clusters are not objects [points]
+    std::size_t max_points = 200000;  ///< larger clusters are not objects [points]; >= min_points
+    /// Organized frames: pixel reach of a neighbourhood; 2 bridges one-pixel gaps [pixels]; >= 1.
+    int organized_half_window = 2;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Clusters of the points `region` (indices into `cloud`): organized frames by pixel adjacency
+/// (EuclideanClusteringOrganized, 8-connected within organized_half_window pixels), other clouds
+/// on a k-d tree of the region (EuclideanClustering). Throws InvalidArgument for bad parameters or
+/// indices out of range.
+ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
+                                const ObjectClusteringParams& params);
+
 }  // namespace multicue

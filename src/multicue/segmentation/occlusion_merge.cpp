@@ -16,7 +16,7 @@ namespace {
 
 constexpr float kDegToRad = 3.14159265358979f / 180.0f;
 
-void Validate(const OcclusionMergeParams& p) {
+void CheckParams(const OcclusionMergeParams& p) {
     const auto in_unit = [](float v) { return v >= 0.0f && v <= 1.0f; };
     const auto positive = [](float v) { return v > 0.0f && std::isfinite(v); };
     if (!(p.depth_margin >= 0.0f) || !std::isfinite(p.depth_margin)) {
@@ -207,12 +207,14 @@ bool CylinderContinues(const PointCloud& cloud, const Indices& from, const Indic
 
 }  // namespace
 
+void OcclusionMergeParams::Validate() const { CheckParams(*this); }
+
 OcclusionMergeResult MergeOccludedFragments(const PointCloud& cloud,
                                             const std::vector<Indices>& objects,
                                             const std::vector<std::vector<Indices>>& parts,
                                             const Eigen::Vector4f& support_plane,
                                             const OcclusionMergeParams& params) {
-    Validate(params);
+    CheckParams(params);
     if (parts.size() != objects.size()) {
         throw InvalidArgument(fmt::format("parts must have one list per object ({}), got {}",
                                           objects.size(), parts.size()));
@@ -270,6 +272,38 @@ OcclusionMergeResult MergeOccludedFragments(const PointCloud& cloud,
         result.groups[static_cast<std::size_t>(group_of[root])].push_back(k);
     }
     return result;
+}
+
+std::vector<ObjectSegment> MergeOccludedObjects(const PointCloud& cloud,
+                                                std::vector<ObjectSegment> objects,
+                                                const Eigen::Vector4f& support_plane,
+                                                const Switchable<OcclusionMergeParams>& params) {
+    params.Validate();
+    if (!params.enabled || objects.size() < 2) return objects;
+    std::vector<Indices> indices;
+    std::vector<std::vector<Indices>> parts;
+    indices.reserve(objects.size());
+    parts.reserve(objects.size());
+    for (const auto& o : objects) {
+        indices.push_back(o.indices);
+        parts.push_back(o.parts);
+    }
+    const OcclusionMergeResult merged =
+        MergeOccludedFragments(cloud, indices, parts, support_plane, params);
+    if (merged.merges == 0) return objects;
+    std::vector<ObjectSegment> out;
+    out.reserve(merged.groups.size());
+    for (const auto& group : merged.groups) {
+        ObjectSegment o = std::move(objects[group.front()]);
+        for (std::size_t k = 1; k < group.size(); ++k) {
+            auto& other = objects[group[k]];
+            o.indices.insert(o.indices.end(), other.indices.begin(), other.indices.end());
+            for (auto& part : other.parts) o.parts.push_back(std::move(part));
+        }
+        std::sort(o.indices.begin(), o.indices.end());
+        out.push_back(std::move(o));
+    }
+    return out;
 }
 
 }  // namespace multicue

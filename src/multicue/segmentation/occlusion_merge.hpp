@@ -14,8 +14,10 @@
 
 #include <Eigen/Core>
 
+#include "multicue/core/params.hpp"
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/types.hpp"
+#include "multicue/segmentation/part_segmentation.hpp"
 
 namespace multicue {
 
@@ -36,6 +38,8 @@ struct OcclusionMergeParams {
     float min_cylinder_radius = 0.01f;  ///< cylinder continuation: smallest radius [m]
     float max_cylinder_radius = 0.2f;   ///< cylinder continuation: largest radius [m]
     int cylinder_iterations = 300;      ///< cylinder RANSAC sample cap [samples]; >= 1
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct OcclusionMergeResult {
@@ -58,5 +62,13 @@ OcclusionMergeResult MergeOccludedFragments(const PointCloud& cloud,
                                             const std::vector<std::vector<Indices>>& parts,
                                             const Eigen::Vector4f& support_plane,
                                             const OcclusionMergeParams& params = {});
+
+/// The objects after joining occluded fragments (MergeOccludedFragments): each merged object
+/// takes the points and parts of its group, in the order of the groups; with `enabled` off or
+/// fewer than two objects they come back as they were.
+std::vector<ObjectSegment> MergeOccludedObjects(const PointCloud& cloud,
+                                                std::vector<ObjectSegment> objects,
+                                                const Eigen::Vector4f& support_plane,
+                                                const Switchable<OcclusionMergeParams>& params);
 
 }  // namespace multicue

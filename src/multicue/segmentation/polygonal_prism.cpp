@@ -71,6 +71,13 @@ void DiscardInteriorPoints(std::vector<Eigen::Vector2d>& pts) {
 
 }  // namespace
 
+void PrismParams::Validate() const {
+    if (!(min_height <= max_height)) {
+        throw InvalidArgument(
+            fmt::format("prism min_height {} must not exceed max_height {}", min_height, max_height));
+    }
+}
+
 std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indices& subset,
                                              const Eigen::Vector4f& plane) {
     CheckPlane(plane);
@@ -132,10 +139,7 @@ std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indi
 Indices PolygonalPrism(const PointCloud& cloud, const Eigen::Vector4f& plane,
                        const std::vector<Eigen::Vector3f>& hull, const PrismParams& params) {
     CheckPlane(plane);
-    if (!(params.min_height <= params.max_height)) {
-        throw InvalidArgument(fmt::format("prism min_height {} must not exceed max_height {}",
-                                          params.min_height, params.max_height));
-    }
+    params.Validate();
     if (hull.size() < 3) {
         throw InvalidArgument(
             fmt::format("prism needs a hull of at least 3 vertices, got {}", hull.size()));

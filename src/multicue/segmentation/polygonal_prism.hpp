@@ -22,6 +22,8 @@ std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indi
 struct PrismParams {
     float min_height = 0.01f;  ///< lowest height above the plane that counts [m]
     float max_height = 0.50f;  ///< highest height above the plane that counts [m]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 /// Points whose height above `plane` (along its normal) lies in [min_height, max_height] and whose

@@ -125,6 +125,8 @@ std::size_t MarkPoints(const PointCloud& cloud, const Indices& subset,
 
 }  // namespace
 
+void RegionGrowingParams::Validate() const { CheckParams(*this); }
+
 RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
                                   const RegionGrowingParams& params) {
     CheckParams(params);

@@ -38,6 +38,8 @@ struct RegionGrowingParams {
     bool discard_small_parts = true;  ///< drop parts still under min_part_size after merging;
                                       ///< false keeps them as parts
     Indices subset = {};  ///< points to segment (duplicates ignored); empty = all points
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct RegionGrowingResult {

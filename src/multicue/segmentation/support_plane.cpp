@@ -17,7 +17,7 @@ namespace {
 
 constexpr float kDegToRad = static_cast<float>(M_PI) / 180.0f;
 
-void Validate(const SupportPlaneParams& p) {
+void CheckParams(const SupportPlaneParams& p) {
     if (p.up && (!p.up->allFinite() || p.up->norm() < 1e-6f)) {
         throw InvalidArgument("support plane: up must be a finite non-zero vector");
     }
@@ -74,8 +74,10 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
 
 }  // namespace
 
+void SupportPlaneParams::Validate() const { CheckParams(*this); }
+
 SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params) {
-    Validate(params);
+    CheckParams(params);
     SupportPlane result;
     Indices finite;
     finite.reserve(cloud.size());
@@ -182,6 +184,23 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     LogDebug("support plane ({:.3f}, {:.3f}, {:.3f}, {:.3f}) with {} points from {} candidates",
              plane.x(), plane.y(), plane.z(), plane.w(), result.inliers.size(), result.candidates);
     return result;
+}
+
+TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& support,
+                            const PrismParams& prism) {
+    support.Validate();
+    prism.Validate();
+    TableRegion region;
+    region.support = FindSupportPlane(cloud, support);
+    const SupportPlane& s = region.support;
+    if (s.found && s.hull.size() >= 3) region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
+    if (region.points.empty()) {
+        region.support = SupportPlane{};
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.IsFinite(i)) region.points.push_back(static_cast<Index>(i));
+        }
+    }
+    return region;
 }
 
 }  // namespace multicue

@@ -10,6 +10,7 @@
 
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/types.hpp"
+#include "multicue/segmentation/polygonal_prism.hpp"
 
 namespace multicue {
 
@@ -41,6 +42,8 @@ struct SupportPlaneParams {
     float cluster_tolerance = 0.02f;  ///< the table is the largest connected patch of inliers [m]
     std::uint64_t seed = 1;           ///< sample consensus seed
     int num_threads = 0;              ///< 0 = all cores
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct SupportPlane {
@@ -56,5 +59,18 @@ struct SupportPlane {
 /// Finds the support plane. A cloud without a suitable plane gives found = false (not an error).
 /// Throws InvalidArgument for bad parameters (non-positive threshold, zero up vector, ...).
 SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params);
+
+/// The support plane and the points that may belong to objects on it.
+struct TableRegion {
+    SupportPlane support;  ///< found = false: no table (or one that supports nothing)
+    Indices points;        ///< the points above the table (its prism), else every finite point
+};
+
+/// The table and the points standing on it (thesis section 2.4): FindSupportPlane, then the
+/// polygonal prism (`prism`) over the plane's hull. Without a plane, or with a plane that
+/// supports nothing (the top of a box in a cloud of objects), every finite point may belong to an
+/// object and `support` is reset to "none". Throws InvalidArgument for bad parameters.
+TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& support,
+                            const PrismParams& prism);
 
 }  // namespace multicue

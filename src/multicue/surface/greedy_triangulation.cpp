@@ -90,7 +90,8 @@ TriangulationResult TriangulateFinite(const PointCloud& cloud,
 
 }  // namespace
 
-void ValidateTriangulationParams(const GreedyTriangulationParams& p) {
+void GreedyTriangulationParams::Validate() const {
+    const GreedyTriangulationParams& p = *this;
     if (!(p.search_radius > 0.0f) || !std::isfinite(p.search_radius))
         throw InvalidArgument(fmt::format("search_radius must be > 0, got {}", p.search_radius));
     if (!(p.mu > 0.0f) || !std::isfinite(p.mu))
@@ -120,7 +121,7 @@ void ValidateTriangulationParams(const GreedyTriangulationParams& p) {
 
 TriangulationResult GreedyProjectionTriangulation(const PointCloud& cloud,
                                                   const GreedyTriangulationParams& params) {
-    ValidateTriangulationParams(params);
+    params.Validate();
     cloud.Validate();
     if (params.per_label && !cloud.HasLabels() && !cloud.empty())
         throw InvalidArgument("per_label needs a cloud with labels");
@@ -238,7 +239,7 @@ struct IncrementalTriangulation::Impl {
 
 IncrementalTriangulation::IncrementalTriangulation(const GreedyTriangulationParams& params)
     : impl_(std::make_unique<Impl>()) {
-    ValidateTriangulationParams(params);
+    params.Validate();
     impl_->params = params;
 }
 

@@ -57,6 +57,8 @@ struct GreedyTriangulationParams {
     /// repeated measurement of the existing surface and is dropped [m]; 0 = search_radius / 5.
     float overlap_distance = 0.0f;
     int num_threads = 0;  ///< 0 = all cores (used by per-label meshing and normal estimation)
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
 };
 
 struct TriangulationResult {
@@ -69,9 +71,6 @@ struct TriangulationResult {
     std::size_t gap_triangles = 0;   ///< triangles that closed gaps between touching fronts
     std::size_t hole_triangles = 0;  ///< triangles added by hole filling
 };
-
-/// Checks the parameters; throws InvalidArgument naming the first bad one.
-void ValidateTriangulationParams(const GreedyTriangulationParams& params);
 
 /// Triangulates the finite points of `cloud` (NaN points are skipped). Throws InvalidArgument for
 /// bad parameters or, with per_label, a cloud without labels. An empty cloud gives an empty mesh.

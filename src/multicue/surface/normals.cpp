@@ -50,6 +50,8 @@ void CheckTree(const PointCloud& cloud, const KdTree& tree) {
 
 }  // namespace
 
+void NormalParams::Validate() const { CheckParams(*this); }
+
 NormalsResult EstimateNormals(const PointCloud& cloud, const KdTree& tree,
                               const NormalParams& params) {
     CheckParams(params);
@@ -148,6 +150,35 @@ void SetNormals(PointCloud& cloud, NormalsResult result) {
     }
     cloud.normals = std::move(result.normals);
     cloud.curvature = std::move(result.curvature);
+}
+
+void FrameNormalParams::Validate() const {
+    organized.Validate();
+    unorganized.Validate();
+}
+
+NormalsResult EstimateFrameNormals(const PointCloud& cloud, const Indices& region,
+                                   const FrameNormalParams& params) {
+    params.Validate();
+    if (cloud.IsOrganized()) {
+        OrganizedNormalParams p = params.organized;
+        p.mask.assign(cloud.size(), 0);
+        for (Index i : region) {
+            if (i >= cloud.size()) {
+                throw InvalidArgument(fmt::format(
+                    "region index {} is out of range for a cloud of {} points", i, cloud.size()));
+            }
+            p.mask[i] = 1;
+        }
+        return EstimateNormalsOrganized(cloud, p);
+    }
+    const KdTree tree(cloud);
+    return EstimateNormals(cloud, tree, params.unorganized);
+}
+
+void EnsureFrameNormals(PointCloud& cloud, const Indices& region, const FrameNormalParams& params) {
+    if (cloud.HasNormals() && cloud.HasCurvature()) return;
+    SetNormals(cloud, EstimateFrameNormals(cloud, region, params));
 }
 
 }  // namespace multicue

@@ -101,6 +101,8 @@ float DepthLimit(const OrganizedNormalParams& params, float depth) {
 
 }  // namespace
 
+void OrganizedNormalParams::Validate() const { CheckParams(*this); }
+
 NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
                                        const OrganizedNormalParams& params) {
     CheckParams(params);

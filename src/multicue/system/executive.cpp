@@ -35,7 +35,8 @@ class SegmentationMethod final : public ExaminationMethod {
 
     void Examine(ExaminationContext& context, std::vector<Hypothesis>& hypotheses) override {
         const PointCloud& cloud = context.frame.cloud;
-        context.perceive = Perceive(cloud, context.params.perceive);
+        context.perceive = Perceive(cloud, context.params.perceive,
+                                    context.models ? *context.models : PerceiveModels{});
         const Eigen::Isometry3d& T = context.frame.T_world_sensor;
         for (const auto& object : context.perceive->objects) {
             Hypothesis h;
@@ -412,8 +413,11 @@ std::unique_ptr<ExaminationMethod> MakeIdentificationMethod() {
     return std::make_unique<IdentificationMethod>();
 }
 
-PerceptionExecutive::PerceptionExecutive(ObjectDatabase* database, ExecutiveParams params)
-    : database_(database), params_(std::move(params)) {
+PerceptionExecutive::PerceptionExecutive(ObjectDatabase* database, ExecutiveParams params,
+                                         PerceiveModels models)
+    : database_(database), params_(std::move(params)), models_(std::move(models)) {
+    params_.perceive.Validate();
+    CheckCategorizationModel(params_.perceive.category, models_.part_graph.get());
     methods_.push_back(MakeSegmentationMethod());
     methods_.push_back(MakeColourDescriptorMethod());
     methods_.push_back(MakeShapeDescriptorMethod());
@@ -501,7 +505,7 @@ FrameReport PerceptionExecutive::Run(const Frame& frame, const Task& task) {
     report.methods = Plan(task);
 
     auto examine = [&](const Frame& input) {
-        ExaminationContext context{input, task, params_, database_, std::nullopt};
+        ExaminationContext context{input, task, params_, database_, &models_, std::nullopt};
         std::vector<Hypothesis> hypotheses;
         for (const auto& name : report.methods) {
             const auto start = Clock::now();

@@ -96,6 +96,7 @@ struct ExaminationContext {
     const Task& task;
     const ExecutiveParams& params;
     const ObjectDatabase* database = nullptr;  ///< may be null (nothing known yet)
+    const PerceiveModels* models = nullptr;    ///< the categoriser's models (null: none)
     std::optional<PerceiveResult> perceive;    ///< set by the segmentation method
 };
 
@@ -141,8 +142,10 @@ double DescriptorDistance(const std::string& kind, const std::vector<float>& a,
 
 class PerceptionExecutive {
   public:
-    /// `database` may be null: nothing is identified or learnt then.
-    PerceptionExecutive(ObjectDatabase* database, ExecutiveParams params = {});
+    /// `database` may be null: nothing is identified or learnt then. `models` are the learned
+    /// models of the segmentation method's categoriser (params.perceive.category); checked here.
+    PerceptionExecutive(ObjectDatabase* database, ExecutiveParams params = {},
+                        PerceiveModels models = {});
 
     /// Adds a method (the four standard ones are there from the start).
     void AddMethod(std::unique_ptr<ExaminationMethod> method);
@@ -157,6 +160,7 @@ class PerceptionExecutive {
   private:
     ObjectDatabase* database_;
     ExecutiveParams params_;
+    PerceiveModels models_;
     std::vector<std::unique_ptr<ExaminationMethod>> methods_;
 };
 

@@ -83,10 +83,10 @@ void FuseViewCategories(const std::vector<const PointCloud*>& clouds,
         Indices objects;
         for (const auto& o : r.objects)
             objects.insert(objects.end(), o.indices.begin(), o.indices.end());
-        EnsurePerceiveNormals(cloud, objects, params);
+        const PerceiveParams threaded = ApplyThreadCount(params);
+        EnsureFrameNormals(cloud, objects, threaded.normals);
         const Eigen::Vector4f plane = r.support.found ? r.support.plane : Eigen::Vector4f::Zero();
-        for (std::size_t k : changed)
-            r.objects[k].model = ModelObject(cloud, r.objects[k], plane, params);
+        ModelObjects(cloud, r.objects, plane, threaded.models, changed);
     }
 }
 

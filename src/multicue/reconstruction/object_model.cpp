@@ -3,16 +3,20 @@
 // 4.2.4.3), triangulated meshes where the primitive fails (section 5.4.2.3), attached outlier
 // surfaces and a grasp summary.
 
+#include "multicue/reconstruction/object_model.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
 
 #include <Eigen/Geometry>
+#include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
-#include "multicue/system/perceive.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/reconstruction/fit_guidance.hpp"
 
 namespace multicue {
 namespace {
@@ -122,10 +126,10 @@ PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
 // Triangulated surface of the given points (at most max_points, an even stride); only vertices
 // with triangles are kept.
 TriangleMesh TriangulatePoints(const PointCloud& cloud, const Indices& indices,
-                               const PerceiveParams& params) {
+                               const ModelParams& params) {
     const std::size_t stride =
-        std::max<std::size_t>(1, (indices.size() + params.model_mesh_max_points - 1) /
-                                     std::max<std::size_t>(1, params.model_mesh_max_points));
+        std::max<std::size_t>(1, (indices.size() + params.mesh_max_points - 1) /
+                                     std::max<std::size_t>(1, params.mesh_max_points));
     PointCloud sub;
     const bool normals = cloud.HasNormals();
     for (std::size_t k = 0; k < indices.size(); k += stride) {
@@ -139,7 +143,7 @@ TriangleMesh TriangulatePoints(const PointCloud& cloud, const Indices& indices,
     sub.sensor_origin = cloud.sensor_origin;
     TriangleMesh mesh;
     if (sub.points.size() < 3) return mesh;
-    GreedyTriangulationParams p = params.model_mesh;
+    GreedyTriangulationParams p = params.mesh;
     p.per_label = false;
     p.num_threads = 1;
     if (!p.viewpoint) p.viewpoint = cloud.sensor_origin;
@@ -198,7 +202,7 @@ float SmallestHorizontalWidth(const std::vector<Eigen::Vector3f>& points,
 }
 
 GraspSummary Grasp(const PointCloud& cloud, const Indices& indices, const ObjectModel& m,
-                   const Eigen::Vector4f& plane, const PerceiveParams& params) {
+                   const Eigen::Vector4f& plane, const ModelParams& params) {
     GraspSummary g;
     const Eigen::Vector3f up = PlaneUp(plane);
     if (m.box) {
@@ -240,62 +244,59 @@ GraspSummary Grasp(const PointCloud& cloud, const Indices& indices, const Object
     return g;
 }
 
-}  // namespace
+// The guidance of the box and cylinder fits (sections 5.4.1, 5.4.2.1): RSD r_min of the object's
+// points and, with part probabilities, each point's probability of the fitted shape.
+struct ShapeGuidance {
+    std::vector<float> rsd, box_prior, round_prior;
+    FitGuidance Box() const { return {.rsd_min_radius = rsd, .shape_prior = box_prior}; }
+    FitGuidance Round() const { return {.rsd_min_radius = rsd, .shape_prior = round_prior}; }
+};
 
-ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
-                        const Eigen::Vector4f& plane, const PerceiveParams& params) {
-    if (!(params.min_model_inlier_ratio >= 0.0f && params.min_model_inlier_ratio <= 1.0f)) {
-        throw InvalidArgument("models.min_inlier_ratio must be in [0, 1]");
+ShapeGuidance GuideFits(const PointCloud& cloud, const PerceivedObject& object,
+                        const ModelParams& params) {
+    ShapeGuidance g;
+    if (!params.guided_fits || !cloud.HasNormals()) return g;
+    RsdParams rp = params.guided_rsd;
+    rp.num_threads = 1;
+    g.rsd = RsdMinRadii(cloud, object.indices, rp);
+    if (object.part_probabilities.size() != object.parts.size() || object.parts.empty()) return g;
+    g.box_prior.assign(cloud.size(), 0.0f);
+    g.round_prior.assign(cloud.size(), 0.0f);
+    for (std::size_t k = 0; k < object.parts.size(); ++k) {
+        const auto& q = object.part_probabilities[k];
+        const auto at = [&](Category x) { return q[static_cast<std::size_t>(x)]; };
+        for (Index i : object.parts[k]) {
+            g.box_prior[i] = std::clamp(at(Category::kBox) + at(Category::kFlat), 0.0f, 1.0f);
+            g.round_prior[i] = std::clamp(
+                at(Category::kCylinder) + at(Category::kSphere) + at(Category::kPlate), 0.0f, 1.0f);
+        }
     }
-    if (params.model_mesh_max_points < 3) {
-        throw InvalidArgument("models.mesh_max_points must be >= 3");
+    // Points outside every part keep a neutral prior.
+    std::vector<char> in_part(cloud.size(), 0);
+    for (const auto& part : object.parts) {
+        for (Index i : part) in_part[i] = 1;
     }
-    ValidateTriangulationParams(params.model_mesh);
-    if (params.verify_models) {  // checks the parameters only
-        VerifyModel(TriangleMesh{}, PointCloud{}, cloud.sensor_origin, params.verification);
+    for (Index i : object.indices) {
+        if (!in_part[i]) g.box_prior[i] = g.round_prior[i] = 0.5f;
     }
-    ObjectModel model;
+    return g;
+}
+
+// The primitive of the object's category into `model` (a cylinder for cylinders and plates, else
+// a box, upright on the table for boxes and flat objects), replaced by a surface of revolution
+// for round and other objects when that explains more than a poor primitive (section 5.4.2.2).
+// Returns the inlier ratio of the model kept (0 without one).
+float FitPrimitive(const PointCloud& cloud, const PerceivedObject& object,
+                   const Eigen::Vector4f& plane, const ModelParams& params,
+                   const ShapeGuidance& guidance, ObjectModel& model) {
     const Category c = object.category.category;
     const Eigen::Vector3f up = PlaneUp(plane);
     const bool upright_possible = !up.isZero();
     float inlier_ratio = 0.0f;
-    // Guidance: RSD r_min of the object's points, and each point's part probability of the shape.
-    std::vector<float> rsd, box_prior, round_prior;
-    FitGuidance box_guidance, round_guidance;
-    if (params.guided_fits && cloud.HasNormals()) {
-        RsdParams rp = params.guided_rsd;
-        rp.num_threads = 1;
-        rsd = RsdMinRadii(cloud, object.indices, rp);
-        box_guidance.rsd_min_radius = round_guidance.rsd_min_radius = rsd;
-        if (object.part_probabilities.size() == object.parts.size() && !object.parts.empty()) {
-            box_prior.assign(cloud.size(), 0.0f);
-            round_prior.assign(cloud.size(), 0.0f);
-            for (std::size_t k = 0; k < object.parts.size(); ++k) {
-                const auto& q = object.part_probabilities[k];
-                const auto at = [&](Category x) { return q[static_cast<std::size_t>(x)]; };
-                for (Index i : object.parts[k]) {
-                    box_prior[i] = std::clamp(at(Category::kBox) + at(Category::kFlat), 0.0f, 1.0f);
-                    round_prior[i] = std::clamp(
-                        at(Category::kCylinder) + at(Category::kSphere) + at(Category::kPlate),
-                        0.0f, 1.0f);
-                }
-            }
-            // Points outside every part keep a neutral prior.
-            std::vector<char> in_part(cloud.size(), 0);
-            for (const auto& part : object.parts) {
-                for (Index i : part) in_part[i] = 1;
-            }
-            for (Index i : object.indices) {
-                if (!in_part[i]) box_prior[i] = round_prior[i] = 0.5f;
-            }
-            box_guidance.shape_prior = box_prior;
-            round_guidance.shape_prior = round_prior;
-        }
-    }
     if (c == Category::kCylinder || c == Category::kPlate) {
         CylinderModelParams p = params.cylinder;
         p.sac.num_threads = 1;
-        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p, round_guidance);
+        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p, guidance.Round());
         if (cyl.found) {
             model.mesh = CylinderMesh(cyl);
             model.cylinder = cyl;
@@ -303,9 +304,10 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
         }
     }
     if (!model.cylinder) {
-        BoxModel box = (c == Category::kBox || c == Category::kFlat) && upright_possible
-                           ? FitUprightBox(cloud, object.indices, plane, params.box, box_guidance)
-                           : FitOrientedBoundingBox(cloud, object.indices, params.box);
+        BoxModel box =
+            (c == Category::kBox || c == Category::kFlat) && upright_possible
+                ? FitUprightBox(cloud, object.indices, plane, params.box, guidance.Box())
+                : FitOrientedBoundingBox(cloud, object.indices, params.box);
         if (!box.found) box = FitOrientedBoundingBox(cloud, object.indices, params.box);
         if (box.found) {
             model.mesh = BoxMesh(box);
@@ -313,9 +315,9 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
             inlier_ratio = box.inlier_ratio;
         }
     }
-    if (params.try_rotational && upright_possible && cloud.HasNormals() &&
+    if (params.rotational.enabled && upright_possible && cloud.HasNormals() &&
         (c == Category::kCylinder || c == Category::kOther || c == Category::kSphere) &&
-        inlier_ratio < params.min_model_inlier_ratio) {
+        inlier_ratio < params.min_inlier_ratio) {
         RotationalModel rot =
             FitRotationalModel(cloud, object.indices, up, plane, params.rotational);
         if (rot.found && rot.inlier_ratio > inlier_ratio) {
@@ -326,105 +328,180 @@ ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
             model.rotational = std::move(rot);
         }
     }
-    const bool has_primitive = model.box || model.cylinder || model.rotational;
-    if (!has_primitive) {
+    return inlier_ratio;
+}
+
+// Verification of the model's mesh against the frame (section 4.2.4.3), none when it is off or
+// the model is too large for the grid (a whole room without a table). Surface inside the table
+// is as impossible as surface in free space, but hidden from the sensor: samples more than two
+// cells below the plane count as invalid.
+std::optional<ModelVerificationSummary> VerifyInFrame(const PointCloud& cloud,
+                                                      const TriangleMesh& mesh,
+                                                      const Eigen::Vector4f& plane,
+                                                      const ModelParams& params) {
+    const VerificationParams& vp = params.verification;
+    if (!params.verification.enabled) return std::nullopt;
+    Eigen::Vector3f lo = mesh.vertices.front(), hi = lo;
+    for (const auto& v : mesh.vertices) {
+        lo = lo.cwiseMin(v);
+        hi = hi.cwiseMax(v);
+    }
+    const Eigen::Vector3d cells =
+        ((hi - lo).array() + 2.0f * vp.margin).cast<double>() / vp.voxel_size + 1.0;
+    if (cells.prod() > 0.9 * static_cast<double>(vp.max_cells)) return std::nullopt;
+    lo.array() -= vp.margin;
+    hi.array() += vp.margin;
+    const PointCloud rays = RaysThroughBox(cloud, lo, hi, vp.voxel_size);
+    VerificationResult v = VerifyModel(mesh, rays, cloud.sensor_origin, vp);
+    if (!PlaneUp(plane).isZero() && !v.samples.empty()) {
+        const float n = plane.head<3>().norm();
+        const float depth = 2.0f * vp.voxel_size;
+        std::size_t counts[3] = {0, 0, 0};
+        for (std::size_t i = 0; i < v.samples.size(); ++i) {
+            if ((plane.head<3>().dot(v.samples[i]) + plane.w()) / n < -depth) {
+                v.states[i] = SurfaceState::kInvalid;
+            }
+            ++counts[static_cast<int>(v.states[i])];
+        }
+        const float total = static_cast<float>(v.samples.size());
+        v.verified_ratio = static_cast<float>(counts[0]) / total;
+        v.occluded_ratio = static_cast<float>(counts[1]) / total;
+        v.invalid_ratio = static_cast<float>(counts[2]) / total;
+        v.accepted = v.invalid_ratio <= vp.max_invalid_ratio;
+    }
+    return ModelVerificationSummary{v.verified_ratio, v.occluded_ratio, v.invalid_ratio,
+                                    v.accepted};
+}
+
+// A rejected primitive becomes a triangulated mesh of the object's points (section 5.4.2.3).
+void ReplaceByMesh(const PointCloud& cloud, const Indices& indices, float inlier_ratio,
+                   const ModelParams& params, ObjectModel& model) {
+    TriangleMesh mesh = TriangulatePoints(cloud, indices, params);
+    if (mesh.triangles.empty()) return;
+    model.replaced = model.box ? "box" : model.cylinder ? "cylinder" : "rotational";
+    model.replace_reason =
+        inlier_ratio < params.min_inlier_ratio ? "inlier_ratio" : "verification";
+    model.replaced_inlier_ratio = inlier_ratio;
+    model.box.reset();
+    model.cylinder.reset();
+    model.rotational.reset();
+    model.mesh = std::move(mesh);
+}
+
+// The outliers of a good primitive (a handle, a spout), triangulated and attached to its mesh.
+void AttachOutliers(const PointCloud& cloud, const Indices& indices, const ModelParams& params,
+                    ObjectModel& model) {
+    float threshold = params.box.inlier_threshold;
+    if (model.cylinder) threshold = params.cylinder.inlier_threshold;
+    if (model.rotational) threshold = params.rotational.inlier_threshold;
+    Indices outliers;
+    for (Index i : indices) {
+        if (!cloud.IsFinite(i)) continue;
+        const Eigen::Vector3f& p = cloud.points[i];
+        const float d = model.box        ? BoxSurfaceDistance(*model.box, p)
+                        : model.cylinder ? CylinderSurfaceDistance(*model.cylinder, p)
+                                         : RotationalSurfaceDistance(*model.rotational, p);
+        if (d > threshold) outliers.push_back(i);
+    }
+    if (outliers.size() < params.min_attached_points) return;
+    const TriangleMesh extra = TriangulatePoints(cloud, outliers, params);
+    if (extra.triangles.empty()) return;
+    model.attached_points = extra.vertices.size();
+    model.attached_triangles = extra.triangles.size();
+    TriangleMesh base = std::move(model.mesh);
+    base.vertex_normals.clear();
+    base.vertex_colors.clear();
+    base.vertex_labels.clear();
+    base.Append(extra);
+    model.mesh = std::move(base);
+}
+
+}  // namespace
+
+void ConcentricMergeParams::Validate() const {
+    if (!(angle_deg >= 0.0f) || !(distance >= 0.0f) || !(radius_ratio >= 0.0f)) {
+        throw InvalidArgument("angle_deg, distance and radius_ratio must be >= 0");
+    }
+}
+
+void ContainedMergeParams::Validate() const {
+    if (!(margin >= 0.0f) || !(min_share > 0.0f && min_share <= 1.0f)) {
+        throw InvalidArgument("margin must be >= 0 and min_share in (0, 1]");
+    }
+}
+
+void StackedSplitParams::Validate() const {
+    if (!(min_step > 0.0f) || !(min_gain >= 0.0f)) {
+        throw InvalidArgument("min_step must be > 0 and min_gain >= 0");
+    }
+}
+
+void TouchingSplitParams::Validate() const {
+    if (!(min_gain >= 0.0f) || !(max_overlap >= 0.0f) || max_parts < 2 || max_parts > 12) {
+        throw InvalidArgument("min_gain and max_overlap must be >= 0, max_parts in [2, 12]");
+    }
+}
+
+void ModelParams::Validate() const {
+    if (!(min_inlier_ratio >= 0.0f && min_inlier_ratio <= 1.0f)) {
+        throw InvalidArgument("min_inlier_ratio must be in [0, 1]");
+    }
+    if (mesh_max_points < 3) throw InvalidArgument("mesh_max_points must be >= 3");
+    if (!(several_min_ratio >= 0.0f)) throw InvalidArgument("several_min_ratio must be >= 0");
+    ResolveThreadCount(num_threads);
+    ValidateNode("mesh", [&] { mesh.Validate(); });
+    ValidateNode("guided_rsd", [&] { guided_rsd.Validate(); });
+    ValidateNode("box", [&] { box.Validate(); });
+    ValidateNode("cylinder", [&] { cylinder.Validate(); });
+    ValidateNode("rotational", [&] { rotational.Validate(); });
+    ValidateNode("verification", [&] { verification.Validate(); });
+    ValidateNode("concentric", [&] { concentric.Validate(); });
+    ValidateNode("contained", [&] { contained.Validate(); });
+    ValidateNode("stacked", [&] { stacked.Validate(); });
+    ValidateNode("touching", [&] { touching.Validate(); });
+    ValidateNode("part_counts", [&] { part_counts.Validate(); });
+}
+
+ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
+                        const Eigen::Vector4f& plane, const ModelParams& params) {
+    params.Validate();
+    ObjectModel model;
+    const ShapeGuidance guidance = GuideFits(cloud, object, params);
+    const float inlier_ratio = FitPrimitive(cloud, object, plane, params, guidance, model);
+    if (!model.box && !model.cylinder && !model.rotational) {
         model.accepted = false;
         model.grasp = Grasp(cloud, object.indices, model, plane, params);
         return model;
     }
-
-    std::optional<double> grid_cells;
-    if (params.verify_models) {
-        Eigen::Vector3f lo = model.mesh.vertices.front(), hi = lo;
-        for (const auto& v : model.mesh.vertices) {
-            lo = lo.cwiseMin(v);
-            hi = hi.cwiseMax(v);
-        }
-        const Eigen::Vector3d cells =
-            ((hi - lo).array() + 2.0f * params.verification.margin).cast<double>() /
-                params.verification.voxel_size +
-            1.0;
-        grid_cells = cells.prod();
-    }
-    // A model too large for the grid (a whole room without a table) is not verified.
-    if (params.verify_models &&
-        *grid_cells <= 0.9 * static_cast<double>(params.verification.max_cells)) {
-        Eigen::Vector3f lo = model.mesh.vertices.front(), hi = lo;
-        for (const auto& v : model.mesh.vertices) {
-            lo = lo.cwiseMin(v);
-            hi = hi.cwiseMax(v);
-        }
-        lo.array() -= params.verification.margin;
-        hi.array() += params.verification.margin;
-        const PointCloud rays = RaysThroughBox(cloud, lo, hi, params.verification.voxel_size);
-        VerificationResult v =
-            VerifyModel(model.mesh, rays, cloud.sensor_origin, params.verification);
-        if (upright_possible && !v.samples.empty()) {
-            // Surface inside the table is as impossible as surface in free space, but hidden from
-            // the sensor: samples more than two cells below the plane count as invalid.
-            const float n = plane.head<3>().norm();
-            const float depth = 2.0f * params.verification.voxel_size;
-            std::size_t counts[3] = {0, 0, 0};
-            for (std::size_t i = 0; i < v.samples.size(); ++i) {
-                if ((plane.head<3>().dot(v.samples[i]) + plane.w()) / n < -depth) {
-                    v.states[i] = SurfaceState::kInvalid;
-                }
-                ++counts[static_cast<int>(v.states[i])];
-            }
-            const float total = static_cast<float>(v.samples.size());
-            v.verified_ratio = static_cast<float>(counts[0]) / total;
-            v.occluded_ratio = static_cast<float>(counts[1]) / total;
-            v.invalid_ratio = static_cast<float>(counts[2]) / total;
-            v.accepted = v.invalid_ratio <= params.verification.max_invalid_ratio;
-        }
-        model.verification = ModelVerificationSummary{v.verified_ratio, v.occluded_ratio,
-                                                      v.invalid_ratio, v.accepted};
-    }
-    model.accepted = inlier_ratio >= params.min_model_inlier_ratio &&
+    model.verification = VerifyInFrame(cloud, model.mesh, plane, params);
+    model.accepted = inlier_ratio >= params.min_inlier_ratio &&
                      (!model.verification || model.verification->accepted);
-
     if (!model.accepted && params.mesh_fallback) {
-        TriangleMesh mesh = TriangulatePoints(cloud, object.indices, params);
-        if (!mesh.triangles.empty()) {
-            model.replaced = model.box ? "box" : model.cylinder ? "cylinder" : "rotational";
-            model.replace_reason =
-                inlier_ratio < params.min_model_inlier_ratio ? "inlier_ratio" : "verification";
-            model.replaced_inlier_ratio = inlier_ratio;
-            model.box.reset();
-            model.cylinder.reset();
-            model.rotational.reset();
-            model.mesh = std::move(mesh);
-        }
+        ReplaceByMesh(cloud, object.indices, inlier_ratio, params, model);
     } else if (model.accepted && params.min_attached_points > 0) {
-        // Outliers of a good model: a handle, a spout; triangulated and attached.
-        float threshold = params.box.inlier_threshold;
-        if (model.cylinder) threshold = params.cylinder.inlier_threshold;
-        if (model.rotational) threshold = params.rotational.inlier_threshold;
-        Indices outliers;
-        for (Index i : object.indices) {
-            if (!cloud.IsFinite(i)) continue;
-            const Eigen::Vector3f& p = cloud.points[i];
-            const float d = model.box        ? BoxSurfaceDistance(*model.box, p)
-                            : model.cylinder ? CylinderSurfaceDistance(*model.cylinder, p)
-                                             : RotationalSurfaceDistance(*model.rotational, p);
-            if (d > threshold) outliers.push_back(i);
-        }
-        if (outliers.size() >= params.min_attached_points) {
-            const TriangleMesh extra = TriangulatePoints(cloud, outliers, params);
-            if (!extra.triangles.empty()) {
-                model.attached_points = extra.vertices.size();
-                model.attached_triangles = extra.triangles.size();
-                TriangleMesh base = std::move(model.mesh);
-                base.vertex_normals.clear();
-                base.vertex_colors.clear();
-                base.vertex_labels.clear();
-                base.Append(extra);
-                model.mesh = std::move(base);
-            }
-        }
+        AttachOutliers(cloud, object.indices, params, model);
     }
     model.grasp = Grasp(cloud, object.indices, model, plane, params);
     return model;
+}
+
+void ModelObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                  const Eigen::Vector4f& plane, const ModelParams& params,
+                  std::span<const std::size_t> which) {
+    params.Validate();
+    const std::size_t n = which.empty() ? objects.size() : which.size();
+    for (std::size_t k : which) {
+        if (k >= objects.size()) {
+            throw InvalidArgument(fmt::format("object {} of {} to model", k, objects.size()));
+        }
+    }
+    ParallelFor(
+        n, params.num_threads,
+        [&](std::size_t r) {
+            PerceivedObject& o = objects[which.empty() ? r : which[r]];
+            o.model = ModelObject(cloud, o, plane, params);
+        },
+        1);
 }
 
 }  // namespace multicue

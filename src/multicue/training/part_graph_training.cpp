@@ -1,4 +1,4 @@
-#include "part_graph_training.hpp"
+#include "multicue/training/part_graph_training.hpp"
 
 #include <algorithm>
 #include <array>
@@ -27,13 +27,13 @@ namespace multicue::training {
 std::vector<Indices> DecomposeObject(PointCloud& scan, const Indices& object,
                                      const PerceiveParams& perceive) {
     if (object.empty()) return {};
-    OrganizedNormalParams np = perceive.organized_normals;
+    OrganizedNormalParams np = perceive.normals.organized;
     np.num_threads = 1;
     np.mask.assign(scan.size(), 0);
     for (Index i : object) np.mask[i] = 1;
     SetNormals(scan, EstimateNormalsOrganized(scan, np));
     const KdTree tree(scan, object);
-    RegionGrowingParams rg = perceive.parts;
+    RegionGrowingParams rg = perceive.parts.region_growing;
     rg.subset = object;
     return RegionGrowing(scan, tree, rg).parts;
 }
@@ -114,7 +114,7 @@ void PerceiveTableViews(const sim::Scene& scene, int views, std::uint64_t seed,
         PointCloud scan = sim::ScanKinect(caster, poses[v], kp, seed + v);
         const auto* truth = scan.FindExtraField("category");
         if (!truth) continue;
-        OrganizedNormalParams np = pp.organized_normals;
+        OrganizedNormalParams np = pp.normals.organized;
         np.num_threads = 1;
         SetNormals(scan, EstimateNormalsOrganized(scan, np));
         const PerceiveResult r = Perceive(scan, pp);
@@ -151,14 +151,14 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
                 const Eigen::Isometry3f&) {
                 const Eigen::Vector4f plane =
                     r.support.found ? r.support.plane : Eigen::Vector4f::Zero();
-                const PartGraphVotes pg = VotePartGraph(model, scan, r.objects, plane, pp);
+                const PartGraphVotes pg = VotePartGraph(model, scan, r.objects, plane, pp.category);
                 for (std::size_t k = 0; k < r.objects.size(); ++k) {
                     const auto& obj = r.objects[k];
                     if (obj.parts.empty() || obj.category.category == Category::kNone) continue;
                     const auto [best, count] = MajorityCategory(obj.indices, truth);
                     if (count == 0) continue;
                     rows[s].emplace_back(StackerInputs(obj.category, pg.objects[k],
-                                                       ClusterExpert(model, scan, obj.indices, pp)),
+                                                       ClusterExpert(model, scan, obj.indices, pp.category)),
                                          best);
                 }
             });
@@ -356,6 +356,22 @@ std::filesystem::path DefaultPartGraphModelPath() {
     return base / "multicue" /
            ("part-graph-default-v" + std::to_string(kPartGraphModelVersion) + "." +
             std::to_string(kDefaultTrainingRevision) + ".mcpg");
+}
+
+PerceiveModels LoadPerceiveModels(const PerceiveParams& params) {
+    PerceiveModels models;
+    const CategorizationParams& c = params.category;
+    if (!c.NeedsPartGraph()) return models;
+    if (!c.part_graph_model.empty()) {
+        models.part_graph = std::make_shared<const PartGraphModel>(PartGraphModel::Load(c.part_graph_model));
+    } else if (c.categoriser == Categoriser::kStacked) {
+        throw InvalidArgument(
+            "category.categoriser stacked needs category.part_graph_model: a model trained with "
+            "multicue train --stacker-scenes N");
+    } else {
+        models.part_graph = std::make_shared<const PartGraphModel>(LoadOrTrainDefaultPartGraphModel());
+    }
+    return models;
 }
 
 PartGraphModel LoadOrTrainDefaultPartGraphModel() {

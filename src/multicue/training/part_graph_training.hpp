@@ -1,9 +1,11 @@
 #pragma once
-/// \file Training data for part-graph hashing from simulated turntable scans (docs/part-graph.md):
-/// procedural objects of every table-top category, optionally a mesh library, each scanned from
-/// `views` directions by the simulated Kinect, decomposed as perceive decomposes objects (organized
-/// normals, normal-angle region growing) and added to a PartGraphModel. Shared by `multicue train`
-/// and bench/part_graph_eval.
+/// \file Training of the part-graph categoriser (thesis sections 4.2.2 and 5.1) on simulated
+/// data: procedural objects of every table-top category and optionally a mesh library, each
+/// scanned from `views` turntable directions by the simulated Kinect and decomposed as perceive
+/// decomposes objects (organized normals, normal-angle region growing), plus the objects perceive
+/// finds in simulated table scenes; optionally a stacker over the experts. Also the default model
+/// (procedural objects only), trained once and cached, and the models perceive's categorisers
+/// need (LoadPerceiveModels).
 
 #include <cstdint>
 #include <filesystem>
@@ -104,5 +106,11 @@ std::filesystem::path DefaultPartGraphModelPath();
 
 /// Loads the cached default model, training and caching it first when it is missing.
 PartGraphModel LoadOrTrainDefaultPartGraphModel();
+
+/// The models perceive needs for `params`: none for the rules categoriser; otherwise the model
+/// file category.part_graph_model, or without one the default model (LoadOrTrainDefault-
+/// PartGraphModel; the stacked categoriser needs a file of a model with a stacker). Throws
+/// IoError / FormatError for an unreadable model file, InvalidArgument for "stacked" without one.
+PerceiveModels LoadPerceiveModels(const PerceiveParams& params);
 
 }  // namespace multicue::training

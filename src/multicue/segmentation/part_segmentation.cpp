@@ -1,0 +1,77 @@
+#include "multicue/segmentation/part_segmentation.hpp"
+
+#include <algorithm>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue {
+namespace {
+
+// The parts of `parts` that belong to `object` (judged by their first point: the concave split
+// keeps parts whole).
+std::vector<Indices> PartsOf(const Indices& object, const std::vector<Indices>& parts) {
+    std::vector<Indices> out;
+    for (const auto& part : parts) {
+        if (!part.empty() && std::binary_search(object.begin(), object.end(), part.front())) {
+            out.push_back(part);
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+void PartSegmentationParams::Validate() const {
+    region_growing.Validate();
+    convexity.Validate();
+    ResolveThreadCount(num_threads);
+}
+
+PartSegmentationResult SegmentParts(const PointCloud& cloud, const std::vector<Indices>& clusters,
+                                    const Eigen::Vector4f& plane,
+                                    const PartSegmentationParams& params,
+                                    std::size_t min_object_points) {
+    params.Validate();
+    if (!clusters.empty() && !cloud.HasNormals()) throw DataError("part segmentation needs normals");
+    Indices all;
+    for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
+    std::sort(all.begin(), all.end());
+    const KdTree tree(cloud, all);
+    std::vector<std::vector<ObjectSegment>> split(clusters.size());
+    ParallelFor(
+        clusters.size(), params.num_threads,
+        [&](std::size_t k) {
+            RegionGrowingParams rg = params.region_growing;
+            rg.subset = clusters[k];
+            const std::vector<Indices> parts = RegionGrowing(cloud, tree, rg).parts;
+            std::vector<Indices> groups;
+            if (params.convexity.enabled) {
+                ConvexitySplitParams cp = params.convexity;
+                cp.min_object_points = min_object_points;
+                groups = SplitByConvexity(cloud, clusters[k], parts, cp, plane).objects;
+            } else {
+                groups.push_back(clusters[k]);
+            }
+            for (auto& g : groups) {
+                std::vector<Indices> own = PartsOf(g, parts);
+                split[k].push_back({std::move(g), std::move(own)});
+            }
+        },
+        1);
+    PartSegmentationResult result;
+    for (auto& pieces : split) {
+        if (pieces.size() > 1) ++result.split_hypotheses;
+        for (auto& o : pieces) {
+            if (o.indices.size() < min_object_points) {
+                ++result.dropped_pieces;
+                continue;
+            }
+            result.objects.push_back(std::move(o));
+        }
+    }
+    return result;
+}
+
+}  // namespace multicue

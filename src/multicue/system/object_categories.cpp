@@ -1,0 +1,174 @@
+#include "multicue/system/object_categories.hpp"
+
+#include <array>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/core/params.hpp"
+#include "multicue/recognition/category_stacker.hpp"
+#include "multicue/recognition/part_vocabulary.hpp"
+
+namespace multicue {
+namespace {
+
+constexpr std::array<std::pair<Categoriser, std::string_view>, 5> kCategoriserNames{{
+    {Categoriser::kRules, "rules"},
+    {Categoriser::kPartGraph, "part-graph"},
+    {Categoriser::kPartGraphRules, "part-graph+rules"},
+    {Categoriser::kThreeExperts, "part-graph+rules+cluster"},
+    {Categoriser::kStacked, "stacked"},
+}};
+
+// The objects `which` refers to: all of them when it is empty.
+std::vector<std::size_t> Targets(std::size_t n, std::span<const std::size_t> which) {
+    std::vector<std::size_t> out;
+    if (which.empty()) {
+        for (std::size_t k = 0; k < n; ++k) out.push_back(k);
+        return out;
+    }
+    for (std::size_t k : which) {
+        if (k >= n) throw InvalidArgument(fmt::format("object {} of {} to categorise", k, n));
+        out.push_back(k);
+    }
+    return out;
+}
+
+// One object's fused distribution from the rules' (c) and the part-graph's (p).
+CategoryDistribution Fuse(const CategorizationParams& params, const PartGraphModel& model,
+                          const PointCloud& cloud, const PerceivedObject& o,
+                          const CategoryResult& c, const CategoryDistribution& p) {
+    switch (params.categoriser) {
+        case Categoriser::kPartGraphRules:
+            return BlendCategoryProbabilities(c.probabilities, p, params.part_graph_weight);
+        case Categoriser::kThreeExperts:
+            return BlendThreeExperts(c.probabilities, p,
+                                     ClusterExpert(model, cloud, o.indices, params),
+                                     params.expert_weights);
+        case Categoriser::kStacked:
+            return model.stacker.Predict(
+                StackerInputs(c, p, ClusterExpert(model, cloud, o.indices, params)));
+        case Categoriser::kRules:
+        case Categoriser::kPartGraph:
+            break;
+    }
+    return p;
+}
+
+}  // namespace
+
+std::string_view CategoriserName(Categoriser categoriser) {
+    for (const auto& [c, name] : kCategoriserNames) {
+        if (c == categoriser) return name;
+    }
+    throw InvalidArgument("unknown categoriser");
+}
+
+Categoriser ParseCategoriser(std::string_view name) {
+    for (const auto& [c, n] : kCategoriserNames) {
+        if (n == name) return c;
+    }
+    throw InvalidArgument(fmt::format(
+        "categoriser must be rules, part-graph, part-graph+rules, part-graph+rules+cluster or "
+        "stacked, got '{}'",
+        name));
+}
+
+void CategorizationParams::Validate() const {
+    CategoriserName(categoriser);  // one of the enumerators
+    ValidateNode("rules", [&] { rules.Validate(); });
+    ValidateNode("part_graph", [&] { part_graph.Validate(); });
+    if (!(part_graph_weight >= 0.0f && part_graph_weight <= 1.0f)) {
+        throw InvalidArgument("part_graph_weight must be in [0, 1]");
+    }
+    CheckExpertWeights(expert_weights);
+    if (cluster_k < 1) throw InvalidArgument("cluster_k must be >= 1");
+    ResolveThreadCount(num_threads);
+}
+
+void CheckCategorizationModel(const CategorizationParams& params, const PartGraphModel* model) {
+    if (!params.NeedsPartGraph()) return;
+    if (model == nullptr) {
+        throw InvalidArgument(fmt::format(
+            "category.categoriser {} needs a part-graph model (category.part_graph_model, or the "
+            "default model)",
+            CategoriserName(params.categoriser)));
+    }
+    if (params.categoriser == Categoriser::kStacked && !model->stacker.trained()) {
+        throw InvalidArgument(
+            "category.categoriser stacked needs a part-graph model with a stacker "
+            "(multicue train --stacker-scenes N)");
+    }
+}
+
+CategoryDistribution ClusterExpert(const PartGraphModel& model, const PointCloud& cloud,
+                                   const Indices& object, const CategorizationParams& params) {
+    ClusterDescriptorParams cp;
+    cp.size_weight = model.cluster_size_weight;
+    return ApplyCategoryPriors(
+        model.ClassifyCluster(ComputeClusterDescriptor(cloud, object, cp), params.cluster_k),
+        params.part_graph.category_priors);
+}
+
+PartGraphVotes VotePartGraph(const PartGraphModel& model, const PointCloud& cloud,
+                             const std::vector<PerceivedObject>& objects,
+                             const Eigen::Vector4f& plane, const CategorizationParams& params,
+                             std::span<const std::size_t> which) {
+    const std::vector<std::size_t> targets = Targets(objects.size(), which);
+    std::vector<Indices> parts;
+    std::vector<std::uint32_t> groups;
+    std::vector<std::vector<std::size_t>> ids(targets.size());
+    for (std::size_t r = 0; r < targets.size(); ++r) {
+        for (const auto& part : objects[targets[r]].parts) {
+            ids[r].push_back(parts.size());
+            parts.push_back(part);
+            groups.push_back(static_cast<std::uint32_t>(r));
+        }
+    }
+    const PartGraphResult votes =
+        RecognizeParts(model, cloud, parts, params.part_graph, plane.head<3>(), groups);
+    PartGraphVotes out;
+    out.parts.resize(targets.size());
+    out.objects.resize(targets.size());
+    for (std::size_t r = 0; r < targets.size(); ++r) {
+        for (std::size_t id : ids[r]) out.parts[r].push_back(votes.part_probabilities[id]);
+        out.objects[r] = MergePartProbabilities(votes, parts, ids[r]);
+    }
+    return out;
+}
+
+void CategorizeObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
+                       const Eigen::Vector4f& plane, const CategorizationParams& params,
+                       const PartGraphModel* model, std::span<const std::size_t> which,
+                       std::span<const Category> allowed) {
+    params.Validate();
+    CheckCategorizationModel(params, model);
+    const std::vector<std::size_t> targets = Targets(objects.size(), which);
+    CategoryParams rules = params.rules;
+    rules.num_threads = 1;  // objects run in parallel
+    ParallelFor(
+        targets.size(), params.num_threads,
+        [&](std::size_t r) {
+            PerceivedObject& o = objects[targets[r]];
+            o.category = CategorizeObject(cloud, o.indices, o.parts, plane, rules);
+            RestrictCategories(o.category, allowed);
+        },
+        1);
+    if (!params.NeedsPartGraph() || targets.empty()) return;
+    PartGraphVotes votes = VotePartGraph(*model, cloud, objects, plane, params, targets);
+    for (std::size_t r = 0; r < targets.size(); ++r) {
+        PerceivedObject& o = objects[targets[r]];
+        o.part_probabilities = std::move(votes.parts[r]);
+        CategoryResult& c = o.category;
+        if (c.category != Category::kNone && !o.parts.empty()) {
+            const CategoryDistribution p = Fuse(params, *model, cloud, o, c, votes.objects[r]);
+            c.probabilities = p;
+            c.category = ArgMaxCategory(p);
+            c.confidence = p[static_cast<std::size_t>(c.category)];
+        }
+        RestrictCategories(c, allowed);
+    }
+}
+
+}  // namespace multicue
