@@ -262,7 +262,8 @@ void AddConfigCommand(CLI::App& app, const GlobalOptions& /*global*/) {
             std::printf("%s: ok\n", check->c_str());
             return;
         }
-        if (!*dump && !*markdown) throw InvalidArgument("config: give --dump, --markdown or --check FILE");
+        if (!*dump && !*markdown)
+            throw InvalidArgument("config: give --dump, --markdown or --check FILE");
         auto section = io::ConfigSection::Dump();
         PerceiveOptions options;
         ReadPerceiveParams(section, options.pipeline);

@@ -30,7 +30,9 @@ struct Switchable : P {
 class ParameterError : public InvalidArgument {
   public:
     ParameterError(std::string path, std::string detail)
-        : InvalidArgument(path + ": " + detail), path_(std::move(path)), detail_(std::move(detail)) {}
+        : InvalidArgument(path + ": " + detail),
+          path_(std::move(path)),
+          detail_(std::move(detail)) {}
     const std::string& path() const { return path_; }
     const std::string& detail() const { return detail_; }
 

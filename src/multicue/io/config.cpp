@@ -217,8 +217,8 @@ void ConfigSection::Rename(const std::string& old_key, const std::string& new_ke
     std::string parent = from;
     while (true) {
         const std::size_t dot = parent.rfind('.');
-        nlohmann::json* owner = dot == std::string::npos ? &state_->root
-                                                         : Find(state_->root, parent.substr(0, dot));
+        nlohmann::json* owner =
+            dot == std::string::npos ? &state_->root : Find(state_->root, parent.substr(0, dot));
         owner->erase(dot == std::string::npos ? parent : parent.substr(dot + 1));
         if (dot == std::string::npos || !owner->empty()) break;
         parent = parent.substr(0, dot);
@@ -233,8 +233,9 @@ void ConfigSection::Rename(const std::string& old_key, const std::string& new_ke
             if (!node->contains(part)) {
                 (*node)[part] = std::move(moved);
             } else if (!MergeInto((*node)[part], std::move(moved))) {
-                throw InvalidArgument(fmt::format("{}: '{}' is given twice, also by its former name '{}'",
-                                                  state_->source, to, from));
+                throw InvalidArgument(
+                    fmt::format("{}: '{}' is given twice, also by its former name '{}'",
+                                state_->source, to, from));
             }
             break;
         }

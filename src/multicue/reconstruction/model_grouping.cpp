@@ -83,7 +83,8 @@ bool InsideModel(const ObjectModel& m, const Eigen::Vector3f& point, float margi
         const Eigen::Vector3f p = point - c.center;
         const Eigen::Vector3f axis = c.axis.normalized();
         const float h = p.dot(axis);
-        return std::abs(h) <= 0.5f * c.height + margin && (p - h * axis).norm() <= c.radius + margin;
+        return std::abs(h) <= 0.5f * c.height + margin &&
+               (p - h * axis).norm() <= c.radius + margin;
     }
     return false;
 }
@@ -126,8 +127,7 @@ std::vector<float> HorizontalFaceHeights(const PointCloud& cloud, const Perceive
         std::vector<float> h;
         h.reserve(part.size());
         for (Index i : part) h.push_back((up.dot(cloud.points[i]) + plane.w()) * scale);
-        std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2),
-                         h.end());
+        std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2), h.end());
         faces.push_back(h[h.size() / 2]);
     }
     std::sort(faces.begin(), faces.end());
@@ -293,8 +293,7 @@ GroupingResult MergeConcentricObjects(std::vector<PerceivedObject>& objects,
     return result;
 }
 
-GroupingResult MergeContainedObjects(const PointCloud& cloud,
-                                     std::vector<PerceivedObject>& objects,
+GroupingResult MergeContainedObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
                                      const ContainedMergeParams& params) {
     params.Validate();
     const std::size_t n = objects.size();
@@ -421,9 +420,10 @@ GroupingResult SplitTouchingBoxes(const PointCloud& cloud, std::vector<Perceived
         BoxModel one;
         if (boxy) one = FitUprightBox(cloud, sample, plane, params.box);
         const float one_ratio =
-            one.found ? Explained(cloud, sample, threshold,
-                                  [&](const Eigen::Vector3f& p) { return BoxSurfaceDistance(one, p); })
-                      : 0.0f;
+            one.found
+                ? Explained(cloud, sample, threshold,
+                            [&](const Eigen::Vector3f& p) { return BoxSurfaceDistance(one, p); })
+                : 0.0f;
         std::vector<std::size_t> big;
         for (std::size_t k = 0; k < o.parts.size(); ++k) {
             if (o.parts[k].size() >= t.min_part_points) big.push_back(k);

@@ -44,8 +44,7 @@ GroupingResult MergeConcentricObjects(std::vector<PerceivedObject>& objects,
 /// its outer wall below the rim, a mug's handle) join it: an object with at least min_share of
 /// its points inside the solid of a larger object's accepted cylinder or surface of revolution,
 /// enlarged by margin. Containers are taken from the largest object down.
-GroupingResult MergeContainedObjects(const PointCloud& cloud,
-                                     std::vector<PerceivedObject>& objects,
+GroupingResult MergeContainedObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
                                      const ContainedMergeParams& params);
 
 /// Stacked boxes kept together by segmentation: a box or flat object with two horizontal faces at

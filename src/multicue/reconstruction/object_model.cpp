@@ -10,8 +10,8 @@
 #include <limits>
 #include <optional>
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <Eigen/Geometry>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
@@ -304,10 +304,9 @@ float FitPrimitive(const PointCloud& cloud, const PerceivedObject& object,
         }
     }
     if (!model.cylinder) {
-        BoxModel box =
-            (c == Category::kBox || c == Category::kFlat) && upright_possible
-                ? FitUprightBox(cloud, object.indices, plane, params.box, guidance.Box())
-                : FitOrientedBoundingBox(cloud, object.indices, params.box);
+        BoxModel box = (c == Category::kBox || c == Category::kFlat) && upright_possible
+                           ? FitUprightBox(cloud, object.indices, plane, params.box, guidance.Box())
+                           : FitOrientedBoundingBox(cloud, object.indices, params.box);
         if (!box.found) box = FitOrientedBoundingBox(cloud, object.indices, params.box);
         if (box.found) {
             model.mesh = BoxMesh(box);
@@ -379,8 +378,7 @@ void ReplaceByMesh(const PointCloud& cloud, const Indices& indices, float inlier
     TriangleMesh mesh = TriangulatePoints(cloud, indices, params);
     if (mesh.triangles.empty()) return;
     model.replaced = model.box ? "box" : model.cylinder ? "cylinder" : "rotational";
-    model.replace_reason =
-        inlier_ratio < params.min_inlier_ratio ? "inlier_ratio" : "verification";
+    model.replace_reason = inlier_ratio < params.min_inlier_ratio ? "inlier_ratio" : "verification";
     model.replaced_inlier_ratio = inlier_ratio;
     model.box.reset();
     model.cylinder.reset();

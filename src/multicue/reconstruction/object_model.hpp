@@ -120,8 +120,8 @@ struct ModelParams {
     /// Surfaces of revolution (section 5.4.2.2) for cylindrical, spherical and "other" objects
     /// whose primitive explains too little (under min_inlier_ratio); kept when they explain more
     /// points than the primitive. The support plane's up is the axis prior.
-    Switchable<RotationalFitParams> rotational =
-        Switchable<RotationalFitParams>::With([](RotationalFitParams& p) { p.max_tilt_deg = 20.0f; });
+    Switchable<RotationalFitParams> rotational = Switchable<RotationalFitParams>::With(
+        [](RotationalFitParams& p) { p.max_tilt_deg = 20.0f; });
     /// Verification of every model against the frame seen from the cloud's sensor origin
     /// (section 4.2.4.3); a model with more than max_invalid_ratio of its surface in space the
     /// sensor saw through is rejected. The rejection share is above the library's: an open cup's

@@ -55,7 +55,8 @@ void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p) {
 
 void VerificationParams::Validate() const {
     if (!(voxel_size > 0.0f)) {
-        throw InvalidArgument(fmt::format("verification: voxel_size must be > 0, got {}", voxel_size));
+        throw InvalidArgument(
+            fmt::format("verification: voxel_size must be > 0, got {}", voxel_size));
     }
     if (!(margin >= 0.0f)) throw InvalidArgument("verification: margin must be >= 0");
     if (tolerance_voxels < 0) throw InvalidArgument("verification: tolerance_voxels must be >= 0");

@@ -34,7 +34,8 @@ PartSegmentationResult SegmentParts(const PointCloud& cloud, const std::vector<I
                                     const PartSegmentationParams& params,
                                     std::size_t min_object_points) {
     params.Validate();
-    if (!clusters.empty() && !cloud.HasNormals()) throw DataError("part segmentation needs normals");
+    if (!clusters.empty() && !cloud.HasNormals())
+        throw DataError("part segmentation needs normals");
     Indices all;
     for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
     std::sort(all.begin(), all.end());

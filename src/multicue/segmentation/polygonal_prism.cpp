@@ -73,8 +73,8 @@ void DiscardInteriorPoints(std::vector<Eigen::Vector2d>& pts) {
 
 void PrismParams::Validate() const {
     if (!(min_height <= max_height)) {
-        throw InvalidArgument(
-            fmt::format("prism min_height {} must not exceed max_height {}", min_height, max_height));
+        throw InvalidArgument(fmt::format("prism min_height {} must not exceed max_height {}",
+                                          min_height, max_height));
     }
 }
 

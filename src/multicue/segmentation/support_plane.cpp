@@ -193,7 +193,8 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     TableRegion region;
     region.support = FindSupportPlane(cloud, support);
     const SupportPlane& s = region.support;
-    if (s.found && s.hull.size() >= 3) region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
+    if (s.found && s.hull.size() >= 3)
+        region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
     if (region.points.empty()) {
         region.support = SupportPlane{};
         for (std::size_t i = 0; i < cloud.size(); ++i) {

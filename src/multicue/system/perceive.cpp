@@ -86,8 +86,8 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result) {
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         for (Index i : o.indices) {
             if (i >= cloud.size()) {
-                throw InvalidArgument(fmt::format("object {} has point {} of a cloud of {}", o.id,
-                                                  i, cloud.size()));
+                throw InvalidArgument(
+                    fmt::format("object {} has point {} of a cloud of {}", o.id, i, cloud.size()));
             }
             sum += cloud.points[i].cast<double>();
             result.point_objects[i] = static_cast<std::uint32_t>(o.id);

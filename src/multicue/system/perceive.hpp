@@ -32,7 +32,7 @@ namespace multicue {
 
 /// Every parameter of the pipeline, one node per configuration section.
 struct PerceiveParams {
-    int num_threads = 0;          ///< "threads": 0 = all cores; set in every stage (ApplyThreadCount)
+    int num_threads = 0;  ///< "threads": 0 = all cores; set in every stage (ApplyThreadCount)
     FrameNormalParams normals{};  ///< normals of the region above the table
     SupportPlaneParams support{};
     PrismParams prism{.min_height = 0.008f, .max_height = 0.5f};  ///< the region above the table

@@ -78,8 +78,9 @@ void Read(ConfigSection& s, FrameNormalParams& p) {
 }
 
 void Read(ConfigSection& s, SupportPlaneParams& p) {
-    MC_FIELD(up, "up in the cloud's frame, null = from VIEWPOINT, the camera convention or the "
-                 "dominant plane");
+    MC_FIELD(up,
+             "up in the cloud's frame, null = from VIEWPOINT, the camera convention or the "
+             "dominant plane");
     MC_FIELD(max_tilt_deg, "table normal within this angle of a given or world up [deg]");
     MC_FIELD(camera_tilt_deg, "in the sensor frame: table normal within this angle of -y [deg]");
     MC_FIELD(distance_threshold, "plane inlier distance [m]");
@@ -105,7 +106,8 @@ void Read(ConfigSection& s, ObjectClusteringParams& p) {
     MC_FIELD(tolerance, "points closer than this are one object [m]");
     MC_FIELD(min_points, "smaller clusters (and pieces of splits) are not objects");
     MC_FIELD(max_points, "larger clusters are not objects");
-    MC_FIELD(organized_half_window, "organized clustering reach in pixels; 2 bridges one-pixel gaps");
+    MC_FIELD(organized_half_window,
+             "organized clustering reach in pixels; 2 bridges one-pixel gaps");
 }
 
 void Read(ConfigSection& s, RegionGrowingParams& p) {
@@ -123,7 +125,8 @@ void Read(ConfigSection& s, ConvexitySplitParams& p) {
     MC_FIELD(min_border, "patch pairs needed to judge a border");
     MC_FIELD(bend_angle_deg,
              "concave borders with a median patch angle below this are bends [deg]; 0 = off");
-    MC_FIELD(max_top_difference, "groups across a bend join when their tops differ less than this [m]");
+    MC_FIELD(max_top_difference,
+             "groups across a bend join when their tops differ less than this [m]");
 }
 
 void Read(ConfigSection& s, PartSegmentationParams& p) {
@@ -193,8 +196,9 @@ void Read(ConfigSection& s, PartGraphRecognitionParams& p) {
 
 void Read(ConfigSection& s, CategorizationParams& p) {
     std::vector<std::string_view> names;
-    for (Categoriser c : {Categoriser::kRules, Categoriser::kPartGraph, Categoriser::kPartGraphRules,
-                          Categoriser::kThreeExperts, Categoriser::kStacked}) {
+    for (Categoriser c :
+         {Categoriser::kRules, Categoriser::kPartGraph, Categoriser::kPartGraphRules,
+          Categoriser::kThreeExperts, Categoriser::kStacked}) {
         names.push_back(CategoriserName(c));
     }
     std::string categoriser(CategoriserName(p.categoriser));
@@ -208,7 +212,8 @@ void Read(ConfigSection& s, CategorizationParams& p) {
              "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
     MC_FIELD(expert_weights,
              "weights of the rules, part-graph and cluster experts in part-graph+rules+cluster");
-    MC_FIELD(cluster_k, "neighbours of the whole-object expert (part-graph+rules+cluster, stacked)");
+    MC_FIELD(cluster_k,
+             "neighbours of the whole-object expert (part-graph+rules+cluster, stacked)");
 }
 
 void Read(ConfigSection& s, BoxFitParams& p) {
@@ -265,7 +270,8 @@ void Read(ConfigSection& s, VerificationParams& p) {
 }
 
 void Read(ConfigSection& s, ConcentricMergeParams& p) {
-    MC_FIELD(enabled, "merge objects whose cylinders share their axis (inside and outside of a pot)");
+    MC_FIELD(enabled,
+             "merge objects whose cylinders share their axis (inside and outside of a pot)");
     MC_FIELD(angle_deg, "axes parallel within [deg]");
     MC_FIELD(distance, "axis to axis at most [m]");
     MC_FIELD(radius_ratio, "radii differ by at most this share of the larger one");
@@ -303,7 +309,8 @@ void Read(ConfigSection& s, PartCountParams& p) {
 }
 
 void Read(ConfigSection& s, ModelParams& p) {
-    MC_FIELD(min_inlier_ratio, "primitives explaining a smaller share of their points are replaced");
+    MC_FIELD(min_inlier_ratio,
+             "primitives explaining a smaller share of their points are replaced");
     MC_FIELD(mesh_fallback,
              "replace rejected primitives by a triangulated mesh of the object's points");
     MC_NODE(mesh);
@@ -311,12 +318,14 @@ void Read(ConfigSection& s, ModelParams& p) {
     MC_FIELD(min_attached_points,
              "outliers of a kept primitive (a handle) are meshed and attached from this many, 0 = "
              "never");
-    MC_FIELD(guided_fits, "box/cylinder fits sample by RSD and weight by part-graph part probabilities");
+    MC_FIELD(guided_fits,
+             "box/cylinder fits sample by RSD and weight by part-graph part probabilities");
     MC_NODE(guided_rsd);
     MC_NODE(box);
     MC_NODE(cylinder);
-    MC_SWITCH(rotational,
-              "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
+    MC_SWITCH(
+        rotational,
+        "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
     MC_SWITCH(verification, "verify models against the frame's free space");
     MC_NODE(concentric);
     MC_NODE(contained);
@@ -356,8 +365,10 @@ std::vector<std::pair<std::string, std::string>> RenamedKeys() {
         {"models.mesh_max_surface_angle_deg", "models.mesh.max_surface_angle_deg"},
         {"models.guided_rsd_radius", "models.guided_rsd.radius"},
     };
-    for (const char* key : {"radius", "k", "max_angle_deg", "min_part_size", "discard_small_parts"}) {
-        renamed.emplace_back(std::string("parts.") + key, std::string("parts.region_growing.") + key);
+    for (const char* key :
+         {"radius", "k", "max_angle_deg", "min_part_size", "discard_small_parts"}) {
+        renamed.emplace_back(std::string("parts.") + key,
+                             std::string("parts.region_growing.") + key);
     }
     // The rules' keys, read off their own table.
     ConfigSection rules = ConfigSection::Dump();
@@ -380,7 +391,8 @@ void ReadPerceiveParams(ConfigSection& config, PerceiveParams& p) {
     Node(s, "prism", p.prism);
     Node(s, "clustering", p.clustering);
     Node(s, "parts", p.parts);
-    Node(s, "occlusion", p.occlusion, "join fragments of an object that a nearer object cuts in two");
+    Node(s, "occlusion", p.occlusion,
+         "join fragments of an object that a nearer object cuts in two");
     Node(s, "category", p.category);
     Node(s, "models", p.models);
 }

@@ -157,9 +157,10 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
                     if (obj.parts.empty() || obj.category.category == Category::kNone) continue;
                     const auto [best, count] = MajorityCategory(obj.indices, truth);
                     if (count == 0) continue;
-                    rows[s].emplace_back(StackerInputs(obj.category, pg.objects[k],
-                                                       ClusterExpert(model, scan, obj.indices, pp.category)),
-                                         best);
+                    rows[s].emplace_back(
+                        StackerInputs(obj.category, pg.objects[k],
+                                      ClusterExpert(model, scan, obj.indices, pp.category)),
+                        best);
                 }
             });
         if (progress) progress->Advance();
@@ -363,13 +364,15 @@ PerceiveModels LoadPerceiveModels(const PerceiveParams& params) {
     const CategorizationParams& c = params.category;
     if (!c.NeedsPartGraph()) return models;
     if (!c.part_graph_model.empty()) {
-        models.part_graph = std::make_shared<const PartGraphModel>(PartGraphModel::Load(c.part_graph_model));
+        models.part_graph =
+            std::make_shared<const PartGraphModel>(PartGraphModel::Load(c.part_graph_model));
     } else if (c.categoriser == Categoriser::kStacked) {
         throw InvalidArgument(
             "category.categoriser stacked needs category.part_graph_model: a model trained with "
             "multicue train --stacker-scenes N");
     } else {
-        models.part_graph = std::make_shared<const PartGraphModel>(LoadOrTrainDefaultPartGraphModel());
+        models.part_graph =
+            std::make_shared<const PartGraphModel>(LoadOrTrainDefaultPartGraphModel());
     }
     return models;
 }
