@@ -9,8 +9,8 @@
 - No page mentions the data folder outside the repository (`../shared`, `shared/data`): users of
   the library do not have it.
 
-Links inside code (fenced blocks, `code spans`) are not links and are skipped. Pages that the
-build generates (GENERATED below) may be absent; links to them are then not checked.
+Links inside code (fenced blocks, `code spans`) are not links and are skipped. Pages generated
+from the code (GENERATED below) may be absent; links to them are then not checked.
 
 usage: check_docs.py [REPO_ROOT]     (default: the folder above this script)
 Prints one line per problem (file:line: message) and exits 1 if there is any, else 0.
@@ -21,7 +21,7 @@ import re
 import sys
 import unicodedata
 
-# Pages written by the build or by tools from the code; a link to one is fine while it is absent.
+# Pages generated from the code (the parameter reference); a link to one is fine while it is absent.
 GENERATED = {"docs/configuration.md"}
 
 FORBIDDEN = ["../shared", "shared/data"]
