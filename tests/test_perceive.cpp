@@ -607,5 +607,88 @@ TEST(PerceiveConfig, DumpParsesBackAndUnknownKeysFail) {
     EXPECT_EQ(*p.support.up, Eigen::Vector3f(0, -1, 0));
 }
 
+TEST(PerceiveConfig, KeysOfEarlierReleasesAreReadUnderTheirNewNames) {
+    auto old = io::ConfigSection::Parse(R"({
+        "normals": {"k": 12, "organized": {"half_window": 5}},
+        "objects": {"cluster_tolerance": 0.02, "min_points": 42},
+        "parts": {"k": 8},
+        "convexity": {"enabled": false, "patch_size": 0.02},
+        "category": {"categoriser": "part-graph", "part_graph_k": 7, "min_points": 40,
+                     "part_graph_within_objects": false, "part_graph_priors": {"other": 0.5}},
+        "box": {"inlier_threshold": 0.02},
+        "cylinder": {"max_iterations": 100, "min_radius": 0.01},
+        "models": {"mesh_search_radius": 0.03, "guided_rsd_radius": 0.03,
+                   "touching": {"round_enabled": false}}})",
+                                        "old.json");
+    PerceiveParams p;
+    ReadPerceiveParams(old, p);
+    EXPECT_NO_THROW(old.CheckAllUsed());
+    EXPECT_EQ(p.normals.unorganized.k, 12);
+    EXPECT_EQ(p.normals.organized.half_window, 5);
+    EXPECT_FLOAT_EQ(p.clustering.tolerance, 0.02f);
+    EXPECT_EQ(p.clustering.min_points, 42u);
+    EXPECT_EQ(p.parts.region_growing.k, 8);
+    EXPECT_FALSE(p.parts.convexity.enabled);
+    EXPECT_FLOAT_EQ(p.parts.convexity.patch_size, 0.02f);
+    EXPECT_EQ(p.category.categoriser, Categoriser::kPartGraph);
+    EXPECT_EQ(p.category.part_graph.k, 7u);
+    EXPECT_FALSE(p.category.part_graph.within_groups);
+    EXPECT_FLOAT_EQ(
+        p.category.part_graph.category_priors[static_cast<std::size_t>(Category::kOther)], 0.5f);
+    EXPECT_EQ(p.category.rules.min_points, 40u);
+    EXPECT_FLOAT_EQ(p.models.box.inlier_threshold, 0.02f);
+    EXPECT_EQ(p.models.cylinder.sac.max_iterations, 100);
+    EXPECT_FLOAT_EQ(p.models.cylinder.min_radius, 0.01f);
+    EXPECT_FLOAT_EQ(p.models.mesh.search_radius, 0.03f);
+    EXPECT_FLOAT_EQ(p.models.guided_rsd.radius, 0.03f);
+    EXPECT_FALSE(p.models.touching.round_enabled);
+    EXPECT_NO_THROW(p.Validate());
+
+    // A value given under both names is refused; a new key next to an old one is merged.
+    auto both = io::ConfigSection::Parse(
+        R"({"objects": {"min_points": 5}, "clustering": {"min_points": 6}})", "both.json");
+    EXPECT_THROW(ReadPerceiveParams(both, p), InvalidArgument);
+    auto merged = io::ConfigSection::Parse(
+        R"({"objects": {"min_points": 5}, "clustering": {"tolerance": 0.01}})", "m.json");
+    PerceiveParams q;
+    ReadPerceiveParams(merged, q);
+    EXPECT_NO_THROW(merged.CheckAllUsed());
+    EXPECT_EQ(q.clustering.min_points, 5u);
+    EXPECT_FLOAT_EQ(q.clustering.tolerance, 0.01f);
+    for (const auto& [from, to] : PerceiveRenamedKeys()) EXPECT_NE(from, to);
+}
+
+TEST(PerceiveConfig, EveryKeyIsDocumentedAndNamedAsItsField) {
+    auto dump = io::ConfigSection::Dump();
+    PerceiveParams p;
+    ReadPerceiveParams(dump, p);
+    const auto keys = dump.RecordedKeys();
+    EXPECT_GT(keys.size(), 150u);
+    const std::string markdown = dump.DumpMarkdown();
+    for (const auto& key : keys) {
+        EXPECT_NE(markdown.find("| `" + key + "` |"), std::string::npos) << key;
+    }
+    // Every row has a meaning.
+    EXPECT_EQ(markdown.find("` |  |"), std::string::npos);
+    EXPECT_NE(markdown.find("## models"), std::string::npos);
+}
+
+TEST(PerceiveConfig, TheCategoriserIsOneOfItsNames) {
+    auto bad = io::ConfigSection::Parse(R"({"category": {"categoriser": "votes"}})", "c.json");
+    PerceiveParams p;
+    try {
+        ReadPerceiveParams(bad, p);
+        ADD_FAILURE() << "accepted";
+    } catch (const InvalidArgument& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("c.json: 'category.categoriser'"), std::string::npos) << what;
+        EXPECT_NE(what.find("part-graph+rules+cluster"), std::string::npos) << what;
+    }
+    auto three = io::ConfigSection::Parse(
+        R"({"category": {"categoriser": "part-graph+rules+cluster"}})", "c.json");
+    ReadPerceiveParams(three, p);
+    EXPECT_EQ(p.category.categoriser, Categoriser::kThreeExperts);
+}
+
 }  // namespace
 }  // namespace multicue

@@ -268,7 +268,19 @@ void AddConfigCommand(CLI::App& app, const GlobalOptions& /*global*/) {
         PerceiveOptions options;
         ReadPerceiveParams(section, options.pipeline);
         ReadReportParams(section, options.report);
-        std::fputs((*markdown ? section.DumpMarkdown() : section.DumpText()).c_str(), stdout);
+        if (!*markdown) {
+            std::fputs(section.DumpText().c_str(), stdout);
+            return;
+        }
+        std::string text = section.DumpMarkdown();
+        text +=
+            "## Former keys\n\nFiles of earlier releases are read with these keys under their "
+            "current names (`perceive` warns once per key).\n\n| former key | current key |\n"
+            "|---|---|\n";
+        for (const auto& [from, to] : PerceiveRenamedKeys()) {
+            text += fmt::format("| `{}` | `{}` |\n", from, to);
+        }
+        std::fputs(text.c_str(), stdout);
     });
 }
 

@@ -219,6 +219,7 @@ void ObjectClusteringParams::Validate() const {
 ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
                                 const ObjectClusteringParams& params) {
     params.Validate();
+    if (region.empty()) return {};
     if (cloud.IsOrganized()) {
         return EuclideanClusteringOrganized(cloud, {.tolerance = params.tolerance,
                                                     .min_cluster_size = params.min_points,

@@ -104,8 +104,8 @@ struct ObjectClusteringParams {
 
 /// Clusters of the points `region` (indices into `cloud`): organized frames by pixel adjacency
 /// (EuclideanClusteringOrganized, 8-connected within organized_half_window pixels), other clouds
-/// on a k-d tree of the region (EuclideanClustering). Throws InvalidArgument for bad parameters or
-/// indices out of range.
+/// on a k-d tree of the region (EuclideanClustering). An empty region has no clusters. Throws
+/// InvalidArgument for bad parameters or indices out of range.
 ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
                                 const ObjectClusteringParams& params);
 

@@ -24,8 +24,8 @@ std::vector<Indices> PartsOf(const Indices& object, const std::vector<Indices>& 
 }  // namespace
 
 void PartSegmentationParams::Validate() const {
-    region_growing.Validate();
-    convexity.Validate();
+    ValidateNode("region_growing", [&] { region_growing.Validate(); });
+    ValidateNode("convexity", [&] { convexity.Validate(); });
     ResolveThreadCount(num_threads);
 }
 

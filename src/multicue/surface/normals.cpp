@@ -10,6 +10,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/core/params.hpp"
 #include "multicue/surface/pca.hpp"
 #include "multicue/surface/tree_neighbourhoods.hpp"
 
@@ -153,8 +154,8 @@ void SetNormals(PointCloud& cloud, NormalsResult result) {
 }
 
 void FrameNormalParams::Validate() const {
-    organized.Validate();
-    unorganized.Validate();
+    ValidateNode("organized", [&] { organized.Validate(); });
+    ValidateNode("unorganized", [&] { unorganized.Validate(); });
 }
 
 NormalsResult EstimateFrameNormals(const PointCloud& cloud, const Indices& region,

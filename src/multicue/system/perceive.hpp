@@ -54,6 +54,10 @@ PerceiveParams ApplyThreadCount(PerceiveParams params);
 /// meaning). Keys of earlier releases are read under their current names with a warning.
 void ReadPerceiveParams(io::ConfigSection& config, PerceiveParams& params);
 
+/// The keys of earlier releases that ReadPerceiveParams still reads: (former key, current key);
+/// a section moves with all its keys.
+std::vector<std::pair<std::string, std::string>> PerceiveRenamedKeys();
+
 /// The learned models the categorisers use: loaded once by the caller, shared by every frame.
 struct PerceiveModels {
     std::shared_ptr<const PartGraphModel> part_graph;  ///< every categoriser but "rules"

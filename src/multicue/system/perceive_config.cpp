@@ -340,8 +340,9 @@ void Read(ConfigSection& s, ModelParams& p) {
 #undef MC_NODE
 #undef MC_SWITCH
 
-// Keys of earlier releases and their current names (a section moves with its keys).
-std::vector<std::pair<std::string, std::string>> RenamedKeys() {
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> PerceiveRenamedKeys() {
     std::vector<std::pair<std::string, std::string>> renamed = {
         {"normals.k", "normals.unorganized.k"},
         {"normals.radius", "normals.unorganized.radius"},
@@ -380,10 +381,8 @@ std::vector<std::pair<std::string, std::string>> RenamedKeys() {
     return renamed;
 }
 
-}  // namespace
-
 void ReadPerceiveParams(ConfigSection& config, PerceiveParams& p) {
-    for (const auto& [from, to] : RenamedKeys()) config.Rename(from, to);
+    for (const auto& [from, to] : PerceiveRenamedKeys()) config.Rename(from, to);
     ConfigSection& s = config;
     s.Get("threads", p.num_threads, "worker threads, 0 = all cores");
     Node(s, "normals", p.normals);
