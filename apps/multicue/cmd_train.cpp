@@ -1,4 +1,5 @@
-// `multicue train`: a part-graph hashing model (docs/part-graph.md) from simulated turntable scans.
+// `multicue train`: a part-graph hashing model (thesis section 5.1; docs/training.md) from
+// simulated turntable scans.
 
 #include <algorithm>
 #include <cmath>

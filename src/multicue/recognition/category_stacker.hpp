@@ -4,7 +4,6 @@
 /// k-NN, together with the rules' geometric evidence (box extents and ratios, fit scores), and
 /// returns one category distribution. The level-1 classifier is a multinomial logistic
 /// regression on standardised inputs, trained by full-batch gradient descent (deterministic).
-/// docs/part-graph.md, "Stacking the experts".
 
 #include <array>
 #include <cstddef>

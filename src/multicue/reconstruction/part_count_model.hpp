@@ -4,7 +4,7 @@
 /// (plates, flat boxes, boxes), 2.166 for round ones (spheres, cylinders) and 3.317 for others on
 /// its own segmentation (PartCountParams::Thesis()). The means depend on how finely objects are
 /// cut into parts, so the defaults are those of this library's normal-angle region growing,
-/// measured on simulated Kinect frames by bench/part_counts (docs/reconstruction.md). Used to
+/// measured on simulated Kinect frames by eval/part_counts. Used to
 /// judge whether a group of parts of one category is one object or several.
 
 #include <cstddef>

@@ -1,5 +1,5 @@
 #pragma once
-/// \file Outputs of `multicue perceive` as ../shared/design/EVALUATION.md defines them:
+/// \file Outputs of `multicue perceive` (docs/file-formats.md):
 /// result.json, labels.pcd (per-point object and category, input order and layout) and
 /// models.ply (all models as one mesh, coloured per object).
 

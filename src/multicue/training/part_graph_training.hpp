@@ -56,8 +56,7 @@ struct PartGraphTrainingOptions {
     /// segmented by perceive itself; every perceived object whose points are mostly (>= 60 %) of
     /// one category adds its parts as one labelled object. Closer to real frames than the
     /// turntable. 0: none. `multicue train` and part_graph_eval take kLibraryTableScenes when they
-    /// train on a mesh library (docs/part-graph.md, "A single configuration for simulated and
-    /// real scenes").
+    /// train on a mesh library (more varied objects gain from more scenes; docs/training.md).
     int table_scenes = 40;
     int table_views = 4;
     sim::ViewpointParams table_viewpoints{};  ///< camera placement around the table scenes
