@@ -55,6 +55,12 @@ struct RsdParams {
     float angle_quantile = 1.0f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("radius", radius, "RSD neighbourhood radius [m]");
+    }
 };
 
 /// RSD of every point of `cloud` (with normals) from neighbourhoods in `tree` (built from this

@@ -16,6 +16,8 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "multicue/core/params.hpp"
+
 namespace multicue::io {
 
 /// A view of one JSON object of a parameter file. Read values with Get(); absent keys leave the
@@ -45,6 +47,34 @@ class ConfigSection {
 
     /// Nested section `key` (empty if absent).
     ConfigSection Section(const std::string& key);
+
+    /// The visitor interface of parameter structs: a struct P lists its parameters once, in
+    /// `template <typename V> void VisitParams(V& v)`, with `v(key, field, help)` per value,
+    /// `v.Node(key, sub)` per nested struct and `v.Switch(key, step, help)` per optional step;
+    /// a section then reads them (or records them in dump mode).
+    template <typename T>
+    void operator()(const std::string& key, T& value, const std::string& help) {
+        Get(key, value, help);
+    }
+    /// A nested struct's parameters in section `key`.
+    template <typename P>
+    void Node(const std::string& key, P& params) {
+        ConfigSection sub = Section(key);
+        params.VisitParams(sub);
+    }
+    /// An optional step in section `key`: its "enabled" switch (meaning `help`), then its own
+    /// parameters.
+    template <typename P>
+    void Switch(const std::string& key, Switchable<P>& step, const std::string& help) {
+        ConfigSection sub = Section(key);
+        sub.Get("enabled", step.enabled, help);
+        static_cast<P&>(step).VisitParams(sub);
+    }
+    /// GetChoice under the visitor interface.
+    void Choice(const std::string& key, std::string& value,
+                std::span<const std::string_view> choices, const std::string& help) {
+        GetChoice(key, value, choices, help);
+    }
 
     /// A key of an earlier release: when the file has `old_key` (a dotted path below this
     /// section; a value or a whole section), it is read as `new_key` and a warning names both.

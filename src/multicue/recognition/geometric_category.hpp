@@ -114,6 +114,40 @@ struct CategoryParams {
                                  ///< result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("min_points", min_points, "fewer usable points give category none");
+        v("max_points", max_points, "evidence uses at most this many points");
+        v("axis_angle_deg", axis_angle_deg, "normal this close to a box axis is box-like [deg]");
+        v("planar_part_angle_deg", planar_part_angle_deg, "planar part tolerance [deg]");
+        v("fit_threshold", fit_threshold, "cylinder and sphere inlier distance [m]");
+        v("normal_weight", normal_weight, "normal distance weight of those fits");
+        v("min_radius", min_radius, "smallest cylinder or sphere radius [m]");
+        v("max_radius", max_radius, "largest cylinder or sphere radius [m]");
+        v("upright_angle_deg", upright_angle_deg, "upright cylinder axis tolerance [deg]");
+        v("lying_angle_deg", lying_angle_deg, "lying cylinder axis tolerance [deg]");
+        v("max_iterations", max_iterations, "RANSAC sample cap");
+        v("min_side_ratio", min_side_ratio, "cylinder side share scoring 0");
+        v("full_side_ratio", full_side_ratio, "cylinder side share scoring fully");
+        v("size_tolerance", size_tolerance, "diameter vs extent tolerance factor");
+        v("flat_ratio", flat_ratio, "flat if e2/e3 >= this");
+        v("box_ratio", box_ratio, "box if e2/e3 < this");
+        v("flat_long_ratio", flat_long_ratio, "in between: flat if e1/e3 > this");
+        v("boundary_softness", boundary_softness, "slope of the soft box/flat split");
+        v("plate_thin_ratio", plate_thin_ratio, "thickness/diameter fully thin");
+        v("plate_thick_ratio", plate_thick_ratio, "thickness/diameter not thin");
+        v("plate_low_height", plate_low_height, "objects up to this high may be plates [m]");
+        v("plate_high_height", plate_high_height, "objects from this high are no plates [m]");
+        v("sphere_box_axis_area", sphere_box_axis_area, "sphere score fades from this axis_area");
+        v("sphere_box_axis_area_max", sphere_box_axis_area_max, "... to 0 at this axis_area");
+        v("round_fill", round_fill, "footprint fill up to this is round");
+        v("square_fill", square_fill, "footprint fill from this is square");
+        v("min_evidence", min_evidence, "other wins below this score");
+        v("sharpness", sharpness, "exponent on scores before normalising");
+        v("seed", seed, "RANSAC seed");
+    }
 };
 
 struct CategoryResult {

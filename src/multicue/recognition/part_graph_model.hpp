@@ -146,6 +146,21 @@ struct PartGraphRecognitionParams {
     std::array<float, kNumCategories> category_priors = UniformCategoryPriors();
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("max_parts", max_parts, "largest group of parts classified in a scene");
+        v("k", k, "neighbours voting per group");
+        v("balanced", balanced, "divide votes by the category's share of the model's rows");
+        v("within_groups", within_groups, "only groups of parts inside one perceived object vote");
+        v("group_weight", group_weight, "weight of each whole object's own vote (0: none)");
+        auto priors = v.Section("category_priors");
+        for (std::size_t c = 1; c < kNumCategories; ++c) {
+            priors(std::string(kCategoryNames[c]), category_priors[c],
+                   "prior weight of this category's part-graph votes (>= 0)");
+        }
+    }
 };
 
 /// Per-part and per-group category distributions (indexed by Category; kNone stays 0 unless a

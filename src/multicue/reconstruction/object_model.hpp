@@ -42,6 +42,16 @@ struct ConcentricMergeParams {
     float radius_ratio = 0.25f;  ///< |r1 - r2| / max(r1, r2) at most [-]; >= 0
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("enabled", enabled,
+          "merge objects whose cylinders share their axis (inside and outside of a pot)");
+        v("angle_deg", angle_deg, "axes parallel within [deg]");
+        v("distance", distance, "axis to axis at most [m]");
+        v("radius_ratio", radius_ratio, "radii differ by at most this share of the larger one");
+    }
 };
 
 /// An object with at least min_share of its points inside the solid of a larger object's
@@ -53,6 +63,15 @@ struct ContainedMergeParams {
     float min_share = 0.8f;  ///< share of the object's points inside [-]; (0, 1]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("enabled", enabled,
+          "join objects lying inside a container's cylinder or surface of revolution");
+        v("margin", margin, "the container's solid enlarged by this [m]");
+        v("min_share", min_share, "share of the object's points inside");
+    }
 };
 
 /// A box or flat object with two horizontal faces (parts with normals within 10 degrees of up,
@@ -66,6 +85,17 @@ struct StackedSplitParams {
     float min_gain = 0.05f;             ///< inlier ratio gain of two boxes over one [-]; >= 0
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("enabled", enabled,
+          "split box objects with two horizontal faces at different heights into two boxes");
+        v("min_face_points", min_face_points, "points of each horizontal face");
+        v("min_step", min_step, "height between the faces at least [m]");
+        v("min_gain", min_gain,
+          "two boxes must explain this much larger a share of the points than one");
+    }
 };
 
 /// Touching boxes: a box or flat object that one upright box explains poorly (below
@@ -88,6 +118,21 @@ struct TouchingSplitParams {
     std::size_t max_points = 3000;      ///< points used per box evaluation [points]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("enabled", enabled,
+          "split box objects that one box explains poorly into two touching boxes");
+        v("min_part_points", min_part_points, "parts taking part in the splits");
+        v("max_parts", max_parts, "largest parts tried (2 to 12)");
+        v("max_overlap", max_overlap, "the two solid boxes overlap by at most this share");
+        v("min_gain", min_gain,
+          "two models must explain this much larger a share of the points than one");
+        v("max_points", max_points, "points used per evaluation");
+        v("round_enabled", round_enabled,
+          "split round objects that one cylinder explains poorly into two cylinders");
+    }
 };
 
 /// The models stage: fitting, verification, fallback meshes, and grouping by models.
@@ -144,6 +189,36 @@ struct ModelParams {
     int num_threads = 0;  ///< objects modelled in parallel; 0 = all cores
     /// Throws ParameterError naming the node and field of the first out-of-range value.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("min_inlier_ratio", min_inlier_ratio,
+          "primitives explaining a smaller share of their points are replaced");
+        v("mesh_fallback", mesh_fallback,
+          "replace rejected primitives by a triangulated mesh of the object's points");
+        v.Node("mesh", mesh);
+        v("mesh_max_points", mesh_max_points, "triangulate at most this many points (even stride)");
+        v("min_attached_points", min_attached_points,
+          "outliers of a kept primitive (a handle) are meshed and attached from this many, 0 = "
+          "never");
+        v("guided_fits", guided_fits,
+          "box/cylinder fits sample by RSD and weight by part-graph part probabilities");
+        v.Node("guided_rsd", guided_rsd);
+        v.Node("box", box);
+        v.Node("cylinder", cylinder);
+        v.Switch(
+            "rotational", rotational,
+            "surfaces of revolution for cylinder/sphere/other objects whose primitive fits poorly");
+        v.Switch("verification", verification, "verify models against the frame's free space");
+        v.Node("concentric", concentric);
+        v.Node("contained", contained);
+        v.Node("stacked", stacked);
+        v.Node("touching", touching);
+        v("several_min_ratio", several_min_ratio,
+          "splits are tried when the part count is this much likelier for two objects");
+        v.Node("part_counts", part_counts);
+    }
 };
 
 /// Verification of a fitted primitive (shares of its surface samples, VerifyModel).

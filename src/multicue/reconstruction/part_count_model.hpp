@@ -27,6 +27,14 @@ struct PartCountParams {
     static PartCountParams Thesis() { return {0.876, 2.166, 3.317}; }
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("flat_mean", flat_mean, "Poisson mean of parts of flat objects");
+        v("round_mean", round_mean, "Poisson mean of parts of round objects");
+        v("other_mean", other_mean, "Poisson mean of parts of other objects");
+    }
 };
 
 /// The type of a geometric category: box, flat and plate are flat; sphere and cylinder round;

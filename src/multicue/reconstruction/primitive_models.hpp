@@ -57,6 +57,15 @@ struct BoxFitParams {
     std::uint64_t seed = 1;          ///< its sampler seed [-]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("inlier_threshold", inlier_threshold, "box surface inlier distance [m]");
+        v("use_normals", use_normals, "orient boxes by their side faces' normals");
+        v("face_angle_deg", face_angle_deg, "face point normal tolerance [deg]");
+        v("min_face_points", min_face_points, "points needed to place a face");
+    }
 };
 
 struct FootprintRectangleParams {
@@ -170,6 +179,21 @@ struct CylinderModelParams {
     float inlier_threshold = 0.01f;   ///< distance to the surface for inlier_ratio [m]; > 0
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v.Node("sac", sac);
+        v("min_radius", min_radius, "smallest radius [m]");
+        v("max_radius", max_radius, "largest radius [m]");
+        v("upright_angle_deg", upright_angle_deg, "upright prior tolerance [deg]");
+        v("allow_free_axis", allow_free_axis, "also try a free axis");
+        v("free_axis_gain", free_axis_gain, "free axis must explain this factor more");
+        v("extend_to_support", extend_to_support, "upright cylinders reach the table");
+        v("cap_angle_deg", cap_angle_deg, "cap point normal tolerance [deg]");
+        v("min_cap_points", min_cap_points, "points needed to place a cap");
+        v("inlier_threshold", inlier_threshold, "surface distance for inlier_ratio [m]");
+    }
 };
 
 /// Cylinder of an object (cans, cups, bottles; section 5.4.2.1).

@@ -65,6 +65,19 @@ struct RotationalFitParams {
     float min_radius = 0.003f;       ///< contour radii below this are raised to it [m]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("max_tilt_deg", max_tilt_deg, "axis within this angle of up [deg]");
+        v("max_points", max_points, "points used by the axis search");
+        v("grid_directions", grid_directions, "coarse axis directions (sphere)");
+        v("line_threshold", line_threshold, "normal line to axis distance [m]");
+        v("profile_step", profile_step, "contour height bin [m]");
+        v("inlier_threshold", inlier_threshold, "surface distance of an inlier [m]");
+        v("profile_refinement", profile_refinement,
+          "refine the axis by the thinnest contour and the level rim");
+    }
 };
 
 struct RotationalModel {

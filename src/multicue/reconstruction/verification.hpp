@@ -34,6 +34,18 @@ struct VerificationParams {
     std::size_t max_cells = 16u << 20;  ///< refuse grids larger than this [cells]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("voxel_size", voxel_size, "occupancy cell [m]");
+        v("margin", margin, "grid margin around the model [m]");
+        v("sample_spacing", sample_spacing, "surface sample spacing [m]");
+        v("tolerance_voxels", tolerance_voxels,
+          "occupied cells this close verify a sample [cells]");
+        v("max_invalid_ratio", max_invalid_ratio,
+          "models with a larger share of surface in free space are rejected");
+    }
 };
 
 struct VerificationResult {

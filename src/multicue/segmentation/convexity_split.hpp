@@ -34,6 +34,21 @@ struct ConvexitySplitParams {
                                         ///< above the support plane differ less than this [m]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("patch_size", patch_size, "voxel patch edge [m]");
+        v("smooth_angle_deg", smooth_angle_deg,
+          "patches with normals closer than this always join [deg]");
+        v("min_convex_share", min_convex_share,
+          "parts join when this share of their border is convex");
+        v("min_border", min_border, "patch pairs needed to judge a border");
+        v("bend_angle_deg", bend_angle_deg,
+          "concave borders with a median patch angle below this are bends [deg]; 0 = off");
+        v("max_top_difference", max_top_difference,
+          "groups across a bend join when their tops differ less than this [m]");
+    }
 };
 
 struct ConvexitySplitResult {

@@ -100,6 +100,16 @@ struct ObjectClusteringParams {
     int organized_half_window = 2;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("tolerance", tolerance, "points closer than this are one object [m]");
+        v("min_points", min_points, "smaller clusters (and pieces of splits) are not objects");
+        v("max_points", max_points, "larger clusters are not objects");
+        v("organized_half_window", organized_half_window,
+          "organized clustering reach in pixels; 2 bridges one-pixel gaps");
+    }
 };
 
 /// Clusters of the points `region` (indices into `cloud`): organized frames by pixel adjacency

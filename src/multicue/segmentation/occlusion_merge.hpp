@@ -40,6 +40,26 @@ struct OcclusionMergeParams {
     int cylinder_iterations = 300;      ///< cylinder RANSAC sample cap [samples]; >= 1
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("depth_margin", depth_margin, "gap pixels this much nearer than both [m]");
+        v("min_near_share", min_near_share, "share of nearer pixels in an occluded row");
+        v("min_occluded_share", min_occluded_share,
+          "share of the shared rows that must be occluded");
+        v("min_rows", min_rows, "fewest occluded rows for a merge");
+        v("max_gap", max_gap, "largest median 3D distance across the gap [m]");
+        v("min_height_overlap", min_height_overlap,
+          "overlap of the height ranges over the smaller one");
+        v("surface_distance", surface_distance, "surface continuation distance [m]");
+        v("surface_angle_deg", surface_angle_deg, "surface continuation angle [deg]");
+        v("min_explained_share", min_explained_share,
+          "share of a fragment the other's surface must explain");
+        v("min_cylinder_radius", min_cylinder_radius, "smallest cylinder radius [m]");
+        v("max_cylinder_radius", max_cylinder_radius, "largest cylinder radius [m]");
+        v("cylinder_iterations", cylinder_iterations, "cylinder RANSAC sample cap");
+    }
 };
 
 struct OcclusionMergeResult {

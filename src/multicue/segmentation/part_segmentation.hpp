@@ -32,6 +32,14 @@ struct PartSegmentationParams {
     int num_threads = 0;  ///< 0 = all cores; hypotheses are segmented in parallel
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v.Node("region_growing", region_growing);
+        v.Switch("convexity", convexity,
+                 "split hypotheses where their parts meet in concave creases");
+    }
 };
 
 struct PartSegmentationResult {

@@ -24,6 +24,13 @@ struct PrismParams {
     float max_height = 0.50f;  ///< highest height above the plane that counts [m]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("min_height", min_height, "lowest object point above the table [m]");
+        v("max_height", max_height, "highest object point above the table [m]");
+    }
 };
 
 /// Points whose height above `plane` (along its normal) lies in [min_height, max_height] and whose

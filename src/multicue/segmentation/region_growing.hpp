@@ -40,6 +40,16 @@ struct RegionGrowingParams {
     Indices subset = {};  ///< points to segment (duplicates ignored); empty = all points
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("radius", radius, "neighbourhood radius, delta of section 4.2.1 [m]");
+        v("k", k, "if > 0, at most k neighbours within the radius");
+        v("max_angle_deg", max_angle_deg, "angle to the part's seed normal, alpha [deg]");
+        v("min_part_size", min_part_size, "smaller parts are merged into a neighbour [points]");
+        v("discard_small_parts", discard_small_parts, "drop parts still too small after merging");
+    }
 };
 
 struct RegionGrowingResult {

@@ -69,6 +69,15 @@ struct SacParams {
     /// outliers, MSAC multiplies each point's truncated cost by its weight, and the refinement
     /// compares weighted costs. Each must be finite and >= 0 [-]
     std::vector<float> score_weights{};
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("distance_threshold", distance_threshold, "RANSAC inlier distance [m]");
+        v("max_iterations", max_iterations, "RANSAC sample cap");
+        v("normal_distance_weight", normal_distance_weight, "normal term weight");
+        v("seed", seed, "RANSAC seed");
+    }
 };
 
 /// Coefficients of a model as a flat vector; each model defines the layout.

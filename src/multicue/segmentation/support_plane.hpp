@@ -44,6 +44,33 @@ struct SupportPlaneParams {
     int num_threads = 0;              ///< 0 = all cores
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("up", up,
+          "up in the cloud's frame, null = from VIEWPOINT, the camera convention or the "
+          "dominant plane");
+        v("max_tilt_deg", max_tilt_deg,
+          "table normal within this angle of a given or world up [deg]");
+        v("camera_tilt_deg", camera_tilt_deg,
+          "in the sensor frame: table normal within this angle of -y [deg]");
+        v("distance_threshold", distance_threshold, "plane inlier distance [m]");
+        v("max_candidates", max_candidates, "planes extracted before choosing");
+        v("min_inlier_fraction", min_inlier_fraction,
+          "a candidate plane holds at least this share of the points");
+        v("size_ratio_to_compete", size_ratio_to_compete,
+          "planes this large relative to the largest compete on nearness to the viewpoint");
+        v("raised_gap", raised_gap,
+          "a smaller plane this much nearer to the viewpoint than the largest is a table on "
+          "the floor and wins (0 = off) [m]");
+        v("raised_ratio", raised_ratio,
+          "... if it holds this share of the largest plane's inliers [-]");
+        v("max_samples", max_samples, "points used by the robust fit");
+        v("cluster_tolerance", cluster_tolerance,
+          "the table is the largest connected patch of plane inliers [m]");
+        v("seed", seed, "sample consensus seed");
+    }
 };
 
 struct SupportPlane {

@@ -59,6 +59,15 @@ struct GreedyTriangulationParams {
     int num_threads = 0;  ///< 0 = all cores (used by per-label meshing and normal estimation)
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("search_radius", search_radius, "longest edge and neighbourhood [m]");
+        v("mu", mu, "neighbourhood / nearest distance");
+        v("max_surface_angle_deg", max_surface_angle_deg,
+          "largest angle between connected normals [deg]");
+    }
 };
 
 struct TriangulationResult {

@@ -40,6 +40,13 @@ struct NormalParams {
     int num_threads = 0;  ///< 0 = all cores
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("k", k, "neighbours of the PCA [points]");
+        v("radius", radius, "neighbourhood radius [m], 0 = use k only");
+    }
 };
 
 struct NormalsResult {
@@ -104,6 +111,16 @@ struct OrganizedNormalParams {
     int num_threads = 0;  ///< 0 = all cores
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("half_window", half_window, "half-size of the pixel window [px]");
+        v("stride", stride, "step between the pixels read, 0 = automatic [px]");
+        v("depth_dependent_window", depth_dependent_window, "scale the window with depth");
+        v("max_depth_change", max_depth_change,
+          "neighbours within this depth difference at 1 m [m]");
+    }
 };
 
 /// Normals of an organized cloud from image-space windows (see OrganizedNormalParams).
@@ -127,6 +144,13 @@ struct FrameNormalParams {
     NormalParams unorganized{.k = 20};
     /// Throws InvalidArgument naming the first out-of-range field of either path.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v.Node("organized", organized);
+        v.Node("unorganized", unorganized);
+    }
 };
 
 /// Normals and curvature of the points `region` of a frame (indices into `cloud`): an organized

@@ -13,14 +13,6 @@
 namespace multicue {
 namespace {
 
-constexpr std::array<std::pair<Categoriser, std::string_view>, 5> kCategoriserNames{{
-    {Categoriser::kRules, "rules"},
-    {Categoriser::kPartGraph, "part-graph"},
-    {Categoriser::kPartGraphRules, "part-graph+rules"},
-    {Categoriser::kThreeExperts, "part-graph+rules+cluster"},
-    {Categoriser::kStacked, "stacked"},
-}};
-
 // The objects `which` refers to: all of them when it is empty.
 std::vector<std::size_t> Targets(std::size_t n, std::span<const std::size_t> which) {
     std::vector<std::size_t> out;
@@ -59,15 +51,14 @@ CategoryDistribution Fuse(const CategorizationParams& params, const PartGraphMod
 }  // namespace
 
 std::string_view CategoriserName(Categoriser categoriser) {
-    for (const auto& [c, name] : kCategoriserNames) {
-        if (c == categoriser) return name;
-    }
-    throw InvalidArgument("unknown categoriser");
+    const auto k = static_cast<std::size_t>(categoriser);
+    if (k >= kCategoriserNames.size()) throw InvalidArgument("unknown categoriser");
+    return kCategoriserNames[k];
 }
 
 Categoriser ParseCategoriser(std::string_view name) {
-    for (const auto& [c, n] : kCategoriserNames) {
-        if (n == name) return c;
+    for (std::size_t k = 0; k < kCategoriserNames.size(); ++k) {
+        if (kCategoriserNames[k] == name) return static_cast<Categoriser>(k);
     }
     throw InvalidArgument(fmt::format(
         "categoriser must be rules, part-graph, part-graph+rules, part-graph+rules+cluster or "

@@ -3,6 +3,7 @@
 /// categoriser (CategorizeObject), part-graph hashing over the objects' parts and the model's
 /// whole-object k-NN, alone or fused as a weighted product of experts or by a trained stacker.
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -33,6 +34,10 @@ enum class Categoriser {
     /// (CategoryStacker; the model must have been trained with stacker scenes).
     kStacked,
 };
+
+/// The configuration names of the categorisers, in the order of the enum.
+inline constexpr std::array<std::string_view, 5> kCategoriserNames = {
+    "rules", "part-graph", "part-graph+rules", "part-graph+rules+cluster", "stacked"};
 
 /// The configuration name of a categoriser ("rules", "part-graph", ...).
 std::string_view CategoriserName(Categoriser categoriser);
@@ -68,6 +73,24 @@ struct CategorizationParams {
     bool NeedsPartGraph() const { return categoriser != Categoriser::kRules; }
     /// Throws InvalidArgument (ParameterError for a sub-node) naming the first bad field.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        std::string name(CategoriserName(categoriser));
+        v.Choice("categoriser", name, kCategoriserNames, "who decides the categories");
+        categoriser = ParseCategoriser(name);
+        v("part_graph_model", part_graph_model,
+          "part-graph model file (empty: the default model, trained once and cached)");
+        v.Node("rules", rules);
+        v.Node("part_graph", part_graph);
+        v("part_graph_weight", part_graph_weight,
+          "weight of the part-graph votes against the rules in part-graph+rules, [0, 1]");
+        v("expert_weights", expert_weights,
+          "weights of the rules, part-graph and cluster experts in part-graph+rules+cluster");
+        v("cluster_k", cluster_k,
+          "neighbours of the whole-object expert (part-graph+rules+cluster, stacked)");
+    }
 };
 
 /// Throws InvalidArgument when `params` needs a part-graph model and `model` is null, or the

@@ -44,6 +44,21 @@ struct PerceiveParams {
     ModelParams models{};  ///< models and grouping by models (sections 5.4, 5.4.1)
     /// Throws ParameterError naming the node and field of the first out-of-range value.
     void Validate() const;
+    /// Its parameters once each: configuration key (the field's name), field, meaning. A
+    /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
+    template <typename V>
+    void VisitParams(V& v) {
+        v("threads", num_threads, "worker threads, 0 = all cores");
+        v.Node("normals", normals);
+        v.Node("support", support);
+        v.Node("prism", prism);
+        v.Node("clustering", clustering);
+        v.Node("parts", parts);
+        v.Switch("occlusion", occlusion,
+                 "join fragments of an object that a nearer object cuts in two");
+        v.Node("category", category);
+        v.Node("models", models);
+    }
 };
 
 /// `params` with its num_threads set in every stage that runs in parallel (the one place the
