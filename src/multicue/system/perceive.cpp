@@ -25,7 +25,11 @@ class StageTimer {
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
-void CheckFrame(const PointCloud& cloud) {
+// Every parameter and the categoriser's model, before any work; then the cloud.
+void CheckInputs(const PointCloud& cloud, const PerceiveParams& params,
+                 const PerceiveModels& models) {
+    params.Validate();
+    CheckCategorizationModel(params.category, models.part_graph.get());
     cloud.Validate();
     if (cloud.CountFinite() == 0) {
         throw DataError(fmt::format("no valid points: all {} points are NaN or the cloud is empty",
@@ -100,9 +104,7 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result) {
 PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
                         const PerceiveModels& models) {
     const PerceiveParams params = ApplyThreadCount(given);
-    params.Validate();
-    CheckCategorizationModel(params.category, models.part_graph.get());
-    CheckFrame(input);
+    CheckInputs(input, params, models);
     PerceiveResult result;
     result.points = input.size();
     StageTimer timer(result.timings_ms);
@@ -121,8 +123,7 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
     timer.Done("clustering");
 
     // Parts, hypotheses split at concave creases (section 4.2.1), occluded fragments joined.
-    std::vector<ObjectSegment> segments =
-        SegmentParts(cloud, clusters.clusters, plane, params.parts, min_points).objects;
+    auto segments = SegmentParts(cloud, clusters.clusters, plane, params.parts, min_points).objects;
     timer.Done("parts");
     segments = MergeOccludedObjects(cloud, std::move(segments), plane, params.occlusion);
     timer.Done("occlusion");
@@ -132,8 +133,8 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
     CategorizeObjects(cloud, objects, plane, params.category, models.part_graph.get());
     timer.Done("categories");
 
-    // Models (section 5.4), and grouping by models (section 5.4.1): what a stage merges or
-    // splits is categorised and modelled again before the next one looks.
+    // Models (section 5.4) and grouping by models (section 5.4.1): what a stage merges or splits
+    // is categorised and modelled again before the next stage looks.
     ModelObjects(cloud, objects, plane, params.models);
     const auto refit = [&](const GroupingResult& g) {
         Refit(cloud, objects, g, plane, params, models);
