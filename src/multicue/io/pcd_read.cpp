@@ -228,6 +228,7 @@ void CheckHeaderBytes(std::string_view line, std::size_t line_no, const std::str
     }
 }
 
+/// VIEWPOINT: the sensor origin (3 values) and orientation (a quaternion w x y z).
 void ReadViewpoint(const std::vector<std::string_view>& values, std::string_view key,
                    std::size_t line_no, const std::string& file, PcdHeader& h) {
     if (values.size() != 7) {
@@ -240,6 +241,7 @@ void ReadViewpoint(const std::vector<std::string_view>& values, std::string_view
     h.orientation = Eigen::Quaternionf(v[3], v[4], v[5], v[6]);
 }
 
+/// DATA's encoding, by name in any case.
 PcdEncoding ParseEncoding(std::string_view enc, std::size_t line_no, const std::string& file) {
     if (EqualsNoCase(enc, "ascii")) return PcdEncoding::kAscii;
     if (EqualsNoCase(enc, "binary")) return PcdEncoding::kBinary;

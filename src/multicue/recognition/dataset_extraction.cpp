@@ -56,6 +56,7 @@ T Get(const json& j, const char* key, const fs::path& manifest) {
     }
 }
 
+/// Throws InvalidArgument for a parameter out of range, before any file is read.
 void CheckExtractionParams(const DatasetExtractionParams& params) {
     if (!(params.voxel_size >= 0.0f) || !std::isfinite(params.voxel_size)) {
         throw InvalidArgument("voxel_size must be >= 0");

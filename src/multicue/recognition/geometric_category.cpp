@@ -231,6 +231,7 @@ CategoryResult NoneResult(std::size_t points) {
     return r;
 }
 
+// Throws for an index of the object or of a part outside the cloud.
 void CheckIndices(const PointCloud& cloud, const Indices& object,
                   const std::vector<Indices>& parts) {
     auto check = [&](const Indices& idx) {
@@ -243,6 +244,7 @@ void CheckIndices(const PointCloud& cloud, const Indices& object,
     for (const Indices& part : parts) check(part);
 }
 
+// The object's points with a finite position and a usable normal: all evidence is taken on them.
 Indices UsablePoints(const PointCloud& cloud, const Indices& object) {
     Indices usable;
     usable.reserve(object.size());

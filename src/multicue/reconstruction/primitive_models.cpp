@@ -491,6 +491,7 @@ void SetUprightBox(const UprightFrame& f, const Eigen::Vector2d& dir, const floa
     box.extents = ext;
 }
 
+// The points with a finite, non-zero normal: the cylinder fit samples normals.
 Indices WithNormals(const PointCloud& cloud, const Indices& finite) {
     Indices usable;
     usable.reserve(finite.size());
@@ -620,6 +621,7 @@ std::pair<float, float> AxialExtent(const PointCloud& cloud, const Indices& usab
     return {lo, hi};
 }
 
+// The share of the finite points within the threshold of the closed cylinder's surface.
 float CylinderInlierRatio(const PointCloud& cloud, const Indices& finite,
                           const CylinderModel& model, float threshold) {
     std::size_t inliers = 0;

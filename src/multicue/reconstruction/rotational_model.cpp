@@ -421,6 +421,7 @@ float Median(std::vector<float>& v) {
     return *mid;
 }
 
+/// Throws InvalidArgument for an index outside the cloud.
 void CheckIndices(const PointCloud& cloud, const Indices& indices) {
     for (auto i : indices) {
         if (i >= cloud.size()) {

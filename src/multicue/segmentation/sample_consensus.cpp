@@ -252,6 +252,7 @@ Indices UsablePoints(const PointCloud& cloud, const Indices& indices, bool use_n
     return points;
 }
 
+// Throws InvalidArgument for a model that cannot be sampled or scored.
 void CheckModel(const SacModel& model) {
     if (model.sample_size < 1) {
         throw InvalidArgument(fmt::format("sample consensus model sample_size must be >= 1, got {}",

@@ -72,6 +72,7 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
     return std::move(clusters.clusters.front());
 }
 
+// The cloud's finite points: the candidates and the table are taken among them.
 Indices FinitePoints(const PointCloud& cloud) {
     Indices finite;
     finite.reserve(cloud.size());

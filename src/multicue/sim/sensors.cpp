@@ -93,6 +93,7 @@ bool IsEdge(const std::vector<PixelHit>& px, std::uint32_t w, std::uint32_t h, s
            (v > 0 && differs(i - w)) || (v + 1 < h && differs(i + w));
 }
 
+/// Throws InvalidArgument for parameters no Kinect could have.
 void CheckKinect(const KinectParams& p) {
     CheckPinhole(p.width, p.height, p.fx, p.fy, p.min_range, p.max_range, p.max_incidence_deg);
     if (!(std::abs(p.baseline) > 0.0f) || !(p.disparity_step >= 0.0f) || !(p.axial_noise >= 0.0f) ||

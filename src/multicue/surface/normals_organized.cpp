@@ -99,6 +99,7 @@ float DepthLimit(const OrganizedNormalParams& params, float depth) {
     return std::min(params.max_depth_change * depth * depth, std::numeric_limits<float>::max());
 }
 
+// Throws InvalidArgument unless the cloud is an image and the mask covers it.
 void CheckFrame(const PointCloud& organized, const OrganizedNormalParams& params) {
     if (!organized.IsOrganized()) {
         throw InvalidArgument(fmt::format(

@@ -180,6 +180,7 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
     return true;
 }
 
+// Throws InvalidArgument for bad turntable options (checked before any object is made).
 void CheckObjectOptions(const PartGraphTrainingOptions& o) {
     if (o.views < 1) throw InvalidArgument("views must be >= 1");
     if (o.objects_per_category < 0) throw InvalidArgument("objects_per_category must be >= 0");
@@ -225,6 +226,8 @@ std::vector<Job> TurntableJobs(const PartGraphTrainingOptions& o) {
     return jobs;
 }
 
+// Throws InvalidArgument for bad table-scene options; checked after the turntable objects are
+// made, so that an unreadable mesh library is still the first error reported.
 void CheckSceneOptions(const PartGraphTrainingOptions& o) {
     if (o.table_scenes < 0 || o.table_views < 1) {
         throw InvalidArgument("table_scenes must be >= 0 and table_views >= 1");
