@@ -1,6 +1,7 @@
 #include "multicue/features/part_stats.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -15,6 +16,97 @@ namespace multicue {
 namespace {
 
 float Ratio(double a, double b) { return b > 0.0 ? static_cast<float>(a / b) : 0.0f; }
+
+// Feature 1 (section 4.2.3.1): the share of the usable points on the part's boundary.
+float BoundaryShare(const PointCloud& part, const KdTree& tree, const PartStatsParams& params) {
+    const auto boundary = EstimateBoundaryPoints(part, tree, params.radius, params.boundary_angle,
+                                                 params.num_threads);
+    std::size_t usable = 0, on_boundary = 0;
+    for (std::size_t i = 0; i < part.size(); ++i) {
+        if (!detail::IsUsable(part, i)) continue;
+        ++usable;
+        on_boundary += boundary[i];
+    }
+    return Ratio(static_cast<double>(on_boundary), static_cast<double>(usable));
+}
+
+// Feature 2: the mean curvature (surface variation) of the points, the cloud's own when it has
+// one per point, else estimated with the part radius.
+float MeanCurvature(const PointCloud& part, const KdTree& tree, const PartStatsParams& params) {
+    std::vector<float> curvature;
+    if (part.HasCurvature() && part.curvature.size() == part.size()) {
+        curvature = part.curvature;
+    } else {
+        curvature = EstimateNormals(part, tree,
+                                    {.radius = params.radius, .num_threads = params.num_threads})
+                        .curvature;
+    }
+    double curvature_sum = 0.0;
+    std::size_t curvature_count = 0;
+    for (float c : curvature) {
+        if (!std::isfinite(c)) continue;
+        curvature_sum += c;
+        ++curvature_count;
+    }
+    return Ratio(curvature_sum, static_cast<double>(curvature_count));
+}
+
+// Feature 3: the volume of the occupied voxels.
+double OccupiedVolume(const PointCloud& part, float voxel_size) {
+    const VoxelPartition voxels =
+        PartitionByVoxel(part, {.leaf_size = voxel_size, .num_threads = 1});
+    const double voxel_volume = std::pow(static_cast<double>(voxel_size), 3);
+    return static_cast<double>(voxels.num_voxels()) * voxel_volume;
+}
+
+// The principal axes of the finite points: their mean, the covariance's eigenvalues (ascending,
+// clamped at 0) and eigenvectors.
+struct PrincipalAxes {
+    Eigen::Vector3d mean;
+    Eigen::Vector3d e;
+    Eigen::Matrix3d axes;
+};
+
+PrincipalAxes PrincipalAxesOf(const std::vector<Eigen::Vector3d>& pts) {
+    PrincipalAxes pa;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : pts) mean += p;
+    mean /= static_cast<double>(pts.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& p : pts) cov += (p - mean) * (p - mean).transpose();
+    cov /= static_cast<double>(pts.size());
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    pa.mean = mean;
+    pa.e = eig.eigenvalues().cwiseMax(0.0);  // ascending
+    pa.axes = eig.eigenvectors();
+    return pa;
+}
+
+// Features 5, 7 and 8 of section 4.2.3.1 along each principal axis (entries 9-11, 13-18, 20-22):
+// the spread, the extent, the shorter half-extent over the longer, and spread over extent;
+// returns the extents.
+std::array<double, 3> SetAxisStatistics(const std::vector<Eigen::Vector3d>& pts,
+                                        const PrincipalAxes& pa, FeatureVector& f) {
+    std::array<double, 3> extent;
+    double spread[3];
+    for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d axis = pa.axes.col(k);
+        double lo = 0.0, hi = 0.0, sq = 0.0;
+        for (const auto& p : pts) {
+            const double t = axis.dot(p - pa.mean);
+            lo = std::min(lo, t);
+            hi = std::max(hi, t);
+            sq += t * t;
+        }
+        spread[k] = std::sqrt(sq / static_cast<double>(pts.size()));
+        extent[k] = hi - lo;
+        f[9 + k] = static_cast<float>(spread[k]);
+        f[13 + k] = static_cast<float>(extent[k]);
+        f[16 + k] = Ratio(std::min(hi, -lo), std::max(hi, -lo));
+        f[20 + k] = Ratio(spread[k], extent[k]);
+    }
+    return extent;
+}
 
 }  // namespace
 
@@ -82,52 +174,12 @@ FeatureVector ComputePartStatistics(const PointCloud& part, const PartStatsParam
     if (pts.size() < 3) return f;
 
     const KdTree tree(part);
-    // 0: boundary proportion.
-    const auto boundary = EstimateBoundaryPoints(part, tree, params.radius, params.boundary_angle,
-                                                 params.num_threads);
-    std::size_t usable = 0, on_boundary = 0;
-    for (std::size_t i = 0; i < part.size(); ++i) {
-        if (!detail::IsUsable(part, i)) continue;
-        ++usable;
-        on_boundary += boundary[i];
-    }
-    f[0] = Ratio(static_cast<double>(on_boundary), static_cast<double>(usable));
-
-    // 1: mean curvature (surface variation) of the points.
-    std::vector<float> curvature;
-    if (part.HasCurvature() && part.curvature.size() == part.size()) {
-        curvature = part.curvature;
-    } else {
-        curvature = EstimateNormals(part, tree,
-                                    {.radius = params.radius, .num_threads = params.num_threads})
-                        .curvature;
-    }
-    double curvature_sum = 0.0;
-    std::size_t curvature_count = 0;
-    for (float c : curvature) {
-        if (!std::isfinite(c)) continue;
-        curvature_sum += c;
-        ++curvature_count;
-    }
-    f[1] = Ratio(curvature_sum, static_cast<double>(curvature_count));
-
-    // 2: occupied volume.
-    const VoxelPartition voxels =
-        PartitionByVoxel(part, {.leaf_size = params.voxel_size, .num_threads = 1});
-    const double voxel_volume = std::pow(static_cast<double>(params.voxel_size), 3);
-    const double occupied = static_cast<double>(voxels.num_voxels()) * voxel_volume;
+    f[0] = BoundaryShare(part, tree, params);
+    f[1] = MeanCurvature(part, tree, params);
+    const double occupied = OccupiedVolume(part, params.voxel_size);
     f[2] = static_cast<float>(occupied);
-
-    // Principal axes.
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& p : pts) mean += p;
-    mean /= static_cast<double>(pts.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (const auto& p : pts) cov += (p - mean) * (p - mean).transpose();
-    cov /= static_cast<double>(pts.size());
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    const Eigen::Vector3d e = eig.eigenvalues().cwiseMax(0.0);  // ascending
-    const Eigen::Matrix3d axes = eig.eigenvectors();
+    const PrincipalAxes pa = PrincipalAxesOf(pts);
+    const Eigen::Vector3d& e = pa.e;
     const double sum = e.sum();
     // 3-8: eigenvalue proportions.
     f[3] = Ratio(e[0], e[1]);
@@ -136,27 +188,9 @@ FeatureVector ComputePartStatistics(const PointCloud& part, const PartStatsParam
     f[6] = Ratio(e[0], sum);
     f[7] = Ratio(e[1], sum);
     f[8] = Ratio(e[2], sum);
-    // 9-11, 13-18: spread and extents along each axis.
-    double extent[3];
-    double spread[3];
-    for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d axis = axes.col(k);
-        double lo = 0.0, hi = 0.0, sq = 0.0;
-        for (const auto& p : pts) {
-            const double t = axis.dot(p - mean);
-            lo = std::min(lo, t);
-            hi = std::max(hi, t);
-            sq += t * t;
-        }
-        spread[k] = std::sqrt(sq / static_cast<double>(pts.size()));
-        extent[k] = hi - lo;
-        f[9 + k] = static_cast<float>(spread[k]);
-        f[13 + k] = static_cast<float>(extent[k]);
-        f[16 + k] = Ratio(std::min(hi, -lo), std::max(hi, -lo));
-        f[20 + k] = Ratio(spread[k], extent[k]);
-    }
+    const std::array<double, 3> extent = SetAxisStatistics(pts, pa, f);
     // 12: orientation of the normal direction.
-    f[12] = static_cast<float>(std::abs(axes.col(0).dot(params.up.cast<double>().normalized())));
+    f[12] = static_cast<float>(std::abs(pa.axes.col(0).dot(params.up.cast<double>().normalized())));
     f[19] = Ratio(extent[0], extent[1]);
     // 23: occupied share of the oriented bounding box.
     const double vs = params.voxel_size;

@@ -208,26 +208,116 @@ void AssignTargets(std::vector<PcdField>& fields, const std::string& file) {
     }
 }
 
-PcdHeader ParseHeader(std::string_view bytes, const std::string& file) {
-    PcdHeader h;
-    std::vector<std::string_view> names, sizes, types, counts, tokens;
+/// The header's lines as read, before they are checked against each other: PCD allows the
+/// keywords in any order, so the field lists can only be matched once DATA is reached.
+struct HeaderLines {
+    std::vector<std::string_view> names, sizes, types, counts;
     bool have_fields = false, have_size = false, have_type = false, have_count = false;
     std::optional<std::uint32_t> width, height;
     std::optional<std::uint64_t> points;
-    bool have_data = false, seen_keyword = false;
+    bool have_data = false;
+};
+
+/// Control bytes in a header line mean a binary file, not a PCD header.
+void CheckHeaderBytes(std::string_view line, std::size_t line_no, const std::string& file) {
+    for (char c : line) {
+        if ((static_cast<unsigned char>(c) < 0x20 && !IsBlank(c)) || c == 0x7f) {
+            throw FormatError(fmt::format(
+                "{}: line {}: binary bytes in the header (not a PCD file?)", file, line_no));
+        }
+    }
+}
+
+/// VIEWPOINT: the sensor origin (3 values) and orientation (a quaternion w x y z).
+void ReadViewpoint(const std::vector<std::string_view>& values, std::string_view key,
+                   std::size_t line_no, const std::string& file, PcdHeader& h) {
+    if (values.size() != 7) {
+        throw FormatError(fmt::format("{}: line {}: VIEWPOINT needs 7 values, got {}", file,
+                                      line_no, values.size()));
+    }
+    float v[7];
+    for (int i = 0; i < 7; ++i) v[i] = HeaderNumber<float>(values[i], key, line_no, file);
+    h.origin = {v[0], v[1], v[2]};
+    h.orientation = Eigen::Quaternionf(v[3], v[4], v[5], v[6]);
+}
+
+/// DATA's encoding, by name in any case.
+PcdEncoding ParseEncoding(std::string_view enc, std::size_t line_no, const std::string& file) {
+    if (EqualsNoCase(enc, "ascii")) return PcdEncoding::kAscii;
+    if (EqualsNoCase(enc, "binary")) return PcdEncoding::kBinary;
+    if (EqualsNoCase(enc, "binary_compressed")) return PcdEncoding::kBinaryCompressed;
+    throw FormatError(
+        fmt::format("{}: line {}: unknown DATA encoding '{}' (expected ascii, binary or "
+                    "binary_compressed)",
+                    file, line_no, enc));
+}
+
+/// One header line's keyword and values. `pos` is the offset after the line (where DATA's
+/// records begin); an unknown keyword is an error on the first line (not a PCD file) and where a
+/// number stands for it (point data after a missing DATA line), else a warning.
+void ReadKeyword(std::string_view key, const std::vector<std::string_view>& values,
+                 std::size_t line_no, std::size_t pos, bool seen_keyword, const std::string& file,
+                 HeaderLines& lines, PcdHeader& h) {
+    const auto single = [&]() {
+        if (values.size() != 1) {
+            throw FormatError(fmt::format("{}: line {}: {} needs one value, got {}", file, line_no,
+                                          key, values.size()));
+        }
+        return values.front();
+    };
+    if (EqualsNoCase(key, "VERSION")) {
+        // .5, .6, 0.7 and others are read alike; the layout rules below cover them all.
+    } else if (EqualsNoCase(key, "FIELDS") || EqualsNoCase(key, "COLUMNS")) {
+        lines.names = values;
+        lines.have_fields = true;
+    } else if (EqualsNoCase(key, "SIZE")) {
+        lines.sizes = values;
+        lines.have_size = true;
+    } else if (EqualsNoCase(key, "TYPE")) {
+        lines.types = values;
+        lines.have_type = true;
+    } else if (EqualsNoCase(key, "COUNT")) {
+        lines.counts = values;
+        lines.have_count = true;
+    } else if (EqualsNoCase(key, "WIDTH")) {
+        lines.width = HeaderNumber<std::uint32_t>(single(), key, line_no, file);
+    } else if (EqualsNoCase(key, "HEIGHT")) {
+        lines.height = HeaderNumber<std::uint32_t>(single(), key, line_no, file);
+    } else if (EqualsNoCase(key, "POINTS")) {
+        lines.points = HeaderNumber<std::uint64_t>(single(), key, line_no, file);
+    } else if (EqualsNoCase(key, "VIEWPOINT")) {
+        ReadViewpoint(values, key, line_no, file, h);
+    } else if (EqualsNoCase(key, "DATA")) {
+        h.encoding = ParseEncoding(single(), line_no, file);
+        lines.have_data = true;
+        h.data_offset = pos;
+        h.data_line = line_no;
+    } else if (!seen_keyword) {
+        throw FormatError(fmt::format("{}: line {}: unknown header keyword '{}' (not a PCD file?)",
+                                      file, line_no, key));
+    } else if (!std::isalpha(static_cast<unsigned char>(key.front()))) {
+        // Numbers where a keyword belongs: point data follows a missing or mangled DATA line.
+        throw FormatError(fmt::format("{}: line {}: '{}' in the header (no DATA line before it?)",
+                                      file, line_no, key));
+    } else {
+        LogWarning("{}: line {}: ignoring unknown header keyword '{}'", file, line_no, key);
+    }
+}
+
+/// The header's lines up to and including DATA (comments after '#' and blank lines skipped);
+/// sets the viewpoint, the encoding and where the data begin in `h`.
+HeaderLines ReadHeaderLines(std::string_view bytes, const std::string& file, PcdHeader& h) {
+    HeaderLines lines;
+    std::vector<std::string_view> tokens;
+    bool seen_keyword = false;
     std::size_t pos = 0, line_no = 0;
-    while (pos < bytes.size() && !have_data) {
+    while (pos < bytes.size() && !lines.have_data) {
         const std::size_t eol = bytes.find('\n', pos);
         const std::size_t end = eol == std::string_view::npos ? bytes.size() : eol;
         std::string_view line = bytes.substr(pos, end - pos);
         pos = eol == std::string_view::npos ? bytes.size() : eol + 1;
         ++line_no;
-        for (char c : line) {
-            if ((static_cast<unsigned char>(c) < 0x20 && !IsBlank(c)) || c == 0x7f) {
-                throw FormatError(fmt::format(
-                    "{}: line {}: binary bytes in the header (not a PCD file?)", file, line_no));
-            }
-        }
+        CheckHeaderBytes(line, line_no, file);
         if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) {
             line = line.substr(0, hash);
         }
@@ -235,132 +325,76 @@ PcdHeader ParseHeader(std::string_view bytes, const std::string& file) {
         if (tokens.empty()) continue;
         const std::string_view key = tokens.front();
         const auto values = std::vector<std::string_view>(tokens.begin() + 1, tokens.end());
-        const auto single = [&]() {
-            if (values.size() != 1) {
-                throw FormatError(fmt::format("{}: line {}: {} needs one value, got {}", file,
-                                              line_no, key, values.size()));
-            }
-            return values.front();
-        };
-        if (EqualsNoCase(key, "VERSION")) {
-            // .5, .6, 0.7 and others are read alike; the layout rules below cover them all.
-        } else if (EqualsNoCase(key, "FIELDS") || EqualsNoCase(key, "COLUMNS")) {
-            names = values;
-            have_fields = true;
-        } else if (EqualsNoCase(key, "SIZE")) {
-            sizes = values;
-            have_size = true;
-        } else if (EqualsNoCase(key, "TYPE")) {
-            types = values;
-            have_type = true;
-        } else if (EqualsNoCase(key, "COUNT")) {
-            counts = values;
-            have_count = true;
-        } else if (EqualsNoCase(key, "WIDTH")) {
-            width = HeaderNumber<std::uint32_t>(single(), key, line_no, file);
-        } else if (EqualsNoCase(key, "HEIGHT")) {
-            height = HeaderNumber<std::uint32_t>(single(), key, line_no, file);
-        } else if (EqualsNoCase(key, "POINTS")) {
-            points = HeaderNumber<std::uint64_t>(single(), key, line_no, file);
-        } else if (EqualsNoCase(key, "VIEWPOINT")) {
-            if (values.size() != 7) {
-                throw FormatError(fmt::format("{}: line {}: VIEWPOINT needs 7 values, got {}", file,
-                                              line_no, values.size()));
-            }
-            float v[7];
-            for (int i = 0; i < 7; ++i) v[i] = HeaderNumber<float>(values[i], key, line_no, file);
-            h.origin = {v[0], v[1], v[2]};
-            h.orientation = Eigen::Quaternionf(v[3], v[4], v[5], v[6]);
-        } else if (EqualsNoCase(key, "DATA")) {
-            const std::string_view enc = single();
-            if (EqualsNoCase(enc, "ascii")) {
-                h.encoding = PcdEncoding::kAscii;
-            } else if (EqualsNoCase(enc, "binary")) {
-                h.encoding = PcdEncoding::kBinary;
-            } else if (EqualsNoCase(enc, "binary_compressed")) {
-                h.encoding = PcdEncoding::kBinaryCompressed;
-            } else {
-                throw FormatError(fmt::format(
-                    "{}: line {}: unknown DATA encoding '{}' (expected ascii, binary or "
-                    "binary_compressed)",
-                    file, line_no, enc));
-            }
-            have_data = true;
-            h.data_offset = pos;
-            h.data_line = line_no;
-        } else if (!seen_keyword) {
-            throw FormatError(fmt::format(
-                "{}: line {}: unknown header keyword '{}' (not a PCD file?)", file, line_no, key));
-        } else if (!std::isalpha(static_cast<unsigned char>(key.front()))) {
-            // Numbers where a keyword belongs: point data follows a missing or mangled DATA line.
-            throw FormatError(fmt::format(
-                "{}: line {}: '{}' in the header (no DATA line before it?)", file, line_no, key));
-        } else {
-            LogWarning("{}: line {}: ignoring unknown header keyword '{}'", file, line_no, key);
-        }
+        ReadKeyword(key, values, line_no, pos, seen_keyword, file, lines, h);
         seen_keyword = true;
     }
-    if (!have_data) {
+    return lines;
+}
+
+/// DATA, FIELDS, SIZE and TYPE must be there, and every field list as long as FIELDS.
+void CheckFieldLists(const HeaderLines& lines, const std::string& file) {
+    if (!lines.have_data) {
         throw FormatError(fmt::format("{}: header has no DATA line (not a PCD file?)", file));
     }
-    if (!have_fields || names.empty())
+    if (!lines.have_fields || lines.names.empty())
         throw FormatError(fmt::format("{}: header has no FIELDS", file));
-    if (!have_size) throw FormatError(fmt::format("{}: header has no SIZE line", file));
-    if (!have_type) throw FormatError(fmt::format("{}: header has no TYPE line", file));
+    if (!lines.have_size) throw FormatError(fmt::format("{}: header has no SIZE line", file));
+    if (!lines.have_type) throw FormatError(fmt::format("{}: header has no TYPE line", file));
     const auto check_count = [&](const std::vector<std::string_view>& v, const char* key) {
-        if (v.size() != names.size()) {
+        if (v.size() != lines.names.size()) {
             throw FormatError(
                 fmt::format("{}: header field count mismatch: FIELDS has {} entries, {} has {}",
-                            file, names.size(), key, v.size()));
+                            file, lines.names.size(), key, v.size()));
         }
     };
-    check_count(sizes, "SIZE");
-    check_count(types, "TYPE");
-    if (have_count) check_count(counts, "COUNT");
+    check_count(lines.sizes, "SIZE");
+    check_count(lines.types, "TYPE");
+    if (lines.have_count) check_count(lines.counts, "COUNT");
+}
 
-    for (std::size_t i = 0; i < names.size(); ++i) {
-        PcdField f;
-        f.name = std::string(names[i]);
-        const auto field_number = [&](std::string_view token, const char* key) {
-            std::uint32_t v = 0;
-            if (!ParseNumber(token, v)) {
-                throw FormatError(
-                    fmt::format("{}: field '{}' has bad {} '{}'", file, f.name, key, token));
-            }
-            return v;
-        };
-        const std::uint32_t size = field_number(sizes[i], "SIZE");
-        if (types[i].size() != 1) {
+/// Field i of the lists: its name, scalar type (TYPE letters of either case) and count.
+PcdField ParseField(const HeaderLines& lines, std::size_t i, const std::string& file) {
+    PcdField f;
+    f.name = std::string(lines.names[i]);
+    const auto field_number = [&](std::string_view token, const char* key) {
+        std::uint32_t v = 0;
+        if (!ParseNumber(token, v)) {
             throw FormatError(
-                fmt::format("{}: field '{}' has bad TYPE '{}'", file, f.name, types[i]));
+                fmt::format("{}: field '{}' has bad {} '{}'", file, f.name, key, token));
         }
-        f.type = types[i].front();
-        if (f.type >= 'a' && f.type <= 'z') f.type = static_cast<char>(f.type - 'a' + 'A');
-        const auto scalar = ScalarOf(f.type, size);
-        if (!scalar) {
-            throw FormatError(
-                fmt::format("{}: field '{}' has unsupported TYPE/SIZE combination {} {}", file,
-                            f.name, types[i], sizes[i]));
-        }
-        f.scalar = *scalar;
-        f.size = static_cast<std::uint8_t>(size);
-        f.count = have_count ? field_number(counts[i], "COUNT") : 1;
-        if (f.count == 0)
-            throw FormatError(fmt::format("{}: field '{}' has COUNT 0", file, f.name));
-        h.point_size += f.Bytes();
-        if (f.name != "_") h.packed_size += f.Bytes();
-        h.fields.push_back(std::move(f));
+        return v;
+    };
+    const std::uint32_t size = field_number(lines.sizes[i], "SIZE");
+    if (lines.types[i].size() != 1) {
+        throw FormatError(
+            fmt::format("{}: field '{}' has bad TYPE '{}'", file, f.name, lines.types[i]));
     }
-    AssignTargets(h.fields, file);
+    f.type = lines.types[i].front();
+    if (f.type >= 'a' && f.type <= 'z') f.type = static_cast<char>(f.type - 'a' + 'A');
+    const auto scalar = ScalarOf(f.type, size);
+    if (!scalar) {
+        throw FormatError(fmt::format("{}: field '{}' has unsupported TYPE/SIZE combination {} {}",
+                                      file, f.name, lines.types[i], lines.sizes[i]));
+    }
+    f.scalar = *scalar;
+    f.size = static_cast<std::uint8_t>(size);
+    f.count = lines.have_count ? field_number(lines.counts[i], "COUNT") : 1;
+    if (f.count == 0) throw FormatError(fmt::format("{}: field '{}' has COUNT 0", file, f.name));
+    return f;
+}
 
-    // PCD v0.6 files may lack POINTS; very old ones WIDTH/HEIGHT (PCL then takes POINTS as width).
+/// The cloud's size from WIDTH, HEIGHT and POINTS. PCD v0.6 files may lack POINTS; very old ones
+/// WIDTH/HEIGHT (PCL then takes POINTS as width).
+void SetDimensions(const HeaderLines& lines, const std::string& file, PcdHeader& h) {
+    const auto& width = lines.width;
+    const auto& points = lines.points;
     if (!width && !points) {
         throw FormatError(fmt::format("{}: header has neither WIDTH nor POINTS", file));
     }
     if (!width && *points > std::numeric_limits<std::uint32_t>::max()) {
         throw FormatError(fmt::format("{}: POINTS {} without WIDTH is too large", file, *points));
     }
-    h.height = height.value_or(1);
+    h.height = lines.height.value_or(1);
     h.width = width ? *width : static_cast<std::uint32_t>(*points);
     const std::uint64_t wh = std::uint64_t{h.width} * h.height;
     if (points && *points != wh) {
@@ -376,6 +410,20 @@ PcdHeader ParseHeader(std::string_view bytes, const std::string& file) {
         h.width = 0;
         h.height = 1;
     }
+}
+
+PcdHeader ParseHeader(std::string_view bytes, const std::string& file) {
+    PcdHeader h;
+    const HeaderLines lines = ReadHeaderLines(bytes, file, h);
+    CheckFieldLists(lines, file);
+    for (std::size_t i = 0; i < lines.names.size(); ++i) {
+        PcdField f = ParseField(lines, i, file);
+        h.point_size += f.Bytes();
+        if (f.name != "_") h.packed_size += f.Bytes();
+        h.fields.push_back(std::move(f));
+    }
+    AssignTargets(h.fields, file);
+    SetDimensions(lines, file, h);
     return h;
 }
 

@@ -56,6 +56,134 @@ T Get(const json& j, const char* key, const fs::path& manifest) {
     }
 }
 
+/// Throws InvalidArgument for a parameter out of range, before any file is read.
+void CheckExtractionParams(const DatasetExtractionParams& params) {
+    if (!(params.voxel_size >= 0.0f) || !std::isfinite(params.voxel_size)) {
+        throw InvalidArgument("voxel_size must be >= 0");
+    }
+    if (!(params.normal_radius > 0.0f) || !std::isfinite(params.normal_radius)) {
+        throw InvalidArgument("normal_radius must be > 0");
+    }
+    if (params.save_every == 0) throw InvalidArgument("save_every must be >= 1");
+}
+
+/// The dataset being extracted and its file. Rows not yet saved are saved before an error
+/// propagates, so that --resume continues where the extraction stopped.
+struct DatasetOutput {
+    ml::Dataset data;
+    fs::path out;
+    std::size_t since_save = 0;
+    bool dirty = false;
+
+    void Save() {
+        ml::WriteDatasetFile(data, out);
+        since_save = 0;
+        dirty = false;
+    }
+    void SaveIfDirty() {
+        if (dirty) Save();
+    }
+};
+
+/// --resume: the dataset already in `out` replaces `data` (it must hold the requested features);
+/// returns the files it covers.
+std::unordered_set<std::string> ResumeFrom(const fs::path& out, ml::Dataset& data) {
+    std::unordered_set<std::string> done;
+    ml::Dataset previous = ml::ReadDatasetFile(out);
+    if (previous.BlockNames() != data.BlockNames() || previous.cols() != data.cols()) {
+        std::string have;
+        for (const auto& b : previous.BlockNames()) have += (have.empty() ? "" : ",") + b;
+        throw InvalidArgument(fmt::format(
+            "--resume: {} holds the features {}, not the requested ones", out.string(), have));
+    }
+    for (const auto& s : previous.sources) done.insert(FileOfSource(s));
+    data = std::move(previous);
+    return done;
+}
+
+/// Point indices per label value (finite points only; all under label 0 for a whole frame).
+std::map<std::uint32_t, Indices> PointsByLabel(const PointCloud& cloud, bool whole) {
+    std::map<std::uint32_t, Indices> by_label;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (!cloud.points[i].allFinite()) continue;
+        by_label[whole ? 0u : cloud.labels[i]].push_back(static_cast<Index>(i));
+    }
+    return by_label;
+}
+
+/// The objects to extract from a frame: the manifest's, else the whole frame, else every labelled
+/// cluster (label 0 is background) under the file's class.
+std::vector<ExtractionObject> ExtractionTargets(const ExtractionInput& input,
+                                                const std::map<std::uint32_t, Indices>& by_label,
+                                                bool whole) {
+    std::vector<ExtractionObject> targets;
+    if (!input.objects.empty()) {
+        targets = input.objects;
+    } else if (whole) {
+        targets.push_back({0u, input.class_path, input.group});
+    } else {
+        for (const auto& [label, idx] : by_label) {
+            if (label != 0) targets.push_back({label, input.class_path, input.group});
+        }
+    }
+    return targets;
+}
+
+/// One object's row: skipped (and counted) when the cluster is too small or a feature is not
+/// finite.
+void AddTargetRow(const ExtractionInput& input, const PointCloud& cloud, const Indices& points,
+                  const ExtractionObject& t, bool whole, const DatasetExtractionParams& p,
+                  DatasetOutput& output, DatasetExtractionSummary& summary) {
+    std::optional<std::vector<float>> row;
+    try {
+        row = ExtractClusterFeatures(SelectByIndex(cloud, points), cloud.sensor_origin, p);
+    } catch (...) {
+        output.SaveIfDirty();
+        throw;
+    }
+    if (!row) {
+        ++summary.small_clusters;
+        return;
+    }
+    if (!std::all_of(row->begin(), row->end(), [](float v) { return std::isfinite(v); })) {
+        LogWarning("{} label {}: a feature is not finite, row skipped", input.file.string(),
+                   t.label);
+        ++summary.bad_features;
+        return;
+    }
+    const std::string source = whole ? input.source : fmt::format("{}#{}", input.source, t.label);
+    output.data.AppendRow(*row, t.class_path, t.group, input.view, source);
+    ++summary.rows_added;
+    output.dirty = true;
+}
+
+/// The rows of one frame (with the frame's up direction when it has one); objects not visible in
+/// it are skipped.
+void ExtractFrame(const ExtractionInput& input, const DatasetExtractionParams& params,
+                  DatasetOutput& output, DatasetExtractionSummary& summary) {
+    PointCloud cloud;
+    try {
+        cloud = io::ReadPointCloud(input.file);
+    } catch (...) {
+        output.SaveIfDirty();
+        throw;
+    }
+    const bool whole = input.objects.empty() && !input.per_cluster;
+    if (!whole && !cloud.HasLabels()) {
+        output.SaveIfDirty();
+        throw DataError(fmt::format("{} has no label field", input.file.string()));
+    }
+    const std::map<std::uint32_t, Indices> by_label = PointsByLabel(cloud, whole);
+    const std::vector<ExtractionObject> targets = ExtractionTargets(input, by_label, whole);
+    DatasetExtractionParams p = params;
+    if (input.up) p.feature_params.up = *input.up;
+    for (const ExtractionObject& t : targets) {
+        const auto it = by_label.find(t.label);
+        if (it == by_label.end()) continue;  // not visible in this frame
+        AddTargetRow(input, cloud, it->second, t, whole, p, output, summary);
+    }
+}
+
 }  // namespace
 
 std::vector<ExtractionInput> ManifestInputs(const fs::path& manifest) {
@@ -216,37 +344,14 @@ std::optional<std::vector<float>> ExtractClusterFeatures(const PointCloud& clust
 DatasetExtractionSummary ExtractDataset(const std::vector<ExtractionInput>& inputs,
                                         const fs::path& out, const DatasetExtractionParams& params,
                                         Progress& progress) {
-    if (!(params.voxel_size >= 0.0f) || !std::isfinite(params.voxel_size)) {
-        throw InvalidArgument("voxel_size must be >= 0");
-    }
-    if (!(params.normal_radius > 0.0f) || !std::isfinite(params.normal_radius)) {
-        throw InvalidArgument("normal_radius must be > 0");
-    }
-    if (params.save_every == 0) throw InvalidArgument("save_every must be >= 1");
-    ml::Dataset data = EmptyFeatureDataset(params.features);
+    CheckExtractionParams(params);
+    DatasetOutput output{EmptyFeatureDataset(params.features), out};
     DatasetExtractionSummary summary;
     summary.files = inputs.size();
     std::unordered_set<std::string> done;
     std::error_code ec;
-    if (params.resume && fs::exists(out, ec)) {
-        ml::Dataset previous = ml::ReadDatasetFile(out);
-        if (previous.BlockNames() != data.BlockNames() || previous.cols() != data.cols()) {
-            std::string have;
-            for (const auto& b : previous.BlockNames()) have += (have.empty() ? "" : ",") + b;
-            throw InvalidArgument(fmt::format(
-                "--resume: {} holds the features {}, not the requested ones", out.string(), have));
-        }
-        for (const auto& s : previous.sources) done.insert(FileOfSource(s));
-        data = std::move(previous);
-    }
+    if (params.resume && fs::exists(out, ec)) done = ResumeFrom(out, output.data);
 
-    std::size_t since_save = 0;
-    bool dirty = false;
-    auto save = [&] {
-        ml::WriteDatasetFile(data, out);
-        since_save = 0;
-        dirty = false;
-    };
     for (const ExtractionInput& input : inputs) {
         if (InterruptRequested()) {
             summary.interrupted = true;
@@ -257,69 +362,13 @@ DatasetExtractionSummary ExtractDataset(const std::vector<ExtractionInput>& inpu
             progress.Advance();
             continue;
         }
-        PointCloud cloud;
-        try {
-            cloud = io::ReadPointCloud(input.file);
-        } catch (...) {
-            if (dirty) save();
-            throw;
-        }
-        // Point indices per label value (finite points only).
-        std::map<std::uint32_t, Indices> by_label;
-        const bool whole = input.objects.empty() && !input.per_cluster;
-        if (!whole && !cloud.HasLabels()) {
-            if (dirty) save();
-            throw DataError(fmt::format("{} has no label field", input.file.string()));
-        }
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            if (!cloud.points[i].allFinite()) continue;
-            by_label[whole ? 0u : cloud.labels[i]].push_back(static_cast<Index>(i));
-        }
-        std::vector<ExtractionObject> targets;
-        if (!input.objects.empty()) {
-            targets = input.objects;
-        } else if (whole) {
-            targets.push_back({0u, input.class_path, input.group});
-        } else {
-            for (const auto& [label, idx] : by_label) {
-                if (label != 0) targets.push_back({label, input.class_path, input.group});
-            }
-        }
-        DatasetExtractionParams p = params;
-        if (input.up) p.feature_params.up = *input.up;
-        for (const ExtractionObject& t : targets) {
-            const auto it = by_label.find(t.label);
-            if (it == by_label.end()) continue;  // not visible in this frame
-            std::optional<std::vector<float>> row;
-            try {
-                row = ExtractClusterFeatures(SelectByIndex(cloud, it->second), cloud.sensor_origin,
-                                             p);
-            } catch (...) {
-                if (dirty) save();
-                throw;
-            }
-            if (!row) {
-                ++summary.small_clusters;
-                continue;
-            }
-            if (!std::all_of(row->begin(), row->end(), [](float v) { return std::isfinite(v); })) {
-                LogWarning("{} label {}: a feature is not finite, row skipped", input.file.string(),
-                           t.label);
-                ++summary.bad_features;
-                continue;
-            }
-            const std::string source =
-                whole ? input.source : fmt::format("{}#{}", input.source, t.label);
-            data.AppendRow(*row, t.class_path, t.group, input.view, source);
-            ++summary.rows_added;
-            dirty = true;
-        }
+        ExtractFrame(input, params, output, summary);
         ++summary.files_done;
         progress.Advance();
-        if (++since_save >= params.save_every) save();
+        if (++output.since_save >= params.save_every) output.Save();
     }
-    if (dirty || !fs::exists(out, ec)) save();
-    summary.rows = data.rows();
+    if (output.dirty || !fs::exists(out, ec)) output.Save();
+    summary.rows = output.data.rows();
     return summary;
 }
 

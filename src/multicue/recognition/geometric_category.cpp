@@ -231,6 +231,225 @@ CategoryResult NoneResult(std::size_t points) {
     return r;
 }
 
+// Throws for an index of the object or of a part outside the cloud.
+void CheckIndices(const PointCloud& cloud, const Indices& object,
+                  const std::vector<Indices>& parts) {
+    auto check = [&](const Indices& idx) {
+        for (Index i : idx) {
+            Require(i < cloud.size(), "index {} out of range for a cloud of {} points", i,
+                    cloud.size());
+        }
+    };
+    check(object);
+    for (const Indices& part : parts) check(part);
+}
+
+// The object's points with a finite position and a usable normal: all evidence is taken on them.
+Indices UsablePoints(const PointCloud& cloud, const Indices& object) {
+    Indices usable;
+    usable.reserve(object.size());
+    for (Index i : object) {
+        if (UsableNormal(cloud, i)) usable.push_back(i);
+    }
+    return usable;
+}
+
+/// At most max_points of the usable points, evenly strided: the fits' cost is bounded while the
+/// shares they measure stay representative of the whole object.
+Indices EvenSample(const Indices& usable, std::size_t max_points) {
+    Indices sample;
+    if (usable.size() <= max_points) {
+        sample = usable;
+    } else {
+        sample.reserve(max_points);
+        for (std::size_t k = 0; k < max_points; ++k) {
+            sample.push_back(usable[k * usable.size() / max_points]);
+        }
+    }
+    return sample;
+}
+
+/// The object's bounding box and its thinnest axis (in the box's own order).
+struct ObjectBox {
+    OrientedBox box;
+    int thin_axis = 0;
+};
+
+/// Extents: the upright box on the support plane, else an approximate minimum-volume box; sets
+/// the result's height, sorted extents, thickness ratio and footprint fill.
+ObjectBox MeasureExtents(const PointCloud& cloud, const Indices& usable,
+                         const std::optional<Eigen::Vector4f>& plane, CategoryResult& r) {
+    r.upright = plane.has_value();
+    ObjectBox out{plane ? UprightBoundingBox(cloud, usable, *plane)
+                        : MinVolumeBoundingBox(cloud, usable)};
+    const OrientedBox& box = out.box;
+    if (plane) r.height = box.extents.z();
+    r.extents = box.extents;
+    std::sort(r.extents.data(), r.extents.data() + 3, std::greater<float>());
+    box.extents.minCoeff(&out.thin_axis);
+    r.thickness_ratio = r.extents[0] > 0.0f ? r.extents[2] / r.extents[0] : 1.0f;
+    r.footprint_fill = FootprintFill(cloud, usable, box, out.thin_axis);
+    return out;
+}
+
+/// Box-likeness: the share of normals along the axes of the upright frame (or of the most
+/// populated face direction without a plane), averaged with the planar parts when given.
+void MeasureBoxLikeness(const PointCloud& cloud, const Indices& usable, const Indices& sample,
+                        const std::vector<Indices>& parts,
+                        const std::optional<Eigen::Vector4f>& plane, float axis_angle,
+                        const CategoryParams& params, CategoryResult& r) {
+    if (plane) {
+        const FaceAlignment faces = AlignUprightAxes(cloud, usable, plane->head<3>(), axis_angle);
+        r.axis_area = faces.aligned_ratio;
+        if (faces.num_normals > 0) {
+            r.side_face_ratio = static_cast<float>(faces.num_aligned - faces.num_vertical) /
+                                static_cast<float>(faces.num_normals);
+        }
+    } else {
+        // Without a plane the box's "up" is taken as its most populated face direction.
+        const Eigen::Vector3f face = DominantNormal(cloud, sample, axis_angle);
+        r.axis_area = AlignUprightAxes(cloud, usable, face, axis_angle).aligned_ratio;
+    }
+    r.box_score = r.axis_area;
+    if (!parts.empty()) {
+        r.planar_part_ratio = PlanarPartRatio(cloud, parts, params.planar_part_angle_deg * kDeg);
+        r.box_score = 0.5f * (r.axis_area + r.planar_part_ratio);
+    }
+}
+
+/// The consensus settings shared by the cylinder and sphere fits.
+SacParams ShapeFitSac(const CategoryParams& params) {
+    SacParams sac;
+    sac.method = SacMethod::kMsac;
+    sac.distance_threshold = params.fit_threshold;
+    sac.max_iterations = params.max_iterations;
+    sac.seed = params.seed;
+    sac.max_refine_rounds = 3;
+    sac.normal_distance_weight = params.normal_weight;
+    sac.num_threads = params.num_threads;
+    return sac;
+}
+
+/// The best cylinder (section 5.4.2.1): upright and lying candidates when "up" is known, any axis
+/// otherwise, each scored by its side and cap shares, its axial coverage and how well its
+/// diameter matches the box; sets the result's cylinder fields.
+CylinderEvidence BestCylinder(const PointCloud& cloud, const Indices& sample,
+                              const std::optional<Eigen::Vector4f>& plane, const OrientedBox& box,
+                              const SacParams& sac, float axis_angle, float cos_inlier_normal,
+                              const CategoryParams& params, CategoryResult& r) {
+    CylinderFitParams cp{
+        .sac = sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
+    CylinderEvidence best_cyl;
+    auto consider = [&](const CylinderFit& fit, float plausibility, bool upright) {
+        if (!fit.found) return;
+        CylinderEvidence ev = MeasureCylinder(cloud, sample, fit, params.fit_threshold,
+                                              cos_inlier_normal, axis_angle);
+        ev.coverage = AxialCoverage(cloud, sample, fit, ev.side_lo, ev.side_hi);
+        ev.score = plausibility * Ramp(ev.side, params.min_side_ratio, params.full_side_ratio) *
+                   Ramp(ev.coverage, params.min_coverage, params.full_coverage) *
+                   std::min(1.0f, ev.side + ev.cap);
+        if (ev.score > best_cyl.score || (best_cyl.radius == 0.0f && ev.side > best_cyl.side)) {
+            best_cyl = ev;
+            r.cylinder_upright = upright;
+        }
+    };
+    if (plane) {
+        const Eigen::Vector3f up = plane->head<3>();
+        cp.axis = up;
+        cp.max_angle = params.upright_angle_deg * kDeg;
+        const CylinderFit upright = FitCylinder(cloud, sample, cp);
+        // Upright: the footprint's longer side is a diameter (also for a half-visible side).
+        consider(upright, SizeMatch(2.0f * upright.radius, box.extents.x(), params.size_tolerance),
+                 true);
+        cp.axis = std::nullopt;
+        const CylinderFit free = FitCylinder(cloud, sample, cp);
+        if (free.found && std::abs(free.axis.dot(up)) <= std::sin(params.lying_angle_deg * kDeg)) {
+            // Lying: its height above the table is a diameter.
+            consider(free, SizeMatch(2.0f * free.radius, box.extents.z(), params.size_tolerance),
+                     false);
+        }
+    } else {
+        const CylinderFit free = FitCylinder(cloud, sample, cp);
+        const float match =
+            std::max(SizeMatch(2.0f * free.radius, r.extents[0], params.size_tolerance),
+                     SizeMatch(2.0f * free.radius, r.extents[1], params.size_tolerance));
+        consider(free, match, false);
+    }
+    r.cylinder_inlier_ratio = best_cyl.side;
+    r.cylinder_cap_ratio = best_cyl.cap;
+    r.cylinder_coverage = best_cyl.coverage;
+    r.cylinder_radius = best_cyl.radius;
+    r.cylinder_axis = best_cyl.axis;
+    return best_cyl;
+}
+
+/// Sphere: its share of the points, its diameter matched to the object's largest extent, and not
+/// box-like; sets the result's sphere fields.
+float SphereScore(const PointCloud& cloud, const Indices& sample, const SacParams& sac,
+                  float cos_inlier_normal, const CategoryParams& params, CategoryResult& r) {
+    SphereFitParams spp{
+        .sac = sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
+    const SphereFit sphere = FitSphere(cloud, sample, spp);
+    float sphere_score = 0.0f;
+    if (sphere.found) {
+        r.sphere_inlier_ratio =
+            MeasureSphere(cloud, sample, sphere, params.fit_threshold, cos_inlier_normal);
+        r.sphere_radius = sphere.radius;
+        sphere_score = r.sphere_inlier_ratio *
+                       SizeMatch(2.0f * sphere.radius, r.extents[0], params.size_tolerance) *
+                       (1.0f - Ramp(r.axis_area, params.sphere_box_axis_area,
+                                    params.sphere_box_axis_area_max));
+    }
+    return sphere_score;
+}
+
+/// Plate: thin and round, and with a support plane low and lying (thin axis along up, see the
+/// header).
+float PlateScore(const CategoryResult& r, bool has_plane, int thin_axis,
+                 const CategoryParams& params) {
+    const float thin =
+        1.0f - Ramp(r.thickness_ratio, params.plate_thin_ratio, params.plate_thick_ratio);
+    const float round = 1.0f - Ramp(r.footprint_fill, params.round_fill, params.square_fill);
+    const float low =
+        has_plane ? 1.0f - Ramp(r.height, params.plate_low_height, params.plate_high_height) : 1.0f;
+    return (has_plane && thin_axis != 2) ? 0.0f : thin * round * low;
+}
+
+/// The category scores: box-likeness shared between box and flat, a plate taking precedence over
+/// both and the cylinder, and "other" as strong as the strongest category is weak.
+void ScoreCategories(float sphere_score, float cylinder_score, float plate, float flat_share,
+                     float min_evidence, CategoryResult& r) {
+    auto& s = r.scores;
+    s[static_cast<std::size_t>(Category::kSphere)] = sphere_score;
+    s[static_cast<std::size_t>(Category::kBox)] =
+        r.box_score * (1.0f - flat_share) * (1.0f - plate);
+    s[static_cast<std::size_t>(Category::kFlat)] = r.box_score * flat_share * (1.0f - plate);
+    s[static_cast<std::size_t>(Category::kCylinder)] = cylinder_score * (1.0f - plate);
+    s[static_cast<std::size_t>(Category::kPlate)] = plate;
+    const float strongest = *std::max_element(s.begin(), s.end());
+    s[static_cast<std::size_t>(Category::kOther)] =
+        std::clamp(min_evidence * (1.0f - strongest) / (1.0f - min_evidence), 0.0f, 1.0f);
+}
+
+/// Probabilities from the scores raised to `sharpness` and normalised; the category is the most
+/// probable one.
+void SetProbabilities(float sharpness, CategoryResult& r) {
+    const auto& s = r.scores;
+    double total = 0.0;
+    std::array<double, kNumCategories> powered{};
+    for (std::size_t c = 0; c < kNumCategories; ++c) {
+        powered[c] = std::pow(double{s[c]}, double{sharpness});
+        total += powered[c];
+    }
+    for (std::size_t c = 0; c < kNumCategories; ++c) {
+        r.probabilities[c] = static_cast<float>(powered[c] / total);
+    }
+    const auto best = static_cast<std::size_t>(
+        std::max_element(r.probabilities.begin(), r.probabilities.end()) - r.probabilities.begin());
+    r.category = static_cast<Category>(best);
+    r.confidence = r.probabilities[best];
+}
+
 }  // namespace
 
 std::string_view CategoryName(Category category) {
@@ -320,175 +539,33 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
                                 const CategoryParams& params) {
     params.Validate();
     const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
-    auto check = [&](const Indices& idx) {
-        for (Index i : idx) {
-            Require(i < cloud.size(), "index {} out of range for a cloud of {} points", i,
-                    cloud.size());
-        }
-    };
-    check(object);
-    for (const Indices& part : parts) check(part);
+    CheckIndices(cloud, object, parts);
     if (object.empty()) return NoneResult(0);
     if (cloud.normals.size() != cloud.size()) {
         throw DataError(fmt::format("categorisation needs one normal per point, got {} for {}",
                                     cloud.normals.size(), cloud.size()));
     }
-
-    Indices usable;
-    usable.reserve(object.size());
-    for (Index i : object) {
-        if (UsableNormal(cloud, i)) usable.push_back(i);
-    }
+    const Indices usable = UsablePoints(cloud, object);
     if (usable.size() < params.min_points) return NoneResult(usable.size());
 
     CategoryResult r;
     r.points = usable.size();
-    Indices sample;
-    if (usable.size() <= params.max_points) {
-        sample = usable;
-    } else {
-        sample.reserve(params.max_points);
-        for (std::size_t k = 0; k < params.max_points; ++k) {
-            sample.push_back(usable[k * usable.size() / params.max_points]);
-        }
-    }
+    const Indices sample = EvenSample(usable, params.max_points);
     r.sampled = sample.size();
     const float axis_angle = params.axis_angle_deg * kDeg;
     const float cos_inlier_normal = std::cos(params.inlier_normal_angle_deg * kDeg);
 
-    // Extents: the upright box on the support plane, else an approximate minimum-volume box.
-    r.upright = plane.has_value();
-    const OrientedBox box =
-        plane ? UprightBoundingBox(cloud, usable, *plane) : MinVolumeBoundingBox(cloud, usable);
-    if (plane) r.height = box.extents.z();
-    r.extents = box.extents;
-    std::sort(r.extents.data(), r.extents.data() + 3, std::greater<float>());
-    int thin_axis = 0;
-    box.extents.minCoeff(&thin_axis);
-    r.thickness_ratio = r.extents[0] > 0.0f ? r.extents[2] / r.extents[0] : 1.0f;
-    r.footprint_fill = FootprintFill(cloud, usable, box, thin_axis);
-
-    // Box-likeness (axis_area), and planar parts when given.
-    if (plane) {
-        const FaceAlignment faces = AlignUprightAxes(cloud, usable, plane->head<3>(), axis_angle);
-        r.axis_area = faces.aligned_ratio;
-        if (faces.num_normals > 0) {
-            r.side_face_ratio = static_cast<float>(faces.num_aligned - faces.num_vertical) /
-                                static_cast<float>(faces.num_normals);
-        }
-    } else {
-        // Without a plane the box's "up" is taken as its most populated face direction.
-        const Eigen::Vector3f face = DominantNormal(cloud, sample, axis_angle);
-        r.axis_area = AlignUprightAxes(cloud, usable, face, axis_angle).aligned_ratio;
-    }
-    r.box_score = r.axis_area;
-    if (!parts.empty()) {
-        r.planar_part_ratio = PlanarPartRatio(cloud, parts, params.planar_part_angle_deg * kDeg);
-        r.box_score = 0.5f * (r.axis_area + r.planar_part_ratio);
-    }
-
-    // Cylinder: upright and lying candidates when "up" is known, any axis otherwise.
-    SacParams sac;
-    sac.method = SacMethod::kMsac;
-    sac.distance_threshold = params.fit_threshold;
-    sac.max_iterations = params.max_iterations;
-    sac.seed = params.seed;
-    sac.max_refine_rounds = 3;
-    sac.normal_distance_weight = params.normal_weight;
-    sac.num_threads = params.num_threads;
-    CylinderFitParams cp{
-        .sac = sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
-    CylinderEvidence best_cyl;
-    auto consider = [&](const CylinderFit& fit, float plausibility, bool upright) {
-        if (!fit.found) return;
-        CylinderEvidence ev = MeasureCylinder(cloud, sample, fit, params.fit_threshold,
-                                              cos_inlier_normal, axis_angle);
-        ev.coverage = AxialCoverage(cloud, sample, fit, ev.side_lo, ev.side_hi);
-        ev.score = plausibility * Ramp(ev.side, params.min_side_ratio, params.full_side_ratio) *
-                   Ramp(ev.coverage, params.min_coverage, params.full_coverage) *
-                   std::min(1.0f, ev.side + ev.cap);
-        if (ev.score > best_cyl.score || (best_cyl.radius == 0.0f && ev.side > best_cyl.side)) {
-            best_cyl = ev;
-            r.cylinder_upright = upright;
-        }
-    };
-    if (plane) {
-        const Eigen::Vector3f up = plane->head<3>();
-        cp.axis = up;
-        cp.max_angle = params.upright_angle_deg * kDeg;
-        const CylinderFit upright = FitCylinder(cloud, sample, cp);
-        // Upright: the footprint's longer side is a diameter (also for a half-visible side).
-        consider(upright, SizeMatch(2.0f * upright.radius, box.extents.x(), params.size_tolerance),
-                 true);
-        cp.axis = std::nullopt;
-        const CylinderFit free = FitCylinder(cloud, sample, cp);
-        if (free.found && std::abs(free.axis.dot(up)) <= std::sin(params.lying_angle_deg * kDeg)) {
-            // Lying: its height above the table is a diameter.
-            consider(free, SizeMatch(2.0f * free.radius, box.extents.z(), params.size_tolerance),
-                     false);
-        }
-    } else {
-        const CylinderFit free = FitCylinder(cloud, sample, cp);
-        const float match =
-            std::max(SizeMatch(2.0f * free.radius, r.extents[0], params.size_tolerance),
-                     SizeMatch(2.0f * free.radius, r.extents[1], params.size_tolerance));
-        consider(free, match, false);
-    }
-    r.cylinder_inlier_ratio = best_cyl.side;
-    r.cylinder_cap_ratio = best_cyl.cap;
-    r.cylinder_coverage = best_cyl.coverage;
-    r.cylinder_radius = best_cyl.radius;
-    r.cylinder_axis = best_cyl.axis;
-
-    // Sphere: its diameter is the object's largest extent.
-    SphereFitParams spp{
-        .sac = sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
-    const SphereFit sphere = FitSphere(cloud, sample, spp);
-    float sphere_score = 0.0f;
-    if (sphere.found) {
-        r.sphere_inlier_ratio =
-            MeasureSphere(cloud, sample, sphere, params.fit_threshold, cos_inlier_normal);
-        r.sphere_radius = sphere.radius;
-        sphere_score = r.sphere_inlier_ratio *
-                       SizeMatch(2.0f * sphere.radius, r.extents[0], params.size_tolerance) *
-                       (1.0f - Ramp(r.axis_area, params.sphere_box_axis_area,
-                                    params.sphere_box_axis_area_max));
-    }
-
-    // Plate: thin and round.
-    const float thin =
-        1.0f - Ramp(r.thickness_ratio, params.plate_thin_ratio, params.plate_thick_ratio);
-    const float round = 1.0f - Ramp(r.footprint_fill, params.round_fill, params.square_fill);
-    // With a support plane only a thin axis along up (a lying plate) qualifies, see the header.
-    const float low =
-        plane ? 1.0f - Ramp(r.height, params.plate_low_height, params.plate_high_height) : 1.0f;
-    const float plate = (plane && thin_axis != 2) ? 0.0f : thin * round * low;
+    // The geometric evidence (section 5.1.3), then the scores and probabilities.
+    const ObjectBox box = MeasureExtents(cloud, usable, plane, r);
+    MeasureBoxLikeness(cloud, usable, sample, parts, plane, axis_angle, params, r);
+    const SacParams sac = ShapeFitSac(params);
+    const CylinderEvidence best_cyl =
+        BestCylinder(cloud, sample, plane, box.box, sac, axis_angle, cos_inlier_normal, params, r);
+    const float sphere_score = SphereScore(cloud, sample, sac, cos_inlier_normal, params, r);
+    const float plate = PlateScore(r, plane.has_value(), box.thin_axis, params);
     const float flat_share = FlatShare(r.extents, params);
-
-    auto& s = r.scores;
-    s[static_cast<std::size_t>(Category::kSphere)] = sphere_score;
-    s[static_cast<std::size_t>(Category::kBox)] =
-        r.box_score * (1.0f - flat_share) * (1.0f - plate);
-    s[static_cast<std::size_t>(Category::kFlat)] = r.box_score * flat_share * (1.0f - plate);
-    s[static_cast<std::size_t>(Category::kCylinder)] = best_cyl.score * (1.0f - plate);
-    s[static_cast<std::size_t>(Category::kPlate)] = plate;
-    const float strongest = *std::max_element(s.begin(), s.end());
-    s[static_cast<std::size_t>(Category::kOther)] = std::clamp(
-        params.min_evidence * (1.0f - strongest) / (1.0f - params.min_evidence), 0.0f, 1.0f);
-
-    double total = 0.0;
-    std::array<double, kNumCategories> powered{};
-    for (std::size_t c = 0; c < kNumCategories; ++c) {
-        powered[c] = std::pow(double{s[c]}, double{params.sharpness});
-        total += powered[c];
-    }
-    for (std::size_t c = 0; c < kNumCategories; ++c) {
-        r.probabilities[c] = static_cast<float>(powered[c] / total);
-    }
-    const auto best = static_cast<std::size_t>(
-        std::max_element(r.probabilities.begin(), r.probabilities.end()) - r.probabilities.begin());
-    r.category = static_cast<Category>(best);
-    r.confidence = r.probabilities[best];
+    ScoreCategories(sphere_score, best_cyl.score, plate, flat_share, params.min_evidence, r);
+    SetProbabilities(params.sharpness, r);
     LogDebug(
         "category: {} points, extents {:.3f} {:.3f} {:.3f}, box {:.2f} (axis {:.2f}, side {:.2f}, "
         "planar parts {:.2f}), cylinder {:.2f} (r {:.3f}), sphere {:.2f}, thin {:.2f}, fill {:.2f}"

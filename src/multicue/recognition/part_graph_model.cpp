@@ -65,64 +65,60 @@ void MapCounts(const float* in, int n, float weight, float* out) {
     }
 }
 
-}  // namespace
-
-FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
-                                     const PartDescriptorParams& params,
-                                     const Eigen::Vector3f& up_in) {
-    ValidateDescriptorParams(params);
-    if (!up_in.allFinite()) throw InvalidArgument("part descriptors: up must be finite");
-    const Eigen::Vector3f up =
-        up_in.norm() > 1e-6f ? Eigen::Vector3f(up_in.normalized()) : Eigen::Vector3f(0, -1, 0);
-    FeatureMatrix out =
-        FeatureMatrix::Zero(static_cast<Eigen::Index>(parts.size()), kPartDescriptorSize);
-    // Union of the parts' finite points, as a cloud of its own.
-    std::vector<std::int32_t> owner_part;
+// The union of the parts' finite points as a cloud of its own (with normals), each point's part,
+// and each part's points in it: the voxel RSD then sees the parts' neighbours across borders.
+struct PartCloud {
     PointCloud sub;
-    std::vector<std::vector<Index>> local(parts.size());
-    for (std::size_t p = 0; p < parts.size(); ++p) {
-        for (Index i : parts[p]) {
-            if (i >= cloud.size()) throw InvalidArgument("part descriptors: index out of range");
-        }
-    }
-    std::size_t total = 0;
-    for (const auto& part : parts) total += part.size();
-    if (total == 0) return out;
-    if (!cloud.HasNormals() || cloud.normals.size() != cloud.size()) {
-        throw DataError("part descriptors need one normal per point");
-    }
+    std::vector<std::int32_t> owner_part;
+    std::vector<std::vector<Index>> local;
+};
+
+PartCloud GatherParts(const PointCloud& cloud, const std::vector<Indices>& parts,
+                      std::size_t total) {
+    PartCloud pc;
+    PointCloud& sub = pc.sub;
+    pc.local.resize(parts.size());
     sub.points.reserve(total);
     sub.normals.reserve(total);
     for (std::size_t p = 0; p < parts.size(); ++p) {
         for (Index i : parts[p]) {
             if (!cloud.points[i].allFinite()) continue;
-            local[p].push_back(static_cast<Index>(sub.points.size()));
+            pc.local[p].push_back(static_cast<Index>(sub.points.size()));
             sub.points.push_back(cloud.points[i]);
             sub.normals.push_back(cloud.normals[i]);
-            owner_part.push_back(static_cast<std::int32_t>(p));
+            pc.owner_part.push_back(static_cast<std::int32_t>(p));
         }
     }
     sub.width = static_cast<std::uint32_t>(sub.points.size());
     sub.height = 1;
-    if (sub.points.empty()) return out;
-    // Moments about the mean of all points (small numbers, still additive over parts), in a frame
-    // whose z axis is up.
+    return pc;
+}
+
+// Rows of a right-handed frame whose z axis is up.
+Eigen::Matrix3d UpFrame(const Eigen::Vector3f& up) {
     Eigen::Matrix3d frame;
-    {
-        const Eigen::Vector3d z = up.cast<double>();
-        const Eigen::Vector3d helper =
-            std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-        const Eigen::Vector3d x = (helper - helper.dot(z) * z).normalized();
-        frame.row(0) = x.transpose();
-        frame.row(1) = z.cross(x).transpose();
-        frame.row(2) = z.transpose();
-    }
+    const Eigen::Vector3d z = up.cast<double>();
+    const Eigen::Vector3d helper =
+        std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d x = (helper - helper.dot(z) * z).normalized();
+    frame.row(0) = x.transpose();
+    frame.row(1) = z.cross(x).transpose();
+    frame.row(2) = z.transpose();
+    return frame;
+}
+
+// Per part: the moments about the mean of all points (small numbers, still additive over parts,
+// so that a subgraph's descriptor is the sum of its parts'), in the up frame, and the histogram
+// of its normals' elevation against up.
+void AddMomentsAndElevations(const PartCloud& pc, const Eigen::Vector3f& up, FeatureMatrix& out) {
+    const PointCloud& sub = pc.sub;
+    const Eigen::Matrix3d frame = UpFrame(up);
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     for (const auto& q : sub.points) origin += q.cast<double>();
     origin /= static_cast<double>(sub.points.size());
-    for (std::size_t p = 0; p < parts.size(); ++p) {
+    for (std::size_t p = 0; p < pc.local.size(); ++p) {
         double m[kPartMomentSize] = {};
-        for (Index i : local[p]) {
+        for (Index i : pc.local[p]) {
             const Eigen::Vector3d q = frame * (sub.points[i].cast<double>() - origin);
             m[0] += 1.0;
             m[1] += q.x();
@@ -139,7 +135,7 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
             out(static_cast<Eigen::Index>(p), kPartMomentOffset + j) = static_cast<float>(m[j]);
         }
         // Elevation of the normals against up.
-        for (Index i : local[p]) {
+        for (Index i : pc.local[p]) {
             const Eigen::Vector3f& nrm = sub.normals[i];
             if (!nrm.allFinite() || !(nrm.squaredNorm() > 0.0f)) continue;
             const float e = std::min(std::abs(nrm.normalized().dot(up)), 1.0f);
@@ -148,26 +144,33 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
             out(static_cast<Eigen::Index>(p), kPartElevationOffset + bin) += 1.0f;
         }
     }
-    const KdTree tree(sub);
-    const VoxelRsdResult voxels = ComputeVoxelRsd(sub, tree, params.voxels);
-    // Curvature counts: every point takes the minimum radius of its voxel.
-    for (std::size_t i = 0; i < sub.points.size(); ++i) {
+}
+
+// Curvature counts: every point takes the minimum radius of its voxel (below 3 cm, below 10 cm,
+// flatter).
+void AddCurvatureCounts(const VoxelRsdResult& voxels, const PartCloud& pc, FeatureMatrix& out) {
+    for (std::size_t i = 0; i < pc.sub.points.size(); ++i) {
         const std::uint32_t v = voxels.point_voxel[i];
         if (v == VoxelRsdResult::kNoVoxel) continue;
         const float r = voxels.radii(static_cast<Eigen::Index>(v), 0);
         if (!std::isfinite(r)) continue;
         const int bin = r < 0.03f ? 0 : (r < 0.10f ? 1 : 2);
-        out(static_cast<Eigen::Index>(owner_part[i]), kPartRsdOffset + bin) += 1.0f;
+        out(static_cast<Eigen::Index>(pc.owner_part[i]), kPartRsdOffset + bin) += 1.0f;
     }
-    // Majority owner of every voxel.
+}
+
+// The voxels of each part: every voxel goes to the part holding most of its points (ties to the
+// lower part), so that no voxel counts twice in a subgraph's GRSD-.
+std::vector<std::vector<std::uint32_t>> VoxelsByMajorityOwner(const VoxelRsdResult& voxels,
+                                                              const PartCloud& pc) {
     const std::size_t nv = voxels.size();
     std::vector<std::unordered_map<std::int32_t, std::uint32_t>> counts(nv);
-    for (std::size_t i = 0; i < sub.points.size(); ++i) {
+    for (std::size_t i = 0; i < pc.sub.points.size(); ++i) {
         const std::uint32_t v = voxels.point_voxel[i];
         if (v == VoxelRsdResult::kNoVoxel) continue;
-        ++counts[v][owner_part[i]];
+        ++counts[v][pc.owner_part[i]];
     }
-    std::vector<std::vector<std::uint32_t>> owned(parts.size());
+    std::vector<std::vector<std::uint32_t>> owned(pc.local.size());
     for (std::uint32_t v = 0; v < nv; ++v) {
         std::int32_t best = -1;
         std::uint32_t best_count = 0;
@@ -179,6 +182,38 @@ FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<
         }
         if (best >= 0) owned[static_cast<std::size_t>(best)].push_back(v);
     }
+    return owned;
+}
+
+}  // namespace
+
+FeatureMatrix ComputePartDescriptors(const PointCloud& cloud, const std::vector<Indices>& parts,
+                                     const PartDescriptorParams& params,
+                                     const Eigen::Vector3f& up_in) {
+    ValidateDescriptorParams(params);
+    if (!up_in.allFinite()) throw InvalidArgument("part descriptors: up must be finite");
+    const Eigen::Vector3f up =
+        up_in.norm() > 1e-6f ? Eigen::Vector3f(up_in.normalized()) : Eigen::Vector3f(0, -1, 0);
+    FeatureMatrix out =
+        FeatureMatrix::Zero(static_cast<Eigen::Index>(parts.size()), kPartDescriptorSize);
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        for (Index i : parts[p]) {
+            if (i >= cloud.size()) throw InvalidArgument("part descriptors: index out of range");
+        }
+    }
+    std::size_t total = 0;
+    for (const auto& part : parts) total += part.size();
+    if (total == 0) return out;
+    if (!cloud.HasNormals() || cloud.normals.size() != cloud.size()) {
+        throw DataError("part descriptors need one normal per point");
+    }
+    const PartCloud pc = GatherParts(cloud, parts, total);
+    if (pc.sub.points.empty()) return out;
+    AddMomentsAndElevations(pc, up, out);
+    const KdTree tree(pc.sub);
+    const VoxelRsdResult voxels = ComputeVoxelRsd(pc.sub, tree, params.voxels);
+    AddCurvatureCounts(voxels, pc, out);
+    const std::vector<std::vector<std::uint32_t>> owned = VoxelsByMajorityOwner(voxels, pc);
     for (std::size_t p = 0; p < parts.size(); ++p) {
         if (owned[p].empty()) continue;
         const FeatureVector h = GrsdMinusOfVoxels(voxels, owned[p]);

@@ -273,6 +273,363 @@ FootprintRectangle RunRectangleRansac(const PointCloud& cloud, const SideFootpri
     rect.inlier_weight = r.inlier_weight;
     return rect;
 }
+
+// The object seen from above the support plane (section 5.4.2.1 assumes boxes stand on a side):
+// footprint coordinates in a fixed basis (u, v) of the plane, u x v = up, heights above it, and
+// whether the normals take part (and how close to a face axis they must be).
+struct UprightFrame {
+    Eigen::Vector3f up, u, v;
+    float d = 0.0f;
+    std::vector<Eigen::Vector2d> q;
+    std::vector<float> heights;
+    bool normals = false;
+    float face_angle = 0.0f;
+    float cos_face = 0.0f;
+};
+
+UprightFrame MakeUprightFrame(const PointCloud& cloud, const Indices& finite,
+                              const Eigen::Vector4f& plane, const BoxFitParams& params) {
+    UprightFrame f;
+    f.up = plane.head<3>();
+    f.d = plane[3];
+    f.u = f.up.unitOrthogonal();
+    f.v = f.up.cross(f.u);
+    f.q.resize(finite.size());
+    f.heights.resize(finite.size());
+    for (std::size_t j = 0; j < finite.size(); ++j) {
+        const Eigen::Vector3f& p = cloud.points[finite[j]];
+        f.q[j] = Eigen::Vector2d(p.dot(f.u), p.dot(f.v));
+        f.heights[j] = f.up.dot(p) + f.d;
+    }
+    f.normals = params.use_normals && cloud.normals.size() == cloud.size();
+    f.face_angle = params.face_angle_deg * kDeg;
+    f.cos_face = std::cos(f.face_angle);
+    return f;
+}
+
+// First footprint orientation (unit, in the (u, v) basis): the side normals (AlignUprightAxes),
+// else the minimum-area footprint rectangle.
+Eigen::Vector2d InitialOrientation(const PointCloud& cloud, const Indices& finite,
+                                   const Eigen::Vector4f& plane, const UprightFrame& f,
+                                   const BoxFitParams& params) {
+    const OrientedBox hull_box = UprightBoundingBox(cloud, finite, plane);
+    Eigen::Vector2d dir(hull_box.axes.col(0).dot(f.u), hull_box.axes.col(0).dot(f.v));
+    if (f.normals) {
+        const FaceAlignment fa =
+            AlignUprightAxes(cloud, finite, f.up, f.face_angle, params.min_face_points);
+        if (fa.found) dir = Eigen::Vector2d(fa.axes.col(0).dot(f.u), fa.axes.col(0).dot(f.v));
+    }
+    dir.normalize();
+    return dir;
+}
+
+// The footprint rectangle RANSAC (section 5.4.2.1) proposes an orientation; it replaces `dir`
+// when its rectangle has more (prior-weighted) side points on its boundary.
+void PreferRectangleOrientation(const PointCloud& cloud, const Indices& finite,
+                                const UprightFrame& f, const BoxFitParams& params,
+                                const FitGuidance& guidance, Eigen::Vector2d& dir) {
+    FootprintRectangleParams rp;
+    rp.sac.distance_threshold = params.inlier_threshold;
+    rp.sac.max_iterations = params.rectangle_iterations;
+    rp.sac.seed = params.seed;
+    rp.side_angle_deg = params.face_angle_deg;
+    const SideFootprint side = SidePointsOf(cloud, finite, f.up, f.face_angle);
+    SacParams sac = rp.sac;
+    MakeSacWeights(guidance, SampledSurface::kPlanar, cloud.size(), side.idx, sac.sample_weights,
+                   sac.score_weights);
+    const FootprintRectangle rect = RunRectangleRansac(cloud, side, f.d, rp, sac);
+    if (rect.found) {
+        // side.u, side.v are u, v: both orientations are angles in the same basis.
+        const float old_theta =
+            QuarterAngle(Eigen::Vector2f(static_cast<float>(dir.x()), static_cast<float>(dir.y())));
+        const double old_support =
+            RectangleSupport(side, BoundingRectangle(side.q, old_theta, rp.trim),
+                             params.inlier_threshold, sac.score_weights);
+        if (rect.inlier_weight > old_support) {
+            dir = Eigen::Vector2d(rect.axis.dot(f.u), rect.axis.dot(f.v)).normalized();
+        }
+    }
+}
+
+// Face membership of every point for orientation a1: 0/1 = faces across the first axis
+// (low/high side), 2/3 = across the second, -1 = none; the side is taken from the position
+// relative to the middle, so the normals' sign does not matter.
+void ClassifyFaces(const PointCloud& cloud, const Indices& finite, const UprightFrame& f,
+                   const Eigen::Vector2d& a1, std::vector<int>& face) {
+    const Eigen::Vector2d a2(-a1.y(), a1.x());
+    double lo[2] = {std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity()};
+    double hi[2] = {-lo[0], -lo[1]};
+    for (const auto& p : f.q) {
+        lo[0] = std::min(lo[0], p.dot(a1));
+        hi[0] = std::max(hi[0], p.dot(a1));
+        lo[1] = std::min(lo[1], p.dot(a2));
+        hi[1] = std::max(hi[1], p.dot(a2));
+    }
+    const Eigen::Vector3f a13 = static_cast<float>(a1.x()) * f.u + static_cast<float>(a1.y()) * f.v;
+    const Eigen::Vector3f a23 = f.up.cross(a13);
+    for (std::size_t j = 0; j < finite.size(); ++j) {
+        face[j] = -1;
+        if (!f.normals) continue;
+        const Eigen::Vector3f& n = cloud.normals[finite[j]];
+        if (!n.allFinite() || !(n.squaredNorm() > 0.0f)) continue;
+        const Eigen::Vector3f nn = n.normalized();
+        if (std::abs(nn.dot(a13)) >= f.cos_face) {
+            face[j] = f.q[j].dot(a1) >= 0.5 * (lo[0] + hi[0]) ? 1 : 0;
+        } else if (std::abs(nn.dot(a23)) >= f.cos_face) {
+            face[j] = f.q[j].dot(a2) >= 0.5 * (lo[1] + hi[1]) ? 3 : 2;
+        }
+    }
+}
+
+// Refines the orientation with the seen sides: the least-squares rectangle orientation of their
+// points. A side across the first axis a1 lies on a line with normal a1 and costs a1^T S a1 (S its
+// scatter about its mean); one across a2 = R90 a1 costs a1^T R90^T S R90 a1; the sum is smallest
+// for the eigenvector of the smallest eigenvalue of the summed matrices. Up to 3 rounds, each
+// reclassifying the faces.
+void RefineOrientationBySides(const PointCloud& cloud, const Indices& finite, const UprightFrame& f,
+                              std::size_t min_face_points, Eigen::Vector2d& dir,
+                              std::vector<int>& face) {
+    const auto& q = f.q;
+    for (int round = 0; f.normals && round < 3; ++round) {
+        Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
+        bool any = false;
+        for (int k = 0; k < 4; ++k) {
+            Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+            std::size_t count = 0;
+            for (std::size_t j = 0; j < q.size(); ++j) {
+                if (face[j] == k) {
+                    mean += q[j];
+                    ++count;
+                }
+            }
+            if (count < min_face_points) continue;
+            mean /= static_cast<double>(count);
+            Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+            for (std::size_t j = 0; j < q.size(); ++j) {
+                if (face[j] == k) scatter += (q[j] - mean) * (q[j] - mean).transpose();
+            }
+            if (k >= 2) {
+                Eigen::Matrix2d r90;
+                r90 << 0.0, -1.0, 1.0, 0.0;
+                scatter = r90.transpose() * scatter * r90;
+            }
+            m += scatter;
+            any = true;
+        }
+        if (!any) break;
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(m);
+        Eigen::Vector2d next = solver.eigenvectors().col(0).normalized();
+        if (next.dot(dir) < 0.0) next = -next;
+        const bool stable = std::abs(next.dot(dir)) > 1.0 - 1e-12;
+        dir = next;
+        ClassifyFaces(cloud, finite, f, dir, face);
+        if (stable) break;
+    }
+}
+
+// The box's intervals along dir and its perpendicular: the median of a seen side's points, else
+// the far edge of all points (FarEdge), robust to the noise at an unseen side.
+void SideIntervals(const UprightFrame& f, const std::vector<int>& face, const Eigen::Vector2d& dir,
+                   const BoxFitParams& params, float lo[2], float hi[2]) {
+    const auto& q = f.q;
+    const Eigen::Vector2d dir2(-dir.y(), dir.x());
+    for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2d axis = k == 0 ? dir : dir2;
+        std::vector<float> all(q.size()), face_lo, face_hi;
+        for (std::size_t j = 0; j < q.size(); ++j) {
+            all[j] = static_cast<float>(q[j].dot(axis));
+            if (face[j] == 2 * k) face_lo.push_back(all[j]);
+            if (face[j] == 2 * k + 1) face_hi.push_back(all[j]);
+        }
+        lo[k] = face_lo.size() >= params.min_face_points ? Median(face_lo)
+                                                         : FarEdge(all, false, params.edge_window);
+        hi[k] = face_hi.size() >= params.min_face_points ? Median(face_hi)
+                                                         : FarEdge(all, true, params.edge_window);
+    }
+}
+
+// The box's top: the median height of the top face's points, else the highest point.
+float TopHeight(const PointCloud& cloud, const Indices& finite, const UprightFrame& f,
+                std::size_t min_face_points) {
+    float top = *std::max_element(f.heights.begin(), f.heights.end());
+    if (f.normals) {
+        std::vector<float> top_heights;
+        for (std::size_t j = 0; j < finite.size(); ++j) {
+            const Eigen::Vector3f& n = cloud.normals[finite[j]];
+            if (n.allFinite() && n.squaredNorm() > 0.0f &&
+                std::abs(n.normalized().dot(f.up)) >= f.cos_face) {
+                top_heights.push_back(f.heights[j]);
+            }
+        }
+        if (top_heights.size() >= min_face_points) top = Median(top_heights);
+    }
+    return top;
+}
+
+// The box standing on the plane from its footprint intervals and top, longer side first.
+void SetUprightBox(const UprightFrame& f, const Eigen::Vector2d& dir, const float lo[2],
+                   const float hi[2], float top, BoxModel& box) {
+    const Eigen::Vector3f& up = f.up;
+    const Eigen::Vector3f a1 =
+        static_cast<float>(dir.x()) * f.u + static_cast<float>(dir.y()) * f.v;
+    const Eigen::Vector3f a2 = up.cross(a1);
+    Eigen::Vector3f ext(std::max(hi[0] - lo[0], 0.0f), std::max(hi[1] - lo[1], 0.0f),
+                        std::max(top, 0.0f));
+    box.center =
+        0.5f * (lo[0] + hi[0]) * a1 + 0.5f * (lo[1] + hi[1]) * a2 + (-f.d + 0.5f * ext.z()) * up;
+    if (ext.y() > ext.x()) {
+        // Longer side first; col(1) = up x col(0) keeps the frame right-handed.
+        box.axes.col(0) = a2;
+        box.axes.col(1) = up.cross(a2);
+        std::swap(ext.x(), ext.y());
+    } else {
+        box.axes.col(0) = a1;
+        box.axes.col(1) = up.cross(a1);
+    }
+    box.axes.col(2) = up;
+    box.extents = ext;
+}
+
+// The points with a finite, non-zero normal: the cylinder fit samples normals.
+Indices WithNormals(const PointCloud& cloud, const Indices& finite) {
+    Indices usable;
+    usable.reserve(finite.size());
+    for (Index i : finite) {
+        const Eigen::Vector3f& n = cloud.normals[i];
+        if (n.allFinite() && n.squaredNorm() > 0.0f) usable.push_back(i);
+    }
+    return usable;
+}
+
+// The cylinder hypothesis (section 5.4.2.1): a RANSAC fit, upright when the support is known
+// (upright axes are the more robust), replaced by a free-axis fit only when that one explains
+// clearly more points (free_axis_gain), inliers weighted like the scoring.
+CylinderFit HypothesiseCylinder(const PointCloud& cloud, const Indices& usable,
+                                const std::optional<Eigen::Vector4f>& plane,
+                                const CylinderModelParams& params, const FitGuidance& guidance) {
+    CylinderFitParams cp{
+        .sac = params.sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
+    if (!guidance.rsd_min_radius.empty() || !guidance.shape_prior.empty()) {
+        MakeSacWeights(guidance, SampledSurface::kCurved, cloud.size(), usable,
+                       cp.sac.sample_weights, cp.sac.score_weights);
+    }
+    // Inliers of a fit, weighted like its scoring.
+    auto support = [&](const CylinderFit& f) {
+        if (cp.sac.score_weights.empty()) return static_cast<double>(f.inliers.size());
+        double w = 0.0;
+        for (Index i : f.inliers) w += double{cp.sac.score_weights[i]};
+        return w;
+    };
+    CylinderFit fit;
+    if (plane) {
+        cp.axis = plane->head<3>();
+        cp.max_angle = params.upright_angle_deg * kDeg;
+        fit = FitCylinder(cloud, usable, cp);
+        if (params.allow_free_axis) {
+            cp.axis = std::nullopt;
+            CylinderFit free = FitCylinder(cloud, usable, cp);
+            if (free.found &&
+                (!fit.found || support(free) >= double{params.free_axis_gain} * support(fit))) {
+                fit = std::move(free);
+            }
+        }
+    } else {
+        fit = FitCylinder(cloud, usable, cp);
+    }
+    return fit;
+}
+
+// Whether the hypothesis' axis is upright (then turned to point up), and with snap_to_support
+// the axis snapped: fixed to up when upright, into the plane (free to turn about up) when lying.
+bool SnapToSupport(const std::optional<Eigen::Vector4f>& plane, const CylinderModelParams& params,
+                   CylinderEstimate& x, CylinderRefineParams& refine) {
+    bool upright = false;
+    if (plane) {
+        const Eigen::Vector3d up = plane->head<3>().cast<double>();
+        const double c = x.axis.dot(up);
+        upright = std::abs(c) >= std::cos(double{params.upright_angle_deg * kDeg}) - 1e-9;
+        if (upright && c < 0.0) x.axis = -x.axis;
+        const bool lying = std::abs(c) <= std::sin(double{params.lying_angle_deg * kDeg});
+        if (params.snap_to_support && upright) {
+            x.axis = up;
+            refine = {.freedom = CylinderAxisFreedom::kFixed};
+        } else if (params.snap_to_support && lying) {
+            x.axis = (x.axis - x.axis.dot(up) * up).normalized();
+            refine = {.freedom = CylinderAxisFreedom::kAboutUp, .up = up};
+        }
+    }
+    return upright;
+}
+
+// Refinement on the side points (near the surface, normal radial) until they no longer change,
+// the radius staying in range; returns the final side points (the fit's inliers if none).
+Indices RefineOnSidePoints(const PointCloud& cloud, const Indices& usable, const CylinderFit& fit,
+                           const CylinderModelParams& params, const CylinderRefineParams& refine,
+                           CylinderEstimate& x) {
+    const double side_cos = std::cos(double{params.side_normal_angle_deg * kDeg});
+    Indices side = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
+    for (int round = 0; round < params.refine_rounds && side.size() >= 5; ++round) {
+        CylinderEstimate refined = x;
+        detail::CentreOnPoints(cloud, side, refined);
+        if (!RefineCylinder(cloud, side, refine, refined)) break;
+        if (!(refined.radius >= params.min_radius && refined.radius <= params.max_radius)) break;
+        x = refined;
+        Indices next = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
+        const bool stable = next == side;
+        side = std::move(next);
+        if (stable) break;
+    }
+    if (side.empty()) side = fit.inliers;
+    return side;
+}
+
+// Extent along the axis (axis through p0), [lo, hi] ascending: the side points' span, each end
+// moved to the median level of a visible cap there (normals along the axis, inside the rim,
+// near that end), and with extend_to_support an upright cylinder reaching down to the plane.
+std::pair<float, float> AxialExtent(const PointCloud& cloud, const Indices& usable,
+                                    const Indices& side, const Eigen::Vector3f& p0,
+                                    const Eigen::Vector3f& axis, float radius,
+                                    const std::optional<Eigen::Vector4f>& plane, bool upright,
+                                    const CylinderModelParams& params) {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (Index i : side) {
+        const float t = (cloud.points[i] - p0).dot(axis);
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+    }
+    // Visible caps: normals along the axis, inside the rim, near an end of the side's extent.
+    const float cos_cap = std::cos(params.cap_angle_deg * kDeg);
+    const float reach = 2.0f * params.side_distance;
+    std::vector<float> cap_lo, cap_hi;
+    for (Index i : usable) {
+        const Eigen::Vector3f w = cloud.points[i] - p0;
+        const float t = w.dot(axis);
+        if ((w - t * axis).norm() > radius + params.side_distance) continue;
+        if (std::abs(cloud.normals[i].normalized().dot(axis)) < cos_cap) continue;
+        if (std::abs(t - hi) <= reach) cap_hi.push_back(t);
+        if (std::abs(t - lo) <= reach) cap_lo.push_back(t);
+    }
+    if (cap_hi.size() >= params.min_cap_points) hi = Median(cap_hi);
+    if (cap_lo.size() >= params.min_cap_points) lo = Median(cap_lo);
+    if (plane && upright && params.extend_to_support) {
+        // Where the axis line meets the support plane.
+        const Eigen::Vector3f upf = plane->head<3>();
+        lo = -(upf.dot(p0) + (*plane)[3]) / upf.dot(axis);
+    }
+    if (hi < lo) std::swap(lo, hi);
+    return {lo, hi};
+}
+
+// The share of the finite points within the threshold of the closed cylinder's surface.
+float CylinderInlierRatio(const PointCloud& cloud, const Indices& finite,
+                          const CylinderModel& model, float threshold) {
+    std::size_t inliers = 0;
+    for (Index i : finite) {
+        if (CylinderSurfaceDistance(model, cloud.points[i]) <= threshold) ++inliers;
+    }
+    return static_cast<float>(inliers) / static_cast<float>(finite.size());
+}
 }  // namespace
 
 void BoxFitParams::Validate() const { ValidateBoxParams(*this); }
@@ -331,173 +688,19 @@ BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
     BoxModel box;
     if (finite.empty()) return box;
 
-    const Eigen::Vector3f up = plane->head<3>();
-    const float d = (*plane)[3];
-    // Footprint coordinates in a fixed basis (u, v) of the plane, u x v = up.
-    const Eigen::Vector3f u = up.unitOrthogonal(), v = up.cross(u);
-    std::vector<Eigen::Vector2d> q(finite.size());
-    std::vector<float> heights(finite.size());
-    for (std::size_t j = 0; j < finite.size(); ++j) {
-        const Eigen::Vector3f& p = cloud.points[finite[j]];
-        q[j] = Eigen::Vector2d(p.dot(u), p.dot(v));
-        heights[j] = up.dot(p) + d;
+    // Orientation of the footprint, then the faces seen along it, then the extents.
+    const UprightFrame f = MakeUprightFrame(cloud, finite, *plane, params);
+    Eigen::Vector2d dir = InitialOrientation(cloud, finite, *plane, f, params);
+    if (f.normals && params.rectangle_ransac) {
+        PreferRectangleOrientation(cloud, finite, f, params, guidance, dir);
     }
-    // Orientation: the side normals (AlignUprightAxes), else the minimum-area footprint rectangle.
-    const OrientedBox hull_box = UprightBoundingBox(cloud, finite, *plane);
-    Eigen::Vector2d dir(hull_box.axes.col(0).dot(u), hull_box.axes.col(0).dot(v));
-    const bool normals = params.use_normals && cloud.normals.size() == cloud.size();
-    const float face_angle = params.face_angle_deg * kDeg;
-    const float cos_face = std::cos(face_angle);
-    if (normals) {
-        const FaceAlignment fa =
-            AlignUprightAxes(cloud, finite, up, face_angle, params.min_face_points);
-        if (fa.found) dir = Eigen::Vector2d(fa.axes.col(0).dot(u), fa.axes.col(0).dot(v));
-    }
-    dir.normalize();
-    if (normals && params.rectangle_ransac) {
-        // The footprint rectangle RANSAC (section 5.4.2.1) proposes an orientation; it replaces
-        // the one above when its rectangle has more (prior-weighted) side points on its boundary.
-        FootprintRectangleParams rp;
-        rp.sac.distance_threshold = params.inlier_threshold;
-        rp.sac.max_iterations = params.rectangle_iterations;
-        rp.sac.seed = params.seed;
-        rp.side_angle_deg = params.face_angle_deg;
-        const SideFootprint side = SidePointsOf(cloud, finite, up, face_angle);
-        SacParams sac = rp.sac;
-        MakeSacWeights(guidance, SampledSurface::kPlanar, cloud.size(), side.idx,
-                       sac.sample_weights, sac.score_weights);
-        const FootprintRectangle rect = RunRectangleRansac(cloud, side, d, rp, sac);
-        if (rect.found) {
-            // side.u, side.v are u, v: both orientations are angles in the same basis.
-            const float old_theta = QuarterAngle(
-                Eigen::Vector2f(static_cast<float>(dir.x()), static_cast<float>(dir.y())));
-            const double old_support =
-                RectangleSupport(side, BoundingRectangle(side.q, old_theta, rp.trim),
-                                 params.inlier_threshold, sac.score_weights);
-            if (rect.inlier_weight > old_support) {
-                dir = Eigen::Vector2d(rect.axis.dot(u), rect.axis.dot(v)).normalized();
-            }
-        }
-    }
-
-    // Face membership of every point for the current orientation: 0/1 = faces across the first
-    // axis (low/high side), 2/3 = across the second, -1 = none; the side is taken from the
-    // position relative to the middle, so the normals' sign does not matter.
     std::vector<int> face(finite.size(), -1);
-    auto classify = [&](const Eigen::Vector2d& a1) {
-        const Eigen::Vector2d a2(-a1.y(), a1.x());
-        double lo[2] = {std::numeric_limits<double>::infinity(),
-                        std::numeric_limits<double>::infinity()};
-        double hi[2] = {-lo[0], -lo[1]};
-        for (const auto& p : q) {
-            lo[0] = std::min(lo[0], p.dot(a1));
-            hi[0] = std::max(hi[0], p.dot(a1));
-            lo[1] = std::min(lo[1], p.dot(a2));
-            hi[1] = std::max(hi[1], p.dot(a2));
-        }
-        const Eigen::Vector3f a13 = static_cast<float>(a1.x()) * u + static_cast<float>(a1.y()) * v;
-        const Eigen::Vector3f a23 = up.cross(a13);
-        for (std::size_t j = 0; j < finite.size(); ++j) {
-            face[j] = -1;
-            if (!normals) continue;
-            const Eigen::Vector3f& n = cloud.normals[finite[j]];
-            if (!n.allFinite() || !(n.squaredNorm() > 0.0f)) continue;
-            const Eigen::Vector3f nn = n.normalized();
-            if (std::abs(nn.dot(a13)) >= cos_face) {
-                face[j] = q[j].dot(a1) >= 0.5 * (lo[0] + hi[0]) ? 1 : 0;
-            } else if (std::abs(nn.dot(a23)) >= cos_face) {
-                face[j] = q[j].dot(a2) >= 0.5 * (lo[1] + hi[1]) ? 3 : 2;
-            }
-        }
-    };
-    classify(dir);
-    // Refine the orientation with the seen sides: the least-squares rectangle orientation of their
-    // points. A side across the first axis a1 lies on a line with normal a1 and costs
-    // a1^T S a1 (S its scatter about its mean); one across a2 = R90 a1 costs a1^T R90^T S R90 a1;
-    // the sum is smallest for the eigenvector of the smallest eigenvalue of the summed matrices.
-    for (int round = 0; normals && round < 3; ++round) {
-        Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
-        bool any = false;
-        for (int f = 0; f < 4; ++f) {
-            Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-            std::size_t count = 0;
-            for (std::size_t j = 0; j < q.size(); ++j) {
-                if (face[j] == f) {
-                    mean += q[j];
-                    ++count;
-                }
-            }
-            if (count < params.min_face_points) continue;
-            mean /= static_cast<double>(count);
-            Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-            for (std::size_t j = 0; j < q.size(); ++j) {
-                if (face[j] == f) scatter += (q[j] - mean) * (q[j] - mean).transpose();
-            }
-            if (f >= 2) {
-                Eigen::Matrix2d r90;
-                r90 << 0.0, -1.0, 1.0, 0.0;
-                scatter = r90.transpose() * scatter * r90;
-            }
-            m += scatter;
-            any = true;
-        }
-        if (!any) break;
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(m);
-        Eigen::Vector2d next = solver.eigenvectors().col(0).normalized();
-        if (next.dot(dir) < 0.0) next = -next;
-        const bool stable = std::abs(next.dot(dir)) > 1.0 - 1e-12;
-        dir = next;
-        classify(dir);
-        if (stable) break;
-    }
-
-    // Sides: the median of a seen side's points, else the far edge of all points (FarEdge); top:
-    // the median height of the top face, else the highest point.
-    const Eigen::Vector2d dir2(-dir.y(), dir.x());
-    const Eigen::Vector3f a1 = static_cast<float>(dir.x()) * u + static_cast<float>(dir.y()) * v;
-    const Eigen::Vector3f a2 = up.cross(a1);
+    ClassifyFaces(cloud, finite, f, dir, face);
+    RefineOrientationBySides(cloud, finite, f, params.min_face_points, dir, face);
     float lo[2] = {0.0f, 0.0f}, hi[2] = {0.0f, 0.0f};
-    for (int k = 0; k < 2; ++k) {
-        const Eigen::Vector2d axis = k == 0 ? dir : dir2;
-        std::vector<float> all(q.size()), face_lo, face_hi;
-        for (std::size_t j = 0; j < q.size(); ++j) {
-            all[j] = static_cast<float>(q[j].dot(axis));
-            if (face[j] == 2 * k) face_lo.push_back(all[j]);
-            if (face[j] == 2 * k + 1) face_hi.push_back(all[j]);
-        }
-        lo[k] = face_lo.size() >= params.min_face_points ? Median(face_lo)
-                                                         : FarEdge(all, false, params.edge_window);
-        hi[k] = face_hi.size() >= params.min_face_points ? Median(face_hi)
-                                                         : FarEdge(all, true, params.edge_window);
-    }
-    float top = *std::max_element(heights.begin(), heights.end());
-    if (normals) {
-        std::vector<float> top_heights;
-        for (std::size_t j = 0; j < finite.size(); ++j) {
-            const Eigen::Vector3f& n = cloud.normals[finite[j]];
-            if (n.allFinite() && n.squaredNorm() > 0.0f &&
-                std::abs(n.normalized().dot(up)) >= cos_face) {
-                top_heights.push_back(heights[j]);
-            }
-        }
-        if (top_heights.size() >= params.min_face_points) top = Median(top_heights);
-    }
-
-    Eigen::Vector3f ext(std::max(hi[0] - lo[0], 0.0f), std::max(hi[1] - lo[1], 0.0f),
-                        std::max(top, 0.0f));
-    box.center =
-        0.5f * (lo[0] + hi[0]) * a1 + 0.5f * (lo[1] + hi[1]) * a2 + (-d + 0.5f * ext.z()) * up;
-    if (ext.y() > ext.x()) {
-        // Longer side first; col(1) = up x col(0) keeps the frame right-handed.
-        box.axes.col(0) = a2;
-        box.axes.col(1) = up.cross(a2);
-        std::swap(ext.x(), ext.y());
-    } else {
-        box.axes.col(0) = a1;
-        box.axes.col(1) = up.cross(a1);
-    }
-    box.axes.col(2) = up;
-    box.extents = ext;
+    SideIntervals(f, face, dir, params, lo, hi);
+    const float top = TopHeight(cloud, finite, f, params.min_face_points);
+    SetUprightBox(f, dir, lo, hi, top, box);
     box.found = true;
     box.inlier_ratio = BoxInlierRatio(cloud, finite, box, params.inlier_threshold);
     return box;
@@ -533,110 +736,26 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
                                     cloud.normals.size(), cloud.size()));
     }
     const Indices finite = FinitePoints(cloud, indices);
-    Indices usable;
-    usable.reserve(finite.size());
-    for (Index i : finite) {
-        const Eigen::Vector3f& n = cloud.normals[i];
-        if (n.allFinite() && n.squaredNorm() > 0.0f) usable.push_back(i);
-    }
+    const Indices usable = WithNormals(cloud, finite);
     if (usable.size() < 2) return model;
 
     // 1. Hypothesis.
-    CylinderFitParams cp{
-        .sac = params.sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
-    if (!guidance.rsd_min_radius.empty() || !guidance.shape_prior.empty()) {
-        MakeSacWeights(guidance, SampledSurface::kCurved, cloud.size(), usable,
-                       cp.sac.sample_weights, cp.sac.score_weights);
-    }
-    // Inliers of a fit, weighted like its scoring.
-    auto support = [&](const CylinderFit& f) {
-        if (cp.sac.score_weights.empty()) return static_cast<double>(f.inliers.size());
-        double w = 0.0;
-        for (Index i : f.inliers) w += double{cp.sac.score_weights[i]};
-        return w;
-    };
-    CylinderFit fit;
-    if (plane) {
-        cp.axis = plane->head<3>();
-        cp.max_angle = params.upright_angle_deg * kDeg;
-        fit = FitCylinder(cloud, usable, cp);
-        if (params.allow_free_axis) {
-            cp.axis = std::nullopt;
-            CylinderFit free = FitCylinder(cloud, usable, cp);
-            if (free.found &&
-                (!fit.found || support(free) >= double{params.free_axis_gain} * support(fit))) {
-                fit = std::move(free);
-            }
-        }
-    } else {
-        fit = FitCylinder(cloud, usable, cp);
-    }
+    const CylinderFit fit = HypothesiseCylinder(cloud, usable, plane, params, guidance);
     if (!fit.found || fit.inliers.empty()) return model;
 
     // 2. Refinement on the side points, with the axis snapped to the support when asked.
     CylinderEstimate x{fit.point.cast<double>(), fit.axis.cast<double>().normalized(),
                        double{fit.radius}};
     CylinderRefineParams refine{.freedom = CylinderAxisFreedom::kFree};
-    bool upright = false;
-    if (plane) {
-        const Eigen::Vector3d up = plane->head<3>().cast<double>();
-        const double c = x.axis.dot(up);
-        upright = std::abs(c) >= std::cos(double{params.upright_angle_deg * kDeg}) - 1e-9;
-        if (upright && c < 0.0) x.axis = -x.axis;
-        const bool lying = std::abs(c) <= std::sin(double{params.lying_angle_deg * kDeg});
-        if (params.snap_to_support && upright) {
-            x.axis = up;
-            refine = {.freedom = CylinderAxisFreedom::kFixed};
-        } else if (params.snap_to_support && lying) {
-            x.axis = (x.axis - x.axis.dot(up) * up).normalized();
-            refine = {.freedom = CylinderAxisFreedom::kAboutUp, .up = up};
-        }
-    }
-    const double side_cos = std::cos(double{params.side_normal_angle_deg * kDeg});
-    Indices side = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
-    for (int round = 0; round < params.refine_rounds && side.size() >= 5; ++round) {
-        CylinderEstimate refined = x;
-        detail::CentreOnPoints(cloud, side, refined);
-        if (!RefineCylinder(cloud, side, refine, refined)) break;
-        if (!(refined.radius >= params.min_radius && refined.radius <= params.max_radius)) break;
-        x = refined;
-        Indices next = detail::SidePoints(cloud, usable, x, params.side_distance, side_cos);
-        const bool stable = next == side;
-        side = std::move(next);
-        if (stable) break;
-    }
-    if (side.empty()) side = fit.inliers;
+    const bool upright = SnapToSupport(plane, params, x, refine);
+    const Indices side = RefineOnSidePoints(cloud, usable, fit, params, refine, x);
 
     // 3. Extent along the axis.
     const Eigen::Vector3f axis = x.axis.cast<float>();
     const Eigen::Vector3f p0 = x.point.cast<float>();
     const auto radius = static_cast<float>(x.radius);
-    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-    for (Index i : side) {
-        const float t = (cloud.points[i] - p0).dot(axis);
-        lo = std::min(lo, t);
-        hi = std::max(hi, t);
-    }
-    // Visible caps: normals along the axis, inside the rim, near an end of the side's extent.
-    const float cos_cap = std::cos(params.cap_angle_deg * kDeg);
-    const float reach = 2.0f * params.side_distance;
-    std::vector<float> cap_lo, cap_hi;
-    for (Index i : usable) {
-        const Eigen::Vector3f w = cloud.points[i] - p0;
-        const float t = w.dot(axis);
-        if ((w - t * axis).norm() > radius + params.side_distance) continue;
-        if (std::abs(cloud.normals[i].normalized().dot(axis)) < cos_cap) continue;
-        if (std::abs(t - hi) <= reach) cap_hi.push_back(t);
-        if (std::abs(t - lo) <= reach) cap_lo.push_back(t);
-    }
-    if (cap_hi.size() >= params.min_cap_points) hi = Median(cap_hi);
-    if (cap_lo.size() >= params.min_cap_points) lo = Median(cap_lo);
-    if (plane && upright && params.extend_to_support) {
-        // Where the axis line meets the support plane.
-        const Eigen::Vector3f upf = plane->head<3>();
-        lo = -(upf.dot(p0) + (*plane)[3]) / upf.dot(axis);
-    }
-    if (hi < lo) std::swap(lo, hi);
+    const auto [lo, hi] =
+        AxialExtent(cloud, usable, side, p0, axis, radius, plane, upright, params);
 
     model.found = true;
     model.axis = axis;
@@ -644,11 +763,7 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     model.radius = radius;
     model.height = hi - lo;
     model.center = p0 + 0.5f * (lo + hi) * axis;
-    std::size_t inliers = 0;
-    for (Index i : finite) {
-        if (CylinderSurfaceDistance(model, cloud.points[i]) <= params.inlier_threshold) ++inliers;
-    }
-    model.inlier_ratio = static_cast<float>(inliers) / static_cast<float>(finite.size());
+    model.inlier_ratio = CylinderInlierRatio(cloud, finite, model, params.inlier_threshold);
     return model;
 }
 

@@ -421,6 +421,468 @@ float Median(std::vector<float>& v) {
     return *mid;
 }
 
+/// Throws InvalidArgument for an index outside the cloud.
+void CheckIndices(const PointCloud& cloud, const Indices& indices) {
+    for (auto i : indices) {
+        if (i >= cloud.size()) {
+            throw InvalidArgument(
+                fmt::format("rotational fit: index {} out of range ({} points)", i, cloud.size()));
+        }
+    }
+}
+
+/// Points with a finite position and a finite, not vanishing normal: only they carry a normal line.
+Indices UsablePoints(const PointCloud& cloud, const Indices& indices) {
+    Indices usable;
+    for (auto i : indices) {
+        if (cloud.points[i].allFinite() && cloud.normals[i].allFinite() &&
+            cloud.normals[i].squaredNorm() > 0.25f) {
+            usable.push_back(i);
+        }
+    }
+    return usable;
+}
+
+/// At most max_points usable points, an even stride through the object, relative to their centroid
+/// (returned in `centroid`) and with unit normals: more points slow the axis search without making
+/// it more accurate.
+std::vector<Sample> StridedSamples(const PointCloud& cloud, const Indices& usable,
+                                   std::size_t max_points, Eigen::Vector3d& centroid) {
+    const std::size_t stride = (usable.size() + max_points - 1) / max_points;
+    centroid = Eigen::Vector3d::Zero();
+    std::vector<Sample> samples;
+    for (std::size_t k = 0; k < usable.size(); k += stride) {
+        const auto i = usable[k];
+        samples.push_back(
+            {cloud.points[i].cast<double>(), cloud.normals[i].cast<double>().normalized()});
+        centroid += samples.back().p;
+    }
+    centroid /= static_cast<double>(samples.size());
+    for (auto& s : samples) s.p -= centroid;
+    return samples;
+}
+
+/// What every axis cost needs of the parameters and of `up` (section 5.4.2.2): the line threshold
+/// t, the sine below which a normal counts as parallel to the axis, and the bound on the tilt.
+struct AxisSearch {
+    double t = 0.0;
+    double sin_parallel = 0.0;
+    bool has_up = false;
+    Eigen::Vector3d pole = Eigen::Vector3d::UnitZ();
+    double max_tilt = 0.0;
+
+    /// Whether direction `a` leans more than max_tilt from up (never without an up direction).
+    bool TooTilted(const Eigen::Vector3d& a) const {
+        return has_up && std::acos(std::clamp(std::abs(a.dot(pole)), 0.0, 1.0)) > max_tilt;
+    }
+};
+
+AxisSearch MakeAxisSearch(const Eigen::Vector3f& up, const RotationalFitParams& params) {
+    AxisSearch search;
+    search.t = params.line_threshold;
+    search.sin_parallel = std::sin(params.parallel_angle_deg * kPi / 180.0);
+    search.has_up = up.squaredNorm() > 0.0f;
+    search.pole = search.has_up ? up.cast<double>().normalized() : Eigen::Vector3d::UnitZ();
+    search.max_tilt = search.has_up ? params.max_tilt_deg * kPi / 180.0 : kPi / 2.0;
+    return search;
+}
+
+/// The coarse search: every direction scored on a subset of about 300 samples (cheap, and enough
+/// to rank them); the indices of the best `refine_candidates`, ties broken by index.
+std::vector<std::size_t> BestCoarseDirections(const std::vector<Sample>& samples,
+                                              const std::vector<Eigen::Vector3d>& directions,
+                                              const AxisSearch& search, int refine_candidates) {
+    const std::size_t coarse_stride = std::max<std::size_t>(1, samples.size() / 300);
+    std::vector<double> costs(directions.size());
+    ParallelFor(
+        directions.size(), 0,
+        [&](std::size_t d) {
+            costs[d] = EvaluateDirection(samples, coarse_stride, directions[d], search.t,
+                                         search.sin_parallel)
+                           .cost;
+        },
+        64);
+    std::vector<std::size_t> order(directions.size());
+    for (std::size_t d = 0; d < order.size(); ++d) order[d] = d;
+    const std::size_t keep =
+        std::min<std::size_t>(static_cast<std::size_t>(refine_candidates), order.size());
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
+                      [&](std::size_t a, std::size_t b) {
+                          return costs[a] < costs[b] || (costs[a] == costs[b] && a < b);
+                      });
+    order.resize(keep);
+    return order;
+}
+
+/// Local refinement of one coarse direction on all samples: the best of its 8 neighbours `step`
+/// away is taken while it lowers the cost, else the step halves, down to half a milliradian.
+AxisFit DescendLocalGrid(const std::vector<Sample>& samples, const Eigen::Vector3d& start,
+                         double spacing, const AxisSearch& search) {
+    AxisFit current = EvaluateDirection(samples, 1, start, search.t, search.sin_parallel);
+    for (double step = spacing; step > 0.0005;) {
+        Eigen::Vector3d e1, e2;
+        OrthonormalBasis(current.direction, e1, e2);
+        AxisFit next = current;
+        for (int i = -1; i <= 1; ++i) {
+            for (int j = -1; j <= 1; ++j) {
+                if (i == 0 && j == 0) continue;
+                Eigen::Vector3d a = (current.direction + step * (i * e1 + j * e2)).normalized();
+                if (search.TooTilted(a)) continue;
+                const AxisFit fit = EvaluateDirection(samples, 1, a, search.t, search.sin_parallel);
+                if (fit.cost < next.cost) next = fit;
+            }
+        }
+        if (next.cost < current.cost) {
+            current = next;
+        } else {
+            step *= 0.5;
+        }
+    }
+    return current;
+}
+
+/// The best normal-line axis (section 5.4.2.2): a coarse grid of directions over the cap around
+/// up, the best few refined by successively finer local grids.
+AxisFit SearchNormalLineAxis(const std::vector<Sample>& samples, const AxisSearch& search,
+                             const RotationalFitParams& params) {
+    const auto directions = CapDirections(search.pole, search.max_tilt, params.grid_directions);
+    const std::vector<std::size_t> candidates =
+        BestCoarseDirections(samples, directions, search, params.refine_candidates);
+    const double spacing =
+        std::sqrt(2.0 * kPi * (1.0 - std::cos(search.max_tilt)) / directions.size());
+    AxisFit best;
+    for (std::size_t d : candidates) {
+        const AxisFit current = DescendLocalGrid(samples, directions[d], spacing, search);
+        if (current.cost < best.cost) best = current;
+    }
+    return best;
+}
+
+/// The point sets of the contour refinement, fixed by the normal-line axis so that the cost of
+/// every candidate axis is taken over the same points: side points whose normal line passes within
+/// 2 t of it (a looser window; `inner`: normal towards the axis), cap points (normal parallel to
+/// it; `down`: facing against it) and all points, for the level of the ends.
+struct ContourSets {
+    std::vector<Eigen::Vector3d> side, cap, all;
+    std::vector<char> inner, down;
+};
+
+ContourSets SelectContourSets(const std::vector<Sample>& samples, const Eigen::Vector3d& a0,
+                              const Eigen::Vector3d& c0, std::size_t profile_points,
+                              const AxisSearch& search) {
+    ContourSets sets;
+    const std::size_t refine_stride = (samples.size() + profile_points - 1) / profile_points;
+    for (std::size_t k = 0; k < samples.size(); k += refine_stride) {
+        const Sample& sample = samples[k];
+        sets.all.push_back(sample.p);
+        const Eigen::Vector3d v = sample.n.cross(a0);
+        const double s = v.norm();
+        const Eigen::Vector3d q = sample.p - c0;
+        if (s < search.sin_parallel) {
+            sets.cap.push_back(sample.p);
+            sets.down.push_back(sample.n.dot(a0) < 0.0 ? 1 : 0);
+            continue;
+        }
+        if (std::abs((v / s).dot(q)) > 2.0 * search.t) continue;
+        sets.side.push_back(sample.p);
+        sets.inner.push_back(sample.n.dot(q - q.dot(a0) * a0) < 0.0 ? 1 : 0);
+    }
+    return sets;
+}
+
+/// The refinement's parameters of an axis: two offsets of the direction and two of the position
+/// from the normal-line axis (a0 through c0), along the basis e1, e2 perpendicular to a0.
+struct AxisOffsets {
+    Eigen::Vector3d a0, c0, e1, e2;
+
+    void Axis(const Eigen::Vector4d& x, Eigen::Vector3d& a, Eigen::Vector3d& c) const {
+        a = (a0 + x[0] * e1 + x[1] * e2).normalized();
+        c = c0 + x[2] * e1 + x[3] * e2;
+    }
+};
+
+/// The refinement's cost of the axis with offsets x (section 5.4.2.2, see the header): the side
+/// contour's spread, the caps' weighted in, plus the weighted level of the ends; infinite beyond
+/// the tilt bound.
+class ContourCost {
+  public:
+    ContourCost(ContourSets sets, const Eigen::Vector3d& a0, const Eigen::Vector3d& c0,
+                const AxisSearch& search, const RotationalFitParams& params)
+        : side_(std::move(sets.side), std::move(sets.inner), false, params.profile_step,
+                params.profile_tolerance),
+          cap_(std::move(sets.cap), std::move(sets.down), true, params.profile_step,
+               params.profile_tolerance),
+          rim_(std::move(sets.all), 24, params.profile_tolerance),
+          rim_weight_(params.rim_weight),
+          cap_weight_(params.cap_weight),
+          search_(search) {
+        offsets_.a0 = a0;
+        offsets_.c0 = c0;
+        OrthonormalBasis(a0, offsets_.e1, offsets_.e2);
+    }
+
+    const AxisOffsets& offsets() const { return offsets_; }
+
+    /// The polish ignores the level of the ends: it is biased on small tops such as a bottle's
+    /// cap, where a millimetre is degrees.
+    void DropEndLevel() { rim_weight_ = 0.0; }
+
+    double operator()(const Eigen::Vector4d& x) const {
+        Eigen::Vector3d a, c;
+        offsets_.Axis(x, a, c);
+        if (search_.TooTilted(a)) return std::numeric_limits<double>::infinity();
+        return Objective(a, c);
+    }
+
+  private:
+    double Objective(const Eigen::Vector3d& a, const Eigen::Vector3d& c) const {
+        double sum = side_(a, c) * static_cast<double>(side_.size());
+        std::size_t count = side_.size();
+        if (cap_weight_ > 0.0f && cap_.size() >= 10) {
+            sum += cap_weight_ * cap_(a, c) * static_cast<double>(cap_.size());
+            count += cap_.size();
+        }
+        sum /= static_cast<double>(count);
+        if (rim_weight_ > 0.0) sum += rim_weight_ * rim_(a, c);
+        return sum;
+    }
+
+    ProfileObjective side_, cap_;
+    RimObjective rim_;
+    double rim_weight_;
+    float cap_weight_;
+    AxisSearch search_;
+    AxisOffsets offsets_;
+};
+
+using ScoredStart = std::pair<double, Eigen::Vector4d>;
+
+/// Starts of the simplex searches, the best `refined` (at most 3) first: the normal-line axis and
+/// about 150 directions within 30 degrees of it, each with the normal-line position for it (the
+/// contour cost has local minima; the normal lines place each direction well).
+std::vector<ScoredStart> RefinementStarts(const std::vector<Sample>& samples,
+                                          const ContourCost& cost, const AxisSearch& search,
+                                          std::size_t& refined) {
+    const AxisOffsets& o = cost.offsets();
+    std::vector<ScoredStart> starts;
+    auto start_at = [&](const Eigen::Vector3d& d) {
+        if (d.dot(o.a0) < 0.5 || search.TooTilted(d)) return;
+        const AxisFit fit = EvaluateDirection(samples, 1, d, search.t, search.sin_parallel);
+        const Eigen::Vector4d x(d.dot(o.e1) / d.dot(o.a0), d.dot(o.e2) / d.dot(o.a0),
+                                (fit.center - o.c0).dot(o.e1), (fit.center - o.c0).dot(o.e2));
+        starts.emplace_back(cost(x), x);
+    };
+    starts.emplace_back(cost(Eigen::Vector4d::Zero()), Eigen::Vector4d::Zero());
+    for (const auto& d : CapDirections(o.a0, 30.0 * kPi / 180.0, 150)) start_at(d);
+    refined = std::min<std::size_t>(3, starts.size());
+    std::partial_sort(starts.begin(), starts.begin() + static_cast<std::ptrdiff_t>(refined),
+                      starts.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+    return starts;
+}
+
+/// Nelder-Mead from each of the first `refined` starts (twice, the second with finer steps); the
+/// result of lowest cost.
+Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredStart>& starts,
+                             std::size_t refined, const Eigen::Vector4d& scale, double tolerance) {
+    Eigen::Vector4d x = starts.front().second;
+    double x_cost = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < refined; ++k) {
+        Eigen::Vector4d y = starts[k].second;
+        for (int restart = 0; restart < 2; ++restart) {
+            y = NelderMead<4>(cost, y, restart == 0 ? scale : Eigen::Vector4d(0.25 * scale),
+                              tolerance, 400);
+        }
+        const double y_cost = cost(y);
+        if (y_cost < x_cost) {
+            x = y;
+            x_cost = y_cost;
+        }
+    }
+    return x;
+}
+
+/// Second criterion, the thinnest contour (section 5.4.2.2, see the header): where the normals
+/// barely constrain the direction (a shallow bowl) the normal-line axis can be far off. Replaces
+/// `best` by the refined axis and sets `profile_spread`; leaves both with fewer than 20 side
+/// points.
+void RefineAxisByContour(const std::vector<Sample>& samples, const AxisSearch& search,
+                         const RotationalFitParams& params, AxisFit& best, float& profile_spread) {
+    ContourSets sets =
+        SelectContourSets(samples, best.direction, best.center, params.profile_points, search);
+    if (sets.side.size() < 20) return;
+    ContourCost cost(std::move(sets), best.direction, best.center, search, params);
+    const Eigen::Vector4d scale(0.05, 0.05, 0.005, 0.005);
+    const double tolerance = 1e-4 * params.profile_tolerance * params.profile_tolerance;
+    std::size_t refined = 0;
+    const std::vector<ScoredStart> starts = RefinementStarts(samples, cost, search, refined);
+    Eigen::Vector4d x = BestOfStarts(cost, starts, refined, scale, tolerance);
+    cost.DropEndLevel();
+    for (int restart = 0; restart < 2; ++restart) {
+        x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
+    }
+    profile_spread = static_cast<float>(std::sqrt(cost(x)));
+    cost.offsets().Axis(x, best.direction, best.center);
+    best.cost = LineCost(samples, best.direction, best.center, search.t, search.sin_parallel);
+}
+
+/// The axis sign: away from the support (along up when given, else its largest component
+/// positive), so that heights grow from the bottom.
+Eigen::Vector3d AwayFromSupport(const Eigen::Vector3d& direction, const AxisSearch& search) {
+    Eigen::Vector3d a = direction;
+    Eigen::Index largest = 0;
+    a.cwiseAbs().maxCoeff(&largest);
+    if (search.has_up ? a.dot(search.pole) < 0.0 : a[largest] < 0.0) a = -a;
+    return a;
+}
+
+/// The heights along the axis (a through origin) of all usable points, and (height, radius) of
+/// those whose normal line passes within t of it: the points consistent with the axis.
+struct ContourPoints {
+    std::vector<float> heights;
+    std::vector<std::pair<float, float>> profile;  // (height, radius)
+};
+
+ContourPoints CollectContourPoints(const PointCloud& cloud, const Indices& usable,
+                                   const Eigen::Vector3d& origin, const Eigen::Vector3d& a,
+                                   const AxisSearch& search) {
+    ContourPoints contour;
+    for (auto i : usable) {
+        const Eigen::Vector3d p = cloud.points[i].cast<double>() - origin;
+        const double h = p.dot(a);
+        contour.heights.push_back(static_cast<float>(h));
+        const Eigen::Vector3d n = cloud.normals[i].cast<double>().normalized();
+        const Eigen::Vector3d v = n.cross(a);
+        if (v.norm() < search.sin_parallel) continue;
+        if (std::abs(v.normalized().dot(p)) > search.t) continue;
+        contour.profile.emplace_back(static_cast<float>(h), static_cast<float>((p - h * a).norm()));
+    }
+    return contour;
+}
+
+/// The contour's height range: the 1st to 99th percentile of `heights` (sorted here; stray points
+/// do not stretch it), its bottom lowered to a support plane at most 10 cm below (the contact
+/// side is hidden).
+std::pair<float, float> ContourHeightRange(std::vector<float>& heights,
+                                           const Eigen::Vector4f& support_plane,
+                                           const Eigen::Vector3d& origin,
+                                           const Eigen::Vector3d& a) {
+    std::sort(heights.begin(), heights.end());
+    float h_min = heights[heights.size() / 100];
+    const float h_max = heights[heights.size() - 1 - heights.size() / 100];
+    if (support_plane.head<3>().squaredNorm() > 0.0f) {
+        const Eigen::Vector3d n = support_plane.head<3>().cast<double>().normalized();
+        const double d = support_plane[3] / support_plane.head<3>().norm();
+        const double along = n.dot(a);
+        if (std::abs(along) > 0.5) {
+            const double h_plane = -(n.dot(origin) + d) / along;
+            if (h_plane < h_min && h_plane > h_min - 0.1) h_min = static_cast<float>(h_plane);
+        }
+    }
+    return {h_min, h_max};
+}
+
+/// The median radius of each height bin of `step` from h_min (NaN where a bin has fewer than 2
+/// points): robust to the points of handles and spouts.
+std::vector<float> BinMedianRadii(const std::vector<std::pair<float, float>>& profile, float h_min,
+                                  float h_max, float step) {
+    const int bins = std::max(1, static_cast<int>(std::ceil((h_max - h_min) / step)));
+    std::vector<std::vector<float>> binned(static_cast<std::size_t>(bins));
+    for (const auto& [h, r] : profile) {
+        const int b = static_cast<int>((h - h_min) / step);
+        if (b >= 0 && b < bins) binned[static_cast<std::size_t>(b)].push_back(r);
+    }
+    std::vector<float> radius(static_cast<std::size_t>(bins),
+                              std::numeric_limits<float>::quiet_NaN());
+    for (int b = 0; b < bins; ++b) {
+        auto& v = binned[static_cast<std::size_t>(b)];
+        if (v.size() >= 2) radius[static_cast<std::size_t>(b)] = Median(v);
+    }
+    return radius;
+}
+
+/// Fills empty bins by interpolation between known ones and the ends by the nearest known radius;
+/// false (and `radius` left with gaps) when no bin is known.
+bool FillGaps(std::vector<float>& radius) {
+    const int bins = static_cast<int>(radius.size());
+    int first = -1, last = -1;
+    for (int b = 0; b < bins; ++b) {
+        if (std::isnan(radius[static_cast<std::size_t>(b)])) continue;
+        if (first < 0) first = b;
+        if (last >= 0 && b - last > 1) {
+            for (int k = last + 1; k < b; ++k) {
+                const float f = static_cast<float>(k - last) / static_cast<float>(b - last);
+                radius[static_cast<std::size_t>(k)] = radius[static_cast<std::size_t>(last)] +
+                                                      f * (radius[static_cast<std::size_t>(b)] -
+                                                           radius[static_cast<std::size_t>(last)]);
+            }
+        }
+        last = b;
+    }
+    if (first < 0) return false;
+    for (int b = 0; b < first; ++b)
+        radius[static_cast<std::size_t>(b)] = radius[static_cast<std::size_t>(first)];
+    for (int b = last + 1; b < bins; ++b)
+        radius[static_cast<std::size_t>(b)] = radius[static_cast<std::size_t>(last)];
+    return true;
+}
+
+/// A 3-bin median of the radii: single-bin outliers go, steps (a bottle's shoulder) stay.
+std::vector<float> MedianSmoothed(const std::vector<float>& radius) {
+    const int bins = static_cast<int>(radius.size());
+    std::vector<float> smooth = radius;
+    for (int b = 1; b + 1 < bins; ++b) {
+        float w[3] = {radius[static_cast<std::size_t>(b - 1)], radius[static_cast<std::size_t>(b)],
+                      radius[static_cast<std::size_t>(b + 1)]};
+        std::sort(w, w + 3);
+        smooth[static_cast<std::size_t>(b)] = w[1];
+    }
+    return smooth;
+}
+
+/// The model's contour from the smoothed bin radii: one sample per bin centre plus the two ends,
+/// radii at least min_radius, heights non-decreasing.
+void SetContour(const std::vector<float>& smooth, float h_min, float h_max,
+                const RotationalFitParams& params, RotationalModel& model) {
+    const float step = params.profile_step;
+    const int bins = static_cast<int>(smooth.size());
+    model.heights.clear();
+    model.radii.clear();
+    model.heights.push_back(h_min);
+    model.radii.push_back(std::max(params.min_radius, smooth.front()));
+    for (int b = 0; b < bins; ++b) {
+        model.heights.push_back(std::min(h_max, h_min + (static_cast<float>(b) + 0.5f) * step));
+        model.radii.push_back(std::max(params.min_radius, smooth[static_cast<std::size_t>(b)]));
+    }
+    model.heights.push_back(h_max);
+    model.radii.push_back(std::max(params.min_radius, smooth.back()));
+    for (std::size_t k = 1; k < model.heights.size(); ++k) {
+        model.heights[k] = std::max(model.heights[k], model.heights[k - 1]);
+    }
+}
+
+/// The share of usable points on the completed surface: within the threshold of the side, or on
+/// a cap inside the contour (section 5.4.2.3 meshes objects whose model explains too few).
+float InlierRatio(const PointCloud& cloud, const Indices& usable, const RotationalModel& model,
+                  float inlier_threshold) {
+    std::size_t inliers = 0;
+    for (auto i : usable) {
+        const Eigen::Vector3f p = cloud.points[i] - model.origin;
+        const float h = p.dot(model.axis);
+        if (h < model.heights.front() - inlier_threshold ||
+            h > model.heights.back() + inlier_threshold) {
+            continue;
+        }
+        const float r = (p - h * model.axis).norm();
+        const float hc = std::clamp(h, model.heights.front(), model.heights.back());
+        const bool on_side = std::abs(r - model.RadiusAt(hc)) < inlier_threshold;
+        const bool on_cap = (h - model.heights.front() < inlier_threshold ||
+                             model.heights.back() - h < inlier_threshold) &&
+                            r <= model.RadiusAt(hc) + inlier_threshold;
+        if (on_side || on_cap) ++inliers;
+    }
+    return static_cast<float>(inliers) / static_cast<float>(usable.size());
+}
+
 }  // namespace
 
 void RotationalFitParams::Validate() const { CheckParams(*this); }
@@ -446,301 +908,35 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
     RotationalModel model;
     if (indices.empty()) return model;
     if (!cloud.HasNormals()) throw DataError("rotational fit: the cloud has no normals");
-    for (auto i : indices) {
-        if (i >= cloud.size()) {
-            throw InvalidArgument(
-                fmt::format("rotational fit: index {} out of range ({} points)", i, cloud.size()));
-        }
-    }
-    // Usable points, an even stride through the object.
-    Indices usable;
-    for (auto i : indices) {
-        if (cloud.points[i].allFinite() && cloud.normals[i].allFinite() &&
-            cloud.normals[i].squaredNorm() > 0.25f) {
-            usable.push_back(i);
-        }
-    }
+    CheckIndices(cloud, indices);
+    const Indices usable = UsablePoints(cloud, indices);
     if (usable.size() < 10) return model;
-    const std::size_t stride = (usable.size() + params.max_points - 1) / params.max_points;
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    std::vector<Sample> samples;
-    for (std::size_t k = 0; k < usable.size(); k += stride) {
-        const auto i = usable[k];
-        samples.push_back(
-            {cloud.points[i].cast<double>(), cloud.normals[i].cast<double>().normalized()});
-        centroid += samples.back().p;
-    }
-    centroid /= static_cast<double>(samples.size());
-    for (auto& s : samples) s.p -= centroid;
+    Eigen::Vector3d centroid;
+    const std::vector<Sample> samples = StridedSamples(cloud, usable, params.max_points, centroid);
+    const AxisSearch search = MakeAxisSearch(up, params);
 
-    const double t = params.line_threshold;
-    const double sin_parallel = std::sin(params.parallel_angle_deg * kPi / 180.0);
-    const bool has_up = up.squaredNorm() > 0.0f;
-    const Eigen::Vector3d pole = has_up ? up.cast<double>().normalized() : Eigen::Vector3d::UnitZ();
-    const double max_tilt = has_up ? params.max_tilt_deg * kPi / 180.0 : kPi / 2.0;
-
-    // Coarse search on a subset, then local refinement of the best few on all samples.
-    const auto directions = CapDirections(pole, max_tilt, params.grid_directions);
-    const std::size_t coarse_stride = std::max<std::size_t>(1, samples.size() / 300);
-    std::vector<double> costs(directions.size());
-    ParallelFor(
-        directions.size(), 0,
-        [&](std::size_t d) {
-            costs[d] =
-                EvaluateDirection(samples, coarse_stride, directions[d], t, sin_parallel).cost;
-        },
-        64);
-    std::vector<std::size_t> order(directions.size());
-    for (std::size_t d = 0; d < order.size(); ++d) order[d] = d;
-    const std::size_t keep =
-        std::min<std::size_t>(static_cast<std::size_t>(params.refine_candidates), order.size());
-    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
-                      [&](std::size_t a, std::size_t b) {
-                          return costs[a] < costs[b] || (costs[a] == costs[b] && a < b);
-                      });
-    const double spacing = std::sqrt(2.0 * kPi * (1.0 - std::cos(max_tilt)) / directions.size());
-    AxisFit best;
-    for (std::size_t c = 0; c < keep; ++c) {
-        AxisFit current = EvaluateDirection(samples, 1, directions[order[c]], t, sin_parallel);
-        for (double step = spacing; step > 0.0005;) {
-            Eigen::Vector3d e1, e2;
-            OrthonormalBasis(current.direction, e1, e2);
-            AxisFit next = current;
-            for (int i = -1; i <= 1; ++i) {
-                for (int j = -1; j <= 1; ++j) {
-                    if (i == 0 && j == 0) continue;
-                    Eigen::Vector3d a = (current.direction + step * (i * e1 + j * e2)).normalized();
-                    if (has_up &&
-                        std::acos(std::clamp(std::abs(a.dot(pole)), 0.0, 1.0)) > max_tilt) {
-                        continue;
-                    }
-                    const AxisFit fit = EvaluateDirection(samples, 1, a, t, sin_parallel);
-                    if (fit.cost < next.cost) next = fit;
-                }
-            }
-            if (next.cost < current.cost) {
-                current = next;
-            } else {
-                step *= 0.5;
-            }
-        }
-        if (current.cost < best.cost) best = current;
-    }
+    // The axis: the normal lines, then the thinnest contour.
+    AxisFit best = SearchNormalLineAxis(samples, search, params);
     if (!std::isfinite(best.cost)) return model;
-
-    // Second criterion: the thinnest contour (see the header). The point sets are fixed by the
-    // normal-line axis: side points consistent with it (a looser window), cap points, and all
-    // points for the level of the ends. The direction (2 angles) and position (2 offsets) are
-    // found by simplex searches: from the best few of a grid of directions within 30 degrees of
-    // the normal-line axis (each with its normal-line position), scored with the contour and the
-    // level of the ends; the best result is polished on the contour alone.
     if (params.profile_refinement) {
-        const Eigen::Vector3d a0 = best.direction, c0 = best.center;
-        std::vector<Eigen::Vector3d> side, cap, all;
-        std::vector<char> inner, down;
-        const std::size_t refine_stride =
-            (samples.size() + params.profile_points - 1) / params.profile_points;
-        for (std::size_t k = 0; k < samples.size(); k += refine_stride) {
-            const Sample& sample = samples[k];
-            all.push_back(sample.p);
-            const Eigen::Vector3d v = sample.n.cross(a0);
-            const double s = v.norm();
-            const Eigen::Vector3d q = sample.p - c0;
-            if (s < sin_parallel) {
-                cap.push_back(sample.p);
-                down.push_back(sample.n.dot(a0) < 0.0 ? 1 : 0);
-                continue;
-            }
-            if (std::abs((v / s).dot(q)) > 2.0 * t) continue;
-            side.push_back(sample.p);
-            inner.push_back(sample.n.dot(q - q.dot(a0) * a0) < 0.0 ? 1 : 0);
-        }
-        if (side.size() >= 20) {
-            const ProfileObjective side_objective(std::move(side), std::move(inner), false,
-                                                  params.profile_step, params.profile_tolerance);
-            const ProfileObjective cap_objective(std::move(cap), std::move(down), true,
-                                                 params.profile_step, params.profile_tolerance);
-            const RimObjective rim_objective(std::move(all), 24, params.profile_tolerance);
-            double rim_weight = params.rim_weight;
-            auto objective = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& c) {
-                double sum = side_objective(a, c) * static_cast<double>(side_objective.size());
-                std::size_t count = side_objective.size();
-                if (params.cap_weight > 0.0f && cap_objective.size() >= 10) {
-                    sum += params.cap_weight * cap_objective(a, c) *
-                           static_cast<double>(cap_objective.size());
-                    count += cap_objective.size();
-                }
-                sum /= static_cast<double>(count);
-                if (rim_weight > 0.0) sum += rim_weight * rim_objective(a, c);
-                return sum;
-            };
-            Eigen::Vector3d e1, e2;
-            OrthonormalBasis(a0, e1, e2);
-            auto axis_of = [&](const Eigen::Vector4d& x, Eigen::Vector3d& a, Eigen::Vector3d& c) {
-                a = (a0 + x[0] * e1 + x[1] * e2).normalized();
-                c = c0 + x[2] * e1 + x[3] * e2;
-            };
-            auto cost = [&](const Eigen::Vector4d& x) {
-                Eigen::Vector3d a, c;
-                axis_of(x, a, c);
-                if (has_up && std::acos(std::clamp(std::abs(a.dot(pole)), 0.0, 1.0)) > max_tilt) {
-                    return std::numeric_limits<double>::infinity();
-                }
-                return objective(a, c);
-            };
-            const Eigen::Vector4d scale(0.05, 0.05, 0.005, 0.005);
-            const double tolerance = 1e-4 * params.profile_tolerance * params.profile_tolerance;
-            // Starts: directions within 30 degrees of the normal-line axis, each with the
-            // normal-line position for it; the best few are refined.
-            std::vector<std::pair<double, Eigen::Vector4d>> starts;
-            auto start_at = [&](const Eigen::Vector3d& d) {
-                if (d.dot(a0) < 0.5 ||
-                    (has_up && std::acos(std::clamp(std::abs(d.dot(pole)), 0.0, 1.0)) > max_tilt)) {
-                    return;
-                }
-                const AxisFit fit = EvaluateDirection(samples, 1, d, t, sin_parallel);
-                const Eigen::Vector4d x(d.dot(e1) / d.dot(a0), d.dot(e2) / d.dot(a0),
-                                        (fit.center - c0).dot(e1), (fit.center - c0).dot(e2));
-                starts.emplace_back(cost(x), x);
-            };
-            starts.emplace_back(cost(Eigen::Vector4d::Zero()), Eigen::Vector4d::Zero());
-            for (const auto& d : CapDirections(a0, 30.0 * kPi / 180.0, 150)) start_at(d);
-            const std::size_t refined = std::min<std::size_t>(3, starts.size());
-            std::partial_sort(starts.begin(), starts.begin() + static_cast<std::ptrdiff_t>(refined),
-                              starts.end(),
-                              [](const auto& l, const auto& r) { return l.first < r.first; });
-            Eigen::Vector4d x = starts.front().second;
-            double x_cost = std::numeric_limits<double>::infinity();
-            for (std::size_t k = 0; k < refined; ++k) {
-                Eigen::Vector4d y = starts[k].second;
-                for (int restart = 0; restart < 2; ++restart) {
-                    y = NelderMead<4>(cost, y, restart == 0 ? scale : Eigen::Vector4d(0.25 * scale),
-                                      tolerance, 400);
-                }
-                const double y_cost = cost(y);
-                if (y_cost < x_cost) {
-                    x = y;
-                    x_cost = y_cost;
-                }
-            }
-            rim_weight = 0.0;
-            for (int restart = 0; restart < 2; ++restart) {
-                x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
-            }
-            model.profile_spread = static_cast<float>(std::sqrt(cost(x)));
-            axis_of(x, best.direction, best.center);
-            best.cost = LineCost(samples, best.direction, best.center, t, sin_parallel);
-        }
+        RefineAxisByContour(samples, search, params, best, model.profile_spread);
     }
-
-    Eigen::Vector3d a = best.direction;
-    Eigen::Index largest = 0;
-    a.cwiseAbs().maxCoeff(&largest);
-    if (has_up ? a.dot(pole) < 0.0 : a[largest] < 0.0) a = -a;
+    const Eigen::Vector3d a = AwayFromSupport(best.direction, search);
     const Eigen::Vector3d origin = centroid + best.center;
 
-    // Contour from the points consistent with the axis.
-    std::vector<float> all_heights;
-    std::vector<std::pair<float, float>> profile_points;  // (height, radius)
-    for (auto i : usable) {
-        const Eigen::Vector3d p = cloud.points[i].cast<double>() - origin;
-        const double h = p.dot(a);
-        all_heights.push_back(static_cast<float>(h));
-        const Eigen::Vector3d n = cloud.normals[i].cast<double>().normalized();
-        const Eigen::Vector3d v = n.cross(a);
-        if (v.norm() < sin_parallel) continue;
-        if (std::abs(v.normalized().dot(p)) > t) continue;
-        profile_points.emplace_back(static_cast<float>(h), static_cast<float>((p - h * a).norm()));
-    }
-    if (profile_points.size() < 5) return model;
-    std::sort(all_heights.begin(), all_heights.end());
-    float h_min = all_heights[all_heights.size() / 100];
-    const float h_max = all_heights[all_heights.size() - 1 - all_heights.size() / 100];
-    if (support_plane.head<3>().squaredNorm() > 0.0f) {
-        const Eigen::Vector3d n = support_plane.head<3>().cast<double>().normalized();
-        const double d = support_plane[3] / support_plane.head<3>().norm();
-        const double along = n.dot(a);
-        if (std::abs(along) > 0.5) {
-            const double h_plane = -(n.dot(origin) + d) / along;
-            if (h_plane < h_min && h_plane > h_min - 0.1) h_min = static_cast<float>(h_plane);
-        }
-    }
-    const float step = params.profile_step;
-    const int bins = std::max(1, static_cast<int>(std::ceil((h_max - h_min) / step)));
-    std::vector<std::vector<float>> binned(static_cast<std::size_t>(bins));
-    for (const auto& [h, r] : profile_points) {
-        const int b = static_cast<int>((h - h_min) / step);
-        if (b >= 0 && b < bins) binned[static_cast<std::size_t>(b)].push_back(r);
-    }
-    std::vector<float> radius(static_cast<std::size_t>(bins),
-                              std::numeric_limits<float>::quiet_NaN());
-    for (int b = 0; b < bins; ++b) {
-        auto& v = binned[static_cast<std::size_t>(b)];
-        if (v.size() >= 2) radius[static_cast<std::size_t>(b)] = Median(v);
-    }
-    // Fill gaps by interpolation, ends by the nearest known radius.
-    int first = -1, last = -1;
-    for (int b = 0; b < bins; ++b) {
-        if (std::isnan(radius[static_cast<std::size_t>(b)])) continue;
-        if (first < 0) first = b;
-        if (last >= 0 && b - last > 1) {
-            for (int k = last + 1; k < b; ++k) {
-                const float f = static_cast<float>(k - last) / static_cast<float>(b - last);
-                radius[static_cast<std::size_t>(k)] = radius[static_cast<std::size_t>(last)] +
-                                                      f * (radius[static_cast<std::size_t>(b)] -
-                                                           radius[static_cast<std::size_t>(last)]);
-            }
-        }
-        last = b;
-    }
-    if (first < 0) return model;
-    for (int b = 0; b < first; ++b)
-        radius[static_cast<std::size_t>(b)] = radius[static_cast<std::size_t>(first)];
-    for (int b = last + 1; b < bins; ++b)
-        radius[static_cast<std::size_t>(b)] = radius[static_cast<std::size_t>(last)];
-    // 3-bin median smoothing.
-    std::vector<float> smooth = radius;
-    for (int b = 1; b + 1 < bins; ++b) {
-        float w[3] = {radius[static_cast<std::size_t>(b - 1)], radius[static_cast<std::size_t>(b)],
-                      radius[static_cast<std::size_t>(b + 1)]};
-        std::sort(w, w + 3);
-        smooth[static_cast<std::size_t>(b)] = w[1];
-    }
-    model.heights.clear();
-    model.radii.clear();
-    model.heights.push_back(h_min);
-    model.radii.push_back(std::max(params.min_radius, smooth.front()));
-    for (int b = 0; b < bins; ++b) {
-        model.heights.push_back(std::min(h_max, h_min + (static_cast<float>(b) + 0.5f) * step));
-        model.radii.push_back(std::max(params.min_radius, smooth[static_cast<std::size_t>(b)]));
-    }
-    model.heights.push_back(h_max);
-    model.radii.push_back(std::max(params.min_radius, smooth.back()));
-    for (std::size_t k = 1; k < model.heights.size(); ++k) {
-        model.heights[k] = std::max(model.heights[k], model.heights[k - 1]);
-    }
+    // The contour from the points consistent with the axis.
+    ContourPoints contour = CollectContourPoints(cloud, usable, origin, a, search);
+    if (contour.profile.size() < 5) return model;
+    const auto [h_min, h_max] = ContourHeightRange(contour.heights, support_plane, origin, a);
+    std::vector<float> radius = BinMedianRadii(contour.profile, h_min, h_max, params.profile_step);
+    if (!FillGaps(radius)) return model;
+    SetContour(MedianSmoothed(radius), h_min, h_max, params, model);
     model.origin = origin.cast<float>();
     model.axis = a.cast<float>();
     model.found = true;
-    model.axis_cost = static_cast<float>(best.cost / (static_cast<double>(samples.size()) * t * t));
-
-    std::size_t inliers = 0;
-    for (auto i : usable) {
-        const Eigen::Vector3f p = cloud.points[i] - model.origin;
-        const float h = p.dot(model.axis);
-        if (h < model.heights.front() - params.inlier_threshold ||
-            h > model.heights.back() + params.inlier_threshold) {
-            continue;
-        }
-        const float r = (p - h * model.axis).norm();
-        const float hc = std::clamp(h, model.heights.front(), model.heights.back());
-        const bool on_side = std::abs(r - model.RadiusAt(hc)) < params.inlier_threshold;
-        const bool on_cap = (h - model.heights.front() < params.inlier_threshold ||
-                             model.heights.back() - h < params.inlier_threshold) &&
-                            r <= model.RadiusAt(hc) + params.inlier_threshold;
-        if (on_side || on_cap) ++inliers;
-    }
-    model.inlier_ratio = static_cast<float>(inliers) / static_cast<float>(usable.size());
+    model.axis_cost =
+        static_cast<float>(best.cost / (static_cast<double>(samples.size()) * search.t * search.t));
+    model.inlier_ratio = InlierRatio(cloud, usable, model, params.inlier_threshold);
     return model;
 }
 

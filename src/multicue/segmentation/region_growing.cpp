@@ -123,27 +123,12 @@ std::size_t MarkPoints(const PointCloud& cloud, const Indices& subset,
     return count;
 }
 
-}  // namespace
-
-void RegionGrowingParams::Validate() const { CheckParams(*this); }
-
-RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
-                                  const RegionGrowingParams& params) {
-    CheckParams(params);
-    RegionGrowingResult result;
+// Seeds by lowest curvature, so that flat parts are found first (section 4.2.1); ties by index.
+Indices SeedOrder(const PointCloud& cloud, const std::vector<std::uint8_t>& active,
+                  std::size_t num_points) {
     const std::size_t n = cloud.size();
-    if (n == 0) return result;
-    CheckFields(cloud);
-
-    std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(cloud, params.subset, active);
-    result.part_ids.assign(n, kNoPart);
-    std::vector<std::int32_t>& part_of = result.part_ids;
-    if (result.num_points == 0) return result;
-
-    // Seeds by lowest curvature, so that flat parts are found first (section 4.2.1).
     Indices order;
-    order.reserve(result.num_points);
+    order.reserve(num_points);
     for (std::size_t i = 0; i < n; ++i) {
         if (active[i] != 0) order.push_back(static_cast<Index>(i));
     }
@@ -152,18 +137,27 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
         const float cb = cloud.curvature[b];
         return ca != cb ? ca < cb : a < b;
     });
+    return order;
+}
 
-    const double max_angle_rad = double{params.max_angle_deg} * std::numbers::pi / 180.0;
-    const auto cos_max = static_cast<float>(std::cos(max_angle_rad));
-    Neighborhoods neighborhoods(cloud, tree, params);
-
-    // Growth: a part is the set of free points reachable from its seed through neighbours whose
-    // normal is within the angle of the seed normal (not of the neighbour's normal).
+// The grown parts and the seed each grew from, in seed order.
+struct GrownParts {
     std::vector<Indices> parts;
     Indices seeds;
+};
+
+// Growth: a part is the set of free points reachable from its seed through neighbours whose
+// normal is within the angle of the seed normal (not of the neighbour's normal), so that a part
+// cannot drift around a curved surface.
+GrownParts GrowParts(const PointCloud& cloud, const std::vector<std::uint8_t>& active,
+                     const Indices& order, const RegionGrowingParams& params,
+                     Neighborhoods& neighborhoods, std::vector<std::int32_t>& part_of) {
+    const double max_angle_rad = double{params.max_angle_deg} * std::numbers::pi / 180.0;
+    const auto cos_max = static_cast<float>(std::cos(max_angle_rad));
+    GrownParts grown;
     for (Index seed : order) {
         if (part_of[seed] != kNoPart) continue;
-        const auto id = static_cast<std::int32_t>(parts.size());
+        const auto id = static_cast<std::int32_t>(grown.parts.size());
         const Eigen::Vector3f seed_normal = cloud.normals[seed].normalized();
         Indices part{seed};
         part_of[seed] = id;
@@ -180,25 +174,19 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
                 }
             }
         }
-        parts.push_back(std::move(part));
-        seeds.push_back(seed);
+        grown.parts.push_back(std::move(part));
+        grown.seeds.push_back(seed);
     }
-    result.num_grown_parts = parts.size();
+    return grown;
+}
 
-    // Merging, phase 1: a small part joins, as a whole, the large part holding the point nearest
-    // to any of its points (within the neighbourhood; ties by point index). Rounds repeat so that
-    // chains of small parts reach a large part; decisions of a round use the state before it.
-    const std::size_t min_size = params.min_part_size;
-    const std::size_t num_parts = parts.size();
-    std::vector<std::uint8_t> is_large(num_parts, 0);
-    std::vector<std::int32_t> pending;  // small parts not merged yet, ascending
-    for (std::size_t p = 0; p < num_parts; ++p) {
-        if (parts[p].size() >= min_size) {
-            is_large[p] = 1;
-        } else {
-            pending.push_back(static_cast<std::int32_t>(p));
-        }
-    }
+// Merging, phase 1: a small part joins, as a whole, the large part holding the point nearest to
+// any of its points (within the neighbourhood; ties by point index). Rounds repeat so that chains
+// of small parts reach a large part; decisions of a round use the state before it. Leaves in
+// `pending` the small parts with no large part nearby.
+void MergeIntoLargeParts(const std::vector<std::uint8_t>& is_large, Neighborhoods& neighborhoods,
+                         std::vector<Indices>& parts, std::vector<std::int32_t>& pending,
+                         std::vector<std::int32_t>& part_of, RegionGrowingResult& result) {
     std::vector<std::pair<std::int32_t, std::int32_t>> merges;  // (small part, large part)
     while (!pending.empty()) {
         merges.clear();
@@ -234,10 +222,15 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
         std::erase_if(pending,
                       [&](std::int32_t s) { return parts[static_cast<std::size_t>(s)].empty(); });
     }
+}
 
-    // Merging, phase 2: the remaining small parts have no large part nearby; group them by
-    // distance alone. A group keeps the id of its first part, so part order stays seed order.
-    detail::DisjointSets groups(num_parts);
+// Merging, phase 2: the remaining small parts have no large part nearby; group them by distance
+// alone. A group keeps the id of its first part, so part order stays seed order.
+void GroupSmallParts(const std::vector<std::uint8_t>& is_large,
+                     const std::vector<std::int32_t>& pending, Neighborhoods& neighborhoods,
+                     std::vector<Indices>& parts, std::vector<std::int32_t>& part_of,
+                     RegionGrowingResult& result) {
+    detail::DisjointSets groups(parts.size());
     for (std::int32_t s : pending) {
         for (Index q : parts[static_cast<std::size_t>(s)]) {
             neighborhoods.Search(q);
@@ -259,26 +252,76 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
         member.clear();
         ++result.num_merged_parts;
     }
+}
+
+// With discard_small_parts, the groups still too small lose their points (kNoPart).
+void DiscardSmallGroups(const std::vector<std::int32_t>& pending, std::size_t min_size,
+                        bool discard_small_parts, std::vector<Indices>& parts,
+                        std::vector<std::int32_t>& part_of, RegionGrowingResult& result) {
     for (std::int32_t s : pending) {
         Indices& group = parts[static_cast<std::size_t>(s)];
-        if (group.empty() || group.size() >= min_size || !params.discard_small_parts) continue;
+        if (group.empty() || group.size() >= min_size || !discard_small_parts) continue;
         for (Index i : group) part_of[i] = kNoPart;
         result.num_discarded_points += group.size();
         group.clear();
     }
+}
 
-    // Compaction: surviving parts in seed order, points ascending.
+// Compaction: surviving parts in seed order, points ascending; part ids renumbered to match.
+void CompactParts(GrownParts& grown, RegionGrowingResult& result) {
+    std::vector<Indices>& parts = grown.parts;
+    const std::size_t num_parts = parts.size();
     std::vector<std::int32_t> new_id(num_parts, kNoPart);
     for (std::size_t p = 0; p < num_parts; ++p) {
         if (parts[p].empty()) continue;
         new_id[p] = static_cast<std::int32_t>(result.parts.size());
         std::sort(parts[p].begin(), parts[p].end());
         result.parts.push_back(std::move(parts[p]));
-        result.seeds.push_back(seeds[p]);
+        result.seeds.push_back(grown.seeds[p]);
     }
-    for (auto& id : part_of) {
+    for (auto& id : result.part_ids) {
         if (id != kNoPart) id = new_id[static_cast<std::size_t>(id)];
     }
+}
+
+}  // namespace
+
+void RegionGrowingParams::Validate() const { CheckParams(*this); }
+
+RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
+                                  const RegionGrowingParams& params) {
+    CheckParams(params);
+    RegionGrowingResult result;
+    const std::size_t n = cloud.size();
+    if (n == 0) return result;
+    CheckFields(cloud);
+
+    std::vector<std::uint8_t> active;
+    result.num_points = MarkPoints(cloud, params.subset, active);
+    result.part_ids.assign(n, kNoPart);
+    std::vector<std::int32_t>& part_of = result.part_ids;
+    if (result.num_points == 0) return result;
+
+    const Indices order = SeedOrder(cloud, active, result.num_points);
+    Neighborhoods neighborhoods(cloud, tree, params);
+    GrownParts grown = GrowParts(cloud, active, order, params, neighborhoods, part_of);
+    result.num_grown_parts = grown.parts.size();
+
+    // Parts below min_part_size join a large neighbour, else each other.
+    const std::size_t min_size = params.min_part_size;
+    std::vector<std::uint8_t> is_large(grown.parts.size(), 0);
+    std::vector<std::int32_t> pending;  // small parts not merged yet, ascending
+    for (std::size_t p = 0; p < grown.parts.size(); ++p) {
+        if (grown.parts[p].size() >= min_size) {
+            is_large[p] = 1;
+        } else {
+            pending.push_back(static_cast<std::int32_t>(p));
+        }
+    }
+    MergeIntoLargeParts(is_large, neighborhoods, grown.parts, pending, part_of, result);
+    GroupSmallParts(is_large, pending, neighborhoods, grown.parts, part_of, result);
+    DiscardSmallGroups(pending, min_size, params.discard_small_parts, grown.parts, part_of, result);
+    CompactParts(grown, result);
     return result;
 }
 

@@ -252,6 +252,136 @@ Indices UsablePoints(const PointCloud& cloud, const Indices& indices, bool use_n
     return points;
 }
 
+// Throws InvalidArgument for a model that cannot be sampled or scored.
+void CheckModel(const SacModel& model) {
+    if (model.sample_size < 1) {
+        throw InvalidArgument(fmt::format("sample consensus model sample_size must be >= 1, got {}",
+                                          model.sample_size));
+    }
+    if (!model.fit_sample || !model.distances) {
+        throw InvalidArgument("sample consensus model needs fit_sample and distances");
+    }
+}
+
+// Scores the valid ones of the first n hypotheses, in parallel in the arena when there is one
+// (each score depends on its hypothesis alone, so the order of evaluation does not matter).
+void ScoreBatch(const Evaluator& evaluator, SacMethod method, std::optional<tbb::task_arena>& arena,
+                std::size_t n, const std::vector<SacCoefficients>& hypotheses,
+                const std::vector<char>& valid, std::vector<Score>& scores) {
+    auto score = [&](std::size_t j) {
+        if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], method);
+    };
+    if (arena && n > 1) {
+        arena->execute([&] {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
+                              });
+        });
+    } else {
+        for (std::size_t j = 0; j < n; ++j) score(j);
+    }
+}
+
+// The best hypothesis of the sampling loop and the loop's count of iterations, with the number
+// still needed by Eq. (4.6) (section 4.2.4.3) for the best one's inlier ratio.
+struct Consensus {
+    bool have_best = false;
+    Score best;
+    SacCoefficients coefficients;
+    int needed = std::numeric_limits<int>::max();  // unknown (infinite) at first
+    int iterations = 0;
+};
+
+// The sampling loop: minimal samples drawn serially from one engine, scored in batches (in
+// parallel for large point sets), and decided in drawing order exactly as a serial loop would,
+// so that the result does not depend on the thread count.
+Consensus SearchHypotheses(const PointCloud& cloud, const SacModel& model, const SacParams& params,
+                           const Indices& points, const Sampler& sampler,
+                           const Evaluator& evaluator, const std::vector<float>& sample_w) {
+    const auto k = static_cast<std::size_t>(model.sample_size);
+    double total_mass = 0.0;  // sampling weight of all usable points
+    for (float w : sample_w) total_mass += double{w};
+    const int threads = ResolveThreadCount(params.num_threads);
+    std::optional<tbb::task_arena> arena;
+    if (threads > 1 && points.size() >= kMinPointsForThreads) {
+        arena.emplace(ArenaThreadCount(threads));
+    }
+    const std::size_t batch = arena ? 2 * static_cast<std::size_t>(threads) : 1;
+
+    std::mt19937_64 rng(params.seed);
+    std::vector<std::size_t> positions(k);
+    std::vector<Index> sample(k);
+    std::vector<SacCoefficients> hypotheses(batch);
+    std::vector<char> valid(batch, 0);
+    std::vector<Score> scores(batch);
+
+    Consensus c;
+    while (c.iterations < std::min(c.needed, params.max_iterations)) {
+        // Draw (serially, in order) as many samples as the serial loop could still draw.
+        const auto remaining =
+            static_cast<std::size_t>(std::min(c.needed, params.max_iterations) - c.iterations);
+        const std::size_t n = std::min(batch, remaining);
+        for (std::size_t j = 0; j < n; ++j) {
+            sampler.Draw(rng, positions, sample);
+            valid[j] = model.fit_sample(cloud, sample, hypotheses[j]) ? 1 : 0;
+        }
+        ScoreBatch(evaluator, params.method, arena, n, hypotheses, valid, scores);
+        // Decide in drawing order, exactly as the serial loop does; samples drawn past its stop
+        // are discarded.
+        for (std::size_t j = 0; j < n; ++j) {
+            ++c.iterations;
+            if (valid[j] != 0 && (!c.have_best || scores[j].cost < c.best.cost)) {
+                c.have_best = true;
+                c.best = scores[j];
+                c.coefficients = hypotheses[j];
+                // The chance that one draw is an inlier.
+                const double ratio = sample_w.empty() ? static_cast<double>(c.best.inliers) /
+                                                            static_cast<double>(points.size())
+                                                      : c.best.drawn_mass / total_mass;
+                c.needed = AdaptiveIterationCount(params.p_success, ratio, model.sample_size);
+            }
+            if (c.iterations >= std::min(c.needed, params.max_iterations)) break;
+        }
+    }
+    return c;
+}
+
+// The inliers of a model and what the refinement compares (see Evaluator::Inliers).
+struct InlierSet {
+    Indices inliers;
+    double sum_sq = 0.0;
+    double truncated = 0.0;
+    double inlier_weight = 0.0;
+};
+
+// Least-squares refinement. Accepting a refit only when the truncated quadratic cost does not
+// grow keeps the result at least as good as the sample's model; for an exact least-squares refit
+// the cost cannot grow (old inliers: min(d^2, t^2) <= d^2 <= old d^2 summed; old outliers: at
+// most t^2 each). Stops when the inliers no longer change.
+void RefineConsensus(const PointCloud& cloud, const SacModel& model, const Evaluator& evaluator,
+                     int max_refine_rounds, SacCoefficients& coefficients, InlierSet& set) {
+    const auto k = static_cast<std::size_t>(model.sample_size);
+    Indices refit_inliers;
+    double refit_sum_sq = 0.0;
+    double refit_truncated = 0.0;
+    double refit_weight = 0.0;
+    SacCoefficients refined;
+    for (int round = 0; round < max_refine_rounds; ++round) {
+        if (set.inliers.size() < k) break;
+        if (!model.refine(cloud, set.inliers, coefficients, refined)) break;
+        evaluator.Inliers(refined, refit_inliers, refit_sum_sq, refit_truncated, refit_weight);
+        if (!(refit_truncated <= set.truncated * (1.0 + 1e-6) + 1e-12)) break;
+        coefficients = refined;
+        set.truncated = refit_truncated;
+        set.sum_sq = refit_sum_sq;
+        set.inlier_weight = refit_weight;
+        const bool stable = refit_inliers == set.inliers;
+        set.inliers.swap(refit_inliers);
+        if (stable) break;
+    }
+}
+
 }  // namespace
 
 void ValidateSacParams(const SacParams& params) {
@@ -317,13 +447,7 @@ int AdaptiveIterationCount(double p_success, double inlier_ratio, int sample_siz
 SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, const SacModel& model,
                              const SacParams& params) {
     ValidateSacParams(params);
-    if (model.sample_size < 1) {
-        throw InvalidArgument(fmt::format("sample consensus model sample_size must be >= 1, got {}",
-                                          model.sample_size));
-    }
-    if (!model.fit_sample || !model.distances) {
-        throw InvalidArgument("sample consensus model needs fit_sample and distances");
-    }
+    CheckModel(model);
     ValidateSacWeights(params.sample_weights, cloud.size(), "sample_weights");
     ValidateSacWeights(params.score_weights, cloud.size(), "score_weights");
     SacResult result;
@@ -345,106 +469,24 @@ SacResult RunSampleConsensus(const PointCloud& cloud, const Indices& indices, co
     const std::vector<float> score_w = Gather(params.score_weights, points);
     const Sampler sampler(points, sample_w);
     if (sampler.Drawable(sample_w) < k) return result;
-    double total_mass = 0.0;  // sampling weight of all usable points
-    for (float w : sample_w) total_mass += double{w};
     const Evaluator evaluator(cloud, points, model, params, blend_normals, score_w, sample_w);
-    const int threads = ResolveThreadCount(params.num_threads);
-    std::optional<tbb::task_arena> arena;
-    if (threads > 1 && points.size() >= kMinPointsForThreads) {
-        arena.emplace(ArenaThreadCount(threads));
-    }
-    const std::size_t batch = arena ? 2 * static_cast<std::size_t>(threads) : 1;
+    Consensus c = SearchHypotheses(cloud, model, params, points, sampler, evaluator, sample_w);
+    result.iterations = c.iterations;
+    if (!c.have_best) return result;
 
-    std::mt19937_64 rng(params.seed);
-    std::vector<std::size_t> positions(k);
-    std::vector<Index> sample(k);
-    std::vector<SacCoefficients> hypotheses(batch);
-    std::vector<char> valid(batch, 0);
-    std::vector<Score> scores(batch);
-
-    bool have_best = false;
-    Score best;
-    SacCoefficients best_coefficients;
-    int needed = std::numeric_limits<int>::max();  // Eq. (4.6); unknown (infinite) at first
-    int iterations = 0;
-    while (iterations < std::min(needed, params.max_iterations)) {
-        // Draw (serially, in order) as many samples as the serial loop could still draw.
-        const auto remaining =
-            static_cast<std::size_t>(std::min(needed, params.max_iterations) - iterations);
-        const std::size_t n = std::min(batch, remaining);
-        for (std::size_t j = 0; j < n; ++j) {
-            sampler.Draw(rng, positions, sample);
-            valid[j] = model.fit_sample(cloud, sample, hypotheses[j]) ? 1 : 0;
-        }
-        auto score = [&](std::size_t j) {
-            if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], params.method);
-        };
-        if (arena && n > 1) {
-            arena->execute([&] {
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
-                                  [&](const tbb::blocked_range<std::size_t>& r) {
-                                      for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
-                                  });
-            });
-        } else {
-            for (std::size_t j = 0; j < n; ++j) score(j);
-        }
-        // Decide in drawing order, exactly as the serial loop does; samples drawn past its stop
-        // are discarded.
-        for (std::size_t j = 0; j < n; ++j) {
-            ++iterations;
-            if (valid[j] != 0 && (!have_best || scores[j].cost < best.cost)) {
-                have_best = true;
-                best = scores[j];
-                best_coefficients = hypotheses[j];
-                // The chance that one draw is an inlier.
-                const double ratio = sample_w.empty() ? static_cast<double>(best.inliers) /
-                                                            static_cast<double>(points.size())
-                                                      : best.drawn_mass / total_mass;
-                needed = AdaptiveIterationCount(params.p_success, ratio, model.sample_size);
-            }
-            if (iterations >= std::min(needed, params.max_iterations)) break;
-        }
-    }
-    result.iterations = iterations;
-    if (!have_best) return result;
-
-    // Least-squares refinement. Accepting a refit only when the truncated quadratic cost does not
-    // grow keeps the result at least as good as the sample's model; for an exact least-squares
-    // refit the cost cannot grow (old inliers: min(d^2, t^2) <= d^2 <= old d^2 summed; old
-    // outliers: at most t^2 each).
-    Indices inliers;
-    double sum_sq = 0.0;
-    double truncated = 0.0;
-    double inlier_weight = 0.0;
-    evaluator.Inliers(best_coefficients, inliers, sum_sq, truncated, inlier_weight);
+    InlierSet set;
+    evaluator.Inliers(c.coefficients, set.inliers, set.sum_sq, set.truncated, set.inlier_weight);
     if (model.refine) {
-        Indices refit_inliers;
-        double refit_sum_sq = 0.0;
-        double refit_truncated = 0.0;
-        double refit_weight = 0.0;
-        SacCoefficients refined;
-        for (int round = 0; round < params.max_refine_rounds; ++round) {
-            if (inliers.size() < k) break;
-            if (!model.refine(cloud, inliers, best_coefficients, refined)) break;
-            evaluator.Inliers(refined, refit_inliers, refit_sum_sq, refit_truncated, refit_weight);
-            if (!(refit_truncated <= truncated * (1.0 + 1e-6) + 1e-12)) break;
-            best_coefficients = refined;
-            truncated = refit_truncated;
-            sum_sq = refit_sum_sq;
-            inlier_weight = refit_weight;
-            const bool stable = refit_inliers == inliers;
-            inliers.swap(refit_inliers);
-            if (stable) break;
-        }
+        RefineConsensus(cloud, model, evaluator, params.max_refine_rounds, c.coefficients, set);
     }
-    if (inliers.size() < k) return result;
+    if (set.inliers.size() < k) return result;
     result.found = true;
-    result.converged = iterations >= needed;
-    result.coefficients = std::move(best_coefficients);
-    result.rmse = static_cast<float>(std::sqrt(sum_sq / static_cast<double>(inliers.size())));
-    result.inliers = std::move(inliers);
-    result.inlier_weight = inlier_weight;
+    result.converged = c.iterations >= c.needed;
+    result.coefficients = std::move(c.coefficients);
+    result.rmse =
+        static_cast<float>(std::sqrt(set.sum_sq / static_cast<double>(set.inliers.size())));
+    result.inliers = std::move(set.inliers);
+    result.inlier_weight = set.inlier_weight;
     return result;
 }
 

@@ -72,36 +72,45 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
     return std::move(clusters.clusters.front());
 }
 
-}  // namespace
-
-void SupportPlaneParams::Validate() const { CheckParams(*this); }
-
-SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params) {
-    CheckParams(params);
-    SupportPlane result;
+// The cloud's finite points: the candidates and the table are taken among them.
+Indices FinitePoints(const PointCloud& cloud) {
     Indices finite;
     finite.reserve(cloud.size());
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         if (cloud.IsFinite(i)) finite.push_back(static_cast<Index>(i));
     }
-    if (finite.size() < 3) return result;
+    return finite;
+}
 
-    // Up direction and how strictly the table must follow it.
+// Up direction and how strictly the table must follow it: the given one, else world z when the
+// cloud has a sensor pose, else the camera's -y with the looser camera tilt.
+struct UpPrior {
     std::optional<Eigen::Vector3f> axis;
-    float max_angle = params.max_tilt_deg * kDegToRad;
-    if (params.up) {
-        axis = params.up->normalized();
-        result.up_source = UpSource::kGiven;
-    } else if (!IsIdentityPose(cloud)) {
-        axis = Eigen::Vector3f::UnitZ();
-        result.up_source = UpSource::kViewpoint;
-    } else {
-        axis = -Eigen::Vector3f::UnitY();
-        max_angle = params.camera_tilt_deg * kDegToRad;
-        result.up_source = UpSource::kCamera;
-    }
+    float max_angle = 0.0f;
+    UpSource source = UpSource::kDominant;
+};
 
-    // Strided subsample for the robust fits.
+UpPrior ChooseUp(const PointCloud& cloud, const SupportPlaneParams& params) {
+    UpPrior up;
+    up.max_angle = params.max_tilt_deg * kDegToRad;
+    if (params.up) {
+        up.axis = params.up->normalized();
+        up.source = UpSource::kGiven;
+    } else if (!IsIdentityPose(cloud)) {
+        up.axis = Eigen::Vector3f::UnitZ();
+        up.source = UpSource::kViewpoint;
+    } else {
+        up.axis = -Eigen::Vector3f::UnitY();
+        up.max_angle = params.camera_tilt_deg * kDegToRad;
+        up.source = UpSource::kCamera;
+    }
+    return up;
+}
+
+// Candidate planes along up, extracted one after another from a strided subsample (each from the
+// points the previous ones left), while they hold at least min_inlier_fraction of it.
+std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& finite,
+                                        const UpPrior& up, const SupportPlaneParams& params) {
     Indices remaining;
     const std::size_t stride = (finite.size() + params.max_samples - 1) / params.max_samples;
     for (std::size_t k = 0; k < finite.size(); k += stride) remaining.push_back(finite[k]);
@@ -115,8 +124,8 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
         fp.sac.distance_threshold = params.distance_threshold;
         fp.sac.seed = params.seed + static_cast<std::uint64_t>(c);
         fp.sac.num_threads = params.num_threads;
-        fp.axis = axis;
-        fp.max_angle = max_angle;
+        fp.axis = up.axis;
+        fp.max_angle = up.max_angle;
         fp.viewpoint = cloud.sensor_origin;
         PlaneFit fit = FitPlane(cloud, remaining, fp);
         if (!fit.found || fit.inliers.size() < min_inliers) break;
@@ -126,10 +135,13 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
         remaining = std::move(rest);
         candidates.push_back(std::move(fit));
     }
-    result.candidates = static_cast<int>(candidates.size());
-    if (candidates.empty()) return result;
+    return candidates;
+}
 
-    // Largest plane nearest the viewpoint.
+// The chosen candidate (section 2.4): the largest plane nearest the viewpoint, unless a raised
+// table stands on it (see SupportPlaneParams::raised_gap).
+const PlaneFit& ChooseCandidate(const std::vector<PlaneFit>& candidates, const PointCloud& cloud,
+                                const SupportPlaneParams& params) {
     std::size_t largest = 0;
     for (const auto& c : candidates) largest = std::max(largest, c.inliers.size());
     const PlaneFit* best = nullptr;
@@ -146,6 +158,8 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
         }
     }
     if (params.raised_gap > 0.0f) {
+        // A robot sees the floor around a small table: the largest parallel candidate at least
+        // raised_gap nearer the viewpoint is the table standing on it.
         const PlaneFit* chosen = best;
         const float floor_distance = best_distance;
         for (const auto& c : candidates) {
@@ -162,18 +176,42 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
             }
         }
     }
-    Eigen::Vector4f plane = best->plane;
+    return *best;
+}
+
+// All points of the full cloud within the distance threshold of the plane.
+Indices PointsOnPlane(const PointCloud& cloud, const Indices& finite, const Eigen::Vector4f& plane,
+                      float distance_threshold) {
+    Indices on_plane;
+    for (Index i : finite) {
+        if (std::abs(plane.head<3>().dot(cloud.points[i]) + plane.w()) <= distance_threshold) {
+            on_plane.push_back(i);
+        }
+    }
+    return on_plane;
+}
+
+}  // namespace
+
+void SupportPlaneParams::Validate() const { CheckParams(*this); }
+
+SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params) {
+    CheckParams(params);
+    SupportPlane result;
+    const Indices finite = FinitePoints(cloud);
+    if (finite.size() < 3) return result;
+
+    const UpPrior up = ChooseUp(cloud, params);
+    result.up_source = up.source;
+    const std::vector<PlaneFit> candidates = ExtractCandidates(cloud, finite, up, params);
+    result.candidates = static_cast<int>(candidates.size());
+    if (candidates.empty()) return result;
+    Eigen::Vector4f plane = ChooseCandidate(candidates, cloud, params).plane;
     // Normal towards the viewpoint: objects stand on the side the sensor sees.
     if (plane.head<3>().dot(cloud.sensor_origin) + plane.w() < 0.0f) plane = -plane;
 
     // All points of the full cloud on the plane, then its largest connected patch.
-    Indices on_plane;
-    for (Index i : finite) {
-        if (std::abs(plane.head<3>().dot(cloud.points[i]) + plane.w()) <=
-            params.distance_threshold) {
-            on_plane.push_back(i);
-        }
-    }
+    const Indices on_plane = PointsOnPlane(cloud, finite, plane, params.distance_threshold);
     Indices table = LargestPatch(cloud, on_plane, params.cluster_tolerance);
     if (table.size() < 3) return result;
     result.found = true;

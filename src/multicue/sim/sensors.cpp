@@ -93,16 +93,8 @@ bool IsEdge(const std::vector<PixelHit>& px, std::uint32_t w, std::uint32_t h, s
            (v > 0 && differs(i - w)) || (v + 1 < h && differs(i + w));
 }
 
-}  // namespace
-
-float KinectDisparitySigma(const KinectParams& p) {
-    const double target = double{p.axial_noise} * p.fx * std::abs(p.baseline);
-    const double quant = double{p.disparity_step} * p.disparity_step / 12.0;
-    return static_cast<float>(std::sqrt(std::max(0.0, target * target - quant)));
-}
-
-PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_camera,
-                      const KinectParams& p, std::uint64_t seed) {
+/// Throws InvalidArgument for parameters no Kinect could have.
+void CheckKinect(const KinectParams& p) {
     CheckPinhole(p.width, p.height, p.fx, p.fy, p.min_range, p.max_range, p.max_incidence_deg);
     if (!(std::abs(p.baseline) > 0.0f) || !(p.disparity_step >= 0.0f) || !(p.axial_noise >= 0.0f) ||
         !(p.lateral_noise_px >= 0.0f) || !(p.color_noise >= 0.0f)) {
@@ -111,20 +103,25 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
             "color_noise >= 0 (got {}, {}, {}, {}, {})",
             p.baseline, p.disparity_step, p.axial_noise, p.lateral_noise_px, p.color_noise));
     }
+}
+
+/// The camera-frame ray through pixel (u, v), with z = 1 so that its parameter is the depth.
+Eigen::Vector3f KinectRay(const KinectParams& p, std::uint32_t u, std::uint32_t v) {
+    return Eigen::Vector3f((static_cast<float>(u) - p.cx) / p.fx,
+                           (static_cast<float>(v) - p.cy) / p.fy, 1.0f);
+}
+
+/// Pass 1 of the Kinect: the noise-free hit of every pixel, one image row per batch of packets,
+/// valid within range, below the incidence limit and (projector_shadow) seen by the projector
+/// too, the second ray of the structured-light pair.
+std::vector<PixelHit> KinectHits(const RayCaster& caster, const Eigen::Isometry3f& T_world_camera,
+                                 const KinectParams& p) {
     const std::uint32_t W = p.width, H = p.height;
-    const std::size_t n = std::size_t{W} * H;
     const Eigen::Matrix3f R = T_world_camera.linear();
     const Eigen::Vector3f eye = T_world_camera.translation();
     const Eigen::Vector3f projector = T_world_camera * Eigen::Vector3f(p.baseline, 0.0f, 0.0f);
     const float cos_max = std::cos(p.max_incidence_deg * kDegToRad);
-    auto ray_cam = [&](std::uint32_t u, std::uint32_t v) {
-        return Eigen::Vector3f((static_cast<float>(u) - p.cx) / p.fx,
-                               (static_cast<float>(v) - p.cy) / p.fy, 1.0f);
-    };
-
-    // Pass 1: noise-free hits, one image row per batch of packets. With ray_cam.z = 1 the ray
-    // parameter t is the depth z.
-    std::vector<PixelHit> px(n);
+    std::vector<PixelHit> px(std::size_t{W} * H);
     ParallelForChunks(
         H, p.num_threads,
         [&](std::size_t v0, std::size_t v1) {
@@ -134,7 +131,7 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
             std::unique_ptr<bool[]> active(new bool[W]), shadowed(new bool[W]);
             for (std::size_t v = v0; v < v1; ++v) {
                 for (std::uint32_t u = 0; u < W; ++u) {
-                    dirs[u] = R * ray_cam(u, static_cast<std::uint32_t>(v));
+                    dirs[u] = R * KinectRay(p, u, static_cast<std::uint32_t>(v));
                 }
                 caster.IntersectBatch(eye, dirs.data(), W, 0.0f, p.max_range, hits.data());
                 for (std::uint32_t u = 0; u < W; ++u) {
@@ -163,16 +160,18 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
             }
         },
         8);
+    return px;
+}
 
-    // Pass 2: lateral noise at depth edges, disparity noise and quantisation, colour noise.
+/// Pass 2 of the Kinect: lateral noise at depth edges, disparity noise and quantisation, colour
+/// noise; one random stream per pixel, so the result does not depend on the threads. The pixel
+/// body stays in one piece: its draws must keep their order.
+void KinectMeasurements(const RayCaster& caster, const std::vector<PixelHit>& px,
+                        const KinectParams& p, std::uint64_t seed, PointCloud& cloud,
+                        Truth& truth) {
+    const std::uint32_t W = p.width, H = p.height;
     const float sigma_d = KinectDisparitySigma(p);
     const float fb = p.fx * std::abs(p.baseline);
-    PointCloud cloud;
-    cloud.points.assign(n, Eigen::Vector3f::Constant(kNaN));
-    cloud.colors.assign(n, Color{0, 0, 0, 255});
-    cloud.width = W;
-    cloud.height = H;
-    Truth truth(n);
     auto depth = [&](std::size_t i) {
         return px[i].hit.Valid() ? px[i].hit.t : std::numeric_limits<float>::infinity();
     };
@@ -203,7 +202,7 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
                     if (!(dq > 0.0)) continue;
                     z_noisy = static_cast<float>(fb / dq);
                     if (z_noisy < p.min_range || z_noisy > p.max_range) continue;
-                    cloud.points[i] = ray_cam(u, v) * z_noisy;
+                    cloud.points[i] = KinectRay(p, u, v) * z_noisy;
                     const Color c = caster.HitColor(h.hit);
                     cloud.colors[i] =
                         Color{NoisyChannel(c.r, rng.FastGaussian() * p.color_noise),
@@ -214,6 +213,29 @@ PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_
             }
         },
         8);
+}
+
+}  // namespace
+
+float KinectDisparitySigma(const KinectParams& p) {
+    const double target = double{p.axial_noise} * p.fx * std::abs(p.baseline);
+    const double quant = double{p.disparity_step} * p.disparity_step / 12.0;
+    return static_cast<float>(std::sqrt(std::max(0.0, target * target - quant)));
+}
+
+PointCloud ScanKinect(const RayCaster& caster, const Eigen::Isometry3f& T_world_camera,
+                      const KinectParams& p, std::uint64_t seed) {
+    CheckKinect(p);
+    const std::uint32_t W = p.width, H = p.height;
+    const std::size_t n = std::size_t{W} * H;
+    const std::vector<PixelHit> px = KinectHits(caster, T_world_camera, p);
+    PointCloud cloud;
+    cloud.points.assign(n, Eigen::Vector3f::Constant(kNaN));
+    cloud.colors.assign(n, Color{0, 0, 0, 255});
+    cloud.width = W;
+    cloud.height = H;
+    Truth truth(n);
+    KinectMeasurements(caster, px, p, seed, cloud, truth);
     truth.MoveInto(cloud);
     return cloud;
 }

@@ -99,15 +99,8 @@ float DepthLimit(const OrganizedNormalParams& params, float depth) {
     return std::min(params.max_depth_change * depth * depth, std::numeric_limits<float>::max());
 }
 
-}  // namespace
-
-void OrganizedNormalParams::Validate() const { CheckParams(*this); }
-
-NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
-                                       const OrganizedNormalParams& params) {
-    CheckParams(params);
-    NormalsResult result;
-    if (organized.empty()) return result;
+// Throws InvalidArgument unless the cloud is an image and the mask covers it.
+void CheckFrame(const PointCloud& organized, const OrganizedNormalParams& params) {
     if (!organized.IsOrganized()) {
         throw InvalidArgument(fmt::format(
             "organized normal estimation needs an organized cloud (height > 1, width * height == "
@@ -118,116 +111,150 @@ NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
         throw InvalidArgument(
             fmt::format("mask has {} entries for {} pixels", params.mask.size(), organized.size()));
     }
+}
+
+// Normal and curvature of pixel i from the moments of its window about the centre p, oriented
+// towards the viewpoint; left NaN for a degenerate window.
+void StoreNormal(std::size_t i, const Eigen::Vector3f& p, const FloatMoments& m,
+                 const Eigen::Vector3f& viewpoint, NormalsResult& result) {
+    Eigen::Vector3f normal;
+    float curvature = 0.0f;
+    if (!detail::NormalFromMoments(m.ToDouble(), normal, curvature)) return;
+    detail::OrientTowards(normal, p, viewpoint);
+    result.normals[i] = normal;
+    result.curvature[i] = curvature;
+}
+
+// Depth-dependent windows: every pixel has its own window, so one pixel at a time.
+void NormalsPerPixelWindow(const PointCloud& organized, const Planes& planes,
+                           const OrganizedNormalParams& params, const Eigen::Vector3f& viewpoint,
+                           NormalsResult& result) {
     const bool masked = !params.mask.empty();
     const int width = static_cast<int>(organized.width);
     const int height = static_cast<int>(organized.height);
+    ParallelFor(
+        static_cast<std::size_t>(height), params.num_threads,
+        [&](std::size_t row) {
+            const int v = static_cast<int>(row);
+            for (int u = 0; u < width; ++u) {
+                if (masked && params.mask[row * organized.width + u] == 0) continue;
+                const std::size_t c = planes.At(u, v);
+                const float depth = planes.depth[c];
+                if (depth == std::numeric_limits<float>::infinity()) continue;
+                int reach = 0, step = 1;
+                WindowOf(params, depth, reach, step);
+                const float limit = DepthLimit(params, depth);
+                const Eigen::Vector3f centre(planes.x[c], planes.y[c], planes.z[c]);
+                FloatMoments m;
+                for (int dv = -reach; dv <= reach; dv += step) {
+                    for (int du = -reach; du <= reach; du += step) {
+                        const std::size_t i = planes.At(u + du, v + dv);
+                        m.AddWeighted(
+                            Eigen::Vector3f(planes.x[i], planes.y[i], planes.z[i]) - centre,
+                            WeightIfAtMost(std::abs(planes.depth[i] - depth), limit));
+                    }
+                }
+                StoreNormal(row * organized.width + u, centre, m, viewpoint, result);
+            }
+        },
+        4);
+}
+
+// One row of the fixed window: kLanes neighbouring centres at a time, each offset read for all of
+// them from contiguous memory. Offsets from the centre point keep the float sums small and exact
+// enough. Kept in one piece: the lane loops are the vectorised core.
+void NormalsFixedWindowRow(std::size_t row, int reach, int step, const PointCloud& organized,
+                           const Planes& planes, const OrganizedNormalParams& params,
+                           const Eigen::Vector3f& viewpoint, NormalsResult& result) {
+    const bool masked = !params.mask.empty();
+    const int width = static_cast<int>(organized.width);
+    const int v = static_cast<int>(row);
+    for (int u0 = 0; u0 < width; u0 += kLanes) {
+        if (masked) {
+            bool any = false;
+            for (int l = 0; l < kLanes && u0 + l < width; ++l) {
+                any = any || params.mask[row * organized.width + u0 + l] != 0;
+            }
+            if (!any) continue;
+        }
+        const std::size_t c = planes.At(u0, v);
+        std::array<float, kLanes> cx, cy, cz, cd, limit;
+        for (int l = 0; l < kLanes; ++l) {
+            cx[l] = planes.x[c + l];
+            cy[l] = planes.y[c + l];
+            cz[l] = planes.z[c + l];
+            cd[l] = planes.depth[c + l];
+            limit[l] = DepthLimit(params, cd[l]);
+        }
+        std::array<float, kLanes> n{}, sx{}, sy{}, sz{}, xx{}, xy{}, xz{}, yy{}, yz{}, zz{};
+        for (int dv = -reach; dv <= reach; dv += step) {
+            for (int du = -reach; du <= reach; du += step) {
+                const std::size_t i = planes.At(u0 + du, v + dv);
+                const float* px = &planes.x[i];
+                const float* py = &planes.y[i];
+                const float* pz = &planes.z[i];
+                const float* pd = &planes.depth[i];
+                for (int l = 0; l < kLanes; ++l) {
+                    const float w = WeightIfAtMost(std::abs(pd[l] - cd[l]), limit[l]);
+                    const float dx = px[l] - cx[l], dy = py[l] - cy[l], dz = pz[l] - cz[l];
+                    const float wx = w * dx, wy = w * dy, wz = w * dz;
+                    n[l] += w;
+                    sx[l] += wx;
+                    sy[l] += wy;
+                    sz[l] += wz;
+                    xx[l] += wx * dx;
+                    xy[l] += wx * dy;
+                    xz[l] += wx * dz;
+                    yy[l] += wy * dy;
+                    yz[l] += wy * dz;
+                    zz[l] += wz * dz;
+                }
+            }
+        }
+        for (int l = 0; l < kLanes && u0 + l < width; ++l) {
+            if (cd[l] == std::numeric_limits<float>::infinity()) continue;
+            if (masked && params.mask[row * organized.width + u0 + l] == 0) continue;
+            StoreNormal(row * organized.width + u0 + l, {cx[l], cy[l], cz[l]},
+                        {n[l], sx[l], sy[l], sz[l], xx[l], xy[l], xz[l], yy[l], yz[l], zz[l]},
+                        viewpoint, result);
+        }
+    }
+}
+
+// The same window for all pixels (depth 1 m's): rows in parallel, lanes of centres within a row.
+void NormalsFixedWindow(const PointCloud& organized, const Planes& planes,
+                        const OrganizedNormalParams& params, const Eigen::Vector3f& viewpoint,
+                        NormalsResult& result) {
+    const int height = static_cast<int>(organized.height);
+    int reach = 0, step = 1;
+    WindowOf(params, 1.0f, reach, step);
+    ParallelFor(
+        static_cast<std::size_t>(height), params.num_threads,
+        [&](std::size_t row) {
+            NormalsFixedWindowRow(row, reach, step, organized, planes, params, viewpoint, result);
+        },
+        4);
+}
+
+}  // namespace
+
+void OrganizedNormalParams::Validate() const { CheckParams(*this); }
+
+NormalsResult EstimateNormalsOrganized(const PointCloud& organized,
+                                       const OrganizedNormalParams& params) {
+    CheckParams(params);
+    NormalsResult result;
+    if (organized.empty()) return result;
+    CheckFrame(organized, params);
     const int pad = params.depth_dependent_window ? 3 * params.half_window : params.half_window;
     const Planes planes = MakePlanes(organized, pad, params.num_threads);
     const Eigen::Vector3f viewpoint = params.viewpoint.value_or(organized.sensor_origin);
     result.normals.assign(organized.size(), Eigen::Vector3f::Constant(kNaN));
     result.curvature.assign(organized.size(), kNaN);
-
-    auto store = [&](std::size_t i, const Eigen::Vector3f& p, const FloatMoments& m) {
-        Eigen::Vector3f normal;
-        float curvature = 0.0f;
-        if (!detail::NormalFromMoments(m.ToDouble(), normal, curvature)) return;
-        detail::OrientTowards(normal, p, viewpoint);
-        result.normals[i] = normal;
-        result.curvature[i] = curvature;
-    };
-
     if (params.depth_dependent_window) {
-        // Every pixel has its own window: one pixel at a time.
-        ParallelFor(
-            static_cast<std::size_t>(height), params.num_threads,
-            [&](std::size_t row) {
-                const int v = static_cast<int>(row);
-                for (int u = 0; u < width; ++u) {
-                    if (masked && params.mask[row * organized.width + u] == 0) continue;
-                    const std::size_t c = planes.At(u, v);
-                    const float depth = planes.depth[c];
-                    if (depth == std::numeric_limits<float>::infinity()) continue;
-                    int reach = 0, step = 1;
-                    WindowOf(params, depth, reach, step);
-                    const float limit = DepthLimit(params, depth);
-                    const Eigen::Vector3f centre(planes.x[c], planes.y[c], planes.z[c]);
-                    FloatMoments m;
-                    for (int dv = -reach; dv <= reach; dv += step) {
-                        for (int du = -reach; du <= reach; du += step) {
-                            const std::size_t i = planes.At(u + du, v + dv);
-                            m.AddWeighted(
-                                Eigen::Vector3f(planes.x[i], planes.y[i], planes.z[i]) - centre,
-                                WeightIfAtMost(std::abs(planes.depth[i] - depth), limit));
-                        }
-                    }
-                    store(row * organized.width + u, centre, m);
-                }
-            },
-            4);
+        NormalsPerPixelWindow(organized, planes, params, viewpoint, result);
     } else {
-        // The same window for all pixels: kLanes neighbouring centres at a time, each offset
-        // read for all of them from contiguous memory. Offsets from the centre point keep the
-        // float sums small and exact enough.
-        int reach = 0, step = 1;
-        WindowOf(params, 1.0f, reach, step);
-        ParallelFor(
-            static_cast<std::size_t>(height), params.num_threads,
-            [&](std::size_t row) {
-                const int v = static_cast<int>(row);
-                for (int u0 = 0; u0 < width; u0 += kLanes) {
-                    if (masked) {
-                        bool any = false;
-                        for (int l = 0; l < kLanes && u0 + l < width; ++l) {
-                            any = any || params.mask[row * organized.width + u0 + l] != 0;
-                        }
-                        if (!any) continue;
-                    }
-                    const std::size_t c = planes.At(u0, v);
-                    std::array<float, kLanes> cx, cy, cz, cd, limit;
-                    for (int l = 0; l < kLanes; ++l) {
-                        cx[l] = planes.x[c + l];
-                        cy[l] = planes.y[c + l];
-                        cz[l] = planes.z[c + l];
-                        cd[l] = planes.depth[c + l];
-                        limit[l] = DepthLimit(params, cd[l]);
-                    }
-                    std::array<float, kLanes> n{}, sx{}, sy{}, sz{}, xx{}, xy{}, xz{}, yy{}, yz{},
-                        zz{};
-                    for (int dv = -reach; dv <= reach; dv += step) {
-                        for (int du = -reach; du <= reach; du += step) {
-                            const std::size_t i = planes.At(u0 + du, v + dv);
-                            const float* px = &planes.x[i];
-                            const float* py = &planes.y[i];
-                            const float* pz = &planes.z[i];
-                            const float* pd = &planes.depth[i];
-                            for (int l = 0; l < kLanes; ++l) {
-                                const float w = WeightIfAtMost(std::abs(pd[l] - cd[l]), limit[l]);
-                                const float dx = px[l] - cx[l], dy = py[l] - cy[l],
-                                            dz = pz[l] - cz[l];
-                                const float wx = w * dx, wy = w * dy, wz = w * dz;
-                                n[l] += w;
-                                sx[l] += wx;
-                                sy[l] += wy;
-                                sz[l] += wz;
-                                xx[l] += wx * dx;
-                                xy[l] += wx * dy;
-                                xz[l] += wx * dz;
-                                yy[l] += wy * dy;
-                                yz[l] += wy * dz;
-                                zz[l] += wz * dz;
-                            }
-                        }
-                    }
-                    for (int l = 0; l < kLanes && u0 + l < width; ++l) {
-                        if (cd[l] == std::numeric_limits<float>::infinity()) continue;
-                        if (masked && params.mask[row * organized.width + u0 + l] == 0) continue;
-                        store(
-                            row * organized.width + u0 + l, {cx[l], cy[l], cz[l]},
-                            {n[l], sx[l], sy[l], sz[l], xx[l], xy[l], xz[l], yy[l], yz[l], zz[l]});
-                    }
-                }
-            },
-            4);
+        NormalsFixedWindow(organized, planes, params, viewpoint, result);
     }
     for (float c : result.curvature) result.undefined += std::isnan(c) ? 1 : 0;
     return result;

@@ -353,6 +353,110 @@ Frame RestrictToRegion(const Frame& frame, const Eigen::AlignedBox3d& region) {
     return restricted;
 }
 
+/// Runs the planned methods in order on one input frame (section 3.1.3: each refines the
+/// hypotheses of the ones before). Right after segmentation the task narrows the hypotheses: to
+/// its region, and for a model task without a database to the target category. Appends each
+/// method's time to the report.
+std::vector<Hypothesis> ExamineFrame(const Frame& input, const Task& task,
+                                     const ExecutiveParams& params, const ObjectDatabase* database,
+                                     const PerceiveModels& models,
+                                     const std::vector<std::unique_ptr<ExaminationMethod>>& methods,
+                                     FrameReport& report) {
+    ExaminationContext context{input, task, params, database, &models, std::nullopt};
+    std::vector<Hypothesis> hypotheses;
+    for (const auto& name : report.methods) {
+        const auto start = Clock::now();
+        for (const auto& m : methods) {
+            if (m->Name() != name) continue;
+            m->Examine(context, hypotheses);
+            if (name == "segmentation" && task.region) {
+                std::erase_if(hypotheses, [&](const Hypothesis& h) {
+                    return !task.region->contains(h.position);
+                });
+            }
+            if (name == "segmentation" && task.kind == Task::Kind::kModel && !task.target.empty() &&
+                database == nullptr) {
+                std::erase_if(hypotheses,
+                              [&](const Hypothesis& h) { return h.Category() != task.target; });
+            }
+        }
+        report.timings_ms.emplace_back(name, Milliseconds(start));
+    }
+    return hypotheses;
+}
+
+/// The database's record of a find task's target (the last one listed of that name or id).
+std::optional<ObjectRecord> SoughtObject(const ObjectDatabase* database, const Task& task) {
+    std::optional<ObjectRecord> sought;
+    if (task.kind == Task::Kind::kFind && database != nullptr) {
+        for (auto& o : database->ListObjects()) {
+            if (o.name == task.target || std::to_string(o.id) == task.target) sought = o;
+        }
+    }
+    return sought;
+}
+
+/// The column of world space within `margin` of where the object was last seen, at any height.
+Eigen::AlignedBox3d NearLastPlace(const ObjectRecord& sought, double margin) {
+    const Eigen::Vector3d p = sought.last_pose.block<3, 1>(0, 3);
+    const double m = margin;
+    const double inf = std::numeric_limits<double>::max();
+    return Eigen::AlignedBox3d(Eigen::Vector3d(p.x() - m, p.y() - m, -inf),
+                               Eigen::Vector3d(p.x() + m, p.y() + m, inf));
+}
+
+/// Sets report.found to the (last) hypothesis identified as the sought object, if any.
+void LocateSought(const std::optional<ObjectRecord>& sought, FrameReport& report) {
+    report.found.reset();
+    for (std::size_t i = 0; i < report.hypotheses.size(); ++i) {
+        const auto& h = report.hypotheses[i];
+        if (sought && h.object_id == sought->id) report.found = i;
+    }
+}
+
+/// What the database learns from one hypothesis (section 3.2.4): a novel object with its first
+/// view (not during a search: it learns no strangers), a new view of a known object when it
+/// differs from every stored one, else only where the object was seen.
+void LearnFromHypothesis(ObjectDatabase& database, const Task& task, const Frame& frame,
+                         double new_view_distance, Hypothesis& h, FrameReport& report) {
+    Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+    pose.block<3, 1>(0, 3) = h.position;
+    ObjectView view;
+    view.time = frame.time;
+    view.frame = frame.name;
+    view.category = h.Category();
+    view.category_probabilities = h.categories;
+    view.descriptors = h.descriptors;
+    view.model = h.model;
+    view.pose = pose;
+    if (h.novel) {
+        if (task.kind == Task::Kind::kFind) return;  // a search learns no strangers
+        ObjectRecord object;
+        object.category = view.category;
+        object.created = frame.time;
+        object.last_seen = frame.time;
+        object.last_pose = pose;
+        h.object_id = database.AddObjectWithView(object, view);
+        ++report.learnt_objects;
+        return;
+    }
+    if (h.object_id == 0) return;
+    // A new view when it differs from every stored view of the object.
+    Candidate known{*database.GetObject(h.object_id), database.GetViews(h.object_id)};
+    double nearest = 0.0;
+    for (const auto& [kind, descriptor] : h.descriptors) {
+        const double d = NearestViewDistance(known, kind, descriptor);
+        if (!std::isnan(d)) nearest = std::max(nearest, d);
+    }
+    if (nearest >= new_view_distance) {
+        view.object_id = h.object_id;
+        database.AddView(view);
+        ++report.learnt_views;
+    } else {
+        database.UpdateLastSeen(h.object_id, frame.time, pose);
+    }
+}
+
 }  // namespace
 
 std::string Hypothesis::Category() const {
@@ -503,105 +607,33 @@ FrameReport PerceptionExecutive::Run(const Frame& frame, const Task& task) {
     report.frame = frame.name;
     report.time = frame.time;
     report.methods = Plan(task);
-
     auto examine = [&](const Frame& input) {
-        ExaminationContext context{input, task, params_, database_, &models_, std::nullopt};
-        std::vector<Hypothesis> hypotheses;
-        for (const auto& name : report.methods) {
-            const auto start = Clock::now();
-            for (const auto& m : methods_) {
-                if (m->Name() != name) continue;
-                m->Examine(context, hypotheses);
-                if (name == "segmentation" && task.region) {
-                    std::erase_if(hypotheses, [&](const Hypothesis& h) {
-                        return !task.region->contains(h.position);
-                    });
-                }
-                if (name == "segmentation" && task.kind == Task::Kind::kModel &&
-                    !task.target.empty() && database_ == nullptr) {
-                    std::erase_if(hypotheses,
-                                  [&](const Hypothesis& h) { return h.Category() != task.target; });
-                }
-            }
-            report.timings_ms.emplace_back(name, Milliseconds(start));
-        }
-        return hypotheses;
+        return ExamineFrame(input, task, params_, database_, models_, methods_, report);
     };
 
     // Active search: look where the sought object was last seen first (a prior from the task).
-    std::optional<ObjectRecord> sought;
-    if (task.kind == Task::Kind::kFind && database_ != nullptr) {
-        for (auto& o : database_->ListObjects()) {
-            if (o.name == task.target || std::to_string(o.id) == task.target) sought = o;
-        }
-    }
+    const std::optional<ObjectRecord> sought = SoughtObject(database_, task);
     bool searched_whole_frame = true;
     if (sought && !task.region) {
-        const Eigen::Vector3d p = sought->last_pose.block<3, 1>(0, 3);
-        const double m = params_.search_margin;
-        const double inf = std::numeric_limits<double>::max();
-        const Eigen::AlignedBox3d near(Eigen::Vector3d(p.x() - m, p.y() - m, -inf),
-                                       Eigen::Vector3d(p.x() + m, p.y() + m, inf));
-        report.hypotheses = examine(RestrictToRegion(frame, near));
+        report.hypotheses =
+            examine(RestrictToRegion(frame, NearLastPlace(*sought, params_.search_margin)));
         searched_whole_frame = false;
     } else {
         report.hypotheses = examine(frame);
     }
-    auto locate = [&] {
-        report.found.reset();
-        for (std::size_t i = 0; i < report.hypotheses.size(); ++i) {
-            const auto& h = report.hypotheses[i];
-            if (sought && h.object_id == sought->id) report.found = i;
-        }
-    };
-    locate();
+    LocateSought(sought, report);
     if (!report.found && !searched_whole_frame) {
         LogInfo("active search: {} not near its last place; searching the whole frame",
                 task.target);
         report.hypotheses = examine(frame);
-        locate();
+        LocateSought(sought, report);
     }
 
     // Learning (section 3.2.4): novel objects, new views, and where everything was seen.
     if (database_ != nullptr && task.learn) {
         const auto start = Clock::now();
         for (auto& h : report.hypotheses) {
-            Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
-            pose.block<3, 1>(0, 3) = h.position;
-            ObjectView view;
-            view.time = frame.time;
-            view.frame = frame.name;
-            view.category = h.Category();
-            view.category_probabilities = h.categories;
-            view.descriptors = h.descriptors;
-            view.model = h.model;
-            view.pose = pose;
-            if (h.novel) {
-                if (task.kind == Task::Kind::kFind) continue;  // a search learns no strangers
-                ObjectRecord object;
-                object.category = view.category;
-                object.created = frame.time;
-                object.last_seen = frame.time;
-                object.last_pose = pose;
-                h.object_id = database_->AddObjectWithView(object, view);
-                ++report.learnt_objects;
-                continue;
-            }
-            if (h.object_id == 0) continue;
-            // A new view when it differs from every stored view of the object.
-            Candidate known{*database_->GetObject(h.object_id), database_->GetViews(h.object_id)};
-            double nearest = 0.0;
-            for (const auto& [kind, descriptor] : h.descriptors) {
-                const double d = NearestViewDistance(known, kind, descriptor);
-                if (!std::isnan(d)) nearest = std::max(nearest, d);
-            }
-            if (nearest >= params_.new_view_distance) {
-                view.object_id = h.object_id;
-                database_->AddView(view);
-                ++report.learnt_views;
-            } else {
-                database_->UpdateLastSeen(h.object_id, frame.time, pose);
-            }
+            LearnFromHypothesis(*database_, task, frame, params_.new_view_distance, h, report);
         }
         report.timings_ms.emplace_back("learning", Milliseconds(start));
     }

@@ -180,15 +180,18 @@ bool TrainStacker(PartGraphModel& model, const std::vector<sim::Scene>& scenes,
     return true;
 }
 
-}  // namespace
-
-bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& o,
-                         Progress* progress) {
+// Throws InvalidArgument for bad turntable options (checked before any object is made).
+void CheckObjectOptions(const PartGraphTrainingOptions& o) {
     if (o.views < 1) throw InvalidArgument("views must be >= 1");
     if (o.objects_per_category < 0) throw InvalidArgument("objects_per_category must be >= 0");
     if (o.mesh_modulo < 1 || o.mesh_remainder < 0 || o.mesh_remainder >= o.mesh_modulo) {
         throw InvalidArgument("mesh split: need 0 <= mesh_remainder < mesh_modulo");
     }
+}
+
+// The turntable objects: objects_per_category procedural ones per category, then (with
+// mesh_turntable) the meshes of the library in this split, each with its own seed.
+std::vector<Job> TurntableJobs(const PartGraphTrainingOptions& o) {
     std::vector<Job> jobs;
     const auto& categories = o.categories.empty() ? sim::TabletopCategories() : o.categories;
     for (const auto& category : categories) {
@@ -220,14 +223,23 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             ++used;
         }
     }
+    return jobs;
+}
+
+// Throws InvalidArgument for bad table-scene options; checked after the turntable objects are
+// made, so that an unreadable mesh library is still the first error reported.
+void CheckSceneOptions(const PartGraphTrainingOptions& o) {
     if (o.table_scenes < 0 || o.table_views < 1) {
         throw InvalidArgument("table_scenes must be >= 0 and table_views >= 1");
     }
     if (o.stacker_scenes < 0 || o.stacker_views < 1) {
         throw InvalidArgument("stacker_scenes must be >= 0 and stacker_views >= 1");
     }
-    // Table scenes, drawn sequentially (the object source caches meshes), scanned in parallel.
-    std::vector<sim::Scene> scenes;
+}
+
+// The objects of the table scenes (none when there are no scenes): the meshes of the library in
+// this split, else procedural objects of the categories.
+std::optional<sim::ObjectSource> SceneObjectSource(const PartGraphTrainingOptions& o) {
     std::optional<sim::ObjectSource> source;
     if (o.table_scenes > 0 || o.stacker_scenes > 0) {
         if (!o.meshes.empty()) {
@@ -247,71 +259,89 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             source.emplace(o.categories);
         }
     }
-    sim::TableSceneParams scene_params;
-    scene_params.clutter = 0.6f;
-    for (int s = 0; s < o.table_scenes; ++s) {
-        scenes.push_back(sim::MakeTableScene(scene_params, *source,
-                                             sim::SubSeed(o.seed, 7000000u + std::uint64_t(s))));
+    return source;
+}
+
+// `count` cluttered table scenes with seeds SubSeed(seed, base + s), drawn sequentially: the
+// object source caches meshes.
+std::vector<sim::Scene> DrawTableScenes(const sim::TableSceneParams& params,
+                                        std::optional<sim::ObjectSource>& source, int count,
+                                        std::uint64_t seed, std::uint64_t base) {
+    std::vector<sim::Scene> scenes;
+    for (int s = 0; s < count; ++s) {
+        scenes.push_back(
+            sim::MakeTableScene(params, *source, sim::SubSeed(seed, base + std::uint64_t(s))));
     }
-    if (progress) progress->Advance(0);
-    std::vector<std::vector<Sample>> samples(jobs.size() + scenes.size());
-    std::atomic<bool> stopped{false};
-    const PerceiveParams perceive;
-    InterruptibleFor(jobs.size(), o.num_threads, stopped, [&](std::size_t j) {
-        sim::TurntableParams tp;
-        tp.distance = o.camera_distance;
-        const sim::Scene scene = sim::MakeTurntableScene(jobs[j].object, tp, jobs[j].seed);
-        const sim::RayCaster caster(scene);
-        const auto poses = sim::TurntableViews(scene, o.views, tp);
-        sim::KinectParams kp = o.kinect;
-        kp.num_threads = 1;
-        const Category category = ParseCategory(jobs[j].object.category);
-        for (std::size_t v = 0; v < poses.size(); ++v) {
-            PointCloud scan = sim::ScanKinect(caster, poses[v], kp, jobs[j].seed + v);
-            Indices object;
-            for (std::size_t i = 0; i < scan.size(); ++i) {
-                if (scan.labels[i] == 20 && scan.IsFinite(i)) object.push_back(Index(i));
-            }
-            const auto parts = DecomposeObject(scan, object, perceive);
-            if (parts.empty()) continue;
-            // Up (world z) in the scan's frame: the support plane's normal.
-            const Eigen::Vector3f up = poses[v].linear().transpose() * Eigen::Vector3f::UnitZ();
-            Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params, up),
-                     BuildPartGraph(scan, parts, model.graph_params),
-                     category,
-                     {},
-                     {}};
-            AddBaselineFeatures(s, scan, parts, object, up, o);
-            samples[j].push_back(std::move(s));
+    return scenes;
+}
+
+// The samples of one turntable object: each view scanned by the simulated Kinect, the object's
+// points (label 20) decomposed into parts, with up (world z) in the scan's frame.
+std::vector<Sample> TurntableSamples(const Job& job, const PartGraphTrainingOptions& o,
+                                     const PartGraphModel& model, const PerceiveParams& perceive) {
+    std::vector<Sample> samples;
+    sim::TurntableParams tp;
+    tp.distance = o.camera_distance;
+    const sim::Scene scene = sim::MakeTurntableScene(job.object, tp, job.seed);
+    const sim::RayCaster caster(scene);
+    const auto poses = sim::TurntableViews(scene, o.views, tp);
+    sim::KinectParams kp = o.kinect;
+    kp.num_threads = 1;
+    const Category category = ParseCategory(job.object.category);
+    for (std::size_t v = 0; v < poses.size(); ++v) {
+        PointCloud scan = sim::ScanKinect(caster, poses[v], kp, job.seed + v);
+        Indices object;
+        for (std::size_t i = 0; i < scan.size(); ++i) {
+            if (scan.labels[i] == 20 && scan.IsFinite(i)) object.push_back(Index(i));
         }
-        if (progress) progress->Advance();
-    });
-    InterruptibleFor(scenes.size(), o.num_threads, stopped, [&](std::size_t s) {
-        PerceiveParams pp = perceive;
-        pp.num_threads = 1;
-        PerceiveTableViews(
-            scenes[s], o.table_views, sim::SubSeed(o.seed, 8000000u + s), o, pp,
-            [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
-                const Eigen::Isometry3f& pose) {
-                const Eigen::Vector3f up = pose.linear().transpose() * Eigen::Vector3f::UnitZ();
-                for (const auto& obj : r.objects) {
-                    if (obj.parts.empty()) continue;
-                    const auto [best, count] = MajorityCategory(obj.indices, truth);
-                    if (count == 0 || 10 * count < 6 * obj.indices.size()) continue;
-                    Sample sample{
-                        ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
-                        BuildPartGraph(scan, obj.parts, model.graph_params),
-                        best,
-                        {},
-                        {}};
-                    AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
-                    samples[jobs.size() + s].push_back(std::move(sample));
-                }
-            });
-        if (progress) progress->Advance();
-    });
-    model.cluster_size_weight = o.cluster_params.size_weight;
-    // Added in job order: the model does not depend on the thread count.
+        const auto parts = DecomposeObject(scan, object, perceive);
+        if (parts.empty()) continue;
+        // Up (world z) in the scan's frame: the support plane's normal.
+        const Eigen::Vector3f up = poses[v].linear().transpose() * Eigen::Vector3f::UnitZ();
+        Sample s{ComputePartDescriptors(scan, parts, model.descriptor_params, up),
+                 BuildPartGraph(scan, parts, model.graph_params),
+                 category,
+                 {},
+                 {}};
+        AddBaselineFeatures(s, scan, parts, object, up, o);
+        samples.push_back(std::move(s));
+    }
+    return samples;
+}
+
+// The samples of table scene s: every perceived object with parts whose points are mostly (60%)
+// of one true category, the objects as perceive segments them in clutter.
+std::vector<Sample> TableSceneSamples(const sim::Scene& scene, std::size_t s,
+                                      const PartGraphTrainingOptions& o,
+                                      const PartGraphModel& model, const PerceiveParams& perceive) {
+    std::vector<Sample> samples;
+    PerceiveParams pp = perceive;
+    pp.num_threads = 1;
+    PerceiveTableViews(
+        scene, o.table_views, sim::SubSeed(o.seed, 8000000u + s), o, pp,
+        [&](const PointCloud& scan, const PerceiveResult& r, const ExtraField& truth,
+            const Eigen::Isometry3f& pose) {
+            const Eigen::Vector3f up = pose.linear().transpose() * Eigen::Vector3f::UnitZ();
+            for (const auto& obj : r.objects) {
+                if (obj.parts.empty()) continue;
+                const auto [best, count] = MajorityCategory(obj.indices, truth);
+                if (count == 0 || 10 * count < 6 * obj.indices.size()) continue;
+                Sample sample{ComputePartDescriptors(scan, obj.parts, model.descriptor_params, up),
+                              BuildPartGraph(scan, obj.parts, model.graph_params),
+                              best,
+                              {},
+                              {}};
+                AddBaselineFeatures(sample, scan, obj.parts, obj.indices, up, o);
+                samples.push_back(std::move(sample));
+            }
+        });
+    return samples;
+}
+
+// Adds the samples to the model in job order (the model does not depend on the thread count),
+// each with its own training seed, and hands them to objects_out when asked.
+void AddSamples(std::vector<std::vector<Sample>>& samples, const PartGraphTrainingOptions& o,
+                PartGraphModel& model) {
     for (std::size_t j = 0; j < samples.size(); ++j) {
         for (std::size_t v = 0; v < samples[j].size(); ++v) {
             PartGraphTrainParams tp = o.train;
@@ -327,13 +357,40 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
             }
         }
     }
+}
+
+}  // namespace
+
+bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& o,
+                         Progress* progress) {
+    CheckObjectOptions(o);
+    const std::vector<Job> jobs = TurntableJobs(o);
+    CheckSceneOptions(o);
+    std::optional<sim::ObjectSource> source = SceneObjectSource(o);
+    sim::TableSceneParams scene_params;
+    scene_params.clutter = 0.6f;
+    const std::vector<sim::Scene> scenes =
+        DrawTableScenes(scene_params, source, o.table_scenes, o.seed, 7000000u);
+    if (progress) progress->Advance(0);
+
+    // Samples of the turntable objects and the table scenes, scanned in parallel.
+    std::vector<std::vector<Sample>> samples(jobs.size() + scenes.size());
+    std::atomic<bool> stopped{false};
+    const PerceiveParams perceive;
+    InterruptibleFor(jobs.size(), o.num_threads, stopped, [&](std::size_t j) {
+        samples[j] = TurntableSamples(jobs[j], o, model, perceive);
+        if (progress) progress->Advance();
+    });
+    InterruptibleFor(scenes.size(), o.num_threads, stopped, [&](std::size_t s) {
+        samples[jobs.size() + s] = TableSceneSamples(scenes[s], s, o, model, perceive);
+        if (progress) progress->Advance();
+    });
+    model.cluster_size_weight = o.cluster_params.size_weight;
+    AddSamples(samples, o, model);
     model.Build();
     if (o.stacker_scenes > 0 && !stopped) {
-        std::vector<sim::Scene> held_out;
-        for (int s = 0; s < o.stacker_scenes; ++s) {
-            held_out.push_back(sim::MakeTableScene(
-                scene_params, *source, sim::SubSeed(o.seed, 9000000u + std::uint64_t(s))));
-        }
+        const std::vector<sim::Scene> held_out =
+            DrawTableScenes(scene_params, source, o.stacker_scenes, o.seed, 9000000u);
         if (!TrainStacker(model, held_out, o, progress)) stopped = true;
     }
     return !stopped;
