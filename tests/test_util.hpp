@@ -7,6 +7,8 @@
 #include <random>
 #include <string>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "multicue/core/point_cloud.hpp"
@@ -30,6 +32,9 @@ class TempDir {
         for (auto& c : name) {
             if (c == '/') c = '_';
         }
+        // The process id keeps test runs of several checkouts (or builds) on one machine apart.
+        name += '-';
+        name += std::to_string(::getpid());
         path_ = std::filesystem::temp_directory_path() / name;
         std::filesystem::remove_all(path_);
         std::filesystem::create_directories(path_);
