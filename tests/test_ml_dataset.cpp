@@ -292,5 +292,72 @@ TEST(MlEvaluation, ConfusionMatrixTextAndImage) {
     EXPECT_EQ(img.size(), 11u + 8 * 8 * 3);
 }
 
+TEST(MlEvaluation, AccuracyExcludingOneTrueClass) {
+    // Class 0 ("none") as truth is not scored; predicting it for another class is an error.
+    const auto m = Confusion({0, 0, 1, 1, 2, 2, 2}, {0, 1, 1, 0, 2, 2, 1}, {"none", "a", "b"});
+    EXPECT_EQ(m.TotalExcluding(0), 5u);
+    EXPECT_DOUBLE_EQ(m.AccuracyExcluding(0), 3.0 / 5.0);
+    EXPECT_EQ(m.TotalExcluding(2), 4u);
+    EXPECT_DOUBLE_EQ(m.AccuracyExcluding(2), 2.0 / 4.0);
+    EXPECT_DOUBLE_EQ(m.Accuracy(), 4.0 / 7.0);
+    const auto only_none = Confusion({0, 0}, {0, 1}, {"none", "a"});
+    EXPECT_EQ(only_none.TotalExcluding(0), 0u);
+    EXPECT_DOUBLE_EQ(only_none.AccuracyExcluding(0), 0.0);
+    EXPECT_THROW(m.AccuracyExcluding(3), InvalidArgument);
+    EXPECT_THROW(m.TotalExcluding(-1), InvalidArgument);
+}
+
+TEST(MlEvaluation, ConfusionCounterMatchesConfusion) {
+    const std::vector<int> truth{0, 0, 1, 1, 1, kNoLabel, 2};
+    const std::vector<int> predicted{0, 1, 1, 1, 0, 2, 2};
+    const std::vector<std::string> names{"a", "b", "c"};
+    ConfusionCounter counter(names);
+    for (std::size_t i = 0; i < truth.size(); ++i) counter.Add(truth[i], predicted[i]);
+    EXPECT_EQ(counter.total(), 6u);  // the kNoLabel row is skipped
+    EXPECT_EQ(counter.count(1, 1), 2u);
+    const ConfusionMatrix m = counter.ToMatrix();
+    const ConfusionMatrix expected = Confusion(truth, predicted, names);
+    EXPECT_EQ(m.class_names, names);
+    EXPECT_EQ(m.counts, expected.counts);
+    EXPECT_DOUBLE_EQ(m.Accuracy(), expected.Accuracy());
+
+    counter.Add(2, 0, 4);  // several items at once
+    EXPECT_EQ(counter.count(2, 0), 4u);
+    EXPECT_EQ(counter.total(), 10u);
+    EXPECT_THROW(counter.Add(3, 0), InvalidArgument);
+    EXPECT_THROW(counter.Add(0, -1), InvalidArgument);
+    EXPECT_THROW(counter.count(0, 3), InvalidArgument);
+    counter.Clear();
+    EXPECT_EQ(counter.total(), 0u);
+    EXPECT_EQ(counter.ToMatrix().counts, Eigen::MatrixXi::Zero(3, 3));
+    EXPECT_DOUBLE_EQ(counter.ToMatrix().Accuracy(), 0.0);
+}
+
+TEST(MlEvaluation, ConfusionCountersMerge) {
+    ConfusionCounter a({"x", "y"}), b({"x", "y"});
+    a.Add(0, 0);
+    a.Add(1, 0);
+    b.Add(1, 1, 3);
+    a.Merge(b);
+    EXPECT_EQ(a.count(0, 0), 1u);
+    EXPECT_EQ(a.count(1, 0), 1u);
+    EXPECT_EQ(a.count(1, 1), 3u);
+    EXPECT_EQ(a.total(), 5u);
+    EXPECT_EQ(b.total(), 3u);  // the merged-in counter is unchanged
+    EXPECT_DOUBLE_EQ(a.ToMatrix().Accuracy(), 4.0 / 5.0);
+    ConfusionCounter other({"x", "z"});
+    EXPECT_THROW(a.Merge(other), InvalidArgument);
+    EXPECT_THROW(a.Merge(ConfusionCounter({"x"})), InvalidArgument);
+}
+
+TEST(MlEvaluation, ConfusionCounterRefusesCountsBeyondTheMatrix) {
+    ConfusionCounter c({"a", "b"});
+    c.Add(0, 0, static_cast<std::size_t>(std::numeric_limits<int>::max()));
+    EXPECT_NO_THROW(c.ToMatrix());
+    c.Add(1, 0);
+    EXPECT_EQ(c.total(), static_cast<std::size_t>(std::numeric_limits<int>::max()) + 1);
+    EXPECT_THROW(c.ToMatrix(), DataError);
+}
+
 }  // namespace
 }  // namespace multicue::ml

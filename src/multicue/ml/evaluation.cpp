@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/ml/dataset_tools.hpp"
@@ -24,6 +26,20 @@ double Choose2(double n) { return n * (n - 1.0) / 2.0; }
 double ConfusionMatrix::Accuracy() const {
     const auto n = total();
     return n == 0 ? 0.0 : static_cast<double>(counts.trace()) / static_cast<double>(n);
+}
+
+std::size_t ConfusionMatrix::TotalExcluding(int excluded) const {
+    if (excluded < 0 || excluded >= counts.rows()) {
+        throw InvalidArgument("excluded class " + std::to_string(excluded) + " out of range");
+    }
+    return total() - static_cast<std::size_t>(counts.row(excluded).sum());
+}
+
+double ConfusionMatrix::AccuracyExcluding(int excluded) const {
+    const std::size_t n = TotalExcluding(excluded);
+    if (n == 0) return 0.0;
+    const auto correct = static_cast<std::size_t>(counts.trace() - counts(excluded, excluded));
+    return static_cast<double>(correct) / static_cast<double>(n);
 }
 
 double ConfusionMatrix::ErrorRate() const { return total() == 0 ? 0.0 : 1.0 - Accuracy(); }
@@ -112,6 +128,63 @@ ConfusionMatrix Confusion(const std::vector<int>& truth, const std::vector<int>&
             throw InvalidArgument("class index out of range at row " + std::to_string(i));
         }
         ++m.counts(truth[i], predicted[i]);
+    }
+    return m;
+}
+
+ConfusionCounter::ConfusionCounter(std::vector<std::string> class_names)
+    : class_names_(std::move(class_names)), counts_(class_names_.size() * class_names_.size(), 0) {}
+
+std::size_t ConfusionCounter::At(int truth, int predicted) const {
+    const int k = static_cast<int>(class_names_.size());
+    if (truth < 0 || truth >= k || predicted < 0 || predicted >= k) {
+        throw InvalidArgument("class index out of range: truth " + std::to_string(truth) +
+                              ", predicted " + std::to_string(predicted) + " of " +
+                              std::to_string(k) + " classes");
+    }
+    return static_cast<std::size_t>(truth) * class_names_.size() +
+           static_cast<std::size_t>(predicted);
+}
+
+void ConfusionCounter::Add(int truth, int predicted, std::size_t count) {
+    if (truth == kNoLabel) return;
+    counts_[At(truth, predicted)] += count;
+}
+
+void ConfusionCounter::Merge(const ConfusionCounter& other) {
+    if (other.class_names_ != class_names_) {
+        throw InvalidArgument("cannot merge confusion counts over different classes");
+    }
+    for (std::size_t i = 0; i < counts_.size(); ++i) counts_[i] += other.counts_[i];
+}
+
+void ConfusionCounter::Clear() { std::fill(counts_.begin(), counts_.end(), 0); }
+
+std::size_t ConfusionCounter::count(int truth, int predicted) const {
+    return static_cast<std::size_t>(counts_[At(truth, predicted)]);
+}
+
+std::size_t ConfusionCounter::total() const {
+    std::uint64_t n = 0;
+    for (const auto c : counts_) n += c;
+    return static_cast<std::size_t>(n);
+}
+
+ConfusionMatrix ConfusionCounter::ToMatrix() const {
+    const auto k = static_cast<Eigen::Index>(class_names_.size());
+    ConfusionMatrix m;
+    m.class_names = class_names_;
+    m.counts = Eigen::MatrixXi::Zero(k, k);
+    std::uint64_t sum = 0;
+    for (Eigen::Index t = 0; t < k; ++t) {
+        for (Eigen::Index p = 0; p < k; ++p) {
+            const std::uint64_t c = counts_[static_cast<std::size_t>(t * k + p)];
+            sum += c;
+            if (sum > static_cast<std::uint64_t>(std::numeric_limits<int>::max())) {
+                throw DataError("confusion counts too large for a ConfusionMatrix");
+            }
+            m.counts(t, p) = static_cast<int>(c);
+        }
     }
     return m;
 }

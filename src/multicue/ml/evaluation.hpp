@@ -20,7 +20,13 @@ struct ConfusionMatrix {
     Eigen::MatrixXi counts;  ///< rows: true class, columns: predicted class
 
     std::size_t total() const { return static_cast<std::size_t>(counts.sum()); }
-    double Accuracy() const;   ///< trace / total (0 when empty)
+    double Accuracy() const;  ///< trace / total (0 when empty)
+    /// Entries in the rows of every true class but `excluded` (e.g. a "none" class that is not
+    /// scored as truth; its column still counts as a wrong prediction). InvalidArgument for an
+    /// index out of range.
+    std::size_t TotalExcluding(int excluded) const;
+    /// Correct / TotalExcluding(excluded) (0 when those rows are empty).
+    double AccuracyExcluding(int excluded) const;
     double ErrorRate() const;  ///< 1 - accuracy
     /// Per true class: correct / rows of that class (NaN for a class without rows).
     std::vector<double> PerClassAccuracy() const;
@@ -35,6 +41,33 @@ struct ConfusionMatrix {
 /// kNoLabel are skipped). InvalidArgument on length mismatch or an index out of range.
 ConfusionMatrix Confusion(const std::vector<int>& truth, const std::vector<int>& predicted,
                           const std::vector<std::string>& class_names);
+
+/// Confusion counts gathered one (truth, predicted) pair at a time, over a fixed set of classes.
+/// Counts are 64-bit; ToMatrix gives the ConfusionMatrix once counting is done.
+class ConfusionCounter {
+  public:
+    explicit ConfusionCounter(std::vector<std::string> class_names);
+
+    /// Counts `count` items of class `truth` predicted as `predicted` (class indices; truth
+    /// kNoLabel is skipped as in Confusion). InvalidArgument for an index out of range.
+    void Add(int truth, int predicted, std::size_t count = 1);
+    /// Adds the counts of `other`; InvalidArgument unless both have the same class names.
+    void Merge(const ConfusionCounter& other);
+    /// Sets every count to zero.
+    void Clear();
+
+    const std::vector<std::string>& class_names() const { return class_names_; }
+    std::size_t num_classes() const { return class_names_.size(); }
+    std::size_t count(int truth, int predicted) const;
+    std::size_t total() const;
+    /// The counts as a ConfusionMatrix; DataError if one does not fit its int entries.
+    ConfusionMatrix ToMatrix() const;
+
+  private:
+    std::size_t At(int truth, int predicted) const;
+    std::vector<std::string> class_names_;
+    std::vector<std::uint64_t> counts_;  ///< row-major, rows: true class
+};
 
 /// Fraction of equal entries (rows with truth kNoLabel skipped).
 double Accuracy(const std::vector<int>& truth, const std::vector<int>& predicted);

@@ -5,7 +5,7 @@
 // (identity by position off), before and after a pass in which the executive learns the novel
 // object and new views of every object by continuous observation at the same place.
 //
-//   build/bench/executive_sequence [VIEWS]
+//   build/eval/executive_sequence [VIEWS]
 
 #include <cstdio>
 #include <cstdlib>

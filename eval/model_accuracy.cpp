@@ -13,7 +13,7 @@
 // rate with a small fixed sample budget (orientation within 3 deg, radius within 3 mm), samples
 // drawn under the adaptive stop (Eq. 4.6, p = 0.99), and the accuracy of the full fits.
 //
-//   build/bench/model_accuracy [TRIALS_PER_SHAPE] [SEED]
+//   build/eval/model_accuracy [TRIALS_PER_SHAPE] [SEED]
 //   (MODEL_ACCURACY_VERBOSE=1 prints every box's true and fitted extents)
 
 #include <algorithm>

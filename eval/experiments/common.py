@@ -16,8 +16,23 @@ import time
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MULTICUE = os.environ.get("MULTICUE", os.path.join(REPO, "build", "multicue"))
 WORK = os.environ.get("WORK", "/tmp/multicue-experiments")
-MESHES = os.environ.get(
-    "MESHES", os.path.join(os.path.dirname(REPO), "shared", "data", "meshes", "tabletop"))
+
+
+def data_dir():
+    """$MULTICUE_DATA, else the MULTICUE_SHARED_DATA_DIR the build beside MULTICUE was configured
+    with, else the default of that cache variable (the shared data folder beside the repository)."""
+    if os.environ.get("MULTICUE_DATA"):
+        return os.environ["MULTICUE_DATA"]
+    cache = os.path.join(os.path.dirname(os.path.abspath(MULTICUE)), "CMakeCache.txt")
+    if os.path.exists(cache):
+        with open(cache) as f:
+            for line in f:
+                if line.startswith("MULTICUE_SHARED_DATA_DIR:"):
+                    return line.split("=", 1)[1].strip()
+    return os.path.join(os.path.dirname(REPO), "shared", "data")
+
+
+MESHES = os.environ.get("MESHES", os.path.join(data_dir(), "meshes", "tabletop"))
 JOBS = os.environ.get("JOBS", "2")
 VIEWS = os.environ.get("VIEWS", "3")
 PROCEDURAL = os.environ.get("PROCEDURAL", "60")

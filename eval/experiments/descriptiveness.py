@@ -5,7 +5,7 @@ k-NN category accuracy of each feature with the L1, L2, Hellinger, chi2 and Jeff
 metrics on simulated Kinect scans of held-out instances: each run splits the objects by instance
 (GroupSplit, 30 % of the instances of each category to test), so no mesh is in both parts; the
 table gives mean +- standard deviation over SPLITS runs and the mean prediction time per query.
-Usage: bench/experiments/descriptiveness.py  (env: MULTICUE, WORK, MESHES, JOBS, SPLITS, K)
+Usage: eval/experiments/descriptiveness.py  (env: MULTICUE, WORK, MESHES, JOBS, SPLITS, K)
 """
 
 import os

@@ -8,7 +8,7 @@ on the test part of linear SVM and Real AdaBoost trained on level 0 with each si
 with the concatenation (also trained on level 0 + level 1, all the labelled data), and of every
 ensemble rule over members trained on single features and pairs of features (stacking's level-1
 classifier: linear SVM on the members' confidences). Mean over SPLITS shuffled splits.
-Usage: bench/experiments/classification.py  (env: MULTICUE, WORK, MESHES, JOBS, SPLITS)
+Usage: eval/experiments/classification.py  (env: MULTICUE, WORK, MESHES, JOBS, SPLITS)
 """
 
 import os

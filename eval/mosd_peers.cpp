@@ -1,12 +1,12 @@
 /// \file mosd_peers: segments mOSD scenes with three standard PCL 1.13 table-top pipelines and
 /// writes OUT_DIR/<scene>/labels.pcd in the format of `multicue perceive` (fields x y z object
 /// category, same WIDTH/HEIGHT and point order as the input, object 0 = no object, category 0),
-/// so that shared/tools/osd_eval.py scores PCL on exactly the scenes multicue is scored on.
+/// so that the mOSD scorer (osd_eval.py) scores PCL on exactly the scenes multicue is scored on.
 ///
 /// usage: mosd_peers --method euclidean|region_growing|lccp INPUT_DIR OUT_DIR
 ///                   [--scenes learn0,learn1,...]
 ///
-/// The pipelines use the parameters of PCL's own tutorials and examples (see bench/README.md):
+/// The pipelines use the parameters of PCL's own tutorials and examples (see eval/README.md):
 ///  - euclidean: the "Euclidean Cluster Extraction" tutorial (cluster_extraction.cpp);
 ///  - region_growing: the "Region growing segmentation" tutorial (region_growing_segmentation.cpp);
 ///  - lccp: PCL's LCCP example program (examples/segmentation/example_lccp_segmentation.cpp).
