@@ -114,26 +114,33 @@ const PerceivedObject* Match(const PointCloud& cloud, const PerceiveResult& resu
     return best;
 }
 
-}  // namespace
+// The random state every experiment draws from, in the order the experiments run.
+struct Draws {
+    int trials = 30;
+    unsigned seed = 7;
+    std::mt19937 rng;
+    std::uniform_real_distribution<float> u{0.0f, 1.0f};
+    std::uint64_t scan_seed = 0;
+    float Range(float lo, float hi) { return lo + (hi - lo) * u(rng); }
+};
 
-int main(int argc, char** argv) {
-    const int trials = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
-    const unsigned seed = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 7u;
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    auto range = [&](float lo, float hi) { return lo + (hi - lo) * u(rng); };
-    PerceiveParams params;
-    std::uint64_t scan_seed = seed * 100000ull;
-
+struct PrimitiveErrors {
     Stats box_extent, cyl_radius, cyl_axis;
     int box_missed = 0, cyl_missed = 0;
-    for (int t = 0; t < trials; ++t) {
-        const Eigen::Vector3f e(range(0.06f, 0.25f), range(0.05f, 0.15f), range(0.05f, 0.25f));
+};
+
+// Boxes and upright cylinders perceived in full (section 5.4.2.1): model errors against truth.
+PrimitiveErrors MeasurePrimitives(Draws& d) {
+    PrimitiveErrors out;
+    const PerceiveParams params;
+    for (int t = 0; t < d.trials; ++t) {
+        const Eigen::Vector3f e(d.Range(0.06f, 0.25f), d.Range(0.05f, 0.15f),
+                                d.Range(0.05f, 0.25f));
         const Trial trial =
-            Scan(std::make_shared<sim::PartMesh>(sim::MakeBoxMesh(e)), "box", rng, ++scan_seed);
+            Scan(std::make_shared<sim::PartMesh>(sim::MakeBoxMesh(e)), "box", d.rng, ++d.scan_seed);
         const PerceivedObject* o = Match(trial.cloud, Perceive(trial.cloud, params));
         if (o == nullptr || !o->model.box || !o->model.box->found) {
-            ++box_missed;
+            ++out.box_missed;
             continue;
         }
         const auto& b = *o->model.box;
@@ -142,151 +149,182 @@ int main(int argc, char** argv) {
                         std::max(e.x(), e.y()), std::min(e.x(), e.y()), e.z(), b.extents.x(),
                         b.extents.y(), b.extents.z());
         }
-        box_extent.Add(1000.0 * std::abs(b.extents.x() - std::max(e.x(), e.y())));
-        box_extent.Add(1000.0 * std::abs(b.extents.y() - std::min(e.x(), e.y())));
-        box_extent.Add(1000.0 * std::abs(b.extents.z() - e.z()));
+        out.box_extent.Add(1000.0 * std::abs(b.extents.x() - std::max(e.x(), e.y())));
+        out.box_extent.Add(1000.0 * std::abs(b.extents.y() - std::min(e.x(), e.y())));
+        out.box_extent.Add(1000.0 * std::abs(b.extents.z() - e.z()));
     }
-    for (int t = 0; t < trials; ++t) {
-        const float r = range(0.025f, 0.06f), h = range(0.08f, 0.25f);
+    for (int t = 0; t < d.trials; ++t) {
+        const float r = d.Range(0.025f, 0.06f), h = d.Range(0.08f, 0.25f);
         const auto mesh = std::make_shared<sim::PartMesh>(sim::MakeRevolutionMesh(
             {{0.0f, 0.0f, 0}, {r, 0.0f, 0}, {r, h, 0}, {0.0f, h, 0}}, {"body"}, 96));
-        const Trial trial = Scan(mesh, "cylinder", rng, ++scan_seed);
+        const Trial trial = Scan(mesh, "cylinder", d.rng, ++d.scan_seed);
         const PerceivedObject* o = Match(trial.cloud, Perceive(trial.cloud, params));
         if (o == nullptr || !o->model.cylinder || !o->model.cylinder->found) {
-            ++cyl_missed;
+            ++out.cyl_missed;
             continue;
         }
         const auto& c = *o->model.cylinder;
         const Eigen::Vector3f up =
             trial.T_world_camera.linear().transpose() * Eigen::Vector3f::UnitZ();
-        cyl_radius.Add(1000.0 * std::abs(c.radius - r));
-        cyl_axis.Add(std::acos(std::min(1.0f, std::abs(c.axis.normalized().dot(up)))) * 180.0 /
-                     M_PI);
+        out.cyl_radius.Add(1000.0 * std::abs(c.radius - r));
+        out.cyl_axis.Add(std::acos(std::min(1.0f, std::abs(c.axis.normalized().dot(up)))) * 180.0 /
+                         M_PI);
     }
+    return out;
+}
 
-    struct Rotational {
-        const char* kind;
-        Stats axis, ms, fit_ms, prior_axis;
-        int missed = 0;
-    };
-    Rotational rotational[] = {
-        {"bottle", {}, {}, {}, {}}, {"bowl", {}, {}, {}, {}}, {"pitcher", {}, {}, {}, {}}};
-    for (auto& kind : rotational) {
-        for (int t = 0; t < trials; ++t) {
-            sim::StreamRng object_rng(seed, ++scan_seed);
-            auto object = sim::MakeProceduralKind(kind.kind, object_rng);
-            Trial trial = Scan(std::make_shared<sim::PartMesh>(std::move(object.mesh)),
-                               object.category, rng, ++scan_seed);
-            const auto start = std::chrono::steady_clock::now();
-            SetNormals(trial.cloud, EstimateNormalsOrganized(trial.cloud, {}));
-            Indices indices;
-            for (std::uint32_t i = 0; i < trial.cloud.size(); ++i) {
-                if (trial.cloud.labels[i] == sim::ObjectLabel(1)) indices.push_back(i);
-            }
-            const auto fit_start = std::chrono::steady_clock::now();
-            const RotationalModel model = FitRotationalModel(
-                trial.cloud, indices, Eigen::Vector3f::Zero(), Eigen::Vector4f::Zero());
-            const auto stop = std::chrono::steady_clock::now();
-            const double ms = std::chrono::duration<double, std::milli>(stop - start).count();
-            kind.fit_ms.Add(std::chrono::duration<double, std::milli>(stop - fit_start).count());
-            if (!model.found) {
-                ++kind.missed;
-                continue;
-            }
-            const Eigen::Vector3f up =
-                trial.T_world_camera.linear().transpose() * Eigen::Vector3f::UnitZ();
-            kind.axis.Add(std::acos(std::min(1.0f, std::abs(model.axis.dot(up)))) * 180.0 / M_PI);
-            kind.ms.Add(ms);
-            // With the table's normal as a prior: the axis within 20 degrees of up.
-            RotationalFitParams prior;
-            prior.max_tilt_deg = 20.0f;
-            const RotationalModel upright =
-                FitRotationalModel(trial.cloud, indices, up, Eigen::Vector4f::Zero(), prior);
-            if (upright.found) {
-                kind.prior_axis.Add(std::acos(std::min(1.0f, std::abs(upright.axis.dot(up)))) *
-                                    180.0 / M_PI);
-            }
-        }
-    }
+struct Rotational {
+    const char* kind;
+    Stats axis, ms, fit_ms, prior_axis;
+    int missed = 0;
+};
 
-    // Sampling: uniform against RSD-weighted, on ground-truth points.
-    struct Sampling {
-        Stats success[2][3];  // [uniform, weighted][budget]: 1 = good hypothesis
-        Stats iterations[2];  // samples under the adaptive stop
-        Stats extent[2], radius[2], axis[2];
-        int missed[2] = {0, 0};
-    };
-    const int budgets[3] = {3, 10, 30};
-    const int kSeeds = 10;
-    auto object_points = [](const PointCloud& cloud) {
-        Indices idx;
-        for (std::uint32_t i = 0; i < cloud.size(); ++i) {
-            if (cloud.labels[i] == sim::ObjectLabel(1) && cloud.IsFinite(i) &&
-                cloud.normals[i].allFinite()) {
-                idx.push_back(i);
-            }
-        }
-        return idx;
-    };
-    Sampling box_sampling, cyl_sampling;
-    for (int t = 0; t < trials; ++t) {
-        const Eigen::Vector3f e(range(0.06f, 0.25f), range(0.05f, 0.15f), range(0.05f, 0.25f));
-        Trial trial =
-            Scan(std::make_shared<sim::PartMesh>(sim::MakeBoxMesh(e)), "box", rng, ++scan_seed);
+// Surfaces of revolution (section 5.4.2.2) of procedural bottles, bowls and pitchers: the axis
+// found without and with the table's normal as a prior, and the time.
+void MeasureRotational(Draws& d, Rotational& kind) {
+    for (int t = 0; t < d.trials; ++t) {
+        sim::StreamRng object_rng(d.seed, ++d.scan_seed);
+        auto object = sim::MakeProceduralKind(kind.kind, object_rng);
+        Trial trial = Scan(std::make_shared<sim::PartMesh>(std::move(object.mesh)), object.category,
+                           d.rng, ++d.scan_seed);
+        const auto start = std::chrono::steady_clock::now();
         SetNormals(trial.cloud, EstimateNormalsOrganized(trial.cloud, {}));
-        const Indices idx = object_points(trial.cloud);
+        Indices indices;
+        for (std::uint32_t i = 0; i < trial.cloud.size(); ++i) {
+            if (trial.cloud.labels[i] == sim::ObjectLabel(1)) indices.push_back(i);
+        }
+        const auto fit_start = std::chrono::steady_clock::now();
+        const RotationalModel model = FitRotationalModel(
+            trial.cloud, indices, Eigen::Vector3f::Zero(), Eigen::Vector4f::Zero());
+        const auto stop = std::chrono::steady_clock::now();
+        const double ms = std::chrono::duration<double, std::milli>(stop - start).count();
+        kind.fit_ms.Add(std::chrono::duration<double, std::milli>(stop - fit_start).count());
+        if (!model.found) {
+            ++kind.missed;
+            continue;
+        }
+        const Eigen::Vector3f up =
+            trial.T_world_camera.linear().transpose() * Eigen::Vector3f::UnitZ();
+        kind.axis.Add(std::acos(std::min(1.0f, std::abs(model.axis.dot(up)))) * 180.0 / M_PI);
+        kind.ms.Add(ms);
+        // With the table's normal as a prior: the axis within 20 degrees of up.
+        RotationalFitParams prior;
+        prior.max_tilt_deg = 20.0f;
+        const RotationalModel upright =
+            FitRotationalModel(trial.cloud, indices, up, Eigen::Vector4f::Zero(), prior);
+        if (upright.found) {
+            kind.prior_axis.Add(std::acos(std::min(1.0f, std::abs(upright.axis.dot(up)))) * 180.0 /
+                                M_PI);
+        }
+    }
+}
+
+// Uniform against RSD-weighted sampling, on ground-truth points.
+struct Sampling {
+    Stats success[2][3];  // [uniform, weighted][budget]: 1 = good hypothesis
+    Stats iterations[2];  // samples under the adaptive stop
+    Stats extent[2], radius[2], axis[2];
+    int missed[2] = {0, 0};
+};
+constexpr int kBudgets[3] = {3, 10, 30};
+constexpr int kSeeds = 10;
+
+Indices ObjectPoints(const PointCloud& cloud) {
+    Indices idx;
+    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+        if (cloud.labels[i] == sim::ObjectLabel(1) && cloud.IsFinite(i) &&
+            cloud.normals[i].allFinite()) {
+            idx.push_back(i);
+        }
+    }
+    return idx;
+}
+
+// Upright boxes: how often a few footprint-rectangle samples find the orientation, how many
+// samples the adaptive stop takes, and the box fit's errors (section 5.4.2.1).
+Sampling MeasureBoxSampling(Draws& d) {
+    Sampling out;
+    for (int t = 0; t < d.trials; ++t) {
+        const Eigen::Vector3f e(d.Range(0.06f, 0.25f), d.Range(0.05f, 0.15f),
+                                d.Range(0.05f, 0.25f));
+        Trial trial =
+            Scan(std::make_shared<sim::PartMesh>(sim::MakeBoxMesh(e)), "box", d.rng, ++d.scan_seed);
+        SetNormals(trial.cloud, EstimateNormalsOrganized(trial.cloud, {}));
+        const Indices idx = ObjectPoints(trial.cloud);
         const std::vector<float> r_min = RsdMinRadii(trial.cloud, idx);
         const Eigen::Vector3f x_cam = trial.R_camera_object.col(0);
         const Eigen::Vector3f up = trial.plane.head<3>();
         auto angle_error = [&](const Eigen::Vector3f& a) {  // modulo 90 deg, in the plane
             const Eigen::Vector3f y = up.cross(x_cam);
-            double d = std::fmod(std::atan2(a.dot(y), a.dot(x_cam)) + 4.0 * M_PI, 0.5 * M_PI);
-            return std::min(d, 0.5 * M_PI - d) * 180.0 / M_PI;
+            double dd = std::fmod(std::atan2(a.dot(y), a.dot(x_cam)) + 4.0 * M_PI, 0.5 * M_PI);
+            return std::min(dd, 0.5 * M_PI - dd) * 180.0 / M_PI;
         };
         for (int w = 0; w < 2; ++w) {
             const FitGuidance g = w == 0 ? FitGuidance{} : FitGuidance{.rsd_min_radius = r_min};
             for (int b = 0; b < 3; ++b) {
                 for (int s = 1; s <= kSeeds; ++s) {
                     FootprintRectangleParams rp;
-                    rp.sac.max_iterations = budgets[b];
+                    rp.sac.max_iterations = kBudgets[b];
                     rp.sac.p_success = 0.999999;
                     rp.sac.seed = static_cast<std::uint64_t>(s);
                     const FootprintRectangle rect =
                         FitFootprintRectangle(trial.cloud, idx, trial.plane, rp, g);
-                    box_sampling.success[w][b].Add(rect.found && angle_error(rect.axis) < 3.0);
+                    out.success[w][b].Add(rect.found && angle_error(rect.axis) < 3.0);
                 }
             }
             for (int s = 1; s <= kSeeds; ++s) {
                 FootprintRectangleParams rp;
                 rp.sac.max_iterations = 10000;
                 rp.sac.seed = static_cast<std::uint64_t>(s);
-                box_sampling.iterations[w].Add(
+                out.iterations[w].Add(
                     FitFootprintRectangle(trial.cloud, idx, trial.plane, rp, g).iterations);
             }
             const BoxModel box = FitUprightBox(trial.cloud, idx, trial.plane, {}, g);
             if (!box.found) {
-                ++box_sampling.missed[w];
+                ++out.missed[w];
                 continue;
             }
-            box_sampling.extent[w].Add(1000.0 * std::abs(box.extents.x() - std::max(e.x(), e.y())));
-            box_sampling.extent[w].Add(1000.0 * std::abs(box.extents.y() - std::min(e.x(), e.y())));
-            box_sampling.extent[w].Add(1000.0 * std::abs(box.extents.z() - e.z()));
-            box_sampling.axis[w].Add(angle_error(box.axes.col(0)));
+            out.extent[w].Add(1000.0 * std::abs(box.extents.x() - std::max(e.x(), e.y())));
+            out.extent[w].Add(1000.0 * std::abs(box.extents.y() - std::min(e.x(), e.y())));
+            out.extent[w].Add(1000.0 * std::abs(box.extents.z() - e.z()));
+            out.axis[w].Add(angle_error(box.axes.col(0)));
         }
     }
-    for (int t = 0; t < trials; ++t) {
+    return out;
+}
+
+// One cylinder RANSAC on a lying cylinder's points: uniform (w = 0) or RSD-weighted sampling.
+CylinderFit FitFreeCylinder(const PointCloud& cloud, const Indices& idx,
+                            const std::vector<float>& weights, int w, int budget, int seed) {
+    CylinderFitParams cp;  // free axis, as FitObjectCylinder's hypothesis
+    cp.sac = CylinderModelParams{}.sac;
+    cp.sac.num_threads = 1;
+    if (budget > 0) {
+        cp.sac.max_iterations = budget;
+        cp.sac.p_success = 0.999999;
+    }
+    cp.sac.seed = static_cast<std::uint64_t>(seed);
+    cp.max_radius = 0.3f;
+    if (w == 1) cp.sac.sample_weights = weights;
+    return FitCylinder(cloud, idx, cp);
+}
+
+// Lying cylinders with a free axis: the same for the cylinder RANSAC and FitObjectCylinder.
+Sampling MeasureCylinderSampling(Draws& d) {
+    Sampling out;
+    for (int t = 0; t < d.trials; ++t) {
         // A lying cylinder: the profile's z axis turned onto the world's x axis.
-        const float r = range(0.025f, 0.06f), h = range(0.08f, 0.25f);
+        const float r = d.Range(0.025f, 0.06f), h = d.Range(0.08f, 0.25f);
         sim::PartMesh lying = sim::MakeRevolutionMesh(
             {{0.0f, 0.0f, 0}, {r, 0.0f, 0}, {r, h, 0}, {0.0f, h, 0}}, {"body"}, 96);
         const Eigen::Matrix3f turn =
             Eigen::AngleAxisf(0.5f * static_cast<float>(M_PI), Eigen::Vector3f::UnitY())
                 .toRotationMatrix();
         for (auto& v : lying.mesh.vertices) v = turn * v + Eigen::Vector3f(0.0f, 0.0f, r);
-        Trial trial =
-            Scan(std::make_shared<sim::PartMesh>(std::move(lying)), "cylinder", rng, ++scan_seed);
+        Trial trial = Scan(std::make_shared<sim::PartMesh>(std::move(lying)), "cylinder", d.rng,
+                           ++d.scan_seed);
         SetNormals(trial.cloud, EstimateNormalsOrganized(trial.cloud, {}));
-        const Indices idx = object_points(trial.cloud);
+        const Indices idx = ObjectPoints(trial.cloud);
         const std::vector<float> r_min = RsdMinRadii(trial.cloud, idx);
         const Eigen::Vector3f axis_cam = trial.R_camera_object * turn.col(2);
         auto axis_error = [&](const Eigen::Vector3f& a) {
@@ -297,52 +335,44 @@ int main(int argc, char** argv) {
         for (int w = 0; w < 2; ++w) {
             for (int b = 0; b < 3; ++b) {
                 for (int s = 1; s <= kSeeds; ++s) {
-                    CylinderFitParams cp;  // free axis, as FitObjectCylinder's hypothesis
-                    cp.sac = CylinderModelParams{}.sac;
-                    cp.sac.num_threads = 1;
-                    cp.sac.max_iterations = budgets[b];
-                    cp.sac.p_success = 0.999999;
-                    cp.sac.seed = static_cast<std::uint64_t>(s);
-                    cp.max_radius = 0.3f;
-                    if (w == 1) cp.sac.sample_weights = weights;
-                    const CylinderFit f = FitCylinder(trial.cloud, idx, cp);
-                    cyl_sampling.success[w][b].Add(f.found && axis_error(f.axis) < 3.0 &&
-                                                   std::abs(f.radius - r) < 0.003f);
+                    const CylinderFit f =
+                        FitFreeCylinder(trial.cloud, idx, weights, w, kBudgets[b], s);
+                    out.success[w][b].Add(f.found && axis_error(f.axis) < 3.0 &&
+                                          std::abs(f.radius - r) < 0.003f);
                 }
             }
             for (int s = 1; s <= kSeeds; ++s) {
-                CylinderFitParams cp;
-                cp.sac = CylinderModelParams{}.sac;
-                cp.sac.num_threads = 1;
-                cp.sac.seed = static_cast<std::uint64_t>(s);
-                cp.max_radius = 0.3f;
-                if (w == 1) cp.sac.sample_weights = weights;
-                cyl_sampling.iterations[w].Add(FitCylinder(trial.cloud, idx, cp).iterations);
+                out.iterations[w].Add(
+                    FitFreeCylinder(trial.cloud, idx, weights, w, 0, s).iterations);
             }
             const FitGuidance g = w == 0 ? FitGuidance{} : FitGuidance{.rsd_min_radius = r_min};
             // No support plane: no upright prior, the axis is free.
             const CylinderModel c =
                 FitObjectCylinder(trial.cloud, idx, Eigen::Vector4f::Zero(), {}, g);
             if (!c.found) {
-                ++cyl_sampling.missed[w];
+                ++out.missed[w];
                 continue;
             }
-            cyl_sampling.radius[w].Add(1000.0 * std::abs(c.radius - r));
-            cyl_sampling.axis[w].Add(axis_error(c.axis));
+            out.radius[w].Add(1000.0 * std::abs(c.radius - r));
+            out.axis[w].Add(axis_error(c.axis));
         }
     }
-    std::printf("%d scans per shape, simulated Kinect at 0.6-1.5 m, seed %u\n\n", trials, seed);
+    return out;
+}
+
+void PrintModels(const Draws& d, const PrimitiveErrors& p, const Rotational (&rotational)[3]) {
+    std::printf("%d scans per shape, simulated Kinect at 0.6-1.5 m, seed %u\n\n", d.trials, d.seed);
     std::printf(
         "| quantity | multicue (mean +- std) | thesis 5.4.2 | no model |\n|---|---|---|---|\n");
     std::printf(
         "| box extents | %.2f +- %.2f mm (%zu extents; median %.2f, max %.2f) | 5.31 +- 2.69 mm "
         "| %d |\n",
-        box_extent.Mean(), box_extent.Std(), box_extent.values.size(), box_extent.Median(),
-        box_extent.Max(), box_missed);
-    std::printf("| cylinder radius | %.2f +- %.2f mm | 2.85 +- 1.23 mm | %d |\n", cyl_radius.Mean(),
-                cyl_radius.Std(), cyl_missed);
-    std::printf("| cylinder axis | %.2f +- %.2f deg | 1.11 +- 0.34 deg | |\n", cyl_axis.Mean(),
-                cyl_axis.Std());
+        p.box_extent.Mean(), p.box_extent.Std(), p.box_extent.values.size(), p.box_extent.Median(),
+        p.box_extent.Max(), p.box_missed);
+    std::printf("| cylinder radius | %.2f +- %.2f mm | 2.85 +- 1.23 mm | %d |\n",
+                p.cyl_radius.Mean(), p.cyl_radius.Std(), p.cyl_missed);
+    std::printf("| cylinder axis | %.2f +- %.2f deg | 1.11 +- 0.34 deg | |\n", p.cyl_axis.Mean(),
+                p.cyl_axis.Std());
     for (const auto& kind : rotational) {
         std::printf(
             "| %s axis (free) | %.2f +- %.2f deg (max %.2f); per object %.0f ms median, %.0f ms "
@@ -354,8 +384,11 @@ int main(int argc, char** argv) {
             "| |\n",
             kind.kind, kind.prior_axis.Mean(), kind.prior_axis.Std(), kind.prior_axis.Max());
     }
-    std::printf("\nSampling, ground-truth points (%d scans each, %d seeds per budget):\n\n", trials,
-                kSeeds);
+}
+
+void PrintSampling(const Draws& d, const Sampling& box_sampling, const Sampling& cyl_sampling) {
+    std::printf("\nSampling, ground-truth points (%d scans each, %d seeds per budget):\n\n",
+                d.trials, kSeeds);
     std::printf(
         "| case | sampling | good after 3 / 10 / 30 samples | samples to stop (p = 0.99) "
         "| fit error | orientation error | no model |\n|---|---|---|---|---|---|---|\n");
@@ -379,5 +412,23 @@ int main(int argc, char** argv) {
             100.0 * c.success[w][2].Mean(), c.iterations[w].Mean(), c.iterations[w].Std(),
             c.radius[w].Mean(), c.radius[w].Std(), c.axis[w].Mean(), c.axis[w].Std(), c.missed[w]);
     }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Draws d;
+    d.trials = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
+    d.seed = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 7u;
+    d.rng.seed(d.seed);
+    d.scan_seed = d.seed * 100000ull;
+    const PrimitiveErrors primitives = MeasurePrimitives(d);
+    Rotational rotational[] = {
+        {"bottle", {}, {}, {}, {}}, {"bowl", {}, {}, {}, {}}, {"pitcher", {}, {}, {}, {}}};
+    for (auto& kind : rotational) MeasureRotational(d, kind);
+    const Sampling box_sampling = MeasureBoxSampling(d);
+    const Sampling cyl_sampling = MeasureCylinderSampling(d);
+    PrintModels(d, primitives, rotational);
+    PrintSampling(d, box_sampling, cyl_sampling);
     return 0;
 }

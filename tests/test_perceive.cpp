@@ -442,6 +442,7 @@ TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
     p.category.part_graph_weight = 1.0f;
     const PerceiveResult w1 = Perceive(s.cloud, p, models);
     for (const auto& o : w1.objects) {
+        EXPECT_EQ(o.part_probabilities.size(), o.parts.size());  // one distribution per part
         if (o.category.category == Category::kNone) continue;
         EXPECT_EQ(o.category.category, Category::kSphere);
         float sum = 0.0f;

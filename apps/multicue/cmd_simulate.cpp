@@ -177,41 +177,13 @@ class Simulator {
         if (!std::filesystem::is_directory(dir)) {
             throw IoError(fmt::format("{}: cannot create output folder", dir.string()));
         }
-        std::optional<sim::ObjectSource> source;
-        if (!o_.meshes.empty()) {
-            const auto& cats =
-                o_.mode == "rooms" ? sim::FurnitureCategories() : sim::TabletopCategories();
-            source.emplace(sim::ReadMeshLibrary(o_.meshes, cats), o_.strict);
-        } else {
-            source.emplace();
-        }
-        manifest_ = {{"format", "multicue.sim/1"},
-                     {"mode", o_.mode},
-                     {"seed", o_.seed},
-                     {"sensor", SensorJson(o_.sensor, kinect_, laser_, tof_)},
-                     {"meshes", o_.meshes},
-                     {"categories", sim::CategoryNames()},
-                     {"labels", "0 none, 1 table, 2 floor, 3 wall, 10*(k+1) object k"},
-                     {"fields",
-                      "label (mOSD), category (uint8, index into categories), "
-                      "part (uint16, 1 + index into the object's parts; 0 none)"},
-                     {"complete", false},
-                     {"scenes", json::array()}};
+        sim::ObjectSource source = OpenSource();
+        StartManifest();
         const int views = o_.views > 0 ? o_.views : (o_.mode == "objects" ? 16 : 1);
         sim::TableSceneParams table;
         std::tie(table.min_objects, table.max_objects) = ParseRange(o_.objects);
         table.clutter = o_.clutter;
-        const sim::TurntableParams turntable;
-        std::size_t n_jobs = 0;
-        if (o_.mode == "objects") {
-            n_jobs = source->IsLibrary() ? source->library().size()
-                                         : static_cast<std::size_t>(o_.count > 0 ? o_.count : 12);
-            if (source->IsLibrary() && o_.count > 0) {
-                n_jobs = std::min(n_jobs, static_cast<std::size_t>(o_.count));
-            }
-        } else {
-            n_jobs = static_cast<std::size_t>(o_.scenes);
-        }
+        const std::size_t n_jobs = JobCount(source);
         Progress progress("simulate", n_jobs * static_cast<std::size_t>(views),
                           o_.quiet ? ProgressStyle::kSilent : ProgressStyle::kAuto);
         std::size_t written = 0, skipped = 0;
@@ -220,38 +192,10 @@ class Simulator {
             const std::uint64_t seed = sim::SubSeed(o_.seed, i);
             sim::Scene scene;
             std::vector<Eigen::Isometry3f> poses;
-            if (o_.mode == "objects") {
-                sim::StreamRng rng(seed, 1);
-                std::optional<sim::ObjectModel> model;
-                if (source->IsLibrary()) {
-                    model = source->FromEntry(i, rng);
-                } else {
-                    // Categories in turn, so every category gets objects.
-                    const auto& cats = sim::TabletopCategories();
-                    auto obj = sim::MakeProceduralObject(cats[i % cats.size()], rng);
-                    model =
-                        sim::ObjectModel{std::make_shared<const sim::PartMesh>(std::move(obj.mesh)),
-                                         obj.category, obj.kind, 1.0f};
-                }
-                if (!model) {
-                    ++skipped;
-                    progress.Advance(static_cast<std::size_t>(views));
-                    continue;
-                }
-                scene = sim::MakeTurntableScene(*model, turntable, seed);
-                poses = sim::TurntableViews(scene, views, turntable);
-            } else if (o_.mode == "scenes") {
-                scene = sim::MakeTableScene(table, *source, seed);
-                poses = sim::TableViewpoints(scene, views, {}, seed);
-            } else {
-                scene = sim::MakeRoomScene({}, *source, seed);
-                const auto head = sim::RoomLaserPose(scene, 1.5f, seed);
-                for (int v = 0; v < views; ++v) {
-                    Eigen::Isometry3f T = head;
-                    T.rotate(Eigen::AngleAxisf(2.0f * static_cast<float>(M_PI) * v / views,
-                                               Eigen::Vector3f::UnitZ()));
-                    poses.push_back(T);
-                }
+            if (!MakeScene(source, table, i, seed, views, scene, poses)) {
+                ++skipped;
+                progress.Advance(static_cast<std::size_t>(views));
+                continue;
             }
             WriteScene(dir, i, seed, scene, poses, progress);
             ++written;
@@ -273,6 +217,76 @@ class Simulator {
     }
 
   private:
+    // The mesh library of --meshes (table-top or furniture categories), else procedural objects.
+    sim::ObjectSource OpenSource() const {
+        if (o_.meshes.empty()) return sim::ObjectSource();
+        const auto& cats =
+            o_.mode == "rooms" ? sim::FurnitureCategories() : sim::TabletopCategories();
+        return sim::ObjectSource(sim::ReadMeshLibrary(o_.meshes, cats), o_.strict);
+    }
+
+    // The manifest's header; "complete" stays false until every scene is written.
+    void StartManifest() {
+        manifest_ = {{"format", "multicue.sim/1"},
+                     {"mode", o_.mode},
+                     {"seed", o_.seed},
+                     {"sensor", SensorJson(o_.sensor, kinect_, laser_, tof_)},
+                     {"meshes", o_.meshes},
+                     {"categories", sim::CategoryNames()},
+                     {"labels", "0 none, 1 table, 2 floor, 3 wall, 10*(k+1) object k"},
+                     {"fields",
+                      "label (mOSD), category (uint8, index into categories), "
+                      "part (uint16, 1 + index into the object's parts; 0 none)"},
+                     {"complete", false},
+                     {"scenes", json::array()}};
+    }
+
+    // Objects mode: one job per library mesh (at most --count) or --count procedural objects;
+    // the other modes: --scenes.
+    std::size_t JobCount(const sim::ObjectSource& source) const {
+        if (o_.mode != "objects") return static_cast<std::size_t>(o_.scenes);
+        std::size_t n = source.IsLibrary() ? source.library().size()
+                                           : static_cast<std::size_t>(o_.count > 0 ? o_.count : 12);
+        if (source.IsLibrary() && o_.count > 0) n = std::min(n, static_cast<std::size_t>(o_.count));
+        return n;
+    }
+
+    // Scene `i` and its sensor poses; false when its library mesh cannot be used.
+    bool MakeScene(sim::ObjectSource& source, const sim::TableSceneParams& table, std::size_t i,
+                   std::uint64_t seed, int views, sim::Scene& scene,
+                   std::vector<Eigen::Isometry3f>& poses) const {
+        if (o_.mode == "objects") {
+            const sim::TurntableParams turntable;
+            sim::StreamRng rng(seed, 1);
+            std::optional<sim::ObjectModel> model;
+            if (source.IsLibrary()) {
+                model = source.FromEntry(i, rng);
+            } else {
+                // Categories in turn, so every category gets objects.
+                const auto& cats = sim::TabletopCategories();
+                auto obj = sim::MakeProceduralObject(cats[i % cats.size()], rng);
+                model = sim::ObjectModel{std::make_shared<const sim::PartMesh>(std::move(obj.mesh)),
+                                         obj.category, obj.kind, 1.0f};
+            }
+            if (!model) return false;
+            scene = sim::MakeTurntableScene(*model, turntable, seed);
+            poses = sim::TurntableViews(scene, views, turntable);
+        } else if (o_.mode == "scenes") {
+            scene = sim::MakeTableScene(table, source, seed);
+            poses = sim::TableViewpoints(scene, views, {}, seed);
+        } else {
+            scene = sim::MakeRoomScene({}, source, seed);
+            const auto head = sim::RoomLaserPose(scene, 1.5f, seed);
+            for (int v = 0; v < views; ++v) {
+                Eigen::Isometry3f T = head;
+                T.rotate(Eigen::AngleAxisf(2.0f * static_cast<float>(M_PI) * v / views,
+                                           Eigen::Vector3f::UnitZ()));
+                poses.push_back(T);
+            }
+        }
+        return true;
+    }
+
     PointCloud Scan(const sim::RayCaster& caster, const Eigen::Isometry3f& pose,
                     std::uint64_t seed) const {
         if (o_.sensor == "laser") return sim::ScanLaser(caster, pose, laser_, seed);
