@@ -44,6 +44,20 @@ void WriteDump(const nlohmann::ordered_json& j, const std::string& path,
     out += pad + "}";
 }
 
+// The object at a dotted path below `root`, or null.
+nlohmann::json* Find(nlohmann::json& root, const std::string& path) {
+    nlohmann::json* node = &root;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t dot = path.find('.', start);
+        const std::string part = path.substr(start, dot == std::string::npos ? dot : dot - start);
+        if (!node->is_object() || !node->contains(part)) return nullptr;
+        node = &(*node)[part];
+        if (dot == std::string::npos) return node;
+        start = dot + 1;
+    }
+}
+
 void CheckUsed(const nlohmann::json& j, const std::string& path, const std::set<std::string>& used,
                const std::string& source) {
     for (auto it = j.begin(); it != j.end(); ++it) {
@@ -89,17 +103,8 @@ ConfigSection ConfigSection::Dump() {
 
 const nlohmann::json* ConfigSection::Lookup(const std::string& key) {
     const std::string full = Join(path_, key);
-    const nlohmann::json* node = &state_->root;
-    std::size_t start = 0;
-    while (true) {
-        const std::size_t dot = full.find('.', start);
-        const std::string part = full.substr(start, dot == std::string::npos ? dot : dot - start);
-        if (!node->is_object() || !node->contains(part)) return nullptr;
-        node = &(*node)[part];
-        if (dot == std::string::npos) break;
-        start = dot + 1;
-    }
-    state_->used.insert(full);
+    const nlohmann::json* node = Find(state_->root, full);
+    if (node != nullptr) state_->used.insert(full);
     return node;
 }
 
@@ -178,20 +183,6 @@ void ConfigSection::GetChoice(const std::string& key, std::string& value,
 }
 
 namespace {
-
-// The object at a dotted path below `root`, or null.
-nlohmann::json* Find(nlohmann::json& root, const std::string& path) {
-    nlohmann::json* node = &root;
-    std::size_t start = 0;
-    while (true) {
-        const std::size_t dot = path.find('.', start);
-        const std::string part = path.substr(start, dot == std::string::npos ? dot : dot - start);
-        if (!node->is_object() || !node->contains(part)) return nullptr;
-        node = &(*node)[part];
-        if (dot == std::string::npos) return node;
-        start = dot + 1;
-    }
-}
 
 // Moves `from` into `into`: values are set, sections merged; false when a value is in both.
 bool MergeInto(nlohmann::json& into, nlohmann::json&& from) {

@@ -187,7 +187,8 @@ struct ModelParams {
     float several_min_ratio = 0.5f;
     PartCountParams part_counts{};
     int num_threads = 0;  ///< objects modelled in parallel; 0 = all cores
-    /// Throws ParameterError naming the node and field of the first out-of-range value.
+    /// Throws InvalidArgument naming the first out-of-range field (a ParameterError with the
+    /// sub-node's name, `concentric: ...`, for the nested ones).
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
     /// visitor reads or records them (io::ConfigSection::operator(); ReadPerceiveParams).
