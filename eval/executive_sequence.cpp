@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include "driver_options.hpp"
 #include "executive_common.hpp"
 
 namespace {
@@ -85,7 +86,16 @@ void PrintRow(const char* name, const Tally& t) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    const int num_views = argc > 1 ? std::max(2, std::atoi(argv[1])) : 12;
+    int num_views = 12;
+    CLI::App app{
+        "executive_sequence: identification of known objects and learning of a new one over a "
+        "sequence of views (thesis Table 3.3)"};
+    app.add_option("VIEWS", num_views, "views in the sequence")
+        ->capture_default_str()
+        ->check(CLI::Range(2, 100000));
+    if (auto code =
+            eval::ParseDriverOptions(app, "executive_sequence", [&] { app.parse(argc, argv); }))
+        return *code;
     const auto path = std::filesystem::temp_directory_path() /
                       ("multicue-executive-sequence-" + std::to_string(::getpid()) + ".db");
     std::filesystem::remove(path);

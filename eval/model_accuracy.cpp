@@ -25,6 +25,7 @@
 #include <random>
 #include <vector>
 
+#include "driver_options.hpp"
 #include "multicue/reconstruction/fit_guidance.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
 #include "multicue/reconstruction/rotational_model.hpp"
@@ -418,8 +419,15 @@ void PrintSampling(const Draws& d, const Sampling& box_sampling, const Sampling&
 
 int main(int argc, char** argv) {
     Draws d;
-    d.trials = argc > 1 ? std::max(1, std::atoi(argv[1])) : 30;
-    d.seed = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 7u;
+    CLI::App app{
+        "model_accuracy: box, cylinder and rotational models of simulated single-view scans "
+        "against their truth (thesis section 5.4.2), and uniform against RSD-weighted sampling"};
+    app.add_option("TRIALS", d.trials, "scans per shape")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1000000));
+    app.add_option("SEED", d.seed, "random seed of the shapes and scans")->capture_default_str();
+    if (auto code = eval::ParseDriverOptions(app, "model_accuracy", [&] { app.parse(argc, argv); }))
+        return *code;
     d.rng.seed(d.seed);
     d.scan_seed = d.seed * 100000ull;
     const PrimitiveErrors primitives = MeasurePrimitives(d);

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "driver_options.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/pcd.hpp"
 #include "multicue/reconstruction/part_count_model.hpp"
@@ -23,27 +24,32 @@
 using namespace multicue;
 
 int main(int argc, char** argv) {
-    if (argc < 2) {
-        std::fprintf(stderr, "usage: part_counts FRAME.pcd [FRAME.pcd ...]\n");
-        return 2;
-    }
+    std::vector<std::string> frames;
+    CLI::App app{
+        "part_counts: parts per perceived object on simulated frames with ground truth (the "
+        "label and category fields of multicue simulate scenes): the Poisson means of thesis "
+        "section 5.4.1"};
+    app.add_option("FRAMES", frames, "simulated frames (.pcd)")->required();
+    if (auto code = eval::ParseDriverOptions(app, "part_counts", [&] { app.parse(argc, argv); }))
+        return *code;
     constexpr std::array<const char*, 3> kTypes{"flat", "round", "other"};
     std::array<std::vector<std::size_t>, 3> single;
     std::array<std::vector<std::size_t>, 3> merged;
     PerceiveParams params;
     params.models.touching.enabled = params.models.stacked.enabled =
         params.models.concentric.enabled = false;
-    for (int a = 1; a < argc; ++a) {
+    for (std::size_t a = 0; a < frames.size(); ++a) {
         PointCloud cloud;
         try {
-            cloud = io::ReadPcd(argv[a]);
+            cloud = io::ReadPcd(frames[a]);
         } catch (const Error& e) {
             std::fprintf(stderr, "part_counts: %s\n", e.what());
             return 1;
         }
         const auto* truth = cloud.FindExtraField("category");
         if (cloud.labels.size() != cloud.size() || truth == nullptr || truth->size != 1) {
-            std::fprintf(stderr, "part_counts: %s has no label and u8 category fields\n", argv[a]);
+            std::fprintf(stderr, "part_counts: %s has no label and u8 category fields\n",
+                         frames[a].c_str());
             return 1;
         }
         const PerceiveResult r = Perceive(cloud, params);
@@ -80,7 +86,7 @@ int main(int argc, char** argv) {
                 single[type].push_back(o.parts.size());
             }
         }
-        std::fprintf(stderr, "\r%d / %d frames", a, argc - 1);
+        std::fprintf(stderr, "\r%zu / %zu frames", a + 1, frames.size());
     }
     std::fprintf(stderr, "\n");
     for (std::size_t t = 0; t < 3; ++t) {

@@ -64,6 +64,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "driver_options.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/features/part_stats.hpp"
 #include "multicue/ml/classifier.hpp"
@@ -403,15 +404,10 @@ std::optional<int> ParseOptions(int argc, char** argv, Options& o, std::vector<V
     AddTestOptions(app, o);
     AddTrainingOptions(app, o);
     AddRecognitionOptions(app, o);
-    try {
+    return eval::ParseDriverOptions(app, "part_graph_eval", [&] {
         app.parse(argc, argv);
         variants = ParseVariants(o);
-    } catch (const CLI::ParseError& e) {
-        if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-        std::fprintf(stderr, "part_graph_eval: %s (run with --help for usage)\n", e.what());
-        return 2;
-    }
-    return std::nullopt;
+    });
 }
 
 // ---------------------------------------------------------------------------------------------
