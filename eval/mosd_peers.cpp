@@ -49,6 +49,7 @@
 #include <pcl/segmentation/region_growing.h>
 #include <pcl/segmentation/sac_segmentation.h>
 #include <pcl/segmentation/supervoxel_clustering.h>
+#include "driver_options.hpp"
 
 namespace {
 
@@ -362,46 +363,29 @@ bool SceneLess(const std::string& a, const std::string& b) {
     return split(a) < split(b);
 }
 
-int Usage(const char* argv0) {
-    std::fprintf(stderr,
-                 "usage: %s --method euclidean|region_growing|lccp INPUT_DIR OUT_DIR "
-                 "[--scenes learn0,learn1,...]\n"
-                 "Reads INPUT_DIR/<scene>.pcd, writes OUT_DIR/<scene>/labels.pcd.\n",
-                 argv0);
-    return 2;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
     std::string method;
     std::string scenes_arg;
-    std::vector<std::string> positional;
-    for (int i = 1; i < argc; ++i) {
-        const std::string arg = argv[i];
-        if ((arg == "--method" || arg == "--scenes") && i + 1 < argc) {
-            (arg == "--method" ? method : scenes_arg) = argv[++i];
-        } else if (arg == "-h" || arg == "--help") {
-            Usage(argv[0]);
-            return 0;
-        } else if (!arg.empty() && arg[0] == '-') {
-            std::fprintf(stderr, "unknown option %s\n", arg.c_str());
-            return Usage(argv[0]);
-        } else {
-            positional.push_back(arg);
-        }
-    }
-    Segmentation (*segment)(const Cloud::ConstPtr&) = nullptr;
-    if (method == "euclidean") {
-        segment = Euclidean;
-    } else if (method == "region_growing") {
-        segment = RegionGrowing;
-    } else if (method == "lccp") {
-        segment = Lccp;
-    }
-    if (segment == nullptr || positional.size() != 2) return Usage(argv[0]);
-    const fs::path input_dir = positional[0];
-    const fs::path out_dir = positional[1];
+    std::string input_arg, out_arg;
+    CLI::App app{
+        "mosd_peers: mOSD scenes segmented by PCL's table-top pipelines; reads "
+        "INPUT_DIR/<scene>.pcd and writes OUT_DIR/<scene>/labels.pcd for the mOSD scorer"};
+    app.add_option("--method", method, "PCL pipeline")
+        ->required()
+        ->check(CLI::IsMember({"euclidean", "region_growing", "lccp"}));
+    app.add_option("--scenes", scenes_arg, "scenes to segment, learn0,learn1,... (default: all)");
+    app.add_option("INPUT_DIR", input_arg, "folder of the scenes' .pcd files")->required();
+    app.add_option("OUT_DIR", out_arg, "output folder")->required();
+    if (auto code =
+            multicue::eval::ParseDriverOptions(app, "mosd_peers", [&] { app.parse(argc, argv); }))
+        return *code;
+    Segmentation (*segment)(const Cloud::ConstPtr&) = method == "euclidean"        ? Euclidean
+                                                      : method == "region_growing" ? RegionGrowing
+                                                                                   : Lccp;
+    const fs::path input_dir = input_arg;
+    const fs::path out_dir = out_arg;
 
     std::vector<std::string> scenes = SplitComma(scenes_arg);
     if (scenes.empty()) {
