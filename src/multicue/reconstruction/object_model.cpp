@@ -416,36 +416,42 @@ void AttachOutliers(const PointCloud& cloud, const Indices& indices, const Model
 
 }  // namespace
 
+namespace {
+
+// InvalidArgument "name must be <what>, got value" unless `ok`.
+void Require(bool ok, const char* name, const char* what, double value) {
+    if (!ok) throw InvalidArgument(fmt::format("{} must be {}, got {}", name, what, value));
+}
+
+}  // namespace
+
 void ConcentricMergeParams::Validate() const {
-    if (!(angle_deg >= 0.0f) || !(distance >= 0.0f) || !(radius_ratio >= 0.0f)) {
-        throw InvalidArgument("angle_deg, distance and radius_ratio must be >= 0");
-    }
+    Require(angle_deg >= 0.0f, "angle_deg", ">= 0", angle_deg);
+    Require(distance >= 0.0f, "distance", ">= 0", distance);
+    Require(radius_ratio >= 0.0f, "radius_ratio", ">= 0", radius_ratio);
 }
 
 void ContainedMergeParams::Validate() const {
-    if (!(margin >= 0.0f) || !(min_share > 0.0f && min_share <= 1.0f)) {
-        throw InvalidArgument("margin must be >= 0 and min_share in (0, 1]");
-    }
+    Require(margin >= 0.0f, "margin", ">= 0", margin);
+    Require(min_share > 0.0f && min_share <= 1.0f, "min_share", "in (0, 1]", min_share);
 }
 
 void StackedSplitParams::Validate() const {
-    if (!(min_step > 0.0f) || !(min_gain >= 0.0f)) {
-        throw InvalidArgument("min_step must be > 0 and min_gain >= 0");
-    }
+    Require(min_step > 0.0f, "min_step", "> 0", min_step);
+    Require(min_gain >= 0.0f, "min_gain", ">= 0", min_gain);
 }
 
 void TouchingSplitParams::Validate() const {
-    if (!(min_gain >= 0.0f) || !(max_overlap >= 0.0f) || max_parts < 2 || max_parts > 12) {
-        throw InvalidArgument("min_gain and max_overlap must be >= 0, max_parts in [2, 12]");
-    }
+    Require(min_gain >= 0.0f, "min_gain", ">= 0", min_gain);
+    Require(max_overlap >= 0.0f, "max_overlap", ">= 0", max_overlap);
+    Require(max_parts >= 2 && max_parts <= 12, "max_parts", "in [2, 12]", max_parts);
 }
 
 void ModelParams::Validate() const {
-    if (!(min_inlier_ratio >= 0.0f && min_inlier_ratio <= 1.0f)) {
-        throw InvalidArgument("min_inlier_ratio must be in [0, 1]");
-    }
-    if (mesh_max_points < 3) throw InvalidArgument("mesh_max_points must be >= 3");
-    if (!(several_min_ratio >= 0.0f)) throw InvalidArgument("several_min_ratio must be >= 0");
+    Require(min_inlier_ratio >= 0.0f && min_inlier_ratio <= 1.0f, "min_inlier_ratio", "in [0, 1]",
+            min_inlier_ratio);
+    Require(mesh_max_points >= 3, "mesh_max_points", ">= 3", static_cast<double>(mesh_max_points));
+    Require(several_min_ratio >= 0.0f, "several_min_ratio", ">= 0", several_min_ratio);
     ResolveThreadCount(num_threads);
     ValidateNode("mesh", [&] { mesh.Validate(); });
     ValidateNode("guided_rsd", [&] { guided_rsd.Validate(); });
