@@ -114,7 +114,7 @@ struct Outer {
         v.Node("inner", inner);
         v.Switch("step", step, "run the step");
         static constexpr std::array<std::string_view, 2> kKinds{"a", "b"};
-        v.Choice("kind", kind, kKinds, "the kind");
+        v.GetChoice("kind", kind, kKinds, "the kind");
     }
 };
 

@@ -86,6 +86,14 @@ const ExtraField* PointCloud::FindExtraField(const std::string& name) const {
     return nullptr;
 }
 
+Indices EvenSubset(const Indices& indices, std::size_t max) {
+    if (indices.size() <= max) return indices;
+    Indices out;
+    out.reserve(max);
+    for (std::size_t k = 0; k < max; ++k) out.push_back(indices[k * indices.size() / max]);
+    return out;
+}
+
 PointCloud SelectByIndex(const PointCloud& cloud, const Indices& indices) {
     const std::size_t n = cloud.size();
     for (Index i : indices) {

@@ -88,6 +88,10 @@ struct PointCloud {
 /// index.
 PointCloud SelectByIndex(const PointCloud& cloud, const Indices& indices);
 
+/// At most `max` of `indices`, evenly strided (entry k * size / max for k < max), in order; all of
+/// them when there are no more than `max`.
+Indices EvenSubset(const Indices& indices, std::size_t max);
+
 /// Axis-aligned bounds of the finite points. Returns false (bounds untouched) if there are none.
 bool ComputeBounds(const PointCloud& cloud, Eigen::Vector3f& min, Eigen::Vector3f& max);
 

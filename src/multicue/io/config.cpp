@@ -58,6 +58,21 @@ nlohmann::json* Find(nlohmann::json& root, const std::string& path) {
     }
 }
 
+// The value at a dotted path below `root`, with the sections on the way created; null when a
+// value on the way is not a section.
+template <typename Json>
+Json* Create(Json& root, const std::string& path) {
+    Json* node = &root;
+    std::size_t start = 0;
+    while (true) {
+        if (!node->is_null() && !node->is_object()) return nullptr;
+        const std::size_t dot = path.find('.', start);
+        node = &(*node)[path.substr(start, dot == std::string::npos ? dot : dot - start)];
+        if (dot == std::string::npos) return node;
+        start = dot + 1;
+    }
+}
+
 void CheckUsed(const nlohmann::json& j, const std::string& path, const std::set<std::string>& used,
                const std::string& source) {
     for (auto it = j.begin(); it != j.end(); ++it) {
@@ -110,18 +125,7 @@ const nlohmann::json* ConfigSection::Lookup(const std::string& key) {
 
 void ConfigSection::Record(const std::string& key, nlohmann::json value, const std::string& help) {
     const std::string full = Join(path_, key);
-    nlohmann::ordered_json* node = &state_->defaults;
-    std::size_t start = 0;
-    while (true) {
-        const std::size_t dot = full.find('.', start);
-        const std::string part = full.substr(start, dot == std::string::npos ? dot : dot - start);
-        if (dot == std::string::npos) {
-            (*node)[part] = nlohmann::ordered_json(value);
-            break;
-        }
-        node = &(*node)[part];
-        start = dot + 1;
-    }
+    *Create(state_->defaults, full) = nlohmann::ordered_json(value);
     state_->help.emplace_back(full, help);
 }
 
@@ -214,29 +218,17 @@ void ConfigSection::Rename(const std::string& old_key, const std::string& new_ke
         if (dot == std::string::npos || !owner->empty()) break;
         parent = parent.substr(0, dot);
     }
-    // Create the new key's sections.
-    nlohmann::json* node = &state_->root;
-    std::size_t start = 0;
-    while (true) {
-        const std::size_t dot = to.find('.', start);
-        const std::string part = to.substr(start, dot == std::string::npos ? dot : dot - start);
-        if (dot == std::string::npos) {
-            if (!node->contains(part)) {
-                (*node)[part] = std::move(moved);
-            } else if (!MergeInto((*node)[part], std::move(moved))) {
-                throw InvalidArgument(
-                    fmt::format("{}: '{}' is given twice, also by its former name '{}'",
-                                state_->source, to, from));
-            }
-            break;
-        }
-        if (!node->contains(part)) (*node)[part] = nlohmann::json::object();
-        node = &(*node)[part];
-        if (!node->is_object()) {
-            throw InvalidArgument(
-                fmt::format("{}: '{}' must be an object", state_->source, to.substr(0, dot)));
-        }
-        start = dot + 1;
+    // Into the new key, its sections created; a section there already is merged.
+    nlohmann::json* into = Create(state_->root, to);
+    if (into == nullptr) {
+        throw InvalidArgument(fmt::format("{}: '{}' needs '{}' to be an object", state_->source,
+                                          from, to.substr(0, to.rfind('.'))));
+    }
+    if (into->is_null()) {
+        *into = std::move(moved);
+    } else if (!MergeInto(*into, std::move(moved))) {
+        throw InvalidArgument(fmt::format("{}: '{}' is given twice, also by its former name '{}'",
+                                          state_->source, to, from));
     }
     LogWarning("{}: '{}' is now called '{}'", state_->source, from, to);
 }

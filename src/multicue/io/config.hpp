@@ -50,7 +50,8 @@ class ConfigSection {
 
     /// The visitor interface of parameter structs: a struct P lists its parameters once, in
     /// `template <typename V> void VisitParams(V& v)`, with `v(key, field, help)` per value,
-    /// `v.Node(key, sub)` per nested struct and `v.Switch(key, step, help)` per optional step;
+    /// `v.Node(key, sub)` per nested struct, `v.Switch(key, step, help)` per optional step and
+    /// `v.GetChoice(key, name, choices, help)` per named option;
     /// a section then reads them (or records them in dump mode).
     template <typename T>
     void operator()(const std::string& key, T& value, const std::string& help) {
@@ -69,11 +70,6 @@ class ConfigSection {
         ConfigSection sub = Section(key);
         sub.Get("enabled", step.enabled, help);
         static_cast<P&>(step).VisitParams(sub);
-    }
-    /// GetChoice under the visitor interface.
-    void Choice(const std::string& key, std::string& value,
-                std::span<const std::string_view> choices, const std::string& help) {
-        GetChoice(key, value, choices, help);
     }
 
     /// A key of an earlier release: when the file has `old_key` (a dotted path below this

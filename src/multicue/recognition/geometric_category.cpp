@@ -254,21 +254,6 @@ Indices UsablePoints(const PointCloud& cloud, const Indices& object) {
     return usable;
 }
 
-/// At most max_points of the usable points, evenly strided: the fits' cost is bounded while the
-/// shares they measure stay representative of the whole object.
-Indices EvenSample(const Indices& usable, std::size_t max_points) {
-    Indices sample;
-    if (usable.size() <= max_points) {
-        sample = usable;
-    } else {
-        sample.reserve(max_points);
-        for (std::size_t k = 0; k < max_points; ++k) {
-            sample.push_back(usable[k * usable.size() / max_points]);
-        }
-    }
-    return sample;
-}
-
 /// The object's bounding box and its thinnest axis (in the box's own order).
 struct ObjectBox {
     OrientedBox box;
@@ -550,7 +535,8 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
 
     CategoryResult r;
     r.points = usable.size();
-    const Indices sample = EvenSample(usable, params.max_points);
+    // An even subset bounds the fits' cost while the shares they measure stay representative.
+    const Indices sample = EvenSubset(usable, params.max_points);
     r.sampled = sample.size();
     const float axis_angle = params.axis_angle_deg * kDeg;
     const float cos_inlier_normal = std::cos(params.inlier_normal_angle_deg * kDeg);

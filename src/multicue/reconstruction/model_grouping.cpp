@@ -49,15 +49,6 @@ void Absorb(PerceivedObject& a, PerceivedObject& b) {
     for (auto& part : b.parts) a.parts.push_back(std::move(part));
 }
 
-// Every `stride`-th of at most `max` entries of `in`.
-Indices Subsample(const Indices& in, std::size_t max) {
-    if (in.size() <= max) return in;
-    Indices out;
-    out.reserve(max);
-    for (std::size_t k = 0; k < max; ++k) out.push_back(in[k * in.size() / max]);
-    return out;
-}
-
 // Share of `points` within `threshold` of a model's surface.
 template <typename Distance>
 float Explained(const PointCloud& cloud, const Indices& points, float threshold,
@@ -163,8 +154,8 @@ BoxPair BestBoxPair(const PointCloud& cloud, const PerceivedObject& o,
         }
         std::sort(ga.begin(), ga.end());
         std::sort(gb.begin(), gb.end());
-        ga = Subsample(ga, t.max_points / 2);
-        gb = Subsample(gb, t.max_points / 2);
+        ga = EvenSubset(ga, t.max_points / 2);
+        gb = EvenSubset(gb, t.max_points / 2);
         const BoxModel a = FitUprightBox(cloud, ga, plane, params.box);
         const BoxModel b = FitUprightBox(cloud, gb, plane, params.box);
         if (!a.found || !b.found) continue;
@@ -416,7 +407,7 @@ GroupingResult SplitTouchingBoxes(const PointCloud& cloud, std::vector<Perceived
     for (auto& o : objects) {
         const Category c = o.category.category;
         const bool boxy = c == Category::kBox || c == Category::kFlat;
-        const Indices sample = Subsample(o.indices, t.max_points);
+        const Indices sample = EvenSubset(o.indices, t.max_points);
         BoxModel one;
         if (boxy) one = FitUprightBox(cloud, sample, plane, params.box);
         const float one_ratio =

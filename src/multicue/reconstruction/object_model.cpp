@@ -414,13 +414,32 @@ void AttachOutliers(const PointCloud& cloud, const Indices& indices, const Model
     model.mesh = std::move(base);
 }
 
-}  // namespace
-
-namespace {
-
 // InvalidArgument "name must be <what>, got value" unless `ok`.
 void Require(bool ok, const char* name, const char* what, double value) {
     if (!ok) throw InvalidArgument(fmt::format("{} must be {}, got {}", name, what, value));
+}
+
+// ModelObject with the parameters checked already.
+ObjectModel ModelChecked(const PointCloud& cloud, const PerceivedObject& object,
+                         const Eigen::Vector4f& plane, const ModelParams& params) {
+    ObjectModel model;
+    const ShapeGuidance guidance = GuideFits(cloud, object, params);
+    const float inlier_ratio = FitPrimitive(cloud, object, plane, params, guidance, model);
+    if (!model.box && !model.cylinder && !model.rotational) {
+        model.accepted = false;
+        model.grasp = Grasp(cloud, object.indices, model, plane, params);
+        return model;
+    }
+    model.verification = VerifyInFrame(cloud, model.mesh, plane, params);
+    model.accepted = inlier_ratio >= params.min_inlier_ratio &&
+                     (!model.verification || model.verification->accepted);
+    if (!model.accepted && params.mesh_fallback) {
+        ReplaceByMesh(cloud, object.indices, inlier_ratio, params, model);
+    } else if (model.accepted && params.min_attached_points > 0) {
+        AttachOutliers(cloud, object.indices, params, model);
+    }
+    model.grasp = Grasp(cloud, object.indices, model, plane, params);
+    return model;
 }
 
 }  // namespace
@@ -469,24 +488,7 @@ void ModelParams::Validate() const {
 ObjectModel ModelObject(const PointCloud& cloud, const PerceivedObject& object,
                         const Eigen::Vector4f& plane, const ModelParams& params) {
     params.Validate();
-    ObjectModel model;
-    const ShapeGuidance guidance = GuideFits(cloud, object, params);
-    const float inlier_ratio = FitPrimitive(cloud, object, plane, params, guidance, model);
-    if (!model.box && !model.cylinder && !model.rotational) {
-        model.accepted = false;
-        model.grasp = Grasp(cloud, object.indices, model, plane, params);
-        return model;
-    }
-    model.verification = VerifyInFrame(cloud, model.mesh, plane, params);
-    model.accepted = inlier_ratio >= params.min_inlier_ratio &&
-                     (!model.verification || model.verification->accepted);
-    if (!model.accepted && params.mesh_fallback) {
-        ReplaceByMesh(cloud, object.indices, inlier_ratio, params, model);
-    } else if (model.accepted && params.min_attached_points > 0) {
-        AttachOutliers(cloud, object.indices, params, model);
-    }
-    model.grasp = Grasp(cloud, object.indices, model, plane, params);
-    return model;
+    return ModelChecked(cloud, object, plane, params);
 }
 
 void ModelObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects,
@@ -503,7 +505,7 @@ void ModelObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects
         n, params.num_threads,
         [&](std::size_t r) {
             PerceivedObject& o = objects[which.empty() ? r : which[r]];
-            o.model = ModelObject(cloud, o, plane, params);
+            o.model = ModelChecked(cloud, o, plane, params);
         },
         1);
 }

@@ -235,9 +235,7 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
         region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
     if (region.points.empty()) {
         region.support = SupportPlane{};
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            if (cloud.IsFinite(i)) region.points.push_back(static_cast<Index>(i));
-        }
+        region.points = FinitePoints(cloud);
     }
     return region;
 }

@@ -78,7 +78,7 @@ struct CategorizationParams {
     template <typename V>
     void VisitParams(V& v) {
         std::string name(CategoriserName(categoriser));
-        v.Choice("categoriser", name, kCategoriserNames, "who decides the categories");
+        v.GetChoice("categoriser", name, kCategoriserNames, "who decides the categories");
         categoriser = ParseCategoriser(name);
         v("part_graph_model", part_graph_model,
           "part-graph model file (empty: the default model, trained once and cached)");
