@@ -255,6 +255,68 @@ TEST(EuclideanClustering, SubsetMatchesBruteForceWithEitherTree) {
     EXPECT_EQ(AsSet(EuclideanClustering(c, part, params).clusters), expected);
 }
 
+// The grid version is exact: the same clusters, in the same order, as the k-d tree version, on
+// random blobs, on subsets, and on a dense surface whose cells hold many points.
+TEST(EuclideanClusteringGrid, IdenticalToTheKdTreeVersion) {
+    for (std::uint32_t seed : {1u, 2u, 3u, 7u}) {
+        const PointCloud c = RandomBlobs(seed);
+        const KdTree tree(c);
+        for (float tolerance : {0.01f, 0.03f, 0.08f, 0.2f, 1.5f}) {
+            const EuclideanClusteringParams params{.tolerance = tolerance,
+                                                   .min_cluster_size = 2,
+                                                   .compute_labels = true};
+            const auto grid = EuclideanClusteringGrid(c, params);
+            const auto with_tree = EuclideanClustering(c, tree, params);
+            EXPECT_EQ(grid.clusters, with_tree.clusters) << "seed " << seed << " tol " << tolerance;
+            EXPECT_EQ(grid.labels, with_tree.labels);
+            EXPECT_EQ(grid.num_points, with_tree.num_points);
+            EXPECT_EQ(grid.num_too_small, with_tree.num_too_small);
+        }
+    }
+    const PointCloud c = RandomBlobs(4);
+    Indices subset;
+    std::vector<bool> use(c.size(), false);
+    for (std::size_t i = 0; i < c.size(); i += 3) {
+        subset.push_back(static_cast<Index>(i));
+        use[i] = true;
+    }
+    EXPECT_EQ(AsSet(EuclideanClusteringGrid(c, {.tolerance = 0.08f, .subset = subset}).clusters),
+              AsSet(BruteForceClusters(c, use, 0.08f)));
+}
+
+TEST(EuclideanClusteringGrid, DenseSheetsOneGapApart) {
+    // Two dense sheets 1.3 cm apart: one cluster at a 1.5 cm tolerance, two at 1 cm.
+    std::mt19937 rng(11);
+    std::normal_distribution<float> noise(0.0f, 0.0003f);
+    PointCloud c;
+    for (float x = 0.0f; x < 0.3f; x += 0.002f) {
+        for (float y = 0.0f; y < 0.2f; y += 0.002f) {
+            c.points.emplace_back(x, y, noise(rng));
+            c.points.emplace_back(x, y, 0.013f + noise(rng));
+        }
+    }
+    c.SetUnorganized();
+    const KdTree tree(c);
+    for (float tolerance : {0.01f, 0.015f}) {
+        const auto grid = EuclideanClusteringGrid(c, {.tolerance = tolerance});
+        EXPECT_EQ(grid.clusters, EuclideanClustering(c, tree, {.tolerance = tolerance}).clusters);
+        EXPECT_EQ(grid.clusters.size(), tolerance < 0.013f ? 2u : 1u);
+    }
+}
+
+TEST(EuclideanClusteringGrid, ContractAndEmptyInput) {
+    PointCloud empty;
+    EXPECT_TRUE(EuclideanClusteringGrid(empty, {}).clusters.empty());
+    PointCloud c = RandomBlobs(1);
+    EXPECT_THROW(EuclideanClusteringGrid(c, {.tolerance = 0.0f}), InvalidArgument);
+    EXPECT_THROW(EuclideanClusteringGrid(c, {.tolerance = kNaN}), InvalidArgument);
+    EXPECT_THROW(EuclideanClusteringGrid(c, {.subset = {static_cast<Index>(c.size())}}),
+                 InvalidArgument);
+    c.points.emplace_back(1e5f, 0.0f, 0.0f);
+    c.SetUnorganized();
+    EXPECT_THROW(EuclideanClusteringGrid(c, {.tolerance = 0.01f}), InvalidArgument);
+}
+
 TEST(EuclideanClustering, ThreeNoisyBoxesGiveThreeClustersOfTheRightSize) {
     std::mt19937 rng(5);
     PointCloud c;

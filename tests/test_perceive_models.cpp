@@ -203,6 +203,43 @@ TEST(PerceiveModels, HandleOfAGoodCylinderIsAttached) {
     EXPECT_EQ(ModelObject(cloud, plain_object, kPlane, Models()).attached_triangles, 0u);
 }
 
+// A 10 cm wide, 4 cm high strip of a 25 cm radius cylinder standing on the table: a cylinder
+// fits it well, but is 50 cm wide, far larger than its points.
+TEST(PerceiveModels, ModelLargerThanItsPointsIsRejected) {
+    PointCloud cloud;
+    PerceivedObject object;
+    const Eigen::Vector3f axis_point(0.0f, 0.3f, 1.25f);
+    for (float a = -0.2f; a <= 0.2f; a += 0.012f) {
+        for (float y = 0.26f; y <= 0.3f + 1e-6f; y += 0.003f) {
+            const Eigen::Vector3f radial(std::sin(a), 0.0f, -std::cos(a));
+            object.indices.push_back(static_cast<Index>(cloud.points.size()));
+            Add(cloud, Eigen::Vector3f(axis_point.x(), y, axis_point.z()) + 0.25f * radial,
+                radial);
+        }
+    }
+    AddWall(cloud);
+    Finish(cloud);
+    object.category.category = Category::kPlate;
+    ModelParams lenient = Models();
+    lenient.max_size_ratio = 100.0f;
+    const ObjectModel fitted = ModelObject(cloud, object, kPlane, lenient);
+    ASSERT_TRUE(fitted.cylinder.has_value()) << "the strip must fit a cylinder";
+    EXPECT_GT(fitted.cylinder->radius, 0.15f);
+    const ObjectModel m = ModelObject(cloud, object, kPlane, Models());
+    EXPECT_FALSE(m.accepted);
+    EXPECT_EQ(m.replaced, "cylinder");
+    EXPECT_EQ(m.replace_reason, "size");
+    EXPECT_FALSE(m.verification.has_value());
+    for (const auto& v : m.mesh.vertices) EXPECT_NEAR((v - axis_point).norm(), 0.25f, 0.05f);
+    // A model of its points' size is kept: the mug's body.
+    Indices body, handle;
+    const PointCloud mug = Mug(body, handle);
+    PerceivedObject cup;
+    cup.indices = body;
+    cup.category.category = Category::kCylinder;
+    EXPECT_TRUE(ModelObject(mug, cup, kPlane, Models()).accepted);
+}
+
 TEST(PerceiveModels, BadParameters) {
     Indices body, handle;
     const PointCloud cloud = Mug(body, handle);
@@ -217,6 +254,12 @@ TEST(PerceiveModels, BadParameters) {
     EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
     p = Models();
     p.verification.voxel_size = -1.0f;
+    EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
+    p = Models();
+    p.max_size_ratio = 0.5f;
+    EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
+    p = Models();
+    p.size_margin = -0.01f;
     EXPECT_THROW(ModelObject(cloud, object, kPlane, p), InvalidArgument);
 }
 

@@ -372,13 +372,34 @@ std::optional<ModelVerificationSummary> VerifyInFrame(const PointCloud& cloud,
                                     v.accepted};
 }
 
-// A rejected primitive becomes a triangulated mesh of the object's points (section 5.4.2.3).
+// Whether the model's mesh has the size of the object's points (ModelParams::max_size_ratio).
+bool FitsPointSize(const PointCloud& cloud, const Indices& indices, const TriangleMesh& mesh,
+                   const ModelParams& params) {
+    if (mesh.vertices.empty()) return true;
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f hi = -lo;
+    for (Index i : indices) {
+        if (!cloud.IsFinite(i)) continue;
+        lo = lo.cwiseMin(cloud.points[i]);
+        hi = hi.cwiseMax(cloud.points[i]);
+    }
+    if (!(hi.x() >= lo.x())) return true;
+    Eigen::Vector3f mlo = mesh.vertices.front(), mhi = mlo;
+    for (const auto& v : mesh.vertices) {
+        mlo = mlo.cwiseMin(v);
+        mhi = mhi.cwiseMax(v);
+    }
+    return (mhi - mlo).norm() <= params.max_size_ratio * (hi - lo).norm() + params.size_margin;
+}
+
+// A rejected primitive becomes a triangulated mesh of the object's points (section 5.4.2.3);
+// `reason` says why (inlier_ratio, size or verification).
 void ReplaceByMesh(const PointCloud& cloud, const Indices& indices, float inlier_ratio,
-                   const ModelParams& params, ObjectModel& model) {
+                   const char* reason, const ModelParams& params, ObjectModel& model) {
     TriangleMesh mesh = TriangulatePoints(cloud, indices, params);
     if (mesh.triangles.empty()) return;
     model.replaced = model.box ? "box" : model.cylinder ? "cylinder" : "rotational";
-    model.replace_reason = inlier_ratio < params.min_inlier_ratio ? "inlier_ratio" : "verification";
+    model.replace_reason = reason;
     model.replaced_inlier_ratio = inlier_ratio;
     model.box.reset();
     model.cylinder.reset();
@@ -430,11 +451,16 @@ ObjectModel ModelChecked(const PointCloud& cloud, const PerceivedObject& object,
         model.grasp = Grasp(cloud, object.indices, model, plane, params);
         return model;
     }
-    model.verification = VerifyInFrame(cloud, model.mesh, plane, params);
-    model.accepted = inlier_ratio >= params.min_inlier_ratio &&
+    const bool fits_size = FitsPointSize(cloud, object.indices, model.mesh, params);
+    // A model of the wrong size is not verified: its surface says nothing about the object.
+    if (fits_size) model.verification = VerifyInFrame(cloud, model.mesh, plane, params);
+    model.accepted = fits_size && inlier_ratio >= params.min_inlier_ratio &&
                      (!model.verification || model.verification->accepted);
+    const char* reason = !fits_size                             ? "size"
+                         : inlier_ratio < params.min_inlier_ratio ? "inlier_ratio"
+                                                                  : "verification";
     if (!model.accepted && params.mesh_fallback) {
-        ReplaceByMesh(cloud, object.indices, inlier_ratio, params, model);
+        ReplaceByMesh(cloud, object.indices, inlier_ratio, reason, params, model);
     } else if (model.accepted && params.min_attached_points > 0) {
         AttachOutliers(cloud, object.indices, params, model);
     }
@@ -469,6 +495,10 @@ void TouchingSplitParams::Validate() const {
 void ModelParams::Validate() const {
     Require(min_inlier_ratio >= 0.0f && min_inlier_ratio <= 1.0f, "min_inlier_ratio", "in [0, 1]",
             min_inlier_ratio);
+    Require(max_size_ratio >= 1.0f && std::isfinite(max_size_ratio), "max_size_ratio", ">= 1",
+            max_size_ratio);
+    Require(size_margin >= 0.0f && std::isfinite(size_margin), "size_margin", ">= 0",
+            size_margin);
     Require(mesh_max_points >= 3, "mesh_max_points", ">= 3", static_cast<double>(mesh_max_points));
     Require(several_min_ratio >= 0.0f, "several_min_ratio", ">= 0", several_min_ratio);
     ResolveThreadCount(num_threads);

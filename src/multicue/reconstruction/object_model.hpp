@@ -140,6 +140,12 @@ struct ModelParams {
     /// A primitive explaining less than this share of its object's points is replaced [-];
     /// [0, 1].
     float min_inlier_ratio = 0.75f;
+    /// A model must fit the size of its points: its bounding box's diagonal may exceed that of
+    /// the points by at most this factor plus size_margin (hidden back faces make a model up to
+    /// about 1.4 times its visible points); a larger one (a 79 cm cylinder for a mug) is
+    /// rejected like a poor fit [-]; >= 1.
+    float max_size_ratio = 1.6f;
+    float size_margin = 0.02f;  ///< [m]; >= 0
     /// Rejected or poorly fitting primitives are replaced by a triangulated mesh of the object's
     /// points (section 5.4.2.3); off: they stay, marked not accepted.
     bool mesh_fallback = true;
@@ -196,6 +202,9 @@ struct ModelParams {
     void VisitParams(V& v) {
         v("min_inlier_ratio", min_inlier_ratio,
           "primitives explaining a smaller share of their points are replaced");
+        v("max_size_ratio", max_size_ratio,
+          "a model's bounding-box diagonal is at most this times its points' (plus size_margin)");
+        v("size_margin", size_margin, "... plus this much [m]");
         v("mesh_fallback", mesh_fallback,
           "replace rejected primitives by a triangulated mesh of the object's points");
         v.Node("mesh", mesh);
@@ -249,7 +258,7 @@ struct ObjectModel {
     std::optional<RotationalModel> rotational;
     TriangleMesh mesh;
     std::string replaced;                ///< type of the replaced primitive, empty if none
-    std::string replace_reason;          ///< "inlier_ratio" or "verification"
+    std::string replace_reason;          ///< "inlier_ratio", "size" or "verification"
     float replaced_inlier_ratio = 0.0f;  ///< the replaced primitive's inlier_ratio
     std::optional<ModelVerificationSummary> verification;  ///< of the fitted primitive
     bool accepted = true;             ///< the primitive passed the inlier and verification checks

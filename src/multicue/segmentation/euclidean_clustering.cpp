@@ -1,7 +1,9 @@
 #include "multicue/segmentation/euclidean_clustering.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <unordered_map>
 #include <utility>
 
 #include <fmt/format.h>
@@ -129,6 +131,134 @@ ClusteringResult EuclideanClustering(const PointCloud& cloud, const KdTree& tree
                   params.max_cluster_size, params.compute_labels);
 }
 
+namespace {
+
+// One cell of the clustering grid: its points (ascending) and their bounding box.
+struct GridCell {
+    std::int64_t x = 0, y = 0, z = 0;
+    std::uint32_t begin = 0, end = 0;  // range in the grid's point list
+    Eigen::Vector3f lo, hi;
+};
+
+std::uint64_t CellKey(std::int64_t x, std::int64_t y, std::int64_t z) {
+    // 21 bits per axis: cells of >= 1 mm cover +-1 km, far beyond any scan.
+    constexpr std::int64_t kBias = 1 << 20;
+    constexpr std::uint64_t kMask = (1u << 21) - 1u;
+    return ((static_cast<std::uint64_t>(x + kBias) & kMask) << 42) |
+           ((static_cast<std::uint64_t>(y + kBias) & kMask) << 21) |
+           (static_cast<std::uint64_t>(z + kBias) & kMask);
+}
+
+float BoxGapSquared(const GridCell& a, const GridCell& b) {
+    const Eigen::Vector3f gap =
+        (a.lo - b.hi).cwiseMax(b.lo - a.hi).cwiseMax(Eigen::Vector3f::Zero());
+    return gap.squaredNorm();
+}
+
+}  // namespace
+
+ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
+                                         const EuclideanClusteringParams& params) {
+    CheckClusterParams(params.tolerance, params.min_cluster_size, params.max_cluster_size);
+    const std::size_t n = cloud.size();
+    std::vector<std::uint8_t> marked;
+    const std::size_t num_points = MarkPoints(cloud, params.subset, {}, marked);
+    if (num_points == 0) {
+        return Finish({}, n, 0, params.min_cluster_size, params.max_cluster_size,
+                      params.compute_labels);
+    }
+    // Cells of edge tolerance / sqrt(3): two points of one cell are always neighbours, and
+    // neighbours lie at most two cells apart along each axis.
+    const double cell = static_cast<double>(params.tolerance) / std::sqrt(3.0) * (1.0 - 1e-6);
+    const double inv = 1.0 / cell;
+    constexpr double kLimit = static_cast<double>(1 << 20) - 4.0;
+    std::vector<std::pair<std::uint64_t, Index>> keyed;
+    keyed.reserve(num_points);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (marked[i] == 0) continue;
+        const Eigen::Vector3d c = (cloud.points[i].cast<double>() * inv).array().floor();
+        if (c.cwiseAbs().maxCoeff() > kLimit) {
+            throw InvalidArgument(fmt::format(
+                "grid clustering: point {} lies too far from the origin for tolerance {}", i,
+                params.tolerance));
+        }
+        keyed.emplace_back(CellKey(static_cast<std::int64_t>(c.x()),
+                                   static_cast<std::int64_t>(c.y()),
+                                   static_cast<std::int64_t>(c.z())),
+                           static_cast<Index>(i));
+    }
+    std::sort(keyed.begin(), keyed.end());
+
+    std::vector<GridCell> cells;
+    Indices points(keyed.size());
+    std::unordered_map<std::uint64_t, std::uint32_t> cell_of_key;
+    cell_of_key.reserve(keyed.size() / 2 + 1);
+    for (std::size_t k = 0; k < keyed.size(); ++k) {
+        points[k] = keyed[k].second;
+        const Eigen::Vector3f& p = cloud.points[points[k]];
+        if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+            GridCell g;
+            const Eigen::Vector3d c = (p.cast<double>() * inv).array().floor();
+            g.x = static_cast<std::int64_t>(c.x());
+            g.y = static_cast<std::int64_t>(c.y());
+            g.z = static_cast<std::int64_t>(c.z());
+            g.begin = static_cast<std::uint32_t>(k);
+            g.lo = g.hi = p;
+            cell_of_key.emplace(keyed[k].first, static_cast<std::uint32_t>(cells.size()));
+            cells.push_back(g);
+        }
+        GridCell& g = cells.back();
+        g.end = static_cast<std::uint32_t>(k + 1);
+        g.lo = g.lo.cwiseMin(p);
+        g.hi = g.hi.cwiseMax(p);
+    }
+
+    // Union-find over cells: a pair of cells within reach is joined as soon as one pair of their
+    // points is closer than the tolerance (the relation of EuclideanClustering, <= tolerance).
+    const float tol_sq = params.tolerance * params.tolerance;
+    detail::DisjointSets sets(cells.size());
+    for (std::uint32_t a = 0; a < cells.size(); ++a) {
+        const GridCell& ca = cells[a];
+        for (int dx = -2; dx <= 2; ++dx) {
+            for (int dy = -2; dy <= 2; ++dy) {
+                for (int dz = -2; dz <= 2; ++dz) {
+                    const auto it = cell_of_key.find(CellKey(ca.x + dx, ca.y + dy, ca.z + dz));
+                    if (it == cell_of_key.end() || it->second <= a) continue;
+                    const std::uint32_t b = it->second;
+                    const GridCell& cb = cells[b];
+                    if (sets.Find(a) == sets.Find(b) || BoxGapSquared(ca, cb) > tol_sq) continue;
+                    bool linked = false;
+                    for (std::uint32_t i = ca.begin; i < ca.end && !linked; ++i) {
+                        const Eigen::Vector3f& p = cloud.points[points[i]];
+                        for (std::uint32_t j = cb.begin; j < cb.end; ++j) {
+                            if ((cloud.points[points[j]] - p).squaredNorm() <= tol_sq) {
+                                linked = true;
+                                break;
+                            }
+                        }
+                    }
+                    if (linked) sets.Unite(a, b);
+                }
+            }
+        }
+    }
+
+    std::vector<std::int32_t> component_of_root(cells.size(), -1);
+    std::vector<Indices> components;
+    for (std::uint32_t c = 0; c < cells.size(); ++c) {
+        const Index root = sets.Find(c);
+        if (component_of_root[root] < 0) {
+            component_of_root[root] = static_cast<std::int32_t>(components.size());
+            components.emplace_back();
+        }
+        Indices& out = components[static_cast<std::size_t>(component_of_root[root])];
+        out.insert(out.end(), points.begin() + cells[c].begin, points.begin() + cells[c].end);
+    }
+    for (auto& c : components) std::sort(c.begin(), c.end());
+    return Finish(std::move(components), n, num_points, params.min_cluster_size,
+                  params.max_cluster_size, params.compute_labels);
+}
+
 ClusteringResult EuclideanClusteringOrganized(const PointCloud& organized,
                                               const OrganizedClusteringParams& params) {
     CheckClusterParams(params.tolerance, params.min_cluster_size, params.max_cluster_size);
@@ -227,12 +357,10 @@ ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
                                                     .subset = region,
                                                     .half_window = params.organized_half_window});
     }
-    const KdTree tree(cloud, region);
-    return EuclideanClustering(cloud, tree,
-                               {.tolerance = params.tolerance,
-                                .min_cluster_size = params.min_points,
-                                .max_cluster_size = params.max_points,
-                                .subset = region});
+    return EuclideanClusteringGrid(cloud, {.tolerance = params.tolerance,
+                                           .min_cluster_size = params.min_points,
+                                           .max_cluster_size = params.max_points,
+                                           .subset = region});
 }
 
 }  // namespace multicue

@@ -64,7 +64,7 @@ struct ClusteringResult {
 };
 
 /// Connected components of the finite points in `params.subset` (all points when empty) under the
-/// relation "closer than params.tolerance" (strictly). Non-finite points are skipped.
+/// relation "at most params.tolerance apart". Non-finite points are skipped.
 ///
 /// `tree` must index every point to be clustered; it may index more (for example the whole cloud
 /// when clustering a subset), those extra points are ignored and never link two clusters.
@@ -75,6 +75,17 @@ struct ClusteringResult {
 /// An empty cloud (or no finite point) gives an empty result.
 ClusteringResult EuclideanClustering(const PointCloud& cloud, const KdTree& tree,
                                      const EuclideanClusteringParams& params);
+
+/// The clusters of EuclideanClustering without a k-d tree: the points are binned into a grid of
+/// cells of edge tolerance / sqrt(3) (all points of a cell are neighbours), and a union-find over
+/// cells joins two cells within reach as soon as one pair of their points is within the tolerance.
+/// The result is identical to EuclideanClustering with a tree over the same points; on dense
+/// scans it runs several times faster, since it needs no radius query per point.
+///
+/// Same errors as EuclideanClustering, and InvalidArgument when a point lies so far from the
+/// origin that its cell coordinates leave the 21-bit range (about 10^6 cells).
+ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
+                                         const EuclideanClusteringParams& params);
 
 /// Clusters of an organized cloud in image space: union-find over pixels, joining each finite
 /// pixel with the finite pixels of its neighbourhood (see OrganizedClusteringParams) that are

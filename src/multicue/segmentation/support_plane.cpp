@@ -7,7 +7,6 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
-#include "multicue/search/kdtree.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "multicue/segmentation/sac_plane.hpp"
@@ -46,6 +45,11 @@ void CheckParams(const SupportPlaneParams& p) {
         throw InvalidArgument(
             fmt::format("support plane: max_samples must be >= 3, got {}", p.max_samples));
     }
+    if (!(p.min_supported_fraction >= 0.0f && p.min_supported_fraction <= 1.0f)) {
+        throw InvalidArgument(fmt::format(
+            "support plane: min_supported_fraction must be in [0, 1], got {}",
+            p.min_supported_fraction));
+    }
     if (!(p.cluster_tolerance > 0.0f)) {
         throw InvalidArgument(fmt::format("support plane: cluster_tolerance must be > 0, got {}",
                                           p.cluster_tolerance));
@@ -65,8 +69,7 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
         clusters = EuclideanClusteringOrganized(
             cloud, {.tolerance = tolerance, .subset = inliers, .half_window = 1});
     } else {
-        const KdTree tree(cloud, inliers);
-        clusters = EuclideanClustering(cloud, tree, {.tolerance = tolerance, .subset = inliers});
+        clusters = EuclideanClusteringGrid(cloud, {.tolerance = tolerance, .subset = inliers});
     }
     if (clusters.clusters.empty()) return {};
     return std::move(clusters.clusters.front());
@@ -107,16 +110,21 @@ UpPrior ChooseUp(const PointCloud& cloud, const SupportPlaneParams& params) {
     return up;
 }
 
-// Candidate planes along up, extracted one after another from a strided subsample (each from the
+// The strided subsample of the finite points that the candidates are fitted and scored on.
+Indices Subsample(const Indices& finite, std::size_t max_samples) {
+    Indices sample;
+    const std::size_t stride = (finite.size() + max_samples - 1) / max_samples;
+    for (std::size_t k = 0; k < finite.size(); k += stride) sample.push_back(finite[k]);
+    return sample;
+}
+
+// Candidate planes along up, extracted one after another from the subsample (each from the
 // points the previous ones left), while they hold at least min_inlier_fraction of it.
-std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& finite,
+std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& sample,
                                         const UpPrior& up, const SupportPlaneParams& params) {
-    Indices remaining;
-    const std::size_t stride = (finite.size() + params.max_samples - 1) / params.max_samples;
-    for (std::size_t k = 0; k < finite.size(); k += stride) remaining.push_back(finite[k]);
-    const std::size_t sample_size = remaining.size();
+    Indices remaining = sample;
     const auto min_inliers = static_cast<std::size_t>(
-        std::max(3.0f, params.min_inlier_fraction * static_cast<float>(sample_size)));
+        std::max(3.0f, params.min_inlier_fraction * static_cast<float>(sample.size())));
 
     std::vector<PlaneFit> candidates;
     for (int c = 0; c < params.max_candidates && remaining.size() >= min_inliers; ++c) {
@@ -133,50 +141,112 @@ std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& 
         std::set_difference(remaining.begin(), remaining.end(), fit.inliers.begin(),
                             fit.inliers.end(), std::back_inserter(rest));
         remaining = std::move(rest);
+        // Normal towards the viewpoint: objects stand on the side the sensor sees.
+        if (fit.plane.head<3>().dot(cloud.sensor_origin) + fit.plane.w() < 0.0f)
+            fit.plane = -fit.plane;
         candidates.push_back(std::move(fit));
     }
     return candidates;
 }
 
-// The chosen candidate (section 2.4): the largest plane nearest the viewpoint, unless a raised
-// table stands on it (see SupportPlaneParams::raised_gap).
-const PlaneFit& ChooseCandidate(const std::vector<PlaneFit>& candidates, const PointCloud& cloud,
-                                const SupportPlaneParams& params) {
+// What a candidate supports (section 2.4, "by what it supports"): the subsample's points that
+// stand above it, inside the hull of its largest connected patch of inliers, no higher than the
+// prism reaches. The top of a box holds (almost) nothing; the table holds every object on it.
+std::size_t CountSupported(const PointCloud& sample_cloud, const Indices& inliers,
+                           const Eigen::Vector4f& plane, const SupportPlaneParams& params,
+                           const PrismParams& prism) {
+    const ClusteringResult patches = EuclideanClusteringGrid(
+        sample_cloud, {.tolerance = params.cluster_tolerance, .subset = inliers});
+    if (patches.clusters.empty()) return 0;
+    const std::vector<Eigen::Vector3f> hull =
+        PlaneConvexHull(sample_cloud, patches.clusters.front(), plane);
+    if (hull.size() < 3) return 0;
+    PrismParams above = prism;
+    above.min_height = std::max(prism.min_height, params.distance_threshold);
+    above.max_height = std::max(above.min_height, prism.max_height);
+    return PolygonalPrism(sample_cloud, plane, hull, above).size();
+}
+
+float ViewDistance(const PlaneFit& c, const PointCloud& cloud) {
+    return std::abs(c.plane.head<3>().dot(cloud.sensor_origin) + c.plane.w());
+}
+
+// Without support evidence: the largest plane nearest the viewpoint, unless a raised table stands
+// on it (see SupportPlaneParams::raised_gap).
+std::size_t ChooseByView(const std::vector<PlaneFit>& candidates, const PointCloud& cloud,
+                         const SupportPlaneParams& params) {
     std::size_t largest = 0;
     for (const auto& c : candidates) largest = std::max(largest, c.inliers.size());
-    const PlaneFit* best = nullptr;
+    std::size_t best = candidates.size();
     float best_distance = 0.0f;
-    for (const auto& c : candidates) {
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const PlaneFit& c = candidates[k];
         if (static_cast<float>(c.inliers.size()) <
             params.size_ratio_to_compete * static_cast<float>(largest)) {
             continue;
         }
-        const float d = std::abs(c.plane.head<3>().dot(cloud.sensor_origin) + c.plane.w());
-        if (best == nullptr || d < best_distance) {
-            best = &c;
+        const float d = ViewDistance(c, cloud);
+        if (best == candidates.size() || d < best_distance) {
+            best = k;
             best_distance = d;
         }
     }
     if (params.raised_gap > 0.0f) {
         // A robot sees the floor around a small table: the largest parallel candidate at least
         // raised_gap nearer the viewpoint is the table standing on it.
-        const PlaneFit* chosen = best;
+        const std::size_t chosen = best;
         const float floor_distance = best_distance;
-        for (const auto& c : candidates) {
-            if (&c == chosen || static_cast<float>(c.inliers.size()) <
-                                    params.raised_ratio * static_cast<float>(largest)) {
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            const PlaneFit& c = candidates[k];
+            if (k == chosen || static_cast<float>(c.inliers.size()) <
+                                   params.raised_ratio * static_cast<float>(largest)) {
                 continue;
             }
-            const float d = std::abs(c.plane.head<3>().dot(cloud.sensor_origin) + c.plane.w());
-            const bool parallel = std::abs(c.plane.head<3>().dot(chosen->plane.head<3>())) > 0.95f;
+            const float d = ViewDistance(c, cloud);
+            const bool parallel =
+                std::abs(c.plane.head<3>().dot(candidates[chosen].plane.head<3>())) > 0.95f;
             if (parallel && d <= floor_distance - params.raised_gap &&
-                (best == chosen || c.inliers.size() > best->inliers.size())) {
-                best = &c;
-                best_distance = d;
+                (best == chosen || c.inliers.size() > candidates[best].inliers.size())) {
+                best = k;
             }
         }
     }
-    return *best;
+    return best;
+}
+
+// The chosen candidate: the one that supports the most points, when any supports at least
+// min_supported of the subsample (ties: the one nearer the viewpoint); else the choice by view.
+std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const PointCloud& cloud,
+                            const Indices& sample, const SupportPlaneParams& params,
+                            const PrismParams& prism, std::vector<std::size_t>& supported) {
+    // The subsample as a cloud of its own, so that hulls and prisms touch only its points.
+    PointCloud sample_cloud;
+    sample_cloud.points.reserve(sample.size());
+    for (Index i : sample) sample_cloud.points.push_back(cloud.points[i]);
+    sample_cloud.SetUnorganized();
+    std::vector<Index> position_of(cloud.size(), 0);
+    for (std::size_t k = 0; k < sample.size(); ++k) position_of[sample[k]] = static_cast<Index>(k);
+
+    supported.assign(candidates.size(), 0);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        Indices local;
+        local.reserve(candidates[k].inliers.size());
+        for (Index i : candidates[k].inliers) local.push_back(position_of[i]);
+        std::sort(local.begin(), local.end());
+        supported[k] = CountSupported(sample_cloud, local, candidates[k].plane, params, prism);
+    }
+    const auto needed = static_cast<std::size_t>(
+        std::ceil(params.min_supported_fraction * static_cast<float>(sample.size())));
+    std::size_t best = candidates.size();
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        if (supported[k] < std::max<std::size_t>(needed, 1)) continue;
+        if (best == candidates.size() || supported[k] > supported[best] ||
+            (supported[k] == supported[best] &&
+             ViewDistance(candidates[k], cloud) < ViewDistance(candidates[best], cloud))) {
+            best = k;
+        }
+    }
+    return best < candidates.size() ? best : ChooseByView(candidates, cloud, params);
 }
 
 // All points of the full cloud within the distance threshold of the plane.
@@ -195,20 +265,24 @@ Indices PointsOnPlane(const PointCloud& cloud, const Indices& finite, const Eige
 
 void SupportPlaneParams::Validate() const { CheckParams(*this); }
 
-SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params) {
+SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params,
+                              const PrismParams& prism) {
     CheckParams(params);
+    prism.Validate();
     SupportPlane result;
     const Indices finite = FinitePoints(cloud);
     if (finite.size() < 3) return result;
 
     const UpPrior up = ChooseUp(cloud, params);
     result.up_source = up.source;
-    const std::vector<PlaneFit> candidates = ExtractCandidates(cloud, finite, up, params);
+    const Indices sample = Subsample(finite, params.max_samples);
+    const std::vector<PlaneFit> candidates = ExtractCandidates(cloud, sample, up, params);
     result.candidates = static_cast<int>(candidates.size());
     if (candidates.empty()) return result;
-    Eigen::Vector4f plane = ChooseCandidate(candidates, cloud, params).plane;
-    // Normal towards the viewpoint: objects stand on the side the sensor sees.
-    if (plane.head<3>().dot(cloud.sensor_origin) + plane.w() < 0.0f) plane = -plane;
+    std::vector<std::size_t> supported;
+    const std::size_t chosen =
+        ChooseCandidate(candidates, cloud, sample, params, prism, supported);
+    const Eigen::Vector4f plane = candidates[chosen].plane;
 
     // All points of the full cloud on the plane, then its largest connected patch.
     const Indices on_plane = PointsOnPlane(cloud, finite, plane, params.distance_threshold);
@@ -219,8 +293,11 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     result.up = plane.head<3>();
     result.hull = PlaneConvexHull(cloud, table, plane);
     result.inliers = std::move(table);
-    LogDebug("support plane ({:.3f}, {:.3f}, {:.3f}, {:.3f}) with {} points from {} candidates",
-             plane.x(), plane.y(), plane.z(), plane.w(), result.inliers.size(), result.candidates);
+    result.supported = supported[chosen];
+    LogDebug("support plane ({:.3f}, {:.3f}, {:.3f}, {:.3f}) with {} points, supporting {} of {} "
+             "sampled points, from {} candidates",
+             plane.x(), plane.y(), plane.z(), plane.w(), result.inliers.size(), result.supported,
+             sample.size(), result.candidates);
     return result;
 }
 
@@ -229,7 +306,7 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     support.Validate();
     prism.Validate();
     TableRegion region;
-    region.support = FindSupportPlane(cloud, support);
+    region.support = FindSupportPlane(cloud, support, prism);
     const SupportPlane& s = region.support;
     if (s.found && s.hull.size() >= 3)
         region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);

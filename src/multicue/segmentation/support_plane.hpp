@@ -1,6 +1,8 @@
 #pragma once
-/// \file The support plane of a table-top scene (thesis section 2.4): the largest near-horizontal
-/// plane nearest the viewpoint, its convex hull, and the prism above it as the region of interest.
+/// \file The support plane of a table-top scene (thesis section 2.4): among the near-horizontal
+/// planes, the one that supports the objects (the most points stand on it, inside its hull and
+/// below the prism's top), its convex hull, and the prism above it as the region of interest.
+/// Where no plane supports anything, the largest plane nearest the viewpoint.
 
 #include <cstdint>
 #include <optional>
@@ -29,8 +31,13 @@ struct SupportPlaneParams {
     float distance_threshold = 0.012f;  ///< plane inlier distance [m]
     int max_candidates = 4;             ///< planes extracted one after another before choosing
     float min_inlier_fraction = 0.05f;  ///< a candidate holds at least this share of the points
-    /// Candidates with at least this share of the largest one's inliers compete on distance to
-    /// the viewpoint; the nearest wins ("largest plane nearest the viewpoint").
+    /// The table is the candidate with the most points standing on it (inside the hull of its
+    /// largest patch, up to the prism's height), if that is at least this share of the sampled
+    /// points; the top of a box supports little, a table every object. Below it, no candidate
+    /// supports anything and the choice is by view (the next three fields).
+    float min_supported_fraction = 0.002f;
+    /// Choice by view: candidates with at least this share of the largest one's inliers compete
+    /// on distance to the viewpoint; the nearest wins ("largest plane nearest the viewpoint").
     float size_ratio_to_compete = 0.5f;
     /// A smaller candidate at least raised_gap nearer to the viewpoint than that choice, holding
     /// raised_ratio of the largest one's inliers, is a table standing on the chosen floor: the
@@ -59,6 +66,9 @@ struct SupportPlaneParams {
         v("max_candidates", max_candidates, "planes extracted before choosing");
         v("min_inlier_fraction", min_inlier_fraction,
           "a candidate plane holds at least this share of the points");
+        v("min_supported_fraction", min_supported_fraction,
+          "the plane with the most points standing on it is the table, if they are at least "
+          "this share of the sampled points; else the choice is by view [-]");
         v("size_ratio_to_compete", size_ratio_to_compete,
           "planes this large relative to the largest compete on nearness to the viewpoint");
         v("raised_gap", raised_gap,
@@ -81,11 +91,14 @@ struct SupportPlane {
     Eigen::Vector3f up = Eigen::Vector3f::UnitZ();  ///< up used for the search (unit)
     UpSource up_source = UpSource::kDominant;
     int candidates = 0;  ///< planes extracted before choosing
+    std::size_t supported = 0;  ///< sampled points standing on the chosen plane
 };
 
-/// Finds the support plane. A cloud without a suitable plane gives found = false (not an error).
-/// Throws InvalidArgument for bad parameters (non-positive threshold, zero up vector, ...).
-SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params);
+/// Finds the support plane; `prism` bounds the height at which points count as standing on a
+/// candidate. A cloud without a suitable plane gives found = false (not an error). Throws
+/// InvalidArgument for bad parameters (non-positive threshold, zero up vector, ...).
+SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams& params,
+                              const PrismParams& prism = {});
 
 /// The support plane and the points that may belong to objects on it.
 struct TableRegion {

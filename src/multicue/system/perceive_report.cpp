@@ -111,6 +111,7 @@ std::string ModelText(const PerceivedObject& o) {
     if (!o.model.replaced.empty()) {
         return fmt::format("mesh model ({} rejected: {})", o.model.replaced,
                            o.model.replace_reason == "verification" ? "surface in free space"
+                           : o.model.replace_reason == "size"       ? "larger than its points"
                                                                     : "too few points explained");
     }
     const auto& e = o.category.extents;
