@@ -312,9 +312,12 @@ TEST(EuclideanClusteringGrid, ContractAndEmptyInput) {
     EXPECT_THROW(EuclideanClusteringGrid(c, {.tolerance = kNaN}), InvalidArgument);
     EXPECT_THROW(EuclideanClusteringGrid(c, {.subset = {static_cast<Index>(c.size())}}),
                  InvalidArgument);
+    // Far beyond the grid's reach: the k-d tree's answer (a lone point far away).
     c.points.emplace_back(1e5f, 0.0f, 0.0f);
     c.SetUnorganized();
-    EXPECT_THROW(EuclideanClusteringGrid(c, {.tolerance = 0.01f}), InvalidArgument);
+    const KdTree tree(c);
+    EXPECT_EQ(EuclideanClusteringGrid(c, {.tolerance = 0.01f}).clusters,
+              EuclideanClustering(c, tree, {.tolerance = 0.01f}).clusters);
 }
 
 TEST(EuclideanClustering, ThreeNoisyBoxesGiveThreeClustersOfTheRightSize) {

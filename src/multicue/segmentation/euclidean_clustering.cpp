@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 #include <utility>
 
@@ -140,13 +141,12 @@ struct GridCell {
     Eigen::Vector3f lo, hi;
 };
 
+// 21 bits per axis; coordinates are >= 0 (counted from the points' lower corner, plus 2) so that
+// the neighbours at -2 .. +2 never wrap around.
 std::uint64_t CellKey(std::int64_t x, std::int64_t y, std::int64_t z) {
-    // 21 bits per axis: cells of >= 1 mm cover +-1 km, far beyond any scan.
-    constexpr std::int64_t kBias = 1 << 20;
     constexpr std::uint64_t kMask = (1u << 21) - 1u;
-    return ((static_cast<std::uint64_t>(x + kBias) & kMask) << 42) |
-           ((static_cast<std::uint64_t>(y + kBias) & kMask) << 21) |
-           (static_cast<std::uint64_t>(z + kBias) & kMask);
+    return ((static_cast<std::uint64_t>(x) & kMask) << 42) |
+           ((static_cast<std::uint64_t>(y) & kMask) << 21) | (static_cast<std::uint64_t>(z) & kMask);
 }
 
 float BoxGapSquared(const GridCell& a, const GridCell& b) {
@@ -168,24 +168,31 @@ ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
                       params.compute_labels);
     }
     // Cells of edge tolerance / sqrt(3): two points of one cell are always neighbours, and
-    // neighbours lie at most two cells apart along each axis.
+    // neighbours lie at most two cells apart along each axis. Coordinates are counted from the
+    // points' lower corner; a cloud wider than 2^21 - 5 cells along an axis is clustered with a
+    // k-d tree instead.
     const double cell = static_cast<double>(params.tolerance) / std::sqrt(3.0) * (1.0 - 1e-6);
     const double inv = 1.0 / cell;
-    constexpr double kLimit = static_cast<double>(1 << 20) - 4.0;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
+    Eigen::Vector3d hi = -lo;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (marked[i] == 0) continue;
+        lo = lo.cwiseMin(cloud.points[i].cast<double>());
+        hi = hi.cwiseMax(cloud.points[i].cast<double>());
+    }
+    if (((hi - lo) * inv).maxCoeff() > static_cast<double>((1 << 21) - 5)) {
+        const KdTree tree = params.subset.empty() ? KdTree(cloud) : KdTree(cloud, params.subset);
+        return EuclideanClustering(cloud, tree, params);
+    }
+    auto cell_of = [&](const Eigen::Vector3f& p) -> Eigen::Vector3i {
+        return ((p.cast<double>() - lo) * inv).array().floor().cast<int>() + 2;
+    };
     std::vector<std::pair<std::uint64_t, Index>> keyed;
     keyed.reserve(num_points);
     for (std::size_t i = 0; i < n; ++i) {
         if (marked[i] == 0) continue;
-        const Eigen::Vector3d c = (cloud.points[i].cast<double>() * inv).array().floor();
-        if (c.cwiseAbs().maxCoeff() > kLimit) {
-            throw InvalidArgument(fmt::format(
-                "grid clustering: point {} lies too far from the origin for tolerance {}", i,
-                params.tolerance));
-        }
-        keyed.emplace_back(CellKey(static_cast<std::int64_t>(c.x()),
-                                   static_cast<std::int64_t>(c.y()),
-                                   static_cast<std::int64_t>(c.z())),
-                           static_cast<Index>(i));
+        const Eigen::Vector3i c = cell_of(cloud.points[i]);
+        keyed.emplace_back(CellKey(c.x(), c.y(), c.z()), static_cast<Index>(i));
     }
     std::sort(keyed.begin(), keyed.end());
 
@@ -198,10 +205,10 @@ ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
         const Eigen::Vector3f& p = cloud.points[points[k]];
         if (k == 0 || keyed[k].first != keyed[k - 1].first) {
             GridCell g;
-            const Eigen::Vector3d c = (p.cast<double>() * inv).array().floor();
-            g.x = static_cast<std::int64_t>(c.x());
-            g.y = static_cast<std::int64_t>(c.y());
-            g.z = static_cast<std::int64_t>(c.z());
+            const Eigen::Vector3i c = cell_of(p);
+            g.x = c.x();
+            g.y = c.y();
+            g.z = c.z();
             g.begin = static_cast<std::uint32_t>(k);
             g.lo = g.hi = p;
             cell_of_key.emplace(keyed[k].first, static_cast<std::uint32_t>(cells.size()));

@@ -82,8 +82,9 @@ ClusteringResult EuclideanClustering(const PointCloud& cloud, const KdTree& tree
 /// The result is identical to EuclideanClustering with a tree over the same points; on dense
 /// scans it runs several times faster, since it needs no radius query per point.
 ///
-/// Same errors as EuclideanClustering, and InvalidArgument when a point lies so far from the
-/// origin that its cell coordinates leave the 21-bit range (about 10^6 cells).
+/// A cloud that spans more than about 2 * 10^6 cells along an axis (kilometres at centimetre
+/// tolerances) is clustered with a k-d tree instead, with the same result. Same errors as
+/// EuclideanClustering.
 ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
                                          const EuclideanClusteringParams& params);
 

@@ -55,7 +55,22 @@ class Evaluator {
             const std::span<const Index> idx(points_.data() + begin, n);
             model_.distances(cloud_, c, idx, std::span<float>(dist.data(), n));
             if (weight_ > 0.0f) {
-                model_.normal_angles(cloud_, c, idx, std::span<float>(angle.data(), n));
+                // The normal's angle (an acos) only where it can still make an inlier: adding
+                // the non-negative angle term never brings a point back under the threshold.
+                std::array<Index, kChunk> near{};
+                std::array<std::uint16_t, kChunk> slot{};
+                std::size_t m = 0;
+                for (std::size_t k = 0; k < n; ++k) {
+                    if ((1.0f - weight_) * std::abs(dist[k]) <= threshold_) {
+                        near[m] = idx[k];
+                        slot[m++] = static_cast<std::uint16_t>(k);
+                    }
+                }
+                std::array<float, kChunk> near_angle{};
+                model_.normal_angles(cloud_, c, std::span<const Index>(near.data(), m),
+                                     std::span<float>(near_angle.data(), m));
+                std::fill_n(angle.begin(), n, 0.0f);
+                for (std::size_t j = 0; j < m; ++j) angle[slot[j]] = near_angle[j];
                 for (std::size_t k = 0; k < n; ++k) {
                     const float e = std::abs(dist[k]);
                     visit(begin + k, (1.0f - weight_) * e + weight_ * angle[k], e);

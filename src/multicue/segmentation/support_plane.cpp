@@ -61,16 +61,12 @@ bool IsIdentityPose(const PointCloud& c) {
            c.sensor_orientation.coeffs().isApprox(Eigen::Quaternionf::Identity().coeffs(), 1e-6f);
 }
 
-// Largest connected patch of the plane's inliers: other surfaces at the same height (a second
-// table, a shelf seen through a gap) are left out.
+// Largest patch of the plane's inliers connected within `tolerance` in 3D (not in the image:
+// the objects on a table cut its visible top into pieces that no pixel path joins). Other
+// surfaces at the same height farther away (a second table, a shelf) are left out.
 Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tolerance) {
-    ClusteringResult clusters;
-    if (cloud.IsOrganized()) {
-        clusters = EuclideanClusteringOrganized(
-            cloud, {.tolerance = tolerance, .subset = inliers, .half_window = 1});
-    } else {
-        clusters = EuclideanClusteringGrid(cloud, {.tolerance = tolerance, .subset = inliers});
-    }
+    ClusteringResult clusters =
+        EuclideanClusteringGrid(cloud, {.tolerance = tolerance, .subset = inliers});
     if (clusters.clusters.empty()) return {};
     return std::move(clusters.clusters.front());
 }

@@ -46,7 +46,9 @@ struct SupportPlaneParams {
     float raised_gap = 0.3f;          ///< [m]
     float raised_ratio = 0.08f;       ///< [-]
     std::size_t max_samples = 20000;  ///< points used for the robust fit (strided subsample)
-    float cluster_tolerance = 0.02f;  ///< the table is the largest connected patch of inliers [m]
+    /// The table is the largest set of its plane's inliers connected within this distance: the
+    /// objects on it cut its visible top into pieces up to about their size apart [m].
+    float cluster_tolerance = 0.2f;
     std::uint64_t seed = 1;           ///< sample consensus seed
     int num_threads = 0;              ///< 0 = all cores
     /// Throws InvalidArgument naming the first out-of-range field.
@@ -78,7 +80,7 @@ struct SupportPlaneParams {
           "... if it holds this share of the largest plane's inliers [-]");
         v("max_samples", max_samples, "points used by the robust fit");
         v("cluster_tolerance", cluster_tolerance,
-          "the table is the largest connected patch of plane inliers [m]");
+          "the table is the largest set of plane inliers connected within this distance [m]");
         v("seed", seed, "sample consensus seed");
     }
 };
