@@ -85,7 +85,9 @@ def aggregate(osd_eval, gt_of, pred_dir, scenes):
             "pct_F75": tot.get("f75", 0) / max(tot.get("gt_objects", 0), 1),
             "F_os": tot.get("os_pts", 0) / max(tot.get("gt_pts", 0), 1),
             "F_us": tot.get("us_pts", 0) / max(tot.get("gt_pts", 0), 1),
-            "gt_objects": tot.get("gt_objects", 0), "pred_objects": tot.get("pred_objects", 0)}
+            "gt_objects": tot.get("gt_objects", 0), "pred_objects": tot.get("pred_objects", 0),
+            "category_acc": tot["cat_ok"] / tot["cat_total"] if tot.get("cat_total") else None,
+            "category_objects": tot.get("cat_total", 0)}
 
 
 def timing(per_scene):
@@ -218,7 +220,10 @@ def sim_split(args, osd_eval, mode):
 
 
 def fmt_group(g):
-    return f"{g['overlap_F']:.3f} / {g['pct_F75']:.3f} / {g['F_os']:.3f}"
+    text = f"{g['overlap_F']:.3f} / {g['pct_F75']:.3f} / {g['F_os']:.3f}"
+    if g.get("category_acc") is not None:
+        text += f" (categories {g['category_acc']:.3f} of {g['category_objects']})"
+    return text
 
 
 def print_tables(report):

@@ -285,6 +285,46 @@ TEST(PerceiveStages, CategoriserNamesRoundTrip) {
     EXPECT_FALSE(CategorizationParams{}.NeedsPartGraph());
 }
 
+TEST(PerceiveStages, ARoundProfileMakesACylinder) {
+    // Surfaces of revolution: a mug-like profile (radius 4 cm, 10 cm high) and a bowl.
+    auto object = [](Category c, std::vector<float> radii, float height) {
+        PerceivedObject o;
+        o.category.category = c;
+        o.category.probabilities[static_cast<std::size_t>(Category::kCylinder)] = 0.3f;
+        o.model.accepted = true;
+        RotationalModel rot;
+        rot.radii = std::move(radii);
+        for (std::size_t k = 0; k < rot.radii.size(); ++k)
+            rot.heights.push_back(height * static_cast<float>(k) / (rot.radii.size() - 1));
+        o.model.rotational = std::move(rot);
+        return o;
+    };
+    std::vector<PerceivedObject> objects;
+    objects.push_back(object(Category::kOther, {0.038f, 0.039f, 0.040f}, 0.10f));  // mug
+    objects.push_back(object(Category::kOther, {0.03f, 0.06f, 0.09f}, 0.08f));    // bowl
+    objects.push_back(object(Category::kSphere, {0.04f, 0.04f}, 0.02f));          // too low
+    objects.push_back(object(Category::kBox, {0.04f, 0.04f}, 0.10f));             // not other
+    objects.push_back(object(Category::kOther, {0.04f, 0.041f}, 0.10f));
+    objects.back().model.accepted = false;  // a rejected model says nothing
+    CategorizationParams p;
+    CategorizeByModels(objects, p);
+    EXPECT_EQ(objects[0].category.category, Category::kCylinder);
+    EXPECT_TRUE(objects[0].category_from_model);
+    EXPECT_FLOAT_EQ(objects[0].category.confidence, 0.3f);
+    EXPECT_EQ(objects[1].category.category, Category::kOther);
+    EXPECT_EQ(objects[2].category.category, Category::kSphere);
+    EXPECT_EQ(objects[3].category.category, Category::kBox);
+    EXPECT_EQ(objects[4].category.category, Category::kOther);
+    EXPECT_FALSE(objects[4].category_from_model);
+    // Off, and bad values.
+    std::vector<PerceivedObject> again{object(Category::kOther, {0.04f, 0.04f}, 0.1f)};
+    p.cylinder_profile_ratio = 0.0f;
+    CategorizeByModels(again, p);
+    EXPECT_EQ(again[0].category.category, Category::kOther);
+    p.cylinder_profile_ratio = 0.5f;
+    EXPECT_THROW(p.Validate(), InvalidArgument);
+}
+
 TEST(PerceiveStages, ModelsOfSomeObjects) {
     const auto& f = BoxAndCan();
     std::vector<PerceivedObject> objects = Objects(f);

@@ -277,6 +277,8 @@ struct PerceivedObject {
     /// rule-based categoriser.
     std::vector<CategoryDistribution> part_probabilities;
     CategoryResult category;
+    /// The category was set from the kept model (CategorizeByModels), not by the experts.
+    bool category_from_model = false;
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
     ObjectModel model;
 };

@@ -56,10 +56,10 @@ void CheckParams(const SupportPlaneParams& p) {
     }
 }
 
-bool IsIdentityPose(const PointCloud& c) {
-    return c.sensor_origin.norm() < 1e-9f &&
-           c.sensor_orientation.coeffs().isApprox(Eigen::Quaternionf::Identity().coeffs(), 1e-6f);
-}
+// A cloud is in a world frame when its sensor stands somewhere other than the origin. A rotation
+// alone is not a pose: OpenNI grabbers and PCL's sample scans store the optical frame with the
+// orientation (0, 1, 0, 0), a viewer convention.
+bool HasSensorPosition(const PointCloud& c) { return c.sensor_origin.norm() >= 1e-9f; }
 
 // Largest patch of the plane's inliers connected within `tolerance` in 3D (not in the image:
 // the objects on a table cut its visible top into pieces that no pixel path joins). Other
@@ -82,7 +82,7 @@ Indices FinitePoints(const PointCloud& cloud) {
 }
 
 // Up direction and how strictly the table must follow it: the given one, else world z when the
-// cloud has a sensor pose, else the camera's -y with the looser camera tilt.
+// cloud has a sensor position, else the camera's -y with the looser camera tilt.
 struct UpPrior {
     std::optional<Eigen::Vector3f> axis;
     float max_angle = 0.0f;
@@ -95,7 +95,7 @@ UpPrior ChooseUp(const PointCloud& cloud, const SupportPlaneParams& params) {
     if (params.up) {
         up.axis = params.up->normalized();
         up.source = UpSource::kGiven;
-    } else if (!IsIdentityPose(cloud)) {
+    } else if (HasSensorPosition(cloud)) {
         up.axis = Eigen::Vector3f::UnitZ();
         up.source = UpSource::kViewpoint;
     } else {

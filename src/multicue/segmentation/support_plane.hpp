@@ -19,8 +19,10 @@ namespace multicue {
 /// Where "up" came from.
 enum class UpSource {
     kGiven,      ///< SupportPlaneParams::up
-    kViewpoint,  ///< the cloud has a sensor pose, so it is in a world frame with z up
-    kCamera,     ///< sensor frame (identity VIEWPOINT): optical convention, up is roughly -y
+    kViewpoint,  ///< the sensor is away from the origin, so the cloud is in a world frame, z up
+    /// The sensor is at the origin (any VIEWPOINT rotation: OpenNI's and PCL's samples store
+    /// 0 1 0 0 for the optical frame): optical convention, up is roughly -y.
+    kCamera,
     kDominant,   ///< no hint: the dominant plane's normal, oriented towards the viewpoint
 };
 

@@ -1,6 +1,8 @@
 #include "multicue/system/object_categories.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -75,7 +77,33 @@ void CategorizationParams::Validate() const {
     }
     CheckExpertWeights(expert_weights);
     if (cluster_k < 1) throw InvalidArgument("cluster_k must be >= 1");
+    if (!(cylinder_profile_ratio == 0.0f || cylinder_profile_ratio >= 1.0f) ||
+        !std::isfinite(cylinder_profile_ratio)) {
+        throw InvalidArgument(fmt::format("cylinder_profile_ratio must be 0 or >= 1, got {}",
+                                          cylinder_profile_ratio));
+    }
     ResolveThreadCount(num_threads);
+}
+
+void CategorizeByModels(std::vector<PerceivedObject>& objects,
+                        const CategorizationParams& params) {
+    if (params.cylinder_profile_ratio == 0.0f) return;
+    for (PerceivedObject& o : objects) {
+        const Category c = o.category.category;
+        const auto& rot = o.model.rotational;
+        if ((c != Category::kOther && c != Category::kSphere) || !o.model.accepted || !rot ||
+            rot->radii.size() < 2) {
+            continue;
+        }
+        const auto [lo, hi] = std::minmax_element(rot->radii.begin(), rot->radii.end());
+        const float height = rot->heights.back() - rot->heights.front();
+        if (*lo > 0.0f && *hi <= params.cylinder_profile_ratio * *lo && height >= *hi) {
+            o.category.category = Category::kCylinder;
+            o.category.confidence =
+                o.category.probabilities[static_cast<std::size_t>(Category::kCylinder)];
+            o.category_from_model = true;
+        }
+    }
 }
 
 void CheckCategorizationModel(const CategorizationParams& params, const PartGraphModel* model) {

@@ -68,7 +68,12 @@ struct CategorizationParams {
     /// evaluation reports; finite, >= 0, not all 0.
     Eigen::Vector3f expert_weights{0.25f, 0.65f, 0.10f};
     std::size_t cluster_k = 5;  ///< neighbours of the whole-object expert [-]; >= 1
-    int num_threads = 0;        ///< objects categorised in parallel; 0 = all cores
+    /// Categories by the model (CategorizeByModels): an "other" or "sphere" object whose kept
+    /// model is a surface of revolution at least as high as its largest radius, with radii
+    /// within this ratio of each other, is a cylinder (a mug whose handle and noise split it
+    /// into many parts) [-]; 0 = off, else >= 1.
+    float cylinder_profile_ratio = 1.15f;
+    int num_threads = 0;  ///< objects categorised in parallel; 0 = all cores
     /// Whether the categoriser needs a part-graph model (every one but the rules).
     bool NeedsPartGraph() const { return categoriser != Categoriser::kRules; }
     /// Throws InvalidArgument (ParameterError for a sub-node) naming the first bad field.
@@ -90,8 +95,15 @@ struct CategorizationParams {
           "weights of the rules, part-graph and cluster experts in part-graph+rules+cluster");
         v("cluster_k", cluster_k,
           "neighbours of the whole-object expert (part-graph+rules+cluster, stacked)");
+        v("cylinder_profile_ratio", cylinder_profile_ratio,
+          "other/sphere objects whose kept surface of revolution has radii within this ratio "
+          "(and is as high as wide) are cylinders, 0 = off");
     }
 };
+
+/// Categories by the kept models: see CategorizationParams::cylinder_profile_ratio. Sets
+/// `category.category` (the experts' probabilities stay) and `category_from_model`.
+void CategorizeByModels(std::vector<PerceivedObject>& objects, const CategorizationParams& params);
 
 /// Throws InvalidArgument when `params` needs a part-graph model and `model` is null, or the
 /// stacked categoriser's model has no stacker.

@@ -144,6 +144,7 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
     refit(SplitStackedBoxes(cloud, objects, plane, params.models, min_points));
     refit(SplitTouchingBoxes(cloud, objects, plane, params.models, min_points));
     refit(SplitTouchingRound(cloud, objects, plane, params.models, min_points));
+    CategorizeByModels(objects, params.category);
     timer.Done("models");
 
     result.objects = std::move(objects);

@@ -146,6 +146,7 @@ nlohmann::ordered_json PerceiveResultJson(
         oj["id"] = o.id;
         oj["category"] = CategoryName(o.category.category);
         oj["confidence"] = Num(o.category.confidence);
+        if (o.category_from_model) oj["category_from"] = "model";
         nlohmann::ordered_json probs = nlohmann::ordered_json::object();
         for (std::size_t c = 1; c < kNumCategories; ++c) {
             probs[std::string(kCategoryNames[c])] = Num(o.category.probabilities[c]);
