@@ -209,4 +209,95 @@ int WindowHalfSizeForRadius(float radius, float depth, float focal_length) {
     return static_cast<int>(std::clamp(pixels, 1.0, kMaxHalfWindow));
 }
 
+namespace {
+
+// The pitch and origin of a lattice of values, or nothing: distinct values (merged within a
+// hundredth of the smallest gaps) and the median of the gaps between neighbours.
+std::optional<std::pair<double, double>> LatticeOf(std::vector<double> values) {
+    if (values.size() < 16) return std::nullopt;
+    std::sort(values.begin(), values.end());
+    const double span = values.back() - values.front();
+    if (!(span > 0.0)) return std::nullopt;
+    const double merge = span * 1e-6;
+    std::vector<double> distinct{values.front()};
+    for (double v : values) {
+        if (v - distinct.back() > merge) distinct.push_back(v);
+    }
+    if (distinct.size() < 8) return std::nullopt;
+    std::vector<double> gaps;
+    gaps.reserve(distinct.size() - 1);
+    for (std::size_t k = 1; k < distinct.size(); ++k) gaps.push_back(distinct[k] - distinct[k - 1]);
+    std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2),
+                     gaps.end());
+    const double pitch = gaps[gaps.size() / 2];
+    if (!(pitch > 0.0)) return std::nullopt;
+    return std::make_pair(pitch, values.front());
+}
+
+}  // namespace
+
+std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud) {
+    if (cloud.IsOrganized() || cloud.empty() || cloud.sensor_origin.norm() >= 1e-9f)
+        return std::nullopt;
+    const std::size_t n = cloud.size();
+    const Eigen::Matrix3f to_sensor = cloud.sensor_orientation.conjugate().toRotationMatrix();
+    std::vector<double> a, b;
+    a.reserve(n);
+    b.reserve(n);
+    Indices finite;
+    finite.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!cloud.points[i].allFinite()) continue;
+        const Eigen::Vector3f q = to_sensor * cloud.points[i];
+        if (!(q.z() > 1e-6f)) return std::nullopt;  // behind the camera: not one pinhole view
+        a.push_back(static_cast<double>(q.x()) / q.z());
+        b.push_back(static_cast<double>(q.y()) / q.z());
+        finite.push_back(static_cast<Index>(i));
+    }
+    const auto la = LatticeOf(a), lb = LatticeOf(b);
+    if (!la || !lb) return std::nullopt;
+    const auto [pa, a0] = *la;
+    const auto [pb, b0] = *lb;
+    const double width = std::round((*std::max_element(a.begin(), a.end()) - a0) / pa) + 1.0;
+    const double height = std::round((*std::max_element(b.begin(), b.end()) - b0) / pb) + 1.0;
+    if (width > 4096.0 || height > 4096.0 || height < 2.0 ||
+        width * height > 8.0 * static_cast<double>(finite.size())) {
+        return std::nullopt;
+    }
+    const auto w = static_cast<std::uint32_t>(width);
+    const auto h = static_cast<std::uint32_t>(height);
+    ImageGrid grid;
+    grid.input_of.assign(std::size_t{w} * h, ImageGrid::kNoPoint);
+    grid.pixel_of.assign(n, ImageGrid::kNoPoint);
+    std::size_t off_lattice = 0;
+    for (std::size_t k = 0; k < finite.size(); ++k) {
+        const double fu = (a[k] - a0) / pa, fv = (b[k] - b0) / pb;
+        const double u = std::round(fu), v = std::round(fv);
+        if (std::abs(fu - u) > 0.1 || std::abs(fv - v) > 0.1) ++off_lattice;
+        const std::size_t pixel = static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u);
+        if (grid.input_of[pixel] != ImageGrid::kNoPoint) return std::nullopt;  // shared pixel
+        grid.input_of[pixel] = finite[k];
+        grid.pixel_of[finite[k]] = static_cast<Index>(pixel);
+    }
+    if (off_lattice * 100 > finite.size()) return std::nullopt;
+
+    PointCloud& o = grid.organized;
+    o.width = w;
+    o.height = h;
+    o.sensor_origin = cloud.sensor_origin;
+    o.sensor_orientation = cloud.sensor_orientation;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    o.points.assign(grid.input_of.size(), Eigen::Vector3f::Constant(nan));
+    if (cloud.HasNormals()) o.normals.assign(o.points.size(), Eigen::Vector3f::Constant(nan));
+    if (cloud.HasColors()) o.colors.assign(o.points.size(), Color{});
+    for (std::size_t p = 0; p < grid.input_of.size(); ++p) {
+        const Index i = grid.input_of[p];
+        if (i == ImageGrid::kNoPoint) continue;
+        o.points[p] = cloud.points[i];
+        if (!o.normals.empty()) o.normals[p] = cloud.normals[i];
+        if (!o.colors.empty()) o.colors[p] = cloud.colors[i];
+    }
+    return grid;
+}
+
 }  // namespace multicue

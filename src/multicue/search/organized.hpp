@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "multicue/core/point_cloud.hpp"
@@ -61,5 +62,24 @@ float EstimateFocalLength(const PointCloud& cloud);
 /// The result is clamped to 1'000'000. Throws InvalidArgument if radius or focal_length is not > 0
 /// and finite or depth is zero or not finite.
 int WindowHalfSizeForRadius(float radius, float depth, float focal_length);
+
+/// An unorganized cloud that came from a depth image (a frame saved without its invalid pixels)
+/// put back on its pixel grid.
+struct ImageGrid {
+    PointCloud organized;  ///< width x height, NaN where no input point fell; all input fields
+    Indices input_of;      ///< per pixel: the input point's index, or kNoPoint
+    Indices pixel_of;      ///< per input point: its pixel, or kNoPoint (a non-finite point)
+    static constexpr Index kNoPoint = std::numeric_limits<Index>::max();
+};
+
+/// Recovers the pixel grid of an unorganized cloud in the sensor frame of a pinhole camera
+/// (sensor at the origin, any orientation, points in front along +z): x/z and y/z of such points
+/// take values (u - c_x) / f_x and (v - c_y) / f_y on two lattices. The pitch of each lattice is
+/// the median gap between neighbouring distinct values; the grid is accepted when at least 99 %
+/// of the points lie within a tenth of a pixel of a lattice node, no two points share a pixel,
+/// and the image has at most 4096 x 4096 pixels and 8 times as many pixels as points. Returns
+/// nothing otherwise (a cloud that was filtered, merged from several views, transformed into a
+/// world frame, or from a laser scanner), and for organized or empty clouds.
+std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud);
 
 }  // namespace multicue

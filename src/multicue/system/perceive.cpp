@@ -1,12 +1,15 @@
 #include "multicue/system/perceive.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/search/organized.hpp"
 
 namespace multicue {
 namespace {
@@ -101,10 +104,11 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result) {
     }
 }
 
-PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
-                        const PerceiveModels& models) {
-    const PerceiveParams params = ApplyThreadCount(given);
-    CheckInputs(input, params, models);
+namespace {
+
+// The stages on one frame (parameters checked already).
+PerceiveResult PerceiveFrame(const PointCloud& input, const PerceiveParams& params,
+                             const PerceiveModels& models) {
     PerceiveResult result;
     result.points = input.size();
     StageTimer timer(result.timings_ms);
@@ -149,6 +153,43 @@ PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
 
     result.objects = std::move(objects);
     LabelPoints(cloud, result);
+    return result;
+}
+
+// Point indices of the recovered grid mapped to the input's, ascending.
+void ToInput(Indices& indices, const ImageGrid& grid) {
+    for (Index& i : indices) i = grid.input_of[i];
+    std::sort(indices.begin(), indices.end());
+}
+
+}  // namespace
+
+PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
+                        const PerceiveModels& models) {
+    const PerceiveParams params = ApplyThreadCount(given);
+    CheckInputs(input, params, models);
+    PerceiveResult result;
+    const auto start = std::chrono::steady_clock::now();
+    std::optional<ImageGrid> grid;
+    if (params.image_grid && !input.IsOrganized()) grid = RecoverImageGrid(input);
+    if (!grid) {
+        result = PerceiveFrame(input, params, models);
+    } else {
+        const double ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
+        result = PerceiveFrame(grid->organized, params, models);
+        result.timings_ms.insert(result.timings_ms.begin(), {"image_grid", ms});
+        result.points = input.size();
+        ToInput(result.support.inliers, *grid);
+        for (PerceivedObject& o : result.objects) {
+            ToInput(o.indices, *grid);
+            for (Indices& part : o.parts) ToInput(part, *grid);
+        }
+        LabelPoints(input, result);
+        LogDebug("perceive: the unorganized cloud was perceived on its {}x{} pixel grid",
+                 grid->organized.width, grid->organized.height);
+    }
     LogInfo("perceive: support {}, {} objects", result.support.found ? "found" : "none",
             result.objects.size());
     return result;

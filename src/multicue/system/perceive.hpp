@@ -33,6 +33,10 @@ namespace multicue {
 /// Every parameter of the pipeline, one node per configuration section.
 struct PerceiveParams {
     int num_threads = 0;  ///< "threads": 0 = all cores; set in every stage (ApplyThreadCount)
+    /// An unorganized cloud that is a depth image saved without its invalid pixels is put back
+    /// on its pixel grid (RecoverImageGrid) and perceived as the frame it was; the result refers
+    /// to the input's points.
+    bool image_grid = true;
     FrameNormalParams normals{};  ///< normals of the region above the table
     SupportPlaneParams support{};
     PrismParams prism{.min_height = 0.008f, .max_height = 0.5f};  ///< the region above the table
@@ -49,6 +53,9 @@ struct PerceiveParams {
     template <typename V>
     void VisitParams(V& v) {
         v("threads", num_threads, "worker threads, 0 = all cores");
+        v("image_grid", image_grid,
+          "perceive an unorganized depth frame (invalid pixels dropped) on its recovered pixel "
+          "grid");
         v.Node("normals", normals);
         v.Node("support", support);
         v.Node("prism", prism);
