@@ -232,3 +232,78 @@ TEST(OrganizedSearch, ScaledWindowFindsEveryRadiusNeighbour) {
 
 }  // namespace
 }  // namespace multicue
+
+namespace multicue {
+namespace {
+
+// The finite points of an organized frame in a shuffled order, without the grid.
+PointCloud DropGrid(const PointCloud& organized, std::uint32_t seed, Indices& pixel_of_point) {
+    Indices order;
+    for (std::size_t i = 0; i < organized.size(); ++i) {
+        if (organized.points[i].allFinite()) order.push_back(static_cast<Index>(i));
+    }
+    std::mt19937 rng(seed);
+    std::shuffle(order.begin(), order.end(), rng);
+    PointCloud flat;
+    for (Index i : order) flat.points.push_back(organized.points[i]);
+    flat.SetUnorganized();
+    pixel_of_point = order;
+    return flat;
+}
+
+TEST(RecoverImageGrid, PutsADepthFrameBackOnItsPixels) {
+    const PointCloud frame = PinholeCloud(160, 120, 140.0f, 5);
+    Indices pixel_of_point;
+    PointCloud flat = DropGrid(frame, 2, pixel_of_point);
+    // A rotation alone (PCL's 0 1 0 0 convention) keeps it a sensor frame.
+    flat.sensor_orientation = Eigen::Quaternionf(0.0f, 1.0f, 0.0f, 0.0f);
+    const auto grid = RecoverImageGrid(flat);
+    ASSERT_TRUE(grid.has_value());
+    // The image may lose empty border columns or rows, never a point; pixels keep their layout.
+    ASSERT_TRUE(grid->organized.IsOrganized());
+    EXPECT_LE(grid->organized.width, 160u);
+    EXPECT_LE(grid->organized.height, 120u);
+    EXPECT_GE(grid->organized.width, 158u);
+    const std::uint32_t w = grid->organized.width;
+    for (std::size_t k = 0; k < flat.size(); ++k) {
+        const Index p = grid->pixel_of[k];
+        ASSERT_NE(p, ImageGrid::kNoPoint);
+        EXPECT_EQ(grid->input_of[p], k);
+        EXPECT_EQ(grid->organized.points[p], flat.points[k]);
+        if (k > 0) {
+            // Neighbouring pixels of the frame are neighbouring pixels of the grid.
+            const Index a = pixel_of_point[k], b = pixel_of_point[k - 1];
+            const int du = static_cast<int>(a % 160) - static_cast<int>(b % 160);
+            const int dv = static_cast<int>(a / 160) - static_cast<int>(b / 160);
+            const int gu = static_cast<int>(p % w) - static_cast<int>(grid->pixel_of[k - 1] % w);
+            const int gv = static_cast<int>(p / w) - static_cast<int>(grid->pixel_of[k - 1] / w);
+            EXPECT_EQ(du, gu);
+            EXPECT_EQ(dv, gv);
+        }
+    }
+}
+
+TEST(RecoverImageGrid, NothingForCloudsThatAreNotOneDepthImage) {
+    const PointCloud frame = PinholeCloud(80, 60, 70.0f, 7);
+    Indices order;
+    PointCloud flat = DropGrid(frame, 3, order);
+    ASSERT_TRUE(RecoverImageGrid(flat).has_value());
+    EXPECT_FALSE(RecoverImageGrid(frame).has_value());         // organized already
+    EXPECT_FALSE(RecoverImageGrid(PointCloud{}).has_value());  // empty
+    PointCloud world = flat;                                   // in a world frame
+    world.sensor_origin = {0.0f, 0.0f, 1.5f};
+    EXPECT_FALSE(RecoverImageGrid(world).has_value());
+    PointCloud jittered = flat;  // filtered or merged: off the lattice
+    std::mt19937 rng(4);
+    std::normal_distribution<float> noise(0.0f, 0.003f);
+    for (auto& p : jittered.points) p += Eigen::Vector3f(noise(rng), noise(rng), 0.0f);
+    EXPECT_FALSE(RecoverImageGrid(jittered).has_value());
+    PointCloud doubled = flat;  // two points on one pixel
+    doubled.points.push_back(flat.points.front() * 1.1f);
+    doubled.SetUnorganized();
+    EXPECT_FALSE(RecoverImageGrid(doubled).has_value());
+    EXPECT_FALSE(RecoverImageGrid(test::RandomCloud(2000, 1)).has_value());
+}
+
+}  // namespace
+}  // namespace multicue

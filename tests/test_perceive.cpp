@@ -110,6 +110,37 @@ TEST(Perceive, DemoSceneObjectsCategoriesAndModels) {
     }
 }
 
+// A frame saved without its invalid pixels, in another order, is perceived as the frame was.
+TEST(Perceive, AnUnorganizedDepthFrameIsPerceivedOnItsPixelGrid) {
+    const auto& s = DemoScene();
+    Indices order;
+    for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+        if (s.cloud.points[i].allFinite()) order.push_back(static_cast<Index>(i));
+    }
+    std::reverse(order.begin(), order.end());
+    PointCloud flat;
+    for (Index i : order) flat.points.push_back(s.cloud.points[i]);
+    flat.SetUnorganized();
+    flat.sensor_origin = s.cloud.sensor_origin;
+    flat.sensor_orientation = s.cloud.sensor_orientation;
+    const PerceiveResult framed = Perceive(s.cloud, PerceiveParams{});
+    const PerceiveResult r = Perceive(flat, PerceiveParams{});
+    ASSERT_EQ(r.objects.size(), framed.objects.size());
+    ASSERT_EQ(r.point_objects.size(), flat.size());
+    ASSERT_FALSE(r.timings_ms.empty());
+    EXPECT_EQ(r.timings_ms.front().first, "image_grid");
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        ASSERT_EQ(r.point_objects[k], framed.point_objects[order[k]]) << "point " << k;
+        ASSERT_EQ(r.point_categories[k], framed.point_categories[order[k]]);
+    }
+    for (const auto& o : r.objects) EXPECT_TRUE(std::is_sorted(o.indices.begin(), o.indices.end()));
+    // Without the grid the same cloud goes the unorganized way.
+    PerceiveParams off;
+    off.image_grid = false;
+    const PerceiveResult plain = Perceive(flat, off);
+    EXPECT_TRUE(plain.timings_ms.empty() || plain.timings_ms.front().first != "image_grid");
+}
+
 TEST(Perceive, OccludedBoxIsOneObject) {
     // A wide box behind a tall thin one that splits it in two in the image: clustering sees two
     // fragments, the occlusion merge joins them.
@@ -433,11 +464,17 @@ TEST(Perceive, PartGraphPlusRulesBlendsTheTwo) {
     PerceiveParams p;
     const PerceiveModels models{model};
     p.category.categoriser = Categoriser::kPartGraphRules;
+    p.category.cylinder_profile_ratio = 0.0f;  // the experts' categories, not the models'
+    const PerceiveResult rules_only = [&] {
+        PerceiveParams r;
+        r.category.cylinder_profile_ratio = 0.0f;
+        return Perceive(s.cloud, r);
+    }();
     p.category.part_graph_weight = 0.0f;
     const PerceiveResult w0 = Perceive(s.cloud, p, models);
-    ASSERT_EQ(w0.objects.size(), rules.objects.size());
+    ASSERT_EQ(w0.objects.size(), rules_only.objects.size());
     for (std::size_t k = 0; k < w0.objects.size(); ++k) {
-        EXPECT_EQ(w0.objects[k].category.category, rules.objects[k].category.category);
+        EXPECT_EQ(w0.objects[k].category.category, rules_only.objects[k].category.category);
     }
     p.category.part_graph_weight = 1.0f;
     const PerceiveResult w1 = Perceive(s.cloud, p, models);

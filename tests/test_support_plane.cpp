@@ -173,12 +173,35 @@ TEST(SupportPlane, ATableWithObjectsOnTheFloorIsTheTable) {
     }
     AddBox(c, {-0.2f, -0.1f, 0.72f}, {0.0f, 0.1f, 0.9f}, 0.006f, rng);
     AddBox(c, {0.15f, -0.1f, 0.72f}, {0.3f, 0.05f, 0.8f}, 0.006f, rng);
-    c.SetUnorganized();
     c.sensor_origin = {0.0f, -1.2f, 1.4f};
+    // What the table top hides from the sensor: points below it whose ray crosses it.
+    std::erase_if(c.points, [&](const Eigen::Vector3f& p) {
+        if (p.z() >= 0.71f) return false;
+        const Eigen::Vector3f o = c.sensor_origin;
+        const Eigen::Vector3f x = o + (o.z() - 0.72f) / (o.z() - p.z()) * (p - o);
+        return std::abs(x.x()) < 0.5f && std::abs(x.y()) < 0.3f;
+    });
+    c.SetUnorganized();
     c.sensor_orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.5f, Eigen::Vector3f::UnitX()));
     const SupportPlane s = FindSupportPlane(c, {});
     ASSERT_TRUE(s.found);
     EXPECT_NEAR(-s.plane.w() / s.plane.z(), 0.72f, 0.01f);
+}
+
+TEST(SupportPlane, APlaneThroughObjectTopsWithTheTableSeenBetweenIsNoSupport) {
+    // Two boxes of equal height on a table the cloud holds only between them: the plane through
+    // their tops has the table below it inside its hull.
+    std::mt19937 rng(29);
+    PointCloud c;
+    AddBox(c, {-0.3f, -0.1f, 0.75f}, {-0.1f, 0.1f, 0.95f}, 0.006f, rng);
+    AddBox(c, {0.1f, -0.1f, 0.75f}, {0.3f, 0.1f, 0.95f}, 0.006f, rng);
+    AddHorizontal(c, -0.08f, 0.08f, -0.1f, 0.1f, 0.75f, 0.01f, rng);
+    c.SetUnorganized();
+    c.sensor_origin = {0.0f, -0.8f, 1.5f};
+    const SupportPlane s = FindSupportPlane(c, {});
+    if (s.found) {
+        EXPECT_NEAR(-s.plane.w() / s.plane.z(), 0.75f, 0.01f);
+    }
 }
 
 TEST(SupportPlane, TheRegionAboveTheTableHoldsTheObjects) {

@@ -240,16 +240,18 @@ std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud) {
     if (cloud.IsOrganized() || cloud.empty() || cloud.sensor_origin.norm() >= 1e-9f)
         return std::nullopt;
     const std::size_t n = cloud.size();
-    const Eigen::Matrix3f to_sensor = cloud.sensor_orientation.conjugate().toRotationMatrix();
     std::vector<double> a, b;
     a.reserve(n);
     b.reserve(n);
     Indices finite;
     finite.reserve(n);
+    int side = 0;  // the sign of z: a camera looks along +z (or -z), never both ways
     for (std::size_t i = 0; i < n; ++i) {
-        if (!cloud.points[i].allFinite()) continue;
-        const Eigen::Vector3f q = to_sensor * cloud.points[i];
-        if (!(q.z() > 1e-6f)) return std::nullopt;  // behind the camera: not one pinhole view
+        const Eigen::Vector3f& q = cloud.points[i];
+        if (!q.allFinite()) continue;
+        const int s = q.z() > 1e-6f ? 1 : q.z() < -1e-6f ? -1 : 0;
+        if (s == 0 || (side != 0 && s != side)) return std::nullopt;
+        side = s;
         a.push_back(static_cast<double>(q.x()) / q.z());
         b.push_back(static_cast<double>(q.y()) / q.z());
         finite.push_back(static_cast<Index>(i));

@@ -72,9 +72,10 @@ struct ImageGrid {
     static constexpr Index kNoPoint = std::numeric_limits<Index>::max();
 };
 
-/// Recovers the pixel grid of an unorganized cloud in the sensor frame of a pinhole camera
-/// (sensor at the origin, any orientation, points in front along +z): x/z and y/z of such points
-/// take values (u - c_x) / f_x and (v - c_y) / f_y on two lattices. The pitch of each lattice is
+/// Recovers the pixel grid of an unorganized cloud in the optical frame of a pinhole camera
+/// (sensor at the origin; a VIEWPOINT rotation alone is a viewer convention and is ignored; every
+/// point in front along +z, or every point along -z): x/z and y/z of such points take values
+/// (u - c_x) / f_x and (v - c_y) / f_y on two lattices. The pitch of each lattice is
 /// the median gap between neighbouring distinct values; the grid is accepted when at least 99 %
 /// of the points lie within a tenth of a pixel of a lattice node, no two points share a pixel,
 /// and the image has at most 4096 x 4096 pixels and 8 times as many pixels as points. Returns

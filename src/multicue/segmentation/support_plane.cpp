@@ -146,21 +146,46 @@ std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& 
 }
 
 // What a candidate supports (section 2.4, "by what it supports"): the subsample's points that
-// stand above it, inside the hull of its largest connected patch of inliers, no higher than the
-// prism reaches. The top of a box holds (almost) nothing; the table holds every object on it.
+// stand above it, inside the hull of its largest patch of inliers (shrunk by a margin, so that a
+// wall rising from its edge does not count), no higher than the prism reaches. The top of a box
+// holds (almost) nothing; the table holds every object on it. A plane through which the sensor
+// sees points below it (a plane through the tops of several objects, with the table seen between
+// them) supports nothing: nothing is seen through a table top.
 std::size_t CountSupported(const PointCloud& sample_cloud, const Indices& inliers,
-                           const Eigen::Vector4f& plane, const SupportPlaneParams& params,
-                           const PrismParams& prism) {
+                           const Eigen::Vector4f& plane, const Eigen::Vector3f& viewpoint,
+                           const SupportPlaneParams& params, const PrismParams& prism) {
     const ClusteringResult patches = EuclideanClusteringGrid(
         sample_cloud, {.tolerance = params.cluster_tolerance, .subset = inliers});
     if (patches.clusters.empty()) return 0;
     const std::vector<Eigen::Vector3f> hull =
         PlaneConvexHull(sample_cloud, patches.clusters.front(), plane);
     if (hull.size() < 3) return 0;
-    PrismParams above = prism;
-    above.min_height = std::max(prism.min_height, params.distance_threshold);
-    above.max_height = std::max(above.min_height, prism.max_height);
-    return PolygonalPrism(sample_cloud, plane, hull, above).size();
+    const Eigen::Vector3f up = plane.head<3>();
+    std::vector<Eigen::Vector3f> inward(hull.size());
+    for (std::size_t k = 0; k < hull.size(); ++k) {
+        inward[k] = up.cross(hull[(k + 1) % hull.size()] - hull[k]).normalized();
+    }
+    const float margin = 2.0f * params.distance_threshold;
+    auto inside = [&](const Eigen::Vector3f& p) {
+        for (std::size_t k = 0; k < hull.size(); ++k) {
+            if (inward[k].dot(p - hull[k]) < margin) return false;
+        }
+        return true;
+    };
+    const float low = std::max(prism.min_height, params.distance_threshold);
+    const float high = std::max(low, prism.max_height);
+    const float eye = up.dot(viewpoint) + plane.w();  // > 0: the normal faces the viewpoint
+    std::size_t above = 0, through = 0;
+    for (const Eigen::Vector3f& p : sample_cloud.points) {
+        const float h = up.dot(p) + plane.w();
+        if (h >= low && h <= high) {
+            above += inside(p) ? 1 : 0;
+        } else if (h < -2.0f * params.distance_threshold && eye > 0.0f) {
+            // Where the ray from the sensor to p crosses the plane.
+            through += inside(viewpoint + (eye / (eye - h)) * (p - viewpoint)) ? 1 : 0;
+        }
+    }
+    return through * 4 > above ? 0 : above;
 }
 
 float ViewDistance(const PlaneFit& c, const PointCloud& cloud) {
@@ -229,7 +254,8 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
         local.reserve(candidates[k].inliers.size());
         for (Index i : candidates[k].inliers) local.push_back(position_of[i]);
         std::sort(local.begin(), local.end());
-        supported[k] = CountSupported(sample_cloud, local, candidates[k].plane, params, prism);
+        supported[k] = CountSupported(sample_cloud, local, candidates[k].plane,
+                                      cloud.sensor_origin, params, prism);
     }
     const auto needed = static_cast<std::size_t>(
         std::ceil(params.min_supported_fraction * static_cast<float>(sample.size())));
@@ -304,7 +330,8 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     TableRegion region;
     region.support = FindSupportPlane(cloud, support, prism);
     const SupportPlane& s = region.support;
-    if (s.found && s.hull.size() >= 3)
+    // A plane that supports nothing (see-through, or nothing stands on it) is no table.
+    if (s.found && s.hull.size() >= 3 && s.supported > 0)
         region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
     if (region.points.empty()) {
         region.support = SupportPlane{};

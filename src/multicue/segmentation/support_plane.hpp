@@ -37,7 +37,7 @@ struct SupportPlaneParams {
     /// largest patch, up to the prism's height), if that is at least this share of the sampled
     /// points; the top of a box supports little, a table every object. Below it, no candidate
     /// supports anything and the choice is by view (the next three fields).
-    float min_supported_fraction = 0.002f;
+    float min_supported_fraction = 0.01f;
     /// Choice by view: candidates with at least this share of the largest one's inliers compete
     /// on distance to the viewpoint; the nearest wins ("largest plane nearest the viewpoint").
     float size_ratio_to_compete = 0.5f;
@@ -95,7 +95,9 @@ struct SupportPlane {
     Eigen::Vector3f up = Eigen::Vector3f::UnitZ();  ///< up used for the search (unit)
     UpSource up_source = UpSource::kDominant;
     int candidates = 0;  ///< planes extracted before choosing
-    std::size_t supported = 0;  ///< sampled points standing on the chosen plane
+    /// Sampled points standing on the chosen plane; 0 when nothing stands on it or the sensor
+    /// sees points through it.
+    std::size_t supported = 0;
 };
 
 /// Finds the support plane; `prism` bounds the height at which points count as standing on a
@@ -112,8 +114,8 @@ struct TableRegion {
 
 /// The table and the points standing on it (thesis section 2.4): FindSupportPlane, then the
 /// polygonal prism (`prism`) over the plane's hull. Without a plane, or with a plane that
-/// supports nothing (the top of a box in a cloud of objects), every finite point may belong to an
-/// object and `support` is reset to "none". Throws InvalidArgument for bad parameters.
+/// supports nothing (SupportPlane::supported = 0: the top of a box in a cloud of objects), every
+/// finite point may belong to an object and `support` is reset to "none". Throws InvalidArgument for bad parameters.
 TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& support,
                             const PrismParams& prism);
 
