@@ -152,7 +152,10 @@ TEST(Cli, SimulateMeshSplitUsesOneHalf) {
     ASSERT_EQ(r.code, 0) << r.output;
     std::vector<sim::MeshEntry> lib;
     for (int i = 0; i < 6; ++i) {
-        lib.push_back({.file = "cube" + std::to_string(i) + ".obj", .category = "box"});
+        sim::MeshEntry e;
+        e.file = "cube" + std::to_string(i) + ".obj";
+        e.category = "box";
+        lib.push_back(e);
     }
     std::set<std::string> test_half;
     for (const auto& e : sim::SelectMeshSplit(lib, sim::MeshSplit::kTest)) {

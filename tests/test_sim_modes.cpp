@@ -216,7 +216,20 @@ TEST(SimModes, DefaultModeSceneIsUnchanged) {
         std::vector<std::string> sources;
         Eigen::Vector3f first, last;  // translations of the first and last object
     };
-    const std::vector<Pinned> pinned = {};
+    const std::vector<Pinned> pinned = {
+        {0,
+         {"flat_box", "irregular", "mug"},
+         {-0.127377093f, 0.0478798896f, 0.747413576f},
+         {-0.207509995f, 0.212344855f, 0.723685384f}},
+        {1,
+         {"pitcher", "plate", "plate"},
+         {0.414508402f, -0.0432196446f, 0.725091457f},
+         {-0.12090157f, 0.0667384416f, 0.740911484f}},
+        {2,
+         {"plate", "can", "plate", "plate", "pitcher", "flat_box", "can"},
+         {0.0580617227f, -0.229479417f, 0.748807967f},
+         {-0.0680473372f, 0.232208148f, 0.748807967f}},
+    };
     for (const auto& p : pinned) {
         const Scene s = MakeTableScene({}, SubSeed(9, p.stream));
         const auto objects = Objects(s);
