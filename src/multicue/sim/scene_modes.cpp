@@ -415,9 +415,13 @@ class Composer {
         if (placement != ObjectPlacement::kLeaning && placement != ObjectPlacement::kNested) {
             b.block = IsBlock(c.model);
             if (b.block) {
+                // The top face: vertices within 1 mm of the highest point, or within up to 4 mm
+                // (3 % of the height) for scanned meshes whose tops are not quite flat; what is
+                // put on it rests at the highest point, so it never sinks in.
+                const float band = std::max(1e-3f, std::min(4e-3f, 0.03f * c.height));
                 Polygon top;
                 for (const auto& v : c.vertices) {
-                    if (v.z() >= c.height - 1e-3f) top.push_back(v.head<2>() + at);
+                    if (v.z() >= c.height - band) top.push_back(v.head<2>() + at);
                 }
                 top = ConvexHull2D(std::move(top));
                 if (top.size() >= 3 && Area(top) >= 0.3f * Area(b.footprint)) b.top = top;
