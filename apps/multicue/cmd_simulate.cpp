@@ -18,6 +18,7 @@
 #include "multicue/core/progress.hpp"
 #include "multicue/io/file_utils.hpp"
 #include "multicue/io/point_cloud_io.hpp"
+#include "multicue/sim/mesh_split.hpp"
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
@@ -33,9 +34,11 @@ struct SimulateOptions {
     std::uint64_t seed = 1;
     std::string sensor = "kinect";
     int scenes = 10;
-    int views = 0;  // 0: 1 per scene, 16 per object
-    std::string objects = "3,8";
-    float clutter = 0.3f;
+    int views = 0;                 // 0: 1 per scene, 16 per object
+    std::string objects;           // empty: the scene mode's range
+    std::optional<float> clutter;  // unset: the scene mode's clutter
+    std::string scene_mode = "default";
+    std::string mesh_split = "all";
     std::string meshes;
     int count = 0;  // objects mode: procedural objects (default 2 per category)
     bool strict = false;
@@ -116,26 +119,11 @@ json ObjectsJson(const sim::Scene& scene) {
                            {"translation", {t.x(), t.y(), t.z()}},
                            {"rotation_wxyz", {q.w(), q.x(), q.y(), q.z()}},
                            {"color", {o.color.r, o.color.g, o.color.b}},
+                           {"placement", sim::ObjectPlacementName(o.placement)},
+                           {"support", o.support},
                            {"parts", o.mesh->part_names}});
     }
     return objects;
-}
-
-void CheckOptions(const SimulateOptions& o) {
-    if (o.mode != "scenes" && o.mode != "objects" && o.mode != "rooms") {
-        throw InvalidArgument(
-            fmt::format("simulate: MODE must be scenes, objects or rooms, got '{}'", o.mode));
-    }
-    if (o.sensor != "kinect" && o.sensor != "laser" && o.sensor != "tof") {
-        throw InvalidArgument(
-            fmt::format("--sensor must be kinect, laser or tof, got '{}'", o.sensor));
-    }
-    if (o.scenes < 0) throw InvalidArgument(fmt::format("--scenes must be >= 0, got {}", o.scenes));
-    if (o.views < 0) throw InvalidArgument(fmt::format("--views must be >= 0, got {}", o.views));
-    if (o.count < 0) throw InvalidArgument(fmt::format("--count must be >= 0, got {}", o.count));
-    if (o.mode == "rooms" && o.meshes.empty()) {
-        throw InvalidArgument("simulate rooms needs --meshes with a furniture library");
-    }
 }
 
 std::pair<int, int> ParseRange(const std::string& text) {
@@ -155,6 +143,55 @@ std::pair<int, int> ParseRange(const std::string& text) {
         throw InvalidArgument(fmt::format("--objects needs 0 <= MIN <= MAX, got '{}'", text));
     }
     return {lo, hi};
+}
+
+void CheckOptions(const SimulateOptions& o) {
+    if (o.mode != "scenes" && o.mode != "objects" && o.mode != "rooms") {
+        throw InvalidArgument(
+            fmt::format("simulate: MODE must be scenes, objects or rooms, got '{}'", o.mode));
+    }
+    if (o.sensor != "kinect" && o.sensor != "laser" && o.sensor != "tof") {
+        throw InvalidArgument(
+            fmt::format("--sensor must be kinect, laser or tof, got '{}'", o.sensor));
+    }
+    if (o.scenes < 0) throw InvalidArgument(fmt::format("--scenes must be >= 0, got {}", o.scenes));
+    if (o.views < 0) throw InvalidArgument(fmt::format("--views must be >= 0, got {}", o.views));
+    if (o.count < 0) throw InvalidArgument(fmt::format("--count must be >= 0, got {}", o.count));
+    if (o.mode == "rooms" && o.meshes.empty()) {
+        throw InvalidArgument("simulate rooms needs --meshes with a furniture library");
+    }
+    try {
+        sim::ParseTableSceneMode(o.scene_mode);
+    } catch (const InvalidArgument&) {
+        throw InvalidArgument(fmt::format(
+            "--mode must be default, boxes, stacked, occluded, cylindric, mixed or complex, got "
+            "'{}'",
+            o.scene_mode));
+    }
+    if (o.scene_mode != "default" && o.mode != "scenes") {
+        throw InvalidArgument(fmt::format("--mode {} needs simulate scenes", o.scene_mode));
+    }
+    try {
+        sim::ParseMeshSplit(o.mesh_split);
+    } catch (const InvalidArgument&) {
+        throw InvalidArgument(
+            fmt::format("--mesh-split must be all, tune or test, got '{}'", o.mesh_split));
+    }
+    if (o.mesh_split != "all" && o.meshes.empty()) {
+        throw InvalidArgument("--mesh-split needs --meshes (procedural objects have no split)");
+    }
+    if (!o.objects.empty()) ParseRange(o.objects);
+    if (o.clutter && !(*o.clutter >= 0.0f && *o.clutter <= 1.0f)) {
+        throw InvalidArgument(fmt::format("--clutter must be in [0, 1], got {}", *o.clutter));
+    }
+}
+
+// The table scene parameters: the scene mode's, with --objects and --clutter when given.
+sim::TableSceneParams TableParams(const SimulateOptions& o) {
+    sim::TableSceneParams table = sim::TableSceneParamsFor(sim::ParseTableSceneMode(o.scene_mode));
+    if (!o.objects.empty()) std::tie(table.min_objects, table.max_objects) = ParseRange(o.objects);
+    if (o.clutter) table.clutter = *o.clutter;
+    return table;
 }
 
 class Simulator {
@@ -180,9 +217,7 @@ class Simulator {
         sim::ObjectSource source = OpenSource();
         StartManifest();
         const int views = o_.views > 0 ? o_.views : (o_.mode == "objects" ? 16 : 1);
-        sim::TableSceneParams table;
-        std::tie(table.min_objects, table.max_objects) = ParseRange(o_.objects);
-        table.clutter = o_.clutter;
+        const sim::TableSceneParams table = TableParams(o_);
         const std::size_t n_jobs = JobCount(source);
         Progress progress("simulate", n_jobs * static_cast<std::size_t>(views),
                           o_.quiet ? ProgressStyle::kSilent : ProgressStyle::kAuto);
@@ -222,7 +257,13 @@ class Simulator {
         if (o_.meshes.empty()) return sim::ObjectSource();
         const auto& cats =
             o_.mode == "rooms" ? sim::FurnitureCategories() : sim::TabletopCategories();
-        return sim::ObjectSource(sim::ReadMeshLibrary(o_.meshes, cats), o_.strict);
+        auto library = sim::SelectMeshSplit(sim::ReadMeshLibrary(o_.meshes, cats),
+                                            sim::ParseMeshSplit(o_.mesh_split));
+        if (library.empty()) {
+            throw DataError(
+                fmt::format("{}: no meshes in the '{}' half", o_.meshes, o_.mesh_split));
+        }
+        return sim::ObjectSource(std::move(library), o_.strict);
     }
 
     // The manifest's header; "complete" stays false until every scene is written.
@@ -232,6 +273,7 @@ class Simulator {
                      {"seed", o_.seed},
                      {"sensor", SensorJson(o_.sensor, kinect_, laser_, tof_)},
                      {"meshes", o_.meshes},
+                     {"mesh_split", o_.mesh_split},
                      {"categories", sim::CategoryNames()},
                      {"labels", "0 none, 1 table, 2 floor, 3 wall, 10*(k+1) object k"},
                      {"fields",
@@ -273,7 +315,8 @@ class Simulator {
             poses = sim::TurntableViews(scene, views, turntable);
         } else if (o_.mode == "scenes") {
             scene = sim::MakeTableScene(table, source, seed);
-            poses = sim::TableViewpoints(scene, views, {}, seed);
+            poses =
+                sim::TableViewpoints(scene, views, sim::TableViewpointParamsFor(table.mode), seed);
         } else {
             scene = sim::MakeRoomScene({}, source, seed);
             const auto head = sim::RoomLaserPose(scene, 1.5f, seed);
@@ -330,14 +373,15 @@ class Simulator {
             progress.Advance();
         }
         const auto c = scene.support_center;
-        manifest_["scenes"].push_back(
-            {{"id", i},
-             {"seed", seed},
-             {"support",
-              {{"center", {c.x(), c.y(), c.z()}},
-               {"size", {scene.support_size.x(), scene.support_size.y()}}}},
-             {"objects", ObjectsJson(scene)},
-             {"frames", frames}});
+        json entry = {{"id", i},
+                      {"seed", seed},
+                      {"support",
+                       {{"center", {c.x(), c.y(), c.z()}},
+                        {"size", {scene.support_size.x(), scene.support_size.y()}}}},
+                      {"objects", ObjectsJson(scene)},
+                      {"frames", frames}};
+        if (o_.mode == "scenes") entry["scene_mode"] = o_.scene_mode;
+        manifest_["scenes"].push_back(std::move(entry));
         // The manifest always describes every complete scene on disk.
         SaveManifest(dir);
     }
@@ -372,8 +416,16 @@ void AddSimulateCommand(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--scenes", o->scenes, "number of scenes (scenes and rooms modes)")
         ->capture_default_str();
     cmd->add_option("--views", o->views, "views per scene (default 1) or per object (default 16)");
-    cmd->add_option("--objects", o->objects, "objects per scene MIN,MAX")->capture_default_str();
-    cmd->add_option("--clutter", o->clutter, "chance that an object touches another [0,1]")
+    cmd->add_option("--mode", o->scene_mode,
+                    "scenes: default, boxes, stacked, occluded, cylindric, mixed or complex")
+        ->capture_default_str();
+    cmd->add_option("--objects", o->objects,
+                    "objects per scene MIN,MAX (default: the mode's range, 3,8 for default)");
+    cmd->add_option("--clutter", o->clutter,
+                    "chance that an object touches another [0,1] (default: the mode's, 0.3 for "
+                    "default)");
+    cmd->add_option("--mesh-split", o->mesh_split,
+                    "with --meshes: all, or the tune or test half of every category")
         ->capture_default_str();
     cmd->add_option("--meshes", o->meshes,
                     "mesh folder with labels.csv (default: procedural objects)");

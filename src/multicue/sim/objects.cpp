@@ -5,6 +5,7 @@
 #include <limits>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
@@ -217,7 +218,7 @@ ObjectModel ObjectSource::Random(StreamRng& rng) {
         ProceduralObject o = MakeProceduralObject(categories_[c], rng);
         const std::string kind = o.kind;
         return ObjectModel{std::make_shared<const PartMesh>(std::move(o.mesh)), o.category, kind,
-                           1.0f};
+                           1.0f, std::move(o.cavity)};
     }
     for (int attempt = 0; attempt < 64; ++attempt) {
         const auto i =
@@ -228,6 +229,34 @@ ObjectModel ObjectSource::Random(StreamRng& rng) {
         if (auto m = FromEntry(i, rng)) return *m;
     }
     throw DataError("no mesh of the library could be loaded");
+}
+
+ObjectModel ObjectSource::RandomOf(const ObjectFilter& filter, StreamRng& rng) {
+    if (!IsLibrary()) {
+        if (filter.kinds.empty()) return Random(rng);
+        const auto k =
+            static_cast<std::size_t>(rng.UniformInt(0, static_cast<int>(filter.kinds.size()) - 1));
+        ProceduralObject o = MakeProceduralKind(filter.kinds[k], rng);
+        const std::string kind = o.kind;
+        return ObjectModel{std::make_shared<const PartMesh>(std::move(o.mesh)), o.category, kind,
+                           1.0f, std::move(o.cavity)};
+    }
+    if (filter.categories.empty()) return Random(rng);
+    std::vector<std::size_t> entries;
+    for (std::size_t i = 0; i < library_.size(); ++i) {
+        const auto& c = filter.categories;
+        if (std::find(c.begin(), c.end(), library_[i].category) != c.end()) entries.push_back(i);
+    }
+    for (int attempt = 0; attempt < 64 && !entries.empty(); ++attempt) {
+        const auto i =
+            static_cast<std::size_t>(rng.UniformInt(0, static_cast<int>(entries.size()) - 1));
+        if (auto m = FromEntry(entries[i], rng)) return *m;
+    }
+    for (const std::size_t i : entries) {
+        if (auto m = FromEntry(i, rng)) return *m;
+    }
+    throw DataError(fmt::format("no mesh of the categories {} could be loaded",
+                                fmt::join(filter.categories, ", ")));
 }
 
 }  // namespace multicue::sim

@@ -22,6 +22,17 @@ struct ObjectModel {
     std::string category;  ///< CategoryNames() entry
     std::string source;    ///< mesh file name or procedural kind
     float scale = 1.0f;    ///< file units -> metres actually applied (1 for procedural)
+    /// Inside of a container (procedural bowls and plates), upright in the object frame: points
+    /// (r, z) of the inner wall from the inner floor (first point: floor edge radius and floor
+    /// height) upwards, piecewise linear, never outside the mesh's wall. Empty: not a container.
+    std::vector<Eigen::Vector2f> cavity{};
+};
+
+/// Which objects ObjectSource::RandomOf may return: procedural kinds (ProceduralKinds() names)
+/// from a procedural source, mesh categories from a library. An empty list allows everything.
+struct ObjectFilter {
+    std::vector<std::string> kinds;
+    std::vector<std::string> categories;
 };
 
 /// Draws objects: procedural (default) or from a mesh library. Library meshes are loaded once and
@@ -39,6 +50,10 @@ class ObjectSource {
 
     /// A random object. Throws DataError when no library mesh can be loaded.
     ObjectModel Random(StreamRng& rng);
+    /// A random object that passes `filter` (Random when the list for this source is empty).
+    /// Throws InvalidArgument for an unknown kind and DataError when no library mesh of the
+    /// categories can be loaded.
+    ObjectModel RandomOf(const ObjectFilter& filter, StreamRng& rng);
     /// Library entry i (random realistic size for shrunk meshes); nullopt if the mesh is bad and
     /// not strict.
     std::optional<ObjectModel> FromEntry(std::size_t i, StreamRng& rng);

@@ -63,7 +63,20 @@ PartMesh Ball(StreamRng& rng) {
     return MakeRevolutionMesh(profile, {"body"});
 }
 
-PartMesh Bowl(StreamRng& rng) {
+// Segments of the revolution meshes: between two profile vertices the facets of a ring of radius
+// r come as close to the axis as r * cos(pi / segments).
+constexpr int kSegments = 48;
+
+/// The inner wall of a container from its profile points `inner` (floor edge first, upwards):
+/// pulled in to the facets of the mesh (see kSegments).
+std::vector<Eigen::Vector2f> Cavity(const std::vector<ProfilePoint>& inner) {
+    const float inset = std::cos(kPi / kSegments);
+    std::vector<Eigen::Vector2f> out;
+    for (const auto& q : inner) out.emplace_back(q.r * inset, q.z);
+    return out;
+}
+
+PartMesh Bowl(StreamRng& rng, std::vector<Eigen::Vector2f>& cavity) {
     const float R = U(rng, 0.06f, 0.12f), h = R * U(rng, 0.45f, 0.6f), t = 0.004f;
     const float Rb = R * U(rng, 0.35f, 0.5f);
     std::vector<ProfilePoint> p{{0.0f, 0.0f, 0}};
@@ -77,14 +90,17 @@ PartMesh Bowl(StreamRng& rng) {
         p.push_back({Rb - t + (R - Rb) * std::sin(s), t + (h - t) * (1 - std::cos(s)), 0});
     }
     p.push_back({0.0f, t, 0});
-    return MakeRevolutionMesh(p, {"bowl"});
+    // Inner wall: the second run of profile points, reversed (floor edge first).
+    cavity = Cavity(std::vector<ProfilePoint>(p.rbegin() + 1, p.rbegin() + 2 + n));
+    return MakeRevolutionMesh(p, {"bowl"}, kSegments);
 }
 
-PartMesh Plate(StreamRng& rng) {
+PartMesh Plate(StreamRng& rng, std::vector<Eigen::Vector2f>& cavity) {
     const float R = U(rng, 0.08f, 0.15f), H = U(rng, 0.015f, 0.025f), t = 0.004f;
     const std::vector<ProfilePoint> p{{0.0f, 0.0f, 0},    {0.6f * R, 0.0f, 0},       {R, H, 0},
                                       {R - 0.006f, H, 0}, {0.6f * R - 0.004f, t, 0}, {0.0f, t, 0}};
-    return MakeRevolutionMesh(p, {"plate"});
+    cavity = Cavity({p[4], p[3]});
+    return MakeRevolutionMesh(p, {"plate"}, kSegments);
 }
 
 PartMesh Can(StreamRng& rng) {
@@ -260,7 +276,7 @@ ProceduralObject MakeProceduralKind(const std::string& kind, StreamRng& rng) {
     if (kind == "ball") {
         o.mesh = Ball(rng);
     } else if (kind == "bowl") {
-        o.mesh = Bowl(rng);
+        o.mesh = Bowl(rng, o.cavity);
     } else if (kind == "box") {
         // Compact: the smallest side at least 35 % of the largest.
         const float L = U(rng, 0.08f, 0.22f);
@@ -285,7 +301,7 @@ ProceduralObject MakeProceduralKind(const std::string& kind, StreamRng& rng) {
     } else if (kind == "bottle") {
         o.mesh = Bottle(rng);
     } else if (kind == "plate") {
-        o.mesh = Plate(rng);
+        o.mesh = Plate(rng, o.cavity);
     } else if (kind == "pitcher") {
         o.mesh = Pitcher(rng);
     } else if (kind == "irregular") {

@@ -19,6 +19,8 @@ struct ProceduralObject {
     PartMesh mesh;         ///< mesh.name is the kind
     std::string category;  ///< one of TabletopCategories()
     std::string kind;      ///< "box", "mug", ... (ProceduralKinds())
+    /// Inner wall (r, z) of a container ("bowl", "plate"), as ObjectModel::cavity; else empty.
+    std::vector<Eigen::Vector2f> cavity{};
 };
 
 /// Every kind of procedural object and its category.

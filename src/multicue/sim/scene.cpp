@@ -6,6 +6,24 @@
 
 namespace multicue::sim {
 
+const char* ObjectPlacementName(ObjectPlacement placement) {
+    switch (placement) {
+        case ObjectPlacement::kStanding:
+            return "standing";
+        case ObjectPlacement::kTouching:
+            return "touching";
+        case ObjectPlacement::kStacked:
+            return "stacked";
+        case ObjectPlacement::kNested:
+            return "nested";
+        case ObjectPlacement::kLeaning:
+            return "leaning";
+        case ObjectPlacement::kFixed:
+            break;
+    }
+    return "fixed";
+}
+
 std::size_t Scene::NumObjects() const {
     std::size_t n = 0;
     for (const auto& o : objects) n += o.label >= ObjectLabel(1) ? 1 : 0;

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/sim/placement_internal.hpp"
 #include "multicue/sim/procedural.hpp"
 
 namespace multicue::sim {
@@ -15,120 +16,7 @@ namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
 constexpr std::uint64_t kObjectStream = 1000;
 
-using Polygon = std::vector<Eigen::Vector2f>;
-
-/// An object's pose on a support at height `h`: rotation (stable pose and yaw) and the footprint
-/// relative to the footprint's centre.
-struct Pose {
-    Eigen::Matrix3f R = Eigen::Matrix3f::Identity();
-    float z = 0.0f;          ///< translation z that rests the object on the support
-    Eigen::Vector2f offset;  ///< object origin relative to the footprint centre
-    Polygon footprint;       ///< hull around the footprint centre
-};
-
-Pose ChoosePose(const PartMesh& mesh, float h, float upright_probability, StreamRng& rng,
-                bool allow_tilted = true) {
-    const auto rotations = StableRotations(mesh);
-    const bool upright_ok = rotations.front().isApprox(Eigen::Matrix3f::Identity(), 1e-4f);
-    Eigen::Matrix3f Rs = rotations.front();
-    const double pick = rng.Uniform();
-    if (allow_tilted && !(upright_ok && pick < upright_probability) && rotations.size() > 1) {
-        const std::size_t first = upright_ok ? 1 : 0;
-        Rs = rotations[first + static_cast<std::size_t>(rng.UniformInt(
-                                   0, static_cast<int>(rotations.size() - first) - 1))];
-    }
-    const float yaw = static_cast<float>(rng.Uniform(0.0, 2.0 * std::numbers::pi));
-    Pose pose;
-    pose.R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix() * Rs;
-    float zmin = std::numeric_limits<float>::infinity();
-    Polygon pts;
-    pts.reserve(mesh.mesh.vertices.size());
-    for (const auto& v : mesh.mesh.vertices) {
-        const Eigen::Vector3f w = pose.R * v;
-        zmin = std::min(zmin, w.z());
-        pts.emplace_back(w.x(), w.y());
-    }
-    pose.z = h - zmin;
-    Polygon hull = ConvexHull2D(std::move(pts));
-    Eigen::Vector2f lo = hull.front(), hi = hull.front();
-    for (const auto& p : hull) {
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-    }
-    const Eigen::Vector2f c = (lo + hi) / 2;
-    for (auto& p : hull) p -= c;
-    pose.offset = -c;
-    pose.footprint = std::move(hull);
-    return pose;
-}
-
-Polygon Translated(const Polygon& p, const Eigen::Vector2f& t) {
-    Polygon out = p;
-    for (auto& q : out) q += t;
-    return out;
-}
-
-bool Inside(const Polygon& p, const Eigen::Vector2f& lo, const Eigen::Vector2f& hi) {
-    for (const auto& q : p) {
-        if ((q.array() < lo.array()).any() || (q.array() > hi.array()).any()) return false;
-    }
-    return true;
-}
-
-float MinSeparation(const Polygon& p, const std::vector<Polygon>& others) {
-    float best = std::numeric_limits<float>::infinity();
-    for (const auto& o : others) best = std::min(best, PolygonSeparation(p, o));
-    return best;
-}
-
-SceneObject MakeInstance(const ObjectModel& model, const Pose& pose, const Eigen::Vector2f& at,
-                         std::uint32_t label, Color color) {
-    SceneObject obj;
-    obj.mesh = model.mesh;
-    obj.T_world_object.linear() = pose.R;
-    obj.T_world_object.translation() =
-        Eigen::Vector3f(at.x() + pose.offset.x(), at.y() + pose.offset.y(), pose.z);
-    obj.label = label;
-    obj.category = static_cast<std::uint32_t>(std::max(0, CategoryIndex(model.category)));
-    obj.color = color;
-    obj.source = model.source;
-    obj.scale = model.scale;
-    return obj;
-}
-
-/// Table top (a slab whose top is at `h`) and four legs, one mesh with parts "top" and "leg".
-std::shared_ptr<const PartMesh> TableMesh(const Eigen::Vector2f& size, float h) {
-    const float thick = 0.03f, leg = 0.05f;
-    PartMesh m = MakeBoxMesh({size.x(), size.y(), thick}, "top");
-    for (auto& v : m.mesh.vertices) v.z() += h - thick;
-    for (int i = 0; i < 4; ++i) {
-        PartMesh l = MakeBoxMesh({leg, leg, h - thick}, "leg");
-        const float x = (i & 1 ? 1.0f : -1.0f) * (size.x() / 2 - leg);
-        const float y = (i & 2 ? 1.0f : -1.0f) * (size.y() / 2 - leg);
-        for (auto& v : l.mesh.vertices) v += Eigen::Vector3f(x, y, 0.0f);
-        m.AppendParts(l);
-    }
-    m.name = "table";
-    return std::make_shared<const PartMesh>(std::move(m));
-}
-
-SceneObject Fixed(std::shared_ptr<const PartMesh> mesh, std::uint32_t label, Color color,
-                  const std::string& source) {
-    SceneObject o;
-    o.mesh = std::move(mesh);
-    o.label = label;
-    o.color = color;
-    o.source = source;
-    return o;
-}
-
-SceneObject Floor(float half) {
-    PartMesh m = MakeBoxMesh({2 * half, 2 * half, 0.02f}, "floor");
-    for (auto& v : m.mesh.vertices) v.z() -= 0.02f;
-    m.name = "floor";
-    return Fixed(std::make_shared<const PartMesh>(std::move(m)), kFloorLabel, {110, 110, 105, 255},
-                 "floor");
-}
+using namespace placement_internal;
 
 void CheckTableParams(const TableSceneParams& p) {
     if (p.min_objects < 0 || p.max_objects < p.min_objects) {
@@ -144,12 +32,17 @@ void CheckTableParams(const TableSceneParams& p) {
         !(p.table_min_height > 0.1f) || !(p.table_max_height >= p.table_min_height)) {
         throw InvalidArgument("table size and height ranges must be positive and ordered");
     }
+    if (!(p.min_gap >= 0.0f) || !(p.edge_margin >= 0.0f) ||
+        !(p.upright_probability >= 0.0f && p.upright_probability <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("min_gap and edge_margin must be >= 0 and upright_probability in [0, 1], "
+                        "got {}, {}, {}",
+                        p.min_gap, p.edge_margin, p.upright_probability));
+    }
 }
 
-}  // namespace
-
-Scene MakeTableScene(const TableSceneParams& p, ObjectSource& source, std::uint64_t seed) {
-    CheckTableParams(p);
+/// The original table scene (TableSceneMode::kDefault); its random draws must not change.
+Scene MakeDefaultTableScene(const TableSceneParams& p, ObjectSource& source, std::uint64_t seed) {
     StreamRng rng(seed, 0);
     Scene scene;
     const Eigen::Vector2f size(
@@ -203,6 +96,7 @@ Scene MakeTableScene(const TableSceneParams& p, ObjectSource& source, std::uint6
                 }
                 const auto label = ObjectLabel(static_cast<std::uint32_t>(placed.size() + 1));
                 scene.objects.push_back(MakeInstance(model, pose, at, label, color));
+                if (touch) scene.objects.back().placement = ObjectPlacement::kTouching;
                 placed.push_back(Translated(pose.footprint, at));
                 centres.push_back(at);
                 done = true;
@@ -210,6 +104,14 @@ Scene MakeTableScene(const TableSceneParams& p, ObjectSource& source, std::uint6
         }
     }
     return scene;
+}
+
+}  // namespace
+
+Scene MakeTableScene(const TableSceneParams& p, ObjectSource& source, std::uint64_t seed) {
+    CheckTableParams(p);
+    if (p.mode == TableSceneMode::kDefault) return MakeDefaultTableScene(p, source, seed);
+    return MakeModeTableScene(p, source, seed);
 }
 
 Scene MakeTableScene(const TableSceneParams& params, std::uint64_t seed) {
@@ -225,7 +127,8 @@ std::vector<Eigen::Isometry3f> TableViewpoints(const Scene& scene, int n, const 
         throw InvalidArgument("viewpoint height and distance ranges must be positive and ordered");
     }
     StreamRng rng(seed, 7);
-    const float a0 = static_cast<float>(rng.Uniform(0.0, 2.0 * kPi));
+    const float a_random = static_cast<float>(rng.Uniform(0.0, 2.0 * kPi));
+    const float a0 = std::isfinite(scene.view_azimuth) ? scene.view_azimuth : a_random;
     const float height = static_cast<float>(rng.Uniform(p.min_height, p.max_height));
     const float dist = static_cast<float>(rng.Uniform(p.min_distance, p.max_distance));
     std::vector<Eigen::Isometry3f> poses;
@@ -329,6 +232,7 @@ Scene MakeRoomScene(const RoomParams& p, ObjectSource& source, std::uint64_t see
             scene.objects.push_back(
                 MakeInstance(model, pose, at,
                              ObjectLabel(static_cast<std::uint32_t>(placed.size() + 1)), color));
+            scene.objects.back().support = kFloorLabel;
             placed.push_back(poly);
             break;
         }

@@ -5,6 +5,7 @@
 /// tilting laser (section 4.2.5).
 
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -15,7 +16,27 @@
 
 namespace multicue::sim {
 
+/// What kind of table-top scene MakeTableScene composes. kDefault is the generator's original
+/// scene (same seed, same scene); the others follow the scene types of the Object Segmentation
+/// Database (mOSD; thesis section 5.3): their object kinds, counts and arrangements.
+enum class TableSceneMode {
+    kDefault,    ///< objects of every category standing apart or, with `clutter`, touching
+    kBoxes,      ///< boxes and flat boxes standing apart
+    kStacked,    ///< boxes stacked on boxes, 2-3 high, beside boxes on the table
+    kOccluded,   ///< pairs: an object partly hidden behind another from the view side
+    kCylindric,  ///< cans, cups, mugs, tins, bottles, plates and bowls
+    kMixed,      ///< boxes and cylindric objects, touching, now and then stacked
+    kComplex,    ///< stacked, touching, leaning, nested (an object in a bowl or on a plate),
+                 ///< some at the edge of the view
+};
+
+/// "default", "boxes", "stacked", "occluded", "cylindric", "mixed", "complex".
+const char* TableSceneModeName(TableSceneMode mode);
+/// Inverse of TableSceneModeName. Throws InvalidArgument naming the value and the choices.
+TableSceneMode ParseTableSceneMode(std::string_view name);
+
 struct TableSceneParams {
+    TableSceneMode mode = TableSceneMode::kDefault;  ///< scene type (TableSceneParamsFor)
     int min_objects = 3;  ///< objects per scene, drawn uniformly in [min, max]
     int max_objects = 8;
     /// Probability that an object is placed touching an object already on the table [0, 1]
@@ -30,9 +51,17 @@ struct TableSceneParams {
     float upright_probability = 0.75f;  ///< chance of the upright pose when it is stable
 };
 
+/// The parameters of a scene type: its mode, object count range, clutter and, for kComplex, a
+/// larger table used up to 1 cm from its edge (docs/simulation.md lists them). The other fields
+/// keep their defaults; TableSceneParamsFor(kDefault) equals TableSceneParams{}.
+TableSceneParams TableSceneParamsFor(TableSceneMode mode);
+
 /// A table (label 1) on the floor (label 2) with objects from `source` (labels 10*(k+1)), random
-/// yaw, stable poses and random colours. The world origin is below the table centre.
-/// Objects that find no free place are left out (the scene may hold fewer than min_objects).
+/// yaw, stable poses and random colours, arranged as `params.mode` says. The world origin is below
+/// the table centre. Objects never interpenetrate; each records how it rests
+/// (SceneObject::placement, SceneObject::support). kDefault: objects that find no free place are
+/// left out (the scene may hold fewer than min_objects); the other modes draw further objects
+/// until the count is reached or the table is full. Throws InvalidArgument for bad params.
 Scene MakeTableScene(const TableSceneParams& params, ObjectSource& source, std::uint64_t seed);
 /// Procedural objects of every category.
 Scene MakeTableScene(const TableSceneParams& params, std::uint64_t seed);
@@ -45,9 +74,13 @@ struct ViewpointParams {
     float target_jitter = 0.05f;  ///< random offset of the look-at point on the table [m]
 };
 
+/// Viewpoints for a scene type: the defaults, but closer to the table for kComplex (0.8-1.0 m,
+/// 1.3-1.45 m high), so that objects near the table's ends leave the field of view.
+ViewpointParams TableViewpointParamsFor(TableSceneMode mode);
+
 /// `n` camera poses (optical frames) on a circle around the support centre, evenly spaced in
-/// azimuth from a random start, at a random height and distance (kept outside the table top),
-/// looking at the table.
+/// azimuth from a random start (from Scene::view_azimuth when that is set), at a random height
+/// and distance (kept outside the table top), looking at the table.
 std::vector<Eigen::Isometry3f> TableViewpoints(const Scene& scene, int n,
                                                const ViewpointParams& params, std::uint64_t seed);
 
