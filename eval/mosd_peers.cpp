@@ -1,7 +1,8 @@
 /// \file mosd_peers: segments mOSD scenes with three standard PCL 1.13 table-top pipelines and
-/// writes OUT_DIR/<scene>/labels.pcd in the format of `multicue perceive` (fields x y z label object
-/// category, same WIDTH/HEIGHT and point order as the input, object 0 = no object, category 0),
-/// so that the mOSD scorer (osd_eval.py) scores PCL on exactly the scenes multicue is scored on.
+/// writes OUT_DIR/<scene>/labels.pcd in the format of `multicue perceive` (fields x y z label
+/// object category, same WIDTH/HEIGHT and point order as the input, label = object, 0 = no object,
+/// category 0), so that the mOSD scorer (osd_eval.py) scores PCL on exactly the scenes multicue is
+/// scored on.
 ///
 /// usage: mosd_peers --method euclidean|region_growing|lccp INPUT_DIR OUT_DIR
 ///                   [--scenes learn0,learn1,...]

@@ -91,9 +91,8 @@ void BindAlgorithms(py::module_& m) {
         "crop_box",
         [](const PointCloud& cloud, const std::vector<float>& min, const std::vector<float>& max,
            bool negative) {
-            const CropBoxParams params{.min = ToVector3(min, "min"),
-                                       .max = ToVector3(max, "max"),
-                                       .negative = negative};
+            const CropBoxParams params{
+                .min = ToVector3(min, "min"), .max = ToVector3(max, "max"), .negative = negative};
             return IndexArray(CropBox(cloud, params));
         },
         py::arg("cloud"), py::arg("min"), py::arg("max"), py::arg("negative") = false,
@@ -102,8 +101,8 @@ void BindAlgorithms(py::module_& m) {
     m.def(
         "statistical_outlier_removal",
         [](const PointCloud& cloud, int k, float std_ratio, int threads) {
-            const StatisticalOutlierParams params{.k = k, .std_ratio = std_ratio,
-                                                  .num_threads = threads};
+            const StatisticalOutlierParams params{
+                .k = k, .std_ratio = std_ratio, .num_threads = threads};
             Indices keep;
             {
                 py::gil_scoped_release release;
@@ -118,8 +117,8 @@ void BindAlgorithms(py::module_& m) {
     m.def(
         "radius_outlier_removal",
         [](const PointCloud& cloud, float radius, int min_neighbors, int threads) {
-            const RadiusOutlierParams params{.radius = radius, .min_neighbors = min_neighbors,
-                                             .num_threads = threads};
+            const RadiusOutlierParams params{
+                .radius = radius, .min_neighbors = min_neighbors, .num_threads = threads};
             Indices keep;
             {
                 py::gil_scoped_release release;
@@ -163,8 +162,8 @@ void BindAlgorithms(py::module_& m) {
         "Returns the number of points left without a normal (NaN).");
     m.def(
         "find_support_plane",
-        [](const PointCloud& cloud, std::optional<std::vector<float>> up,
-           float distance_threshold, std::uint64_t seed, int threads) {
+        [](const PointCloud& cloud, std::optional<std::vector<float>> up, float distance_threshold,
+           std::uint64_t seed, int threads) {
             SupportPlaneParams params;
             if (up) params.up = ToVector3(*up, "up");
             params.distance_threshold = distance_threshold;

@@ -36,9 +36,9 @@ py::array View(T* data, std::size_t count, std::size_t cols, py::handle owner) {
         return py::array_t<T>({rows}, {static_cast<py::ssize_t>(sizeof(T))}, data, owner);
     }
     const auto c = static_cast<py::ssize_t>(cols);
-    return py::array_t<T>({rows, c}, {c * static_cast<py::ssize_t>(sizeof(T)),
-                                      static_cast<py::ssize_t>(sizeof(T))},
-                          data, owner);
+    return py::array_t<T>(
+        {rows, c}, {c * static_cast<py::ssize_t>(sizeof(T)), static_cast<py::ssize_t>(sizeof(T))},
+        data, owner);
 }
 
 std::string Shape(const py::array& a) {
@@ -71,12 +71,13 @@ std::vector<T> ToValues(const py::array& any, std::size_t n, const char* what) {
 }
 
 std::vector<Color> ToColors(const py::array& any, std::size_t n) {
-    const auto a = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(any);
+    const auto a =
+        py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(any);
     if (!a || a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != n ||
         (a.shape(1) != 3 && a.shape(1) != 4)) {
-        throw InvalidArgument(fmt::format(
-            "colors must be a uint8 array of shape ({}, 3) or ({}, 4), got {}", n, n,
-            any ? Shape(any) : std::string("no array")));
+        throw InvalidArgument(
+            fmt::format("colors must be a uint8 array of shape ({}, 3) or ({}, 4), got {}", n, n,
+                        any ? Shape(any) : std::string("no array")));
     }
     std::vector<Color> out(n);
     const auto cols = static_cast<std::size_t>(a.shape(1));
@@ -201,8 +202,8 @@ the cloud. Assigning an array copies it in.)");
                  }
                  if (!colors.is_none()) c.colors = ToColors(colors.cast<py::array>(), c.size());
                  if (!labels.is_none()) {
-                     c.labels = ToValues<std::uint32_t>(labels.cast<py::array>(), c.size(),
-                                                        "labels");
+                     c.labels =
+                         ToValues<std::uint32_t>(labels.cast<py::array>(), c.size(), "labels");
                  }
                  return c;
              }),
@@ -224,19 +225,20 @@ the cloud. Assigning an array copies it in.)");
                  return fmt::format("<multicue.PointCloud {} points ({}x{}): {}>", c.size(),
                                     c.width, c.height, fields);
              })
-        .def_property_readonly("width", [](const PointCloud& c) { return c.width; },
-                               "Columns when organized, else the number of points.")
-        .def_property_readonly("height", [](const PointCloud& c) { return c.height; },
-                               "Rows when organized, else 1.")
+        .def_property_readonly(
+            "width", [](const PointCloud& c) { return c.width; },
+            "Columns when organized, else the number of points.")
+        .def_property_readonly(
+            "height", [](const PointCloud& c) { return c.height; }, "Rows when organized, else 1.")
         .def_property_readonly("is_organized", &PointCloud::IsOrganized,
                                "True for an image-shaped cloud (height > 1).")
         .def(
             "set_organized",
             [](PointCloud& c, std::uint32_t width, std::uint32_t height) {
                 if (std::size_t{width} * height != c.size()) {
-                    throw InvalidArgument(fmt::format(
-                        "width * height must be the number of points ({}), got {} x {}", c.size(),
-                        width, height));
+                    throw InvalidArgument(
+                        fmt::format("width * height must be the number of points ({}), got {} x {}",
+                                    c.size(), width, height));
                 }
                 c.width = width;
                 c.height = height;
@@ -310,13 +312,10 @@ the cloud. Assigning an array copies it in.)");
                 }
                 return ExtraFieldArray(*e, c.size());
             },
-            py::arg("name"),
-            "A copy of an extra field: shape (N,) or (N, count), its file's type.")
+            py::arg("name"), "A copy of an extra field: shape (N,) or (N, count), its file's type.")
         .def_property(
             "sensor_origin",
-            [](const PointCloud& c) {
-                return py::array_t<float>(3, c.sensor_origin.data());
-            },
+            [](const PointCloud& c) { return py::array_t<float>(3, c.sensor_origin.data()); },
             [](PointCloud& c, const py::array& a) {
                 const auto v = ToValues<float>(a, 3, "sensor_origin");
                 c.sensor_origin = Eigen::Vector3f(v[0], v[1], v[2]);

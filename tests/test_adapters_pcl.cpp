@@ -29,10 +29,9 @@ PointCloud FullCloud() {
     for (std::size_t i = 0; i < n; ++i) {
         c.points.emplace_back(u(rng), u(rng), u(rng));
         c.normals.push_back(Eigen::Vector3f(u(rng), u(rng), u(rng)).normalized());
-        c.colors.push_back(Color{static_cast<std::uint8_t>(byte(rng)),
-                                 static_cast<std::uint8_t>(byte(rng)),
-                                 static_cast<std::uint8_t>(byte(rng)),
-                                 static_cast<std::uint8_t>(byte(rng))});
+        c.colors.push_back(
+            Color{static_cast<std::uint8_t>(byte(rng)), static_cast<std::uint8_t>(byte(rng)),
+                  static_cast<std::uint8_t>(byte(rng)), static_cast<std::uint8_t>(byte(rng))});
         c.labels.push_back(static_cast<std::uint32_t>(1000 + i));
         c.curvature.push_back(0.01f * static_cast<float>(i));
     }
