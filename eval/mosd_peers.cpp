@@ -322,11 +322,12 @@ bool WriteLabels(const fs::path& path, const Cloud& cloud,
         f.count = 1;
         return f;
     };
-    out.fields = {
-        field("x", 0, pcl::PCLPointField::FLOAT32), field("y", 4, pcl::PCLPointField::FLOAT32),
-        field("z", 8, pcl::PCLPointField::FLOAT32), field("label", 12, pcl::PCLPointField::UINT32),
-        field("object", 16, pcl::PCLPointField::UINT32),
-        field("category", 20, pcl::PCLPointField::UINT8)};
+    out.fields = {field("x", 0, pcl::PCLPointField::FLOAT32),
+                  field("y", 4, pcl::PCLPointField::FLOAT32),
+                  field("z", 8, pcl::PCLPointField::FLOAT32),
+                  field("label", 12, pcl::PCLPointField::UINT32),
+                  field("object", 16, pcl::PCLPointField::UINT32),
+                  field("category", 20, pcl::PCLPointField::UINT8)};
     out.point_step = 21;
     out.row_step = out.point_step * out.width;
     out.data.assign(static_cast<std::size_t>(out.point_step) * cloud.size(), 0);
