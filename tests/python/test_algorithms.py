@@ -16,13 +16,14 @@ def test_voxel_grid_gives_the_centroid_of_each_voxel():
     rng = np.random.default_rng(3)
     pts = rng.uniform(0, 0.1, size=(2000, 3)).astype(np.float32)
     out = multicue.voxel_grid(multicue.PointCloud(pts), leaf_size=0.05)
-    keys = np.floor(pts / np.float32(0.05)).astype(int)
+    inv = np.float32(1) / np.float32(0.05)  # voxel coordinates: floor(p * (1 / leaf)) in float
+    keys = np.floor(pts * inv).astype(int)
     expected = {}
     for k in np.unique(keys, axis=0):
         expected[tuple(k)] = pts[np.all(keys == k, axis=1)].mean(axis=0)
     assert len(out) == len(expected)
     for p in out.points:
-        k = tuple(np.floor(p / np.float32(0.05)).astype(int))
+        k = tuple(np.floor(p * inv).astype(int))
         np.testing.assert_allclose(p, expected[k], atol=1e-5)
 
 
