@@ -45,7 +45,7 @@ install(EXPORT multicueTargets
         NAMESPACE multicue::
         FILE multicueTargets.cmake
         DESTINATION ${MULTICUE_INSTALL_CMAKEDIR})
-# The same targets for a build tree used without installing (CMAKE_PREFIX_PATH=build).
+# The same targets for a build tree used without installing (-Dmulticue_DIR=build).
 export(EXPORT multicueTargets NAMESPACE multicue::
        FILE ${PROJECT_BINARY_DIR}/multicueTargets.cmake)
 
