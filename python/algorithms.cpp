@@ -32,7 +32,7 @@ py::array_t<std::uint32_t> IndexArray(const Indices& indices) {
     return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(indices.size()), indices.data());
 }
 
-Indices ToIndices(const py::array& any, const char* what) {
+Indices ToIndices(const py::object& any, const char* what) {
     const auto a =
         py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>::ensure(any);
     if (!a || a.ndim() != 1) {
@@ -59,7 +59,7 @@ py::array_t<float> Vectors(const std::vector<Eigen::Vector3f>& v) {
 void BindAlgorithms(py::module_& m) {
     m.def(
         "select",
-        [](const PointCloud& cloud, const py::array& indices) {
+        [](const PointCloud& cloud, const py::object& indices) {
             const Indices idx = ToIndices(indices, "indices");
             py::gil_scoped_release release;
             return SelectByIndex(cloud, idx);
@@ -190,12 +190,12 @@ void BindAlgorithms(py::module_& m) {
     m.def(
         "euclidean_clustering",
         [](const PointCloud& cloud, float tolerance, std::size_t min_cluster_size,
-           std::optional<std::size_t> max_cluster_size, std::optional<py::array> subset) {
+           std::optional<std::size_t> max_cluster_size, const py::object& subset) {
             EuclideanClusteringParams params;
             params.tolerance = tolerance;
             params.min_cluster_size = min_cluster_size;
             if (max_cluster_size) params.max_cluster_size = *max_cluster_size;
-            if (subset) params.subset = ToIndices(*subset, "subset");
+            if (!subset.is_none()) params.subset = ToIndices(subset, "subset");
             ClusteringResult result;
             {
                 py::gil_scoped_release release;

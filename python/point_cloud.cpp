@@ -41,18 +41,21 @@ py::array View(T* data, std::size_t count, std::size_t cols, py::handle owner) {
         data, owner);
 }
 
-std::string Shape(const py::array& a) {
+/// The shape of `obj` as NumPy sees it, "(4, 2)", or its type name when it is no array.
+std::string Shape(const py::object& obj) {
+    const py::array a = py::array::ensure(obj);
+    if (!a || a.ndim() == 0) return "a " + std::string(py::str(py::type::of(obj).attr("__name__")));
     std::string s = "(";
     for (py::ssize_t d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
     return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
 /// The rows of an (N, 3) array as points; InvalidArgument naming `what` otherwise.
-std::vector<Eigen::Vector3f> ToVectors(const py::array& any, const char* what) {
+std::vector<Eigen::Vector3f> ToVectors(const py::object& any, const char* what) {
     const FloatArray a = FloatArray::ensure(any);
     if (!a || a.ndim() != 2 || a.shape(1) != 3) {
-        throw InvalidArgument(fmt::format("{} must be an array of shape (N, 3), got {}", what,
-                                          any ? Shape(any) : std::string("no array")));
+        throw InvalidArgument(
+            fmt::format("{} must be an array of shape (N, 3), got {}", what, Shape(any)));
     }
     std::vector<Eigen::Vector3f> out(static_cast<std::size_t>(a.shape(0)));
     if (!out.empty()) std::memcpy(out.front().data(), a.data(), out.size() * 3 * sizeof(float));
@@ -61,23 +64,22 @@ std::vector<Eigen::Vector3f> ToVectors(const py::array& any, const char* what) {
 
 /// A 1-D array of `n` values of type T; InvalidArgument naming `what` otherwise.
 template <typename T>
-std::vector<T> ToValues(const py::array& any, std::size_t n, const char* what) {
+std::vector<T> ToValues(const py::object& any, std::size_t n, const char* what) {
     const auto a = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(any);
     if (!a || a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n) {
-        throw InvalidArgument(fmt::format("{} must be an array of shape ({},), got {}", what, n,
-                                          any ? Shape(any) : std::string("no array")));
+        throw InvalidArgument(
+            fmt::format("{} must be an array of shape ({},), got {}", what, n, Shape(any)));
     }
     return std::vector<T>(a.data(), a.data() + n);
 }
 
-std::vector<Color> ToColors(const py::array& any, std::size_t n) {
+std::vector<Color> ToColors(const py::object& any, std::size_t n) {
     const auto a =
         py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(any);
     if (!a || a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != n ||
         (a.shape(1) != 3 && a.shape(1) != 4)) {
-        throw InvalidArgument(
-            fmt::format("colors must be a uint8 array of shape ({}, 3) or ({}, 4), got {}", n, n,
-                        any ? Shape(any) : std::string("no array")));
+        throw InvalidArgument(fmt::format(
+            "colors must be a uint8 array of shape ({}, 3) or ({}, 4), got {}", n, n, Shape(any)));
     }
     std::vector<Color> out(n);
     const auto cols = static_cast<std::size_t>(a.shape(1));
@@ -96,7 +98,7 @@ void CheckRows(const PointCloud& c, std::size_t n, const char* what) {
 }
 
 /// Sets the points; a new count makes the cloud unorganized and requires no other fields.
-void SetPoints(PointCloud& c, const py::array& a) {
+void SetPoints(PointCloud& c, const py::object& a) {
     auto points = ToVectors(a, "points");
     if (points.size() == c.size()) {
         std::copy(points.begin(), points.end(), c.points.begin());  // views stay valid
@@ -133,7 +135,7 @@ void ScalarField(py::class_<PointCloud>& cls, const char* name, std::vector<T> P
                 (c.*field).clear();
                 return;
             }
-            auto values = ToValues<T>(value.cast<py::array>(), c.size(), name);
+            auto values = ToValues<T>(value, c.size(), name);
             if ((c.*field).size() == values.size()) {
                 std::copy(values.begin(), values.end(), (c.*field).begin());
             } else {
@@ -193,17 +195,16 @@ void BindPointCloud(py::module_& m) {
 The field properties return NumPy views of the C++ storage (no copy): writing into them changes
 the cloud. Assigning an array copies it in.)");
     cls.def(py::init<>(), "An empty cloud.")
-        .def(py::init([](const py::array& points, const py::object& normals,
+        .def(py::init([](const py::object& points, const py::object& normals,
                          const py::object& colors, const py::object& labels) {
                  PointCloud c(ToVectors(points, "points"));
                  if (!normals.is_none()) {
-                     c.normals = ToVectors(normals.cast<py::array>(), "normals");
+                     c.normals = ToVectors(normals, "normals");
                      CheckRows(c, c.normals.size(), "normals");
                  }
-                 if (!colors.is_none()) c.colors = ToColors(colors.cast<py::array>(), c.size());
+                 if (!colors.is_none()) c.colors = ToColors(colors, c.size());
                  if (!labels.is_none()) {
-                     c.labels =
-                         ToValues<std::uint32_t>(labels.cast<py::array>(), c.size(), "labels");
+                     c.labels = ToValues<std::uint32_t>(labels, c.size(), "labels");
                  }
                  return c;
              }),
@@ -267,7 +268,7 @@ the cloud. Assigning an array copies it in.)");
                     c.normals.clear();
                     return;
                 }
-                auto normals = ToVectors(value.cast<py::array>(), "normals");
+                auto normals = ToVectors(value, "normals");
                 CheckRows(c, normals.size(), "normals");
                 c.normals = std::move(normals);
             },
@@ -284,7 +285,7 @@ the cloud. Assigning an array copies it in.)");
                     c.colors.clear();
                     return;
                 }
-                c.colors = ToColors(value.cast<py::array>(), c.size());
+                c.colors = ToColors(value, c.size());
             },
             "(N, 4) uint8 view of r, g, b, a, or None. Assign (N, 3) or (N, 4).");
     ScalarField(cls, "curvature", &PointCloud::curvature,
@@ -316,7 +317,7 @@ the cloud. Assigning an array copies it in.)");
         .def_property(
             "sensor_origin",
             [](const PointCloud& c) { return py::array_t<float>(3, c.sensor_origin.data()); },
-            [](PointCloud& c, const py::array& a) {
+            [](PointCloud& c, const py::object& a) {
                 const auto v = ToValues<float>(a, 3, "sensor_origin");
                 c.sensor_origin = Eigen::Vector3f(v[0], v[1], v[2]);
             },
@@ -328,7 +329,7 @@ the cloud. Assigning an array copies it in.)");
                 const float wxyz[4] = {q.w(), q.x(), q.y(), q.z()};
                 return py::array_t<float>(4, wxyz);
             },
-            [](PointCloud& c, const py::array& a) {
+            [](PointCloud& c, const py::object& a) {
                 const auto v = ToValues<float>(a, 4, "sensor_orientation");
                 c.sensor_orientation = Eigen::Quaternionf(v[0], v[1], v[2], v[3]).normalized();
             },

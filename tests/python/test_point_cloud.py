@@ -143,3 +143,13 @@ def test_bad_files_raise_io_errors(tmp_path):
     assert issubclass(multicue.FormatError, OSError)
     with pytest.raises(multicue.InvalidArgument, match="encoding|zip"):
         multicue.write(tmp_path / "x.pcd", multicue.PointCloud(random_points(3)), "zip")
+
+
+def test_sequences_convert_and_other_objects_are_refused():
+    cloud = multicue.PointCloud([[0, 0, 0], [1, 2, 3]])
+    np.testing.assert_array_equal(cloud.points[1], (1, 2, 3))
+    cloud.labels = [4, 5]
+    np.testing.assert_array_equal(cloud.labels, (4, 5))
+    assert len(multicue.select(cloud, [1])) == 1
+    with pytest.raises(multicue.InvalidArgument, match="got a str"):
+        multicue.PointCloud("points")
