@@ -184,8 +184,9 @@ void BindAlgorithms(py::module_& m) {
         },
         py::arg("cloud"), py::kw_only(), py::arg("up") = py::none(),
         py::arg("distance_threshold") = 0.012f, py::arg("seed") = 1, py::arg("threads") = 0,
-        "The table plane: the largest near-horizontal plane nearest the viewpoint (thesis\n"
-        "section 2.4). Returns a dict: found (bool), plane (a, b, c, d) with the unit normal\n"
+        "The table plane (thesis section 2.4): among the near-horizontal planes, the one the\n"
+        "most points stand on; where none supports anything, the largest nearest the\n"
+        "viewpoint. Returns a dict: found (bool), plane (a, b, c, d) with the unit normal\n"
         "pointing up, inliers (uint32 indices), hull (H, 3) and the up direction used.");
     m.def(
         "euclidean_clustering",
@@ -209,8 +210,8 @@ void BindAlgorithms(py::module_& m) {
         py::arg("cloud"), py::kw_only(), py::arg("tolerance") = 0.02f,
         py::arg("min_cluster_size") = 1, py::arg("max_cluster_size") = py::none(),
         py::arg("subset") = py::none(),
-        "Connected components of the finite points (of subset, if given) under 'closer than\n"
-        "tolerance [m]': a list of uint32 index arrays, largest first.");
+        "Connected components of the finite points (of subset, if given) under 'at most\n"
+        "tolerance [m] apart': a list of uint32 index arrays, largest first.");
 }
 
 }  // namespace multicue::python
