@@ -2,7 +2,8 @@
 # runs examples/downstream against it with find_package(multicue CONFIG), and builds the same
 # program a second time with the flags of pkg-config's multicue.pc. Only the example is compiled.
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DGENERATOR=... -DCXX_COMPILER=...
-#         [-DLAUNCHER=ccache] [-DPKG_CONFIG=pkg-config] -P package_downstream.cmake
+#         [-DLAUNCHER=ccache] [-DPKG_CONFIG=pkg-config]
+#         [-DPYTHON=python3 -DPYTHON_MODULE_DIR=lib/python3/dist-packages] -P package_downstream.cmake
 cmake_minimum_required(VERSION 3.22)
 
 foreach(_var BUILD_DIR SOURCE_DIR WORK_DIR GENERATOR CXX_COMPILER EXPECTED_VERSION)
@@ -82,6 +83,17 @@ if(PKG_CONFIG)
   if(NOT step_output STREQUAL cmake_summary)
     message(FATAL_ERROR "pkg-config build printed\n${step_output}\nfind_package build printed\n"
                         "${cmake_summary}")
+  endif()
+endif()
+# The installed Python module imports from the prefix and reads the scene.
+if(PYTHON_MODULE_DIR)
+  set(ENV{PYTHONPATH} ${prefix}/${PYTHON_MODULE_DIR})
+  file(WRITE ${WORK_DIR}/import_multicue.py
+       "import sys\nimport multicue\n"
+       "print(multicue.__version__, len(multicue.read(sys.argv[1])), multicue.__file__)\n")
+  run_step("installed Python module" ${PYTHON} ${WORK_DIR}/import_multicue.py ${scene})
+  if(NOT step_output MATCHES "^${EXPECTED_VERSION} 307200 ${prefix}/")
+    message(FATAL_ERROR "the installed Python module printed '${step_output}'")
   endif()
 endif()
 message(STATUS "package_downstream: ok\n${cmake_summary}")
