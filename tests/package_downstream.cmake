@@ -2,10 +2,14 @@
 # runs examples/downstream against it with find_package(multicue CONFIG), and builds the same
 # program a second time with the flags of pkg-config's multicue.pc. Only the example is compiled.
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DGENERATOR=... -DCXX_COMPILER=...
+#         -DEXPECTED_VERSION=... [-DLIBDIR=lib]
 #         [-DLAUNCHER=ccache] [-DPKG_CONFIG=pkg-config]
 #         [-DPYTHON=python3 -DPYTHON_MODULE_DIR=lib/python3/dist-packages] -P package_downstream.cmake
 cmake_minimum_required(VERSION 3.22)
 
+if(NOT LIBDIR)
+  set(LIBDIR lib)
+endif()
 foreach(_var BUILD_DIR SOURCE_DIR WORK_DIR GENERATOR CXX_COMPILER EXPECTED_VERSION)
   if(NOT DEFINED ${_var})
     message(FATAL_ERROR "package_downstream.cmake: -D${_var}=... is missing")
@@ -25,8 +29,9 @@ file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 
 run_step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
-foreach(f lib/cmake/multicue/multicueConfig.cmake lib/cmake/multicue/multicueConfigVersion.cmake
-          lib/cmake/multicue/multicueTargets.cmake lib/pkgconfig/multicue.pc bin/multicue
+foreach(f ${LIBDIR}/cmake/multicue/multicueConfig.cmake
+          ${LIBDIR}/cmake/multicue/multicueConfigVersion.cmake
+          ${LIBDIR}/cmake/multicue/multicueTargets.cmake ${LIBDIR}/pkgconfig/multicue.pc bin/multicue
           include/multicue/version.hpp include/multicue/core/point_cloud.hpp
           share/multicue/report/report.css)
   if(NOT EXISTS ${prefix}/${f})
@@ -72,13 +77,15 @@ set(cmake_summary "${step_output}")
 
 # The same program from multicue.pc (static libraries need --static).
 if(PKG_CONFIG)
-  set(ENV{PKG_CONFIG_PATH} ${prefix}/lib/pkgconfig)
+  set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
   run_step("pkg-config" ${PKG_CONFIG} --static --cflags --libs multicue)
   string(STRIP "${step_output}" pc_flags)
   separate_arguments(pc_flags UNIX_COMMAND "${pc_flags}")
   run_step("compile with pkg-config flags" ${LAUNCHER} ${CXX_COMPILER} -O2
            ${SOURCE_DIR}/examples/downstream/cloud_summary.cpp ${pc_flags}
            -o ${WORK_DIR}/cloud_summary_pc)
+  # Shared libraries in a prefix the loader does not know (find_package builds get an RPATH).
+  set(ENV{LD_LIBRARY_PATH} ${prefix}/${LIBDIR})
   run_step("cloud_summary (pkg-config)" ${WORK_DIR}/cloud_summary_pc ${scene})
   if(NOT step_output STREQUAL cmake_summary)
     message(FATAL_ERROR "pkg-config build printed\n${step_output}\nfind_package build printed\n"
