@@ -7,13 +7,24 @@ function(multicue_warnings target)
 endfunction()
 
 # multicue_module(NAME SOURCES ... DEPS ...): one library target per module, multicue::NAME.
+# The target is exported as multicue::NAME too (cmake/MulticueInstall.cmake installs every module
+# listed in the global property MULTICUE_MODULES). Headers are included as "multicue/NAME/x.hpp"
+# from src/ in the build tree and from include/ once installed.
 function(multicue_module name)
   cmake_parse_arguments(M "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(multicue_${name} ${M_SOURCES})
   add_library(multicue::${name} ALIAS multicue_${name})
   target_include_directories(multicue_${name} PUBLIC
-    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>)
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+    $<BUILD_INTERFACE:${PROJECT_BINARY_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_compile_features(multicue_${name} PUBLIC cxx_std_20)
   target_link_libraries(multicue_${name} PUBLIC ${M_DEPS} PRIVATE ${M_PRIVATE_DEPS})
-  set_target_properties(multicue_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  set_target_properties(multicue_${name} PROPERTIES
+    POSITION_INDEPENDENT_CODE ON
+    EXPORT_NAME ${name}
+    VERSION ${PROJECT_VERSION}
+    SOVERSION ${MULTICUE_SOVERSION})
   multicue_warnings(multicue_${name})
+  set_property(GLOBAL APPEND PROPERTY MULTICUE_MODULES multicue_${name})
 endfunction()

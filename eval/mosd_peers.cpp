@@ -1,7 +1,8 @@
 /// \file mosd_peers: segments mOSD scenes with three standard PCL 1.13 table-top pipelines and
-/// writes OUT_DIR/<scene>/labels.pcd in the format of `multicue perceive` (fields x y z object
-/// category, same WIDTH/HEIGHT and point order as the input, object 0 = no object, category 0),
-/// so that the mOSD scorer (osd_eval.py) scores PCL on exactly the scenes multicue is scored on.
+/// writes OUT_DIR/<scene>/labels.pcd in the format of `multicue perceive` (fields x y z label
+/// object category, same WIDTH/HEIGHT and point order as the input, label = object, 0 = no object,
+/// category 0), so that the mOSD scorer (osd_eval.py) scores PCL on exactly the scenes multicue is
+/// scored on.
 ///
 /// usage: mosd_peers --method euclidean|region_growing|lccp INPUT_DIR OUT_DIR
 ///                   [--scenes learn0,learn1,...]
@@ -305,7 +306,8 @@ Segmentation Lccp(const Cloud::ConstPtr& cloud) {
 
 // ---------------------------------------------------------------------------------------------
 
-// labels.pcd: x y z (F4) object (U4) category (U1), binary_compressed, input layout and order.
+// labels.pcd: x y z (F4) label (U4) object (U4) category (U1), binary_compressed, input layout
+// and order; label and object are the same id (result format 2).
 bool WriteLabels(const fs::path& path, const Cloud& cloud,
                  const std::vector<std::uint32_t>& object) {
     pcl::PCLPointCloud2 out;
@@ -320,11 +322,13 @@ bool WriteLabels(const fs::path& path, const Cloud& cloud,
         f.count = 1;
         return f;
     };
-    out.fields = {
-        field("x", 0, pcl::PCLPointField::FLOAT32), field("y", 4, pcl::PCLPointField::FLOAT32),
-        field("z", 8, pcl::PCLPointField::FLOAT32), field("object", 12, pcl::PCLPointField::UINT32),
-        field("category", 16, pcl::PCLPointField::UINT8)};
-    out.point_step = 17;
+    out.fields = {field("x", 0, pcl::PCLPointField::FLOAT32),
+                  field("y", 4, pcl::PCLPointField::FLOAT32),
+                  field("z", 8, pcl::PCLPointField::FLOAT32),
+                  field("label", 12, pcl::PCLPointField::UINT32),
+                  field("object", 16, pcl::PCLPointField::UINT32),
+                  field("category", 20, pcl::PCLPointField::UINT8)};
+    out.point_step = 21;
     out.row_step = out.point_step * out.width;
     out.data.assign(static_cast<std::size_t>(out.point_step) * cloud.size(), 0);
     for (std::size_t i = 0; i < cloud.size(); ++i) {
@@ -334,7 +338,8 @@ bool WriteLabels(const fs::path& path, const Cloud& cloud,
         std::memcpy(dst + 4, &p.y, 4);
         std::memcpy(dst + 8, &p.z, 4);
         std::memcpy(dst + 12, &object[i], 4);
-        // category (byte 16) stays 0: the peers do not categorise.
+        std::memcpy(dst + 16, &object[i], 4);
+        // category (byte 20) stays 0: the peers do not categorise.
     }
     pcl::PCDWriter writer;
     return writer.writeBinaryCompressed(path.string(), out, cloud.sensor_origin_,

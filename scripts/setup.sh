@@ -2,8 +2,8 @@
 # Installs every Debian package that multicue's build, tests and benchmarks need, then the npm
 # packages of the report viewer (web/, `npm ci` from web/package-lock.json).
 # Idempotent and non-interactive; runs `apt-get update` once, `npm ci` only when the lock changed.
-#   scripts/setup.sh            library, CLI, tests, benchmarks and the PCL/Open3D peers
-#   scripts/setup.sh --minimal  library, CLI and tests only (no PCL/Open3D)
+#   scripts/setup.sh            library, CLI, Python module, tests, benchmarks and the PCL/Open3D peers
+#   scripts/setup.sh --minimal  library, CLI, Python module and tests only (no PCL/Open3D)
 set -euo pipefail
 
 minimal=0
@@ -22,6 +22,8 @@ packages=(
     libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev
     libyaml-cpp-dev
     libgtest-dev libgmock-dev libbenchmark-dev
+    # The Python module (python/) and its tests.
+    pybind11-dev python3-dev python3-numpy python3-pytest
     clang-format
     # The report page's viewer is bundled from npm; its browser test drives Debian's Chromium.
     nodejs chromium chromium-driver

@@ -557,7 +557,7 @@ TEST(PerceiveOutput, FilesFollowTheContract) {
     WritePerceiveOutputs(dir.path(), PerceiveResultJson("scene.pcd", r),
                          PerceiveLabelsCloud(s.cloud, r), PerceiveModelsMesh(r));
     const auto j = nlohmann::json::parse(io::ReadFileBytes(dir / "result.json"));
-    EXPECT_EQ(j["format"], "multicue.result/1");
+    EXPECT_EQ(j["format"], "multicue.result/2");
     EXPECT_EQ(j["points"], s.cloud.size());
     const std::vector<std::string> names = j["categories"];
     EXPECT_EQ(names, (std::vector<std::string>{"none", "sphere", "box", "flat", "cylinder", "plate",
@@ -566,10 +566,12 @@ TEST(PerceiveOutput, FilesFollowTheContract) {
     EXPECT_GE(j["support"]["hull"].size(), 3u);
     EXPECT_TRUE(j["timings_ms"].contains("normals"));
 
-    // labels.pcd: the input's layout, NaN points kept, ids and categories as in result.json.
+    // labels.pcd: the input's layout, NaN points kept, ids and categories as in result.json; the
+    // PCL field `label` holds the same ids as `object`.
     const PointCloud labels = io::ReadPcd(dir / "labels.pcd");
     ASSERT_EQ(labels.width, s.cloud.width);
     ASSERT_EQ(labels.height, s.cloud.height);
+    ASSERT_EQ(labels.labels.size(), labels.size());
     const ExtraField* object = labels.FindExtraField("object");
     const ExtraField* category = labels.FindExtraField("category");
     ASSERT_NE(object, nullptr);
@@ -583,6 +585,7 @@ TEST(PerceiveOutput, FilesFollowTheContract) {
         EXPECT_EQ(labels.IsFinite(i), s.cloud.IsFinite(i));
         std::uint32_t id = 0;
         std::memcpy(&id, object->data.data() + 4 * i, 4);
+        EXPECT_EQ(labels.labels[i], id);
         if (id == 0) {
             EXPECT_EQ(category->data[i], 0);
             continue;

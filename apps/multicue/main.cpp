@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/version.hpp"
 
 namespace {
 
@@ -33,7 +34,7 @@ int Fail(int code, const std::string& message) {
 int main(int argc, char** argv) {
     CLI::App app{"multicue: multi-cue perception of table-top objects from 3D and RGB-D data"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "multicue 0.1.0");
+    app.set_version_flag("--version", std::string("multicue ") + MULTICUE_VERSION_STRING);
     multicue::cli::GlobalOptions global;
     std::string log_level = "warning";
     app.add_option("--log-level", log_level, "debug, info, warning, error or off")

@@ -125,7 +125,7 @@ nlohmann::ordered_json PerceiveResultJson(
     const std::string& input_name, const PerceiveResult& result,
     const std::vector<std::pair<std::string, double>>& timings_ms) {
     nlohmann::ordered_json j;
-    j["format"] = "multicue.result/1";
+    j["format"] = fmt::format("multicue.result/{}", kPerceiveOutputFormatVersion);
     j["input"] = input_name;
     j["points"] = result.points;
     j["categories"] = kCategoryNames;
@@ -181,6 +181,9 @@ PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& re
     labels.height = input.height;
     labels.sensor_origin = input.sensor_origin;
     labels.sensor_orientation = input.sensor_orientation;
+    // Written as PCL's `label` field (uint32), so that pcl::PointXYZL reads the object ids; the
+    // `object` field beside it keeps readers of format 1 working.
+    labels.labels = result.point_objects;
     ExtraField object{"object", 'U', 4, 1, {}};
     object.data.resize(input.size() * 4);
     std::memcpy(object.data.data(), result.point_objects.data(), object.data.size());

@@ -17,13 +17,17 @@
 
 namespace multicue {
 
+/// Version of the perceive outputs, "multicue.result/<version>" in result.json. 2: labels.pcd
+/// also has PCL's `label` field (uint32, the object id).
+inline constexpr int kPerceiveOutputFormatVersion = 2;
+
 /// The result.json object. `timings_ms` are appended after the pipeline's own stage timings.
 nlohmann::ordered_json PerceiveResultJson(
     const std::string& input_name, const PerceiveResult& result,
     const std::vector<std::pair<std::string, double>>& timings_ms = {});
 
-/// The labels cloud: the input's points and layout with fields object (uint32) and category
-/// (uint8).
+/// The labels cloud: the input's points and layout with the object id as `labels` (PCD field
+/// `label`, uint32) and extra fields object (uint32, the same id) and category (uint8).
 PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& result);
 
 /// All object models as one mesh, each coloured with the object's colour.
