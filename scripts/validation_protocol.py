@@ -69,14 +69,15 @@ def run_perceive(cli, pcd, out_dir, config):
         return wall, json.load(f), None
 
 
-def aggregate(osd_eval, gt_of, pred_dir, scenes):
-    """mOSD metrics over `scenes` (names), from per-scene counts as osd_eval sums them."""
+def aggregate(osd_eval, gt_of, pred_dir, scenes, scored_as=None):
+    """mOSD metrics over `scenes` (names), from per-scene counts as osd_eval sums them;
+    `scored_as` names a scene for the scorer (which reads mOSD-style names, e.g. learn12)."""
     tot = {}
-    for s in scenes:
+    for k, s in enumerate(scenes):
         pred = os.path.join(pred_dir, s, "labels.pcd")
         if not os.path.exists(pred):
             continue
-        r = osd_eval.evaluate_scene(gt_of(s), pred, s)
+        r = osd_eval.evaluate_scene(gt_of(s), pred, scored_as(k) if scored_as else s)
         for k, v in r.items():
             tot[k] = tot.get(k, 0) + v
     P = tot.get("tp", 0) / max(tot.get("pred_pts", 0), 1)
@@ -211,8 +212,8 @@ def sim_split(args, osd_eval, mode):
     out, per_scene, failed = perceive_split(args, name, frames,
                                             lambda s: os.path.join(sim_dir, s + ".pcd"))
     gt_of = lambda s: os.path.join(gt_dir, s + ".pcd")  # noqa: E731
-    # osd_eval names scenes by a trailing number; simulated frames are scored under their name.
-    res = {"all": {"multicue": aggregate(osd_eval, gt_of, out, frames)},
+    res = {"all": {"multicue": aggregate(osd_eval, gt_of, out, frames,
+                                         scored_as=lambda k: f"sim{k}")},
            "timing": timing(per_scene), "failed": failed,
            "no_objects": [s for s, r in per_scene.items() if r.get("objects") == 0],
            "per_scene": per_scene}
