@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "multicue/sim/procedural.hpp"
+#include "multicue/sim/scene_gen.hpp"
 
 namespace multicue::sim::placement_internal {
 
@@ -117,6 +118,22 @@ SceneObject Floor(float half) {
     m.name = "floor";
     return Fixed(std::make_shared<const PartMesh>(std::move(m)), kFloorLabel, {110, 110, 105, 255},
                  "floor");
+}
+
+float AddTableAndFloor(const TableSceneParams& p, StreamRng& rng, Scene& scene) {
+    const Eigen::Vector2f size(
+        static_cast<float>(rng.Uniform(p.table_min_size.x(), p.table_max_size.x())),
+        static_cast<float>(rng.Uniform(p.table_min_size.y(), p.table_max_size.y())));
+    const float h = static_cast<float>(rng.Uniform(p.table_min_height, p.table_max_height));
+    scene.support_center = Eigen::Vector3f(0.0f, 0.0f, h);
+    scene.support_size = size;
+    const auto wood = static_cast<std::uint8_t>(rng.UniformInt(120, 200));
+    scene.objects.push_back(Fixed(TableMesh(size, h), kTableLabel,
+                                  Color{wood, static_cast<std::uint8_t>(wood * 0.8f),
+                                        static_cast<std::uint8_t>(wood * 0.55f), 255},
+                                  "table"));
+    scene.objects.push_back(Floor(5.0f));
+    return h;
 }
 
 }  // namespace multicue::sim::placement_internal

@@ -63,6 +63,11 @@ SceneObject Fixed(std::shared_ptr<const PartMesh> mesh, std::uint32_t label, Col
 /// A floor slab of 2*half x 2*half m with its top at z = 0 (label kFloorLabel).
 SceneObject Floor(float half);
 
+/// The table of `params` (size and height drawn from `rng` in this order, then its wood colour)
+/// and the floor, appended to `scene`, which gets the support centre and size. Returns the
+/// table's height [m].
+float AddTableAndFloor(const TableSceneParams& params, StreamRng& rng, Scene& scene);
+
 /// The table-top scenes of the modes other than kDefault (scene_modes.cpp); `params` are
 /// checked by the caller.
 Scene MakeModeTableScene(const TableSceneParams& params, ObjectSource& source, std::uint64_t seed);

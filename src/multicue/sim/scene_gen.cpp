@@ -45,18 +45,8 @@ void CheckTableParams(const TableSceneParams& p) {
 Scene MakeDefaultTableScene(const TableSceneParams& p, ObjectSource& source, std::uint64_t seed) {
     StreamRng rng(seed, 0);
     Scene scene;
-    const Eigen::Vector2f size(
-        static_cast<float>(rng.Uniform(p.table_min_size.x(), p.table_max_size.x())),
-        static_cast<float>(rng.Uniform(p.table_min_size.y(), p.table_max_size.y())));
-    const float h = static_cast<float>(rng.Uniform(p.table_min_height, p.table_max_height));
-    scene.support_center = Eigen::Vector3f(0.0f, 0.0f, h);
-    scene.support_size = size;
-    const auto wood = static_cast<std::uint8_t>(rng.UniformInt(120, 200));
-    scene.objects.push_back(Fixed(TableMesh(size, h), kTableLabel,
-                                  Color{wood, static_cast<std::uint8_t>(wood * 0.8f),
-                                        static_cast<std::uint8_t>(wood * 0.55f), 255},
-                                  "table"));
-    scene.objects.push_back(Floor(5.0f));
+    const float h = AddTableAndFloor(p, rng, scene);
+    const Eigen::Vector2f size = scene.support_size;
 
     const Eigen::Vector2f lo = -size / 2 + Eigen::Vector2f::Constant(p.edge_margin);
     const Eigen::Vector2f hi = size / 2 - Eigen::Vector2f::Constant(p.edge_margin);

@@ -231,18 +231,8 @@ class Composer {
         : p_(p), source_(source), seed_(seed) {
         // The table as in the default mode (same draws from stream 0).
         StreamRng rng(seed, 0);
-        const Eigen::Vector2f size(
-            static_cast<float>(rng.Uniform(p.table_min_size.x(), p.table_max_size.x())),
-            static_cast<float>(rng.Uniform(p.table_min_size.y(), p.table_max_size.y())));
-        h_ = static_cast<float>(rng.Uniform(p.table_min_height, p.table_max_height));
-        scene_.support_center = Eigen::Vector3f(0.0f, 0.0f, h_);
-        scene_.support_size = size;
-        const auto wood = static_cast<std::uint8_t>(rng.UniformInt(120, 200));
-        scene_.objects.push_back(Fixed(TableMesh(size, h_), kTableLabel,
-                                       Color{wood, static_cast<std::uint8_t>(wood * 0.8f),
-                                             static_cast<std::uint8_t>(wood * 0.55f), 255},
-                                       "table"));
-        scene_.objects.push_back(Floor(5.0f));
+        h_ = AddTableAndFloor(p, rng, scene_);
+        const Eigen::Vector2f size = scene_.support_size;
         lo_ = -size / 2 + Eigen::Vector2f::Constant(p.edge_margin);
         hi_ = size / 2 - Eigen::Vector2f::Constant(p.edge_margin);
         count_ = rng.UniformInt(p.min_objects, p.max_objects);
