@@ -14,7 +14,15 @@ namespace multicue::ml {
 
 namespace {
 constexpr std::string_view kModelMagic = "MCUEMODL";
+
+// The format version in a container's header (0 when too short to hold one).
+std::uint32_t FileVersion(std::string_view bytes) {
+    if (bytes.size() < 12) return 0;
+    std::uint32_t v = 0;
+    for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(bytes[8 + k]);
+    return v;
 }
+}  // namespace
 
 void Classifier::Fit(const Dataset& train, Progress* progress) {
     if (train.empty()) throw DataError("cannot train a classifier on an empty dataset");
@@ -39,9 +47,37 @@ void Classifier::Fit(const Dataset& train, Progress* progress) {
     }
     std::vector<int> y(train.rows());
     for (std::size_t r = 0; r < y.size(); ++r) y[r] = remap[train.labels[r]];
-    FitImpl(train.features(), y, static_cast<int>(classes.size()), progress);
+    const bool scale = scaling == InputScaling::kZScore ||
+                       (scaling == InputScaling::kAuto && NeedsScaledInput());
+    scale_mean_.resize(0);
+    scale_inv_std_.resize(0);
+    if (scale) {
+        const FeaturesRef x = train.features();
+        const Eigen::RowVectorXd mean = x.cast<double>().colwise().mean();
+        const Eigen::RowVectorXd var =
+            (x.cast<double>().rowwise() - mean).array().square().colwise().mean();
+        scale_mean_ = mean.cast<float>();
+        scale_inv_std_ = var.unaryExpr([](double v) { return v > 1e-24 ? 1.0 / std::sqrt(v) : 1.0; })
+                             .cast<float>();
+        feature_names_ = train.feature_names;  // Scaled() checks the column count
+        FitImpl(Scaled(x), y, static_cast<int>(classes.size()), progress);
+    } else {
+        FitImpl(train.features(), y, static_cast<int>(classes.size()), progress);
+    }
     class_names_ = std::move(classes);
     feature_names_ = train.feature_names;
+}
+
+FeatureMatrix Classifier::Scaled(const FeaturesRef& features) const {
+    FeatureMatrix out = features;
+    out.array().rowwise() -= scale_mean_.array();
+    out.array().rowwise() *= scale_inv_std_.array();
+    return out;
+}
+
+void Classifier::ScaleRow(float* row) const {
+    for (Eigen::Index c = 0; c < scale_mean_.size(); ++c)
+        row[c] = (row[c] - scale_mean_[c]) * scale_inv_std_[c];
 }
 
 void Classifier::CheckInput(const FeaturesRef& features) const {
@@ -63,7 +99,7 @@ FeatureMatrix Classifier::PredictProba(const FeaturesRef& features) const {
     if (features.rows() == 0) {
         return FeatureMatrix(0, static_cast<Eigen::Index>(num_classes()));
     }
-    FeatureMatrix p = PredictImpl(features);
+    FeatureMatrix p = scales_input() ? PredictImpl(Scaled(features)) : PredictImpl(features);
     for (Eigen::Index r = 0; r < p.rows(); ++r) {
         auto row = p.row(r);
         row = row.cwiseMax(0.0f);
@@ -101,6 +137,9 @@ std::string Classifier::Serialize() const {
     w.Put<std::uint32_t>(seed);
     w.PutStrings(class_names_);
     w.PutStrings(feature_names_);
+    w.Put<std::uint8_t>(static_cast<std::uint8_t>(scaling));
+    w.PutArray(scale_mean_.data(), static_cast<std::size_t>(scale_mean_.size()));
+    w.PutArray(scale_inv_std_.data(), static_cast<std::size_t>(scale_inv_std_.size()));
     WriteModel(w);
     return WrapContainer(kModelMagic, kModelFormatVersion, w.bytes());
 }
@@ -111,8 +150,10 @@ void Classifier::Save(const std::filesystem::path& path) const {
 
 std::unique_ptr<Classifier> DeserializeClassifier(const std::string& bytes,
                                                   const std::string& what) {
+    // Version 1 (no input scaling) is still read.
+    const std::uint32_t version = FileVersion(bytes) == 1 ? 1 : kModelFormatVersion;
     const std::string payload =
-        UnwrapContainer(bytes, kModelMagic, kModelFormatVersion, "classifier model", what);
+        UnwrapContainer(bytes, kModelMagic, version, "classifier model", what);
     ByteReader r(payload, what);
     const std::string type = r.GetString();
     const std::string spec = r.GetString();
@@ -127,6 +168,21 @@ std::unique_ptr<Classifier> DeserializeClassifier(const std::string& bytes,
     c->class_names_ = r.GetStrings();
     c->feature_names_ = r.GetStrings();
     if (c->class_names_.size() < 2) r.Fail("model has fewer than 2 classes");
+    if (version >= 2) {
+        const auto mode = r.Get<std::uint8_t>();
+        if (mode > static_cast<std::uint8_t>(InputScaling::kZScore)) r.Fail("bad input scaling");
+        c->scaling = static_cast<InputScaling>(mode);
+        const std::vector<float> mean = r.GetVector<float>();
+        const std::vector<float> inv = r.GetVector<float>();
+        if (mean.size() != inv.size() ||
+            (!mean.empty() && mean.size() != c->feature_names_.size())) {
+            r.Fail("input scaling does not match the feature columns");
+        }
+        c->scale_mean_ = Eigen::Map<const Eigen::RowVectorXf>(mean.data(),
+                                                              static_cast<Eigen::Index>(mean.size()));
+        c->scale_inv_std_ = Eigen::Map<const Eigen::RowVectorXf>(
+            inv.data(), static_cast<Eigen::Index>(inv.size()));
+    }
     c->ReadModel(r);
     if (!r.AtEnd()) r.Fail("trailing bytes in payload");
     return c;
@@ -156,6 +212,16 @@ std::unique_ptr<Classifier> CreateClassifier(const std::string& spec) {
                               "' (knn, svm, boost, mlp, rtrees)");
     }
     c->seed = static_cast<std::uint32_t>(args.GetInt("seed", 1));
+    const std::string scale = args.GetString("scale", "auto");
+    if (scale == "auto") {
+        c->scaling = InputScaling::kAuto;
+    } else if (scale == "zscore") {
+        c->scaling = InputScaling::kZScore;
+    } else if (scale == "none") {
+        c->scaling = InputScaling::kNone;
+    } else {
+        throw InvalidArgument("scale must be auto, zscore or none, got '" + scale + "'");
+    }
     args.CheckAllUsed();
     return c;
 }

@@ -22,8 +22,16 @@ namespace multicue::ml {
 class ByteWriter;
 class ByteReader;
 
-/// Current version of the classifier model format (docs/ml.md).
-inline constexpr std::uint32_t kModelFormatVersion = 1;
+/// Current version of the classifier model format (docs/ml.md). Version 2 added the input
+/// scaling; version 1 files are still read (no scaling).
+inline constexpr std::uint32_t kModelFormatVersion = 2;
+
+/// Input scaling inside a classifier (spec key `scale`): each feature column standardised to
+/// zero mean and unit variance over the training rows, the same transform applied to every
+/// query. `auto` scales for the classifiers whose result depends on the features' units (SVM with
+/// an RBF kernel, k-NN with the L1 or L2 metric) and not for the others (the MLP scales its
+/// inputs itself, as OpenCV's network does by default).
+enum class InputScaling : std::uint8_t { kAuto = 0, kNone = 1, kZScore = 2 };
 
 class Classifier {
   public:
@@ -64,8 +72,17 @@ class Classifier {
 
     /// Seed of every random choice in training.
     std::uint32_t seed = 1;
+    /// Scaling of the features, resolved by Fit (CreateClassifier sets it from the spec; a
+    /// classifier constructed directly does not scale).
+    InputScaling scaling = InputScaling::kNone;
+    /// Whether the trained model standardises its inputs.
+    bool scales_input() const { return scale_mean_.size() > 0; }
 
   protected:
+    /// Whether the classifier's result depends on the units of its features (InputScaling).
+    virtual bool NeedsScaledInput() const { return false; }
+    /// `row` (num_features values) with the model's input scaling applied, in place.
+    void ScaleRow(float* row) const;
     /// x: rows x num_features (finite); y: class index per row in [0, num_classes).
     virtual void FitImpl(const FeaturesRef& x, const std::vector<int>& y, int num_classes,
                          Progress* progress) = 0;
@@ -76,8 +93,11 @@ class Classifier {
 
   private:
     void CheckInput(const FeaturesRef& features) const;
+    FeatureMatrix Scaled(const FeaturesRef& features) const;
     std::vector<std::string> class_names_;
     std::vector<std::string> feature_names_;
+    Eigen::RowVectorXf scale_mean_;     ///< empty: no input scaling
+    Eigen::RowVectorXf scale_inv_std_;  ///< 1 / standard deviation (1 for constant columns)
 
     friend std::unique_ptr<Classifier> DeserializeClassifier(const std::string& bytes,
                                                              const std::string& what);
@@ -85,7 +105,8 @@ class Classifier {
 
 /// Creates an unfitted classifier from a spec "type" or "type:key=value,key=value", e.g.
 /// "knn:k=5,metric=hellinger", "svm:kernel=rbf,grid=1", "boost:type=real,weak=100",
-/// "mlp:hidden=32", "rtrees:trees=100". Unknown types or keys are InvalidArgument.
+/// "mlp:hidden=32", "rtrees:trees=100". Every type also takes `seed` and `scale=auto|zscore|none`
+/// (InputScaling; default auto). Unknown types or keys are InvalidArgument.
 std::unique_ptr<Classifier> CreateClassifier(const std::string& spec);
 /// Loads any saved classifier; FormatError for another format version or a corrupt file.
 std::unique_ptr<Classifier> LoadClassifier(const std::filesystem::path& path);

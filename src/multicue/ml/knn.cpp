@@ -298,8 +298,9 @@ std::vector<Neighbour> KnnClassifier::Neighbours(std::span<const float> query) c
         throw InvalidArgument("query has " + std::to_string(query.size()) + " features, expected " +
                               std::to_string(train_.cols()));
     }
-    std::vector<float> q(query.size()), scratch;
-    MapRow(query.data(), q.data());
+    std::vector<float> scaled(query.begin(), query.end()), q(query.size()), scratch;
+    if (scales_input()) ScaleRow(scaled.data());
+    MapRow(scaled.data(), q.data());
     std::vector<Neighbour> out;
     SearchMapped(q.data(), out, scratch);
     return out;

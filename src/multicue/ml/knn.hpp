@@ -87,6 +87,9 @@ class KnnClassifier : public Classifier {
     std::vector<Neighbour> Neighbours(std::span<const float> query) const;
 
   protected:
+    bool NeedsScaledInput() const override {
+        return params_.metric == KnnMetric::kL1 || params_.metric == KnnMetric::kL2;
+    }
     void FitImpl(const FeaturesRef& x, const std::vector<int>& y, int num_classes,
                  Progress* progress) override;
     FeatureMatrix PredictImpl(const FeaturesRef& x) const override;

@@ -58,6 +58,7 @@ class SvmClassifier : public Classifier {
     double trained_gamma() const { return gamma_; }
 
   protected:
+    bool NeedsScaledInput() const override { return params_.kernel == SvmKernel::kRbf; }
     void FitImpl(const FeaturesRef& x, const std::vector<int>& y, int num_classes,
                  Progress* progress) override;
     FeatureMatrix PredictImpl(const FeaturesRef& x) const override;
