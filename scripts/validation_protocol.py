@@ -132,7 +132,7 @@ def run_peers(args, name, input_dir, scenes):
         return None
     times = {}
     for line in p.stdout.splitlines():
-        m = re.match(r"\s*(\S+)\s.*?([0-9.]+)\s*ms", line)
+        m = re.match(r"\s*(\S+)\s+([0-9.]+)\s+\d+\s*$", line)  # scene, segment_ms, objects
         if m and m.group(1) in scenes:
             times[m.group(1)] = float(m.group(2)) / 1000.0
     return out, times
@@ -220,9 +220,9 @@ def sim_split(args, osd_eval, mode):
     return res
 
 
-def fmt_group(g):
+def fmt_group(g, categories=True):
     text = f"{g['overlap_F']:.3f} / {g['pct_F75']:.3f} / {g['F_os']:.3f}"
-    if g.get("category_acc") is not None:
+    if categories and g.get("category_acc") is not None:
         text += f" (categories {g['category_acc']:.3f} of {g['category_objects']})"
     return text
 
@@ -233,10 +233,10 @@ def print_tables(report):
     for split, r in report.items():
         if "groups" in r:
             for group, g in r["groups"].items():
-                lccp = fmt_group(g["lccp"]) if "lccp" in g else "-"
+                lccp = fmt_group(g["lccp"], False) if "lccp" in g else "-"
                 print(f"| {split} | {group} | {fmt_group(g['multicue'])} | {lccp} |")
         if "all" in r:
-            lccp = fmt_group(r["all"]["lccp"]) if "lccp" in r["all"] else "-"
+            lccp = fmt_group(r["all"]["lccp"], False) if "lccp" in r["all"] else "-"
             print(f"| {split} | all | {fmt_group(r['all']['multicue'])} | {lccp} |")
     print()
     print("| split | median frame [s] | worst frame [s] | worst / median | worst scene | "
@@ -250,6 +250,10 @@ def print_tables(report):
               f"{t['worst_over_median']:.2f} | {t['worst_scene']} | "
               f"{', '.join(r.get('no_objects', [])) or '-'} | "
               f"{', '.join(r.get('failed', [])) or '-'} |")
+        t = r.get("lccp_timing") or {}
+        if t:
+            print(f"| {split}, LCCP segmentation alone | {t['median_s']:.3f} | "
+                  f"{t['worst_s']:.3f} | {t['worst_over_median']:.2f} | {t['worst_scene']} | - | - |")
     if "samples" in report:
         print()
         for s, r in report["samples"]["per_scene"].items():
