@@ -1,6 +1,7 @@
 // Support plane selection on constructed scenes: the largest near-horizontal plane nearest the
 // viewpoint, its connected patch and hull, and the three ways of finding "up".
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -211,6 +212,36 @@ TEST(SupportPlane, TheRegionAboveTheTableHoldsTheObjects) {
     std::size_t above = 0;
     for (const auto& p : c.points) above += p.z() > 0.77f ? 1 : 0;
     EXPECT_GT(r.points.size(), above * 9 / 10);
+}
+
+// The table visible only in front of the objects: a box at its back stands beyond the hull of
+// the table's points, and a wall rising behind the table must stay out.
+TEST(SupportPlane, ObjectsBeyondTheVisibleTableAreInTheRegionWallsAreNot) {
+    std::mt19937 rng(31);
+    PointCloud c;
+    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.1f, 0.75f, 0.01f, rng);                // seen table
+    AddBox(c, {-0.2f, -0.2f, 0.75f}, {0.0f, -0.05f, 0.9f}, 0.006f, rng);            // on it
+    // Its lowest centimetres are hidden by the objects in front.
+    AddBox(c, {-0.4f, 0.115f, 0.762f}, {-0.2f, 0.25f, 0.85f}, 0.006f, rng);  // at the back
+    AddWall(c, 0.13f, 0.0f, 0.5f, 0.78f, 1.6f, 0.02f, rng);  // a cabinet side, its foot hidden
+    c.SetUnorganized();
+    c.sensor_origin = {0.0f, -1.0f, 1.5f};
+    auto count = [&](const Indices& region, auto pred) {
+        std::size_t n = 0;
+        for (Index i : region) n += pred(c.points[i]) ? 1 : 0;
+        return n;
+    };
+    auto back_box = [](const Eigen::Vector3f& p) { return p.y() > 0.112f && p.x() < -0.1f; };
+    auto wall = [](const Eigen::Vector3f& p) { return p.y() > 0.12f && p.x() > -0.05f; };
+    const TableRegion r = FindTableRegion(c, {}, {});
+    ASSERT_TRUE(r.support.found);
+    EXPECT_NEAR(-r.support.plane.w() / r.support.plane.z(), 0.75f, 0.01f);
+    EXPECT_TRUE(std::is_sorted(r.points.begin(), r.points.end()));
+    EXPECT_GT(count(r.points, back_box), 200u);
+    EXPECT_EQ(count(r.points, wall), 0u);
+    const TableRegion off = FindTableRegion(c, {}, {.edge_reach = 0.0f});
+    EXPECT_EQ(count(off.points, back_box), 0u);
+    EXPECT_THROW(FindTableRegion(c, {}, {.edge_reach = -1.0f}), InvalidArgument);
 }
 
 TEST(SupportPlane, NoPlaneAndContract) {

@@ -76,6 +76,9 @@ void PrismParams::Validate() const {
         throw InvalidArgument(fmt::format("prism min_height {} must not exceed max_height {}",
                                           min_height, max_height));
     }
+    if (!(edge_reach >= 0.0f) || !std::isfinite(edge_reach)) {
+        throw InvalidArgument(fmt::format("prism edge_reach must be >= 0, got {}", edge_reach));
+    }
 }
 
 std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indices& subset,

@@ -22,6 +22,11 @@ std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indi
 struct PrismParams {
     float min_height = 0.01f;  ///< lowest height above the plane that counts [m]
     float max_height = 0.50f;  ///< highest height above the plane that counts [m]
+    /// FindTableRegion: objects standing beyond the visible table (at its back, where the objects
+    /// in front hide the table around them) are taken too: clusters above the plane outside the
+    /// hull, reaching within 3 cm of it, no farther than this from it, and no higher than
+    /// max_height (a wall behind the table rises above it) [m]; 0 = off.
+    float edge_reach = 0.15f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
@@ -30,6 +35,9 @@ struct PrismParams {
     void VisitParams(V& v) {
         v("min_height", min_height, "lowest object point above the table [m]");
         v("max_height", max_height, "highest object point above the table [m]");
+        v("edge_reach", edge_reach,
+          "objects standing up to this far beyond the table's visible hull are taken too, 0 = "
+          "off [m]");
     }
 };
 

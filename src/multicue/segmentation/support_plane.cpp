@@ -323,6 +323,51 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     return result;
 }
 
+namespace {
+
+// Objects standing beyond the visible hull (PrismParams::edge_reach), appended to `region`.
+void AddObjectsBeyondTheHull(const PointCloud& cloud, const SupportPlane& s,
+                             const PrismParams& prism, Indices& region) {
+    constexpr float kTouch = 0.03f;       // a cluster reaches this close to the hull [m]
+    constexpr float kTolerance = 0.015f;  // points of one cluster [m]
+    constexpr float kRise = 0.10f;        // looked at above max_height, to see what rises [m]
+    constexpr std::size_t kMinPoints = 50;
+    const Eigen::Vector3f up = s.plane.head<3>();
+    std::vector<Eigen::Vector3f> inward(s.hull.size());
+    for (std::size_t k = 0; k < s.hull.size(); ++k)
+        inward[k] = up.cross(s.hull[(k + 1) % s.hull.size()] - s.hull[k]).normalized();
+    std::vector<std::uint8_t> in_region(cloud.size(), 0);
+    for (Index i : region) in_region[i] = 1;
+    Indices beyond;
+    std::vector<float> outside_by(cloud.size(), 0.0f);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (in_region[i] != 0 || !cloud.IsFinite(i)) continue;
+        const Eigen::Vector3f& p = cloud.points[i];
+        const float h = up.dot(p) + s.plane.w();
+        if (h < prism.min_height || h > prism.max_height + kRise) continue;
+        float out = 0.0f;  // the largest edge violation: at most the distance to the hull
+        for (std::size_t k = 0; k < s.hull.size(); ++k)
+            out = std::max(out, -inward[k].dot(p - s.hull[k]));
+        if (out <= 0.0f || out > prism.edge_reach) continue;
+        outside_by[i] = out;
+        beyond.push_back(static_cast<Index>(i));
+    }
+    if (beyond.empty()) return;
+    const ClusteringResult clusters = EuclideanClusteringGrid(
+        cloud, {.tolerance = kTolerance, .min_cluster_size = kMinPoints, .subset = beyond});
+    for (const Indices& c : clusters.clusters) {
+        bool touches = false, rises = false;
+        for (Index i : c) {
+            touches = touches || outside_by[i] <= kTouch;
+            rises = rises || up.dot(cloud.points[i]) + s.plane.w() > prism.max_height;
+        }
+        if (touches && !rises) region.insert(region.end(), c.begin(), c.end());
+    }
+    std::sort(region.begin(), region.end());
+}
+
+}  // namespace
+
 TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& support,
                             const PrismParams& prism) {
     support.Validate();
@@ -331,8 +376,11 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     region.support = FindSupportPlane(cloud, support, prism);
     const SupportPlane& s = region.support;
     // A plane that supports nothing (see-through, or nothing stands on it) is no table.
-    if (s.found && s.hull.size() >= 3 && s.supported > 0)
+    if (s.found && s.hull.size() >= 3 && s.supported > 0) {
         region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
+        if (prism.edge_reach > 0.0f && !region.points.empty())
+            AddObjectsBeyondTheHull(cloud, s, prism, region.points);
+    }
     if (region.points.empty()) {
         region.support = SupportPlane{};
         region.points = FinitePoints(cloud);
