@@ -1,6 +1,9 @@
-"""perceive() from Python against `multicue perceive` (the demo scene's result.json)."""
+"""perceive() from Python against `multicue perceive` (the demo scene's and an mOSD frame's
+result.json)."""
 
 import json
+import os
+import pathlib
 import subprocess
 
 import numpy as np
@@ -37,6 +40,21 @@ def test_perceive_gives_what_the_cli_writes(cli, demo, tmp_path):
         assert np.count_nonzero(objects == o["id"]) == o["points"]
         assert multicue.CATEGORIES[np.bincount(categories[objects == o["id"]]).argmax()] == \
             o["category"]
+
+
+def test_perceive_of_an_mosd_frame_gives_what_the_cli_writes(cli, tmp_path):
+    data = pathlib.Path(os.environ.get("MULTICUE_SHARED_DATA_DIR", ""))
+    frame = data / "scans" / "mosd-learn" / "learn33.pcd"
+    if not frame.exists():
+        pytest.skip("the shared data (scans/mosd-learn) is not here")
+    subprocess.run([cli, "perceive", str(frame), "--out", str(tmp_path), "--no-report", "-q"],
+                   check=True)
+    expected = json.loads((tmp_path / "result.json").read_text())
+    result, objects, _ = multicue.perceive(multicue.read(frame), input=str(frame))
+    assert len(result["objects"]) >= 3
+    assert without_run_details(result) == without_run_details(expected)
+    labels = multicue.read(tmp_path / "labels.pcd")
+    np.testing.assert_array_equal(objects, labels.extra_field("object"))
 
 
 def test_perceive_reads_a_configuration_dict(demo):
