@@ -262,9 +262,8 @@ TEST(EuclideanClusteringGrid, IdenticalToTheKdTreeVersion) {
         const PointCloud c = RandomBlobs(seed);
         const KdTree tree(c);
         for (float tolerance : {0.01f, 0.03f, 0.08f, 0.2f, 1.5f}) {
-            const EuclideanClusteringParams params{.tolerance = tolerance,
-                                                   .min_cluster_size = 2,
-                                                   .compute_labels = true};
+            const EuclideanClusteringParams params{
+                .tolerance = tolerance, .min_cluster_size = 2, .compute_labels = true};
             const auto grid = EuclideanClusteringGrid(c, params);
             const auto with_tree = EuclideanClustering(c, tree, params);
             EXPECT_EQ(grid.clusters, with_tree.clusters) << "seed " << seed << " tol " << tolerance;

@@ -213,8 +213,7 @@ TEST(PerceiveModels, ModelLargerThanItsPointsIsRejected) {
         for (float y = 0.26f; y <= 0.3f + 1e-6f; y += 0.003f) {
             const Eigen::Vector3f radial(std::sin(a), 0.0f, -std::cos(a));
             object.indices.push_back(static_cast<Index>(cloud.points.size()));
-            Add(cloud, Eigen::Vector3f(axis_point.x(), y, axis_point.z()) + 0.25f * radial,
-                radial);
+            Add(cloud, Eigen::Vector3f(axis_point.x(), y, axis_point.z()) + 0.25f * radial, radial);
         }
     }
     AddWall(cloud);

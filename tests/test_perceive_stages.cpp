@@ -301,9 +301,9 @@ TEST(PerceiveStages, ARoundProfileMakesACylinder) {
     };
     std::vector<PerceivedObject> objects;
     objects.push_back(object(Category::kOther, {0.038f, 0.039f, 0.040f}, 0.10f));  // mug
-    objects.push_back(object(Category::kOther, {0.03f, 0.06f, 0.09f}, 0.08f));    // bowl
-    objects.push_back(object(Category::kSphere, {0.04f, 0.04f}, 0.02f));          // too low
-    objects.push_back(object(Category::kBox, {0.04f, 0.04f}, 0.10f));             // not other
+    objects.push_back(object(Category::kOther, {0.03f, 0.06f, 0.09f}, 0.08f));     // bowl
+    objects.push_back(object(Category::kSphere, {0.04f, 0.04f}, 0.02f));           // too low
+    objects.push_back(object(Category::kBox, {0.04f, 0.04f}, 0.10f));              // not other
     objects.push_back(object(Category::kOther, {0.04f, 0.041f}, 0.10f));
     objects.back().model.accepted = false;  // a rejected model says nothing
     CategorizationParams p;

@@ -129,8 +129,9 @@ PointCloud TableUnderALargeBox(bool stacked) {
         return p.x() > lo.x() && p.x() < hi.x() && p.y() > lo.y() && p.y() < hi.y();
     });
     AddBox(c, lo, hi, 0.006f, rng);
-    if (stacked) AddBox(c, hi - Eigen::Vector3f(0.2f, 0.2f, 0.0f), hi + Eigen::Vector3f(0, 0, 0.1f),
-                        0.006f, rng);
+    if (stacked)
+        AddBox(c, hi - Eigen::Vector3f(0.2f, 0.2f, 0.0f), hi + Eigen::Vector3f(0, 0, 0.1f), 0.006f,
+               rng);
     AddBox(c, {0.3f, -0.25f, table}, {0.4f, -0.15f, table + 0.12f}, 0.006f, rng);
     AddBox(c, {0.3f, 0.05f, table}, {0.42f, 0.2f, table + 0.08f}, 0.006f, rng);
     c.SetUnorganized();
@@ -169,8 +170,8 @@ TEST(SupportPlane, ATableWithObjectsOnTheFloorIsTheTable) {
     AddHorizontal(c, -2.0f, 2.0f, -1.0f, 2.0f, 0.0f, 0.02f, rng);
     AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.3f, 0.72f, 0.015f, rng);
     for (float x : {-0.45f, 0.45f}) {
-        for (float y : {-0.25f, 0.25f}) AddBox(c, {x, y, 0.0f}, {x + 0.03f, y + 0.03f, 0.72f},
-                                               0.01f, rng);
+        for (float y : {-0.25f, 0.25f})
+            AddBox(c, {x, y, 0.0f}, {x + 0.03f, y + 0.03f, 0.72f}, 0.01f, rng);
     }
     AddBox(c, {-0.2f, -0.1f, 0.72f}, {0.0f, 0.1f, 0.9f}, 0.006f, rng);
     AddBox(c, {0.15f, -0.1f, 0.72f}, {0.3f, 0.05f, 0.8f}, 0.006f, rng);
@@ -219,8 +220,8 @@ TEST(SupportPlane, TheRegionAboveTheTableHoldsTheObjects) {
 TEST(SupportPlane, ObjectsBeyondTheVisibleTableAreInTheRegionWallsAreNot) {
     std::mt19937 rng(31);
     PointCloud c;
-    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.1f, 0.75f, 0.01f, rng);                // seen table
-    AddBox(c, {-0.2f, -0.2f, 0.75f}, {0.0f, -0.05f, 0.9f}, 0.006f, rng);            // on it
+    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.1f, 0.75f, 0.01f, rng);        // seen table
+    AddBox(c, {-0.2f, -0.2f, 0.75f}, {0.0f, -0.05f, 0.9f}, 0.006f, rng);  // on it
     // Its lowest centimetres are hidden by the objects in front.
     AddBox(c, {-0.4f, 0.115f, 0.762f}, {-0.2f, 0.25f, 0.85f}, 0.006f, rng);  // at the back
     AddWall(c, 0.13f, 0.0f, 0.5f, 0.78f, 1.6f, 0.02f, rng);  // a cabinet side, its foot hidden

@@ -47,8 +47,8 @@ void Classifier::Fit(const Dataset& train, Progress* progress) {
     }
     std::vector<int> y(train.rows());
     for (std::size_t r = 0; r < y.size(); ++r) y[r] = remap[train.labels[r]];
-    const bool scale = scaling == InputScaling::kZScore ||
-                       (scaling == InputScaling::kAuto && NeedsScaledInput());
+    const bool scale =
+        scaling == InputScaling::kZScore || (scaling == InputScaling::kAuto && NeedsScaledInput());
     scale_mean_.resize(0);
     scale_inv_std_.resize(0);
     if (scale) {
@@ -57,8 +57,9 @@ void Classifier::Fit(const Dataset& train, Progress* progress) {
         const Eigen::RowVectorXd var =
             (x.cast<double>().rowwise() - mean).array().square().colwise().mean();
         scale_mean_ = mean.cast<float>();
-        scale_inv_std_ = var.unaryExpr([](double v) { return v > 1e-24 ? 1.0 / std::sqrt(v) : 1.0; })
-                             .cast<float>();
+        scale_inv_std_ =
+            var.unaryExpr([](double v) { return v > 1e-24 ? 1.0 / std::sqrt(v) : 1.0; })
+                .cast<float>();
         feature_names_ = train.feature_names;  // Scaled() checks the column count
         FitImpl(Scaled(x), y, static_cast<int>(classes.size()), progress);
     } else {
@@ -178,10 +179,10 @@ std::unique_ptr<Classifier> DeserializeClassifier(const std::string& bytes,
             (!mean.empty() && mean.size() != c->feature_names_.size())) {
             r.Fail("input scaling does not match the feature columns");
         }
-        c->scale_mean_ = Eigen::Map<const Eigen::RowVectorXf>(mean.data(),
-                                                              static_cast<Eigen::Index>(mean.size()));
-        c->scale_inv_std_ = Eigen::Map<const Eigen::RowVectorXf>(
-            inv.data(), static_cast<Eigen::Index>(inv.size()));
+        c->scale_mean_ = Eigen::Map<const Eigen::RowVectorXf>(
+            mean.data(), static_cast<Eigen::Index>(mean.size()));
+        c->scale_inv_std_ =
+            Eigen::Map<const Eigen::RowVectorXf>(inv.data(), static_cast<Eigen::Index>(inv.size()));
     }
     c->ReadModel(r);
     if (!r.AtEnd()) r.Fail("trailing bytes in payload");

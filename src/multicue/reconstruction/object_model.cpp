@@ -456,7 +456,7 @@ ObjectModel ModelChecked(const PointCloud& cloud, const PerceivedObject& object,
     if (fits_size) model.verification = VerifyInFrame(cloud, model.mesh, plane, params);
     model.accepted = fits_size && inlier_ratio >= params.min_inlier_ratio &&
                      (!model.verification || model.verification->accepted);
-    const char* reason = !fits_size                             ? "size"
+    const char* reason = !fits_size                               ? "size"
                          : inlier_ratio < params.min_inlier_ratio ? "inlier_ratio"
                                                                   : "verification";
     if (!model.accepted && params.mesh_fallback) {
@@ -497,8 +497,7 @@ void ModelParams::Validate() const {
             min_inlier_ratio);
     Require(max_size_ratio >= 1.0f && std::isfinite(max_size_ratio), "max_size_ratio", ">= 1",
             max_size_ratio);
-    Require(size_margin >= 0.0f && std::isfinite(size_margin), "size_margin", ">= 0",
-            size_margin);
+    Require(size_margin >= 0.0f && std::isfinite(size_margin), "size_margin", ">= 0", size_margin);
     Require(mesh_max_points >= 3, "mesh_max_points", ">= 3", static_cast<double>(mesh_max_points));
     Require(several_min_ratio >= 0.0f, "several_min_ratio", ">= 0", several_min_ratio);
     ResolveThreadCount(num_threads);

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 
@@ -146,13 +147,117 @@ struct GridCell {
 std::uint64_t CellKey(std::int64_t x, std::int64_t y, std::int64_t z) {
     constexpr std::uint64_t kMask = (1u << 21) - 1u;
     return ((static_cast<std::uint64_t>(x) & kMask) << 42) |
-           ((static_cast<std::uint64_t>(y) & kMask) << 21) | (static_cast<std::uint64_t>(z) & kMask);
+           ((static_cast<std::uint64_t>(y) & kMask) << 21) |
+           (static_cast<std::uint64_t>(z) & kMask);
 }
 
 float BoxGapSquared(const GridCell& a, const GridCell& b) {
     const Eigen::Vector3f gap =
         (a.lo - b.hi).cwiseMax(b.lo - a.hi).cwiseMax(Eigen::Vector3f::Zero());
     return gap.squaredNorm();
+}
+
+// The marked points binned into cells of edge tolerance / sqrt(3): two points of one cell are
+// always neighbours, and neighbours lie at most two cells apart along each axis.
+struct ClusterGrid {
+    std::vector<GridCell> cells;  // ascending key order
+    Indices points;               // grouped by cell
+    std::unordered_map<std::uint64_t, std::uint32_t> cell_of_key;
+};
+
+// Nothing when the points span more than 2^21 - 5 cells along an axis (coordinates are counted
+// from their lower corner).
+std::optional<ClusterGrid> BuildClusterGrid(const PointCloud& cloud,
+                                            const std::vector<std::uint8_t>& marked,
+                                            std::size_t num_points, float tolerance) {
+    const double inv = 1.0 / (static_cast<double>(tolerance) / std::sqrt(3.0) * (1.0 - 1e-6));
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
+    Eigen::Vector3d hi = -lo;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (marked[i] == 0) continue;
+        lo = lo.cwiseMin(cloud.points[i].cast<double>());
+        hi = hi.cwiseMax(cloud.points[i].cast<double>());
+    }
+    if (((hi - lo) * inv).maxCoeff() > static_cast<double>((1 << 21) - 5)) return std::nullopt;
+    auto cell_of = [&](const Eigen::Vector3f& p) -> Eigen::Vector3i {
+        return ((p.cast<double>() - lo) * inv).array().floor().cast<int>() + 2;
+    };
+    std::vector<std::pair<std::uint64_t, Index>> keyed;
+    keyed.reserve(num_points);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (marked[i] == 0) continue;
+        const Eigen::Vector3i c = cell_of(cloud.points[i]);
+        keyed.emplace_back(CellKey(c.x(), c.y(), c.z()), static_cast<Index>(i));
+    }
+    std::sort(keyed.begin(), keyed.end());
+    ClusterGrid grid;
+    grid.points.resize(keyed.size());
+    grid.cell_of_key.reserve(keyed.size() / 2 + 1);
+    for (std::size_t k = 0; k < keyed.size(); ++k) {
+        grid.points[k] = keyed[k].second;
+        const Eigen::Vector3f& p = cloud.points[grid.points[k]];
+        if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+            const Eigen::Vector3i c = cell_of(p);
+            grid.cell_of_key.emplace(keyed[k].first, static_cast<std::uint32_t>(grid.cells.size()));
+            grid.cells.push_back({c.x(), c.y(), c.z(), static_cast<std::uint32_t>(k), 0, p, p});
+        }
+        GridCell& g = grid.cells.back();
+        g.end = static_cast<std::uint32_t>(k + 1);
+        g.lo = g.lo.cwiseMin(p);
+        g.hi = g.hi.cwiseMax(p);
+    }
+    return grid;
+}
+
+// Whether some point of cell a and some point of cell b are within the tolerance.
+bool CellsLinked(const PointCloud& cloud, const ClusterGrid& grid, const GridCell& a,
+                 const GridCell& b, float tol_sq) {
+    for (std::uint32_t i = a.begin; i < a.end; ++i) {
+        const Eigen::Vector3f& p = cloud.points[grid.points[i]];
+        for (std::uint32_t j = b.begin; j < b.end; ++j) {
+            if ((cloud.points[grid.points[j]] - p).squaredNorm() <= tol_sq) return true;
+        }
+    }
+    return false;
+}
+
+// Union-find over cells: a pair of cells within reach is joined as soon as one pair of their
+// points is within the tolerance (the relation of EuclideanClustering); the points of each
+// component, ascending.
+std::vector<Indices> GridComponents(const PointCloud& cloud, const ClusterGrid& grid,
+                                    float tolerance) {
+    const float tol_sq = tolerance * tolerance;
+    const auto& cells = grid.cells;
+    detail::DisjointSets sets(cells.size());
+    for (std::uint32_t a = 0; a < cells.size(); ++a) {
+        const GridCell& ca = cells[a];
+        for (int dx = -2; dx <= 2; ++dx) {
+            for (int dy = -2; dy <= 2; ++dy) {
+                for (int dz = -2; dz <= 2; ++dz) {
+                    const auto it = grid.cell_of_key.find(CellKey(ca.x + dx, ca.y + dy, ca.z + dz));
+                    if (it == grid.cell_of_key.end() || it->second <= a) continue;
+                    const std::uint32_t b = it->second;
+                    if (sets.Find(a) == sets.Find(b) || BoxGapSquared(ca, cells[b]) > tol_sq)
+                        continue;
+                    if (CellsLinked(cloud, grid, ca, cells[b], tol_sq)) sets.Unite(a, b);
+                }
+            }
+        }
+    }
+    std::vector<std::int32_t> component_of_root(cells.size(), -1);
+    std::vector<Indices> components;
+    for (std::uint32_t c = 0; c < cells.size(); ++c) {
+        const Index root = sets.Find(c);
+        if (component_of_root[root] < 0) {
+            component_of_root[root] = static_cast<std::int32_t>(components.size());
+            components.emplace_back();
+        }
+        Indices& out = components[static_cast<std::size_t>(component_of_root[root])];
+        out.insert(out.end(), grid.points.begin() + cells[c].begin,
+                   grid.points.begin() + cells[c].end);
+    }
+    for (auto& c : components) std::sort(c.begin(), c.end());
+    return components;
 }
 
 }  // namespace
@@ -167,103 +272,14 @@ ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
         return Finish({}, n, 0, params.min_cluster_size, params.max_cluster_size,
                       params.compute_labels);
     }
-    // Cells of edge tolerance / sqrt(3): two points of one cell are always neighbours, and
-    // neighbours lie at most two cells apart along each axis. Coordinates are counted from the
-    // points' lower corner; a cloud wider than 2^21 - 5 cells along an axis is clustered with a
-    // k-d tree instead.
-    const double cell = static_cast<double>(params.tolerance) / std::sqrt(3.0) * (1.0 - 1e-6);
-    const double inv = 1.0 / cell;
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
-    Eigen::Vector3d hi = -lo;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (marked[i] == 0) continue;
-        lo = lo.cwiseMin(cloud.points[i].cast<double>());
-        hi = hi.cwiseMax(cloud.points[i].cast<double>());
-    }
-    if (((hi - lo) * inv).maxCoeff() > static_cast<double>((1 << 21) - 5)) {
+    const std::optional<ClusterGrid> grid =
+        BuildClusterGrid(cloud, marked, num_points, params.tolerance);
+    if (!grid) {  // kilometres wide at this tolerance: the k-d tree
         const KdTree tree = params.subset.empty() ? KdTree(cloud) : KdTree(cloud, params.subset);
         return EuclideanClustering(cloud, tree, params);
     }
-    auto cell_of = [&](const Eigen::Vector3f& p) -> Eigen::Vector3i {
-        return ((p.cast<double>() - lo) * inv).array().floor().cast<int>() + 2;
-    };
-    std::vector<std::pair<std::uint64_t, Index>> keyed;
-    keyed.reserve(num_points);
-    for (std::size_t i = 0; i < n; ++i) {
-        if (marked[i] == 0) continue;
-        const Eigen::Vector3i c = cell_of(cloud.points[i]);
-        keyed.emplace_back(CellKey(c.x(), c.y(), c.z()), static_cast<Index>(i));
-    }
-    std::sort(keyed.begin(), keyed.end());
-
-    std::vector<GridCell> cells;
-    Indices points(keyed.size());
-    std::unordered_map<std::uint64_t, std::uint32_t> cell_of_key;
-    cell_of_key.reserve(keyed.size() / 2 + 1);
-    for (std::size_t k = 0; k < keyed.size(); ++k) {
-        points[k] = keyed[k].second;
-        const Eigen::Vector3f& p = cloud.points[points[k]];
-        if (k == 0 || keyed[k].first != keyed[k - 1].first) {
-            GridCell g;
-            const Eigen::Vector3i c = cell_of(p);
-            g.x = c.x();
-            g.y = c.y();
-            g.z = c.z();
-            g.begin = static_cast<std::uint32_t>(k);
-            g.lo = g.hi = p;
-            cell_of_key.emplace(keyed[k].first, static_cast<std::uint32_t>(cells.size()));
-            cells.push_back(g);
-        }
-        GridCell& g = cells.back();
-        g.end = static_cast<std::uint32_t>(k + 1);
-        g.lo = g.lo.cwiseMin(p);
-        g.hi = g.hi.cwiseMax(p);
-    }
-
-    // Union-find over cells: a pair of cells within reach is joined as soon as one pair of their
-    // points is closer than the tolerance (the relation of EuclideanClustering, <= tolerance).
-    const float tol_sq = params.tolerance * params.tolerance;
-    detail::DisjointSets sets(cells.size());
-    for (std::uint32_t a = 0; a < cells.size(); ++a) {
-        const GridCell& ca = cells[a];
-        for (int dx = -2; dx <= 2; ++dx) {
-            for (int dy = -2; dy <= 2; ++dy) {
-                for (int dz = -2; dz <= 2; ++dz) {
-                    const auto it = cell_of_key.find(CellKey(ca.x + dx, ca.y + dy, ca.z + dz));
-                    if (it == cell_of_key.end() || it->second <= a) continue;
-                    const std::uint32_t b = it->second;
-                    const GridCell& cb = cells[b];
-                    if (sets.Find(a) == sets.Find(b) || BoxGapSquared(ca, cb) > tol_sq) continue;
-                    bool linked = false;
-                    for (std::uint32_t i = ca.begin; i < ca.end && !linked; ++i) {
-                        const Eigen::Vector3f& p = cloud.points[points[i]];
-                        for (std::uint32_t j = cb.begin; j < cb.end; ++j) {
-                            if ((cloud.points[points[j]] - p).squaredNorm() <= tol_sq) {
-                                linked = true;
-                                break;
-                            }
-                        }
-                    }
-                    if (linked) sets.Unite(a, b);
-                }
-            }
-        }
-    }
-
-    std::vector<std::int32_t> component_of_root(cells.size(), -1);
-    std::vector<Indices> components;
-    for (std::uint32_t c = 0; c < cells.size(); ++c) {
-        const Index root = sets.Find(c);
-        if (component_of_root[root] < 0) {
-            component_of_root[root] = static_cast<std::int32_t>(components.size());
-            components.emplace_back();
-        }
-        Indices& out = components[static_cast<std::size_t>(component_of_root[root])];
-        out.insert(out.end(), points.begin() + cells[c].begin, points.begin() + cells[c].end);
-    }
-    for (auto& c : components) std::sort(c.begin(), c.end());
-    return Finish(std::move(components), n, num_points, params.min_cluster_size,
-                  params.max_cluster_size, params.compute_labels);
+    return Finish(GridComponents(cloud, *grid, params.tolerance), n, num_points,
+                  params.min_cluster_size, params.max_cluster_size, params.compute_labels);
 }
 
 ClusteringResult EuclideanClusteringOrganized(const PointCloud& organized,

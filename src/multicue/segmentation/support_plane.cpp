@@ -46,9 +46,9 @@ void CheckParams(const SupportPlaneParams& p) {
             fmt::format("support plane: max_samples must be >= 3, got {}", p.max_samples));
     }
     if (!(p.min_supported_fraction >= 0.0f && p.min_supported_fraction <= 1.0f)) {
-        throw InvalidArgument(fmt::format(
-            "support plane: min_supported_fraction must be in [0, 1], got {}",
-            p.min_supported_fraction));
+        throw InvalidArgument(
+            fmt::format("support plane: min_supported_fraction must be in [0, 1], got {}",
+                        p.min_supported_fraction));
     }
     if (!(p.cluster_tolerance > 0.0f)) {
         throw InvalidArgument(fmt::format("support plane: cluster_tolerance must be > 0, got {}",
@@ -254,8 +254,8 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
         local.reserve(candidates[k].inliers.size());
         for (Index i : candidates[k].inliers) local.push_back(position_of[i]);
         std::sort(local.begin(), local.end());
-        supported[k] = CountSupported(sample_cloud, local, candidates[k].plane,
-                                      cloud.sensor_origin, params, prism);
+        supported[k] = CountSupported(sample_cloud, local, candidates[k].plane, cloud.sensor_origin,
+                                      params, prism);
     }
     const auto needed = static_cast<std::size_t>(
         std::ceil(params.min_supported_fraction * static_cast<float>(sample.size())));
@@ -302,8 +302,7 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     result.candidates = static_cast<int>(candidates.size());
     if (candidates.empty()) return result;
     std::vector<std::size_t> supported;
-    const std::size_t chosen =
-        ChooseCandidate(candidates, cloud, sample, params, prism, supported);
+    const std::size_t chosen = ChooseCandidate(candidates, cloud, sample, params, prism, supported);
     const Eigen::Vector4f plane = candidates[chosen].plane;
 
     // All points of the full cloud on the plane, then its largest connected patch.
@@ -316,10 +315,11 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     result.hull = PlaneConvexHull(cloud, table, plane);
     result.inliers = std::move(table);
     result.supported = supported[chosen];
-    LogDebug("support plane ({:.3f}, {:.3f}, {:.3f}, {:.3f}) with {} points, supporting {} of {} "
-             "sampled points, from {} candidates",
-             plane.x(), plane.y(), plane.z(), plane.w(), result.inliers.size(), result.supported,
-             sample.size(), result.candidates);
+    LogDebug(
+        "support plane ({:.3f}, {:.3f}, {:.3f}, {:.3f}) with {} points, supporting {} of {} "
+        "sampled points, from {} candidates",
+        plane.x(), plane.y(), plane.z(), plane.w(), result.inliers.size(), result.supported,
+        sample.size(), result.candidates);
     return result;
 }
 

@@ -23,7 +23,7 @@ enum class UpSource {
     /// The sensor is at the origin (any VIEWPOINT rotation: OpenNI's and PCL's samples store
     /// 0 1 0 0 for the optical frame): optical convention, up is roughly -y.
     kCamera,
-    kDominant,   ///< no hint: the dominant plane's normal, oriented towards the viewpoint
+    kDominant,  ///< no hint: the dominant plane's normal, oriented towards the viewpoint
 };
 
 struct SupportPlaneParams {
@@ -51,8 +51,8 @@ struct SupportPlaneParams {
     /// The table is the largest set of its plane's inliers connected within this distance: the
     /// objects on it cut its visible top into pieces up to about their size apart [m].
     float cluster_tolerance = 0.2f;
-    std::uint64_t seed = 1;           ///< sample consensus seed
-    int num_threads = 0;              ///< 0 = all cores
+    std::uint64_t seed = 1;  ///< sample consensus seed
+    int num_threads = 0;     ///< 0 = all cores
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
@@ -115,7 +115,8 @@ struct TableRegion {
 /// The table and the points standing on it (thesis section 2.4): FindSupportPlane, then the
 /// polygonal prism (`prism`) over the plane's hull. Without a plane, or with a plane that
 /// supports nothing (SupportPlane::supported = 0: the top of a box in a cloud of objects), every
-/// finite point may belong to an object and `support` is reset to "none". Throws InvalidArgument for bad parameters.
+/// finite point may belong to an object and `support` is reset to "none". Throws InvalidArgument
+/// for bad parameters.
 TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& support,
                             const PrismParams& prism);
 

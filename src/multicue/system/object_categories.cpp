@@ -85,8 +85,7 @@ void CategorizationParams::Validate() const {
     ResolveThreadCount(num_threads);
 }
 
-void CategorizeByModels(std::vector<PerceivedObject>& objects,
-                        const CategorizationParams& params) {
+void CategorizeByModels(std::vector<PerceivedObject>& objects, const CategorizationParams& params) {
     if (params.cylinder_profile_ratio == 0.0f) return;
     for (PerceivedObject& o : objects) {
         const Category c = o.category.category;
