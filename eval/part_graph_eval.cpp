@@ -101,6 +101,34 @@ double Accuracy(const ml::ConfusionCounter& c) { return c.ToMatrix().AccuracyExc
 
 std::size_t Scored(const ml::ConfusionCounter& c) { return c.ToMatrix().TotalExcluding(kUnscored); }
 
+// Balanced accuracy: the mean over the true categories present of the share of their points (or
+// objects) named right; and the worst of those categories with its share.
+struct Balanced {
+    double mean = 0.0;
+    std::string worst;
+    double worst_share = 1.0;
+};
+
+Balanced BalancedAccuracy(const ml::ConfusionCounter& c) {
+    const ml::ConfusionMatrix m = c.ToMatrix();
+    Balanced b;
+    int present = 0;
+    for (Eigen::Index t = 0; t < m.counts.rows(); ++t) {
+        if (t == kUnscored) continue;
+        const double total = static_cast<double>(m.counts.row(t).sum());
+        if (total <= 0.0) continue;
+        const double share = static_cast<double>(m.counts(t, t)) / total;
+        b.mean += share;
+        ++present;
+        if (share < b.worst_share) {
+            b.worst_share = share;
+            b.worst = m.class_names[static_cast<std::size_t>(t)];
+        }
+    }
+    if (present > 0) b.mean /= present;
+    return b;
+}
+
 void PrintConfusion(const std::string& title, const ml::ConfusionCounter& c) {
     const ml::ConfusionMatrix m = c.ToMatrix();
     std::printf("%s (rows truth, columns predicted; accuracy %.3f over %zu)\n", title.c_str(),
@@ -1077,12 +1105,15 @@ void PrintSummary(const Options& o, const MethodSet& set, const Tally& tally) {
     const auto& methods = tally.methods;
     std::printf("\nsummary over %d scenes (%zu points, %zu perceived objects with a category):\n",
                 o.scenes, Scored(methods[kPg].point), Scored(methods[kPg].object));
-    std::printf("%-56s %9s %9s %19s\n", "method", "per point", "per object", "per scene mean+-sd");
+    std::printf("%-56s %9s %9s %19s %9s %s\n", "method", "per point", "per object",
+                "per scene mean+-sd", "balanced", "worst category (per point)");
     for (int m = 0; m < int(methods.size()); ++m) {
         if (set.Skip(m)) continue;
         const auto [mean, sd] = MeanStd(methods[m].scene_accuracy);
-        std::printf("%-56s %9.3f %9.3f %11.3f +- %.3f\n", methods[m].name.c_str(),
-                    Accuracy(methods[m].point), Accuracy(methods[m].object), mean, sd);
+        const Balanced b = BalancedAccuracy(methods[m].point);
+        std::printf("%-56s %9.3f %9.3f %11.3f +- %.3f %9.3f %s %.3f\n", methods[m].name.c_str(),
+                    Accuracy(methods[m].point), Accuracy(methods[m].object), mean, sd, b.mean,
+                    b.worst.c_str(), b.worst_share);
     }
     std::printf("per part (segment), part-graph hashing: %.3f\n", Accuracy(tally.part));
     std::printf(
