@@ -206,6 +206,35 @@ TEST(SupportPlane, APlaneThroughObjectTopsWithTheTableSeenBetweenIsNoSupport) {
     }
 }
 
+TEST(SupportPlane, ATableIsTheTableEvenWhenTheFloorHoldsMore) {
+    // Thick legs and a box on the floor hold more points than the one cup on the table.
+    std::mt19937 rng(37);
+    PointCloud c;
+    AddHorizontal(c, -2.0f, 2.0f, -1.0f, 2.0f, 0.0f, 0.02f, rng);
+    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.3f, 0.72f, 0.015f, rng);
+    for (float x : {-0.45f, 0.35f})
+        AddBox(c, {x, -0.3f, 0.0f}, {x + 0.1f, -0.2f, 0.71f}, 0.008f, rng);
+    AddBox(c, {0.8f, -0.6f, 0.0f}, {1.3f, -0.1f, 0.45f}, 0.008f, rng);       // on the floor
+    AddBox(c, {-0.05f, -0.05f, 0.72f}, {0.03f, 0.03f, 0.82f}, 0.006f, rng);  // the cup
+    c.sensor_origin = {0.0f, -1.2f, 1.4f};
+    std::erase_if(c.points, [&](const Eigen::Vector3f& p) {  // hidden by the table top
+        if (p.z() >= 0.71f) return false;
+        const Eigen::Vector3f o = c.sensor_origin;
+        const Eigen::Vector3f x = o + (o.z() - 0.72f) / (o.z() - p.z()) * (p - o);
+        return std::abs(x.x()) < 0.5f && std::abs(x.y()) < 0.3f;
+    });
+    c.SetUnorganized();
+    c.sensor_orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.5f, Eigen::Vector3f::UnitX()));
+    const SupportPlane s = FindSupportPlane(c, {});
+    ASSERT_TRUE(s.found);
+    EXPECT_NEAR(-s.plane.w() / s.plane.z(), 0.72f, 0.01f);
+    SupportPlaneParams no_raise;
+    no_raise.raised_gap = 0.0f;  // the most support alone: the floor
+    const SupportPlane f = FindSupportPlane(c, no_raise);
+    ASSERT_TRUE(f.found);
+    EXPECT_NEAR(-f.plane.w() / f.plane.z(), 0.0f, 0.01f);
+}
+
 TEST(SupportPlane, TheRegionAboveTheTableHoldsTheObjects) {
     const PointCloud c = TableUnderALargeBox(false);
     const TableRegion r = FindTableRegion(c, {}, {});

@@ -268,7 +268,25 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
             best = k;
         }
     }
-    return best < candidates.size() ? best : ChooseByView(candidates, cloud, params);
+    if (best == candidates.size()) return ChooseByView(candidates, cloud, params);
+    // A table standing on the floor: a supporting plane at least raised_gap above the winner
+    // (parallel, nearer the viewpoint) is the table, whatever the floor holds (its legs, chairs).
+    if (params.raised_gap > 0.0f) {
+        const std::size_t floor = best;
+        const float floor_distance = ViewDistance(candidates[floor], cloud);
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            if (k == floor || supported[k] < std::max<std::size_t>(needed, 1)) continue;
+            const bool parallel =
+                std::abs(candidates[k].plane.head<3>().dot(candidates[floor].plane.head<3>())) >
+                0.95f;
+            if (parallel && ViewDistance(candidates[k], cloud) <=
+                                floor_distance - params.raised_gap &&
+                (best == floor || supported[k] > supported[best])) {
+                best = k;
+            }
+        }
+    }
+    return best;
 }
 
 // All points of the full cloud within the distance threshold of the plane.

@@ -44,7 +44,9 @@ struct SupportPlaneParams {
     /// A smaller candidate at least raised_gap nearer to the viewpoint than that choice, holding
     /// raised_ratio of the largest one's inliers, is a table standing on the chosen floor: the
     /// largest such candidate wins (a robot sees the floor around a small table; box tops on the
-    /// table are smaller than the table). raised_gap <= 0 turns this off.
+    /// table are smaller than the table). In the choice by support, a supporting candidate
+    /// raised_gap above the winner is the table standing on the floor (the floor may hold more:
+    /// the table's legs, chairs). raised_gap <= 0 turns this off.
     float raised_gap = 0.3f;          ///< [m]
     float raised_ratio = 0.08f;       ///< [-]
     std::size_t max_samples = 20000;  ///< points used for the robust fit (strided subsample)
