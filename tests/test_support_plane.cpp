@@ -115,6 +115,17 @@ void AddBox(PointCloud& c, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
     }
 }
 
+// Removes what a table top (|x| < half_x, |y| < half_y at height z) hides from the sensor: the
+// points below it whose ray from the sensor crosses it.
+void HideBelowTableTop(PointCloud& c, float half_x, float half_y, float z) {
+    const Eigen::Vector3f o = c.sensor_origin;
+    std::erase_if(c.points, [&](const Eigen::Vector3f& p) {
+        if (p.z() >= z - 0.01f) return false;
+        const Eigen::Vector3f x = o + (o.z() - z) / (o.z() - p.z()) * (p - o);
+        return std::abs(x.x()) < half_x && std::abs(x.y()) < half_y;
+    });
+}
+
 // A table mostly covered by a large box near the sensor, whose top holds more sampled points
 // than the visible table and is nearer the viewpoint, plus small boxes (a complex real scene's
 // failure: the box top was taken for the table and no object was found).
@@ -176,13 +187,7 @@ TEST(SupportPlane, ATableWithObjectsOnTheFloorIsTheTable) {
     AddBox(c, {-0.2f, -0.1f, 0.72f}, {0.0f, 0.1f, 0.9f}, 0.006f, rng);
     AddBox(c, {0.15f, -0.1f, 0.72f}, {0.3f, 0.05f, 0.8f}, 0.006f, rng);
     c.sensor_origin = {0.0f, -1.2f, 1.4f};
-    // What the table top hides from the sensor: points below it whose ray crosses it.
-    std::erase_if(c.points, [&](const Eigen::Vector3f& p) {
-        if (p.z() >= 0.71f) return false;
-        const Eigen::Vector3f o = c.sensor_origin;
-        const Eigen::Vector3f x = o + (o.z() - 0.72f) / (o.z() - p.z()) * (p - o);
-        return std::abs(x.x()) < 0.5f && std::abs(x.y()) < 0.3f;
-    });
+    HideBelowTableTop(c, 0.5f, 0.3f, 0.72f);
     c.SetUnorganized();
     c.sensor_orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.5f, Eigen::Vector3f::UnitX()));
     const SupportPlane s = FindSupportPlane(c, {});
@@ -217,12 +222,7 @@ TEST(SupportPlane, ATableIsTheTableEvenWhenTheFloorHoldsMore) {
     AddBox(c, {0.8f, -0.6f, 0.0f}, {1.3f, -0.1f, 0.45f}, 0.008f, rng);       // on the floor
     AddBox(c, {-0.05f, -0.05f, 0.72f}, {0.03f, 0.03f, 0.82f}, 0.006f, rng);  // the cup
     c.sensor_origin = {0.0f, -1.2f, 1.4f};
-    std::erase_if(c.points, [&](const Eigen::Vector3f& p) {  // hidden by the table top
-        if (p.z() >= 0.71f) return false;
-        const Eigen::Vector3f o = c.sensor_origin;
-        const Eigen::Vector3f x = o + (o.z() - 0.72f) / (o.z() - p.z()) * (p - o);
-        return std::abs(x.x()) < 0.5f && std::abs(x.y()) < 0.3f;
-    });
+    HideBelowTableTop(c, 0.5f, 0.3f, 0.72f);
     c.SetUnorganized();
     c.sensor_orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.5f, Eigen::Vector3f::UnitX()));
     const SupportPlane s = FindSupportPlane(c, {});
