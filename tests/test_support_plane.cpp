@@ -115,6 +115,12 @@ void AddBox(PointCloud& c, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
     }
 }
 
+// A floor (4 m x 3 m) and a 1 m x 0.6 m table top 72 cm above it, centred on the origin.
+void AddFloorAndTable(PointCloud& c, std::mt19937& rng) {
+    AddHorizontal(c, -2.0f, 2.0f, -1.0f, 2.0f, 0.0f, 0.02f, rng);
+    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.3f, 0.72f, 0.015f, rng);
+}
+
 // Removes what a table top (|x| < half_x, |y| < half_y at height z) hides from the sensor: the
 // points below it whose ray from the sensor crosses it.
 void HideBelowTableTop(PointCloud& c, float half_x, float half_y, float z) {
@@ -178,8 +184,7 @@ TEST(SupportPlane, ATableWithObjectsOnTheFloorIsTheTable) {
     // table's legs.
     std::mt19937 rng(23);
     PointCloud c;
-    AddHorizontal(c, -2.0f, 2.0f, -1.0f, 2.0f, 0.0f, 0.02f, rng);
-    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.3f, 0.72f, 0.015f, rng);
+    AddFloorAndTable(c, rng);
     for (float x : {-0.45f, 0.45f}) {
         for (float y : {-0.25f, 0.25f})
             AddBox(c, {x, y, 0.0f}, {x + 0.03f, y + 0.03f, 0.72f}, 0.01f, rng);
@@ -215,8 +220,7 @@ TEST(SupportPlane, ATableIsTheTableEvenWhenTheFloorHoldsMore) {
     // Thick legs and a box on the floor hold more points than the one cup on the table.
     std::mt19937 rng(37);
     PointCloud c;
-    AddHorizontal(c, -2.0f, 2.0f, -1.0f, 2.0f, 0.0f, 0.02f, rng);
-    AddHorizontal(c, -0.5f, 0.5f, -0.3f, 0.3f, 0.72f, 0.015f, rng);
+    AddFloorAndTable(c, rng);
     for (float x : {-0.45f, 0.35f})
         AddBox(c, {x, -0.3f, 0.0f}, {x + 0.1f, -0.2f, 0.71f}, 0.008f, rng);
     AddBox(c, {0.8f, -0.6f, 0.0f}, {1.3f, -0.1f, 0.45f}, 0.008f, rng);       // on the floor
