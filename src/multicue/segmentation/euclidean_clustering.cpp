@@ -209,13 +209,26 @@ std::optional<ClusterGrid> BuildClusterGrid(const PointCloud& cloud,
     return grid;
 }
 
-// Whether some point of cell a and some point of cell b are within the tolerance.
+float PointBoxGapSquared(const Eigen::Vector3f& p, const GridCell& c) {
+    return (c.lo - p).cwiseMax(p - c.hi).cwiseMax(Eigen::Vector3f::Zero()).squaredNorm();
+}
+
+// Whether some point of cell a and some point of cell b are within the tolerance. Only the points
+// of each cell within the tolerance of the other cell's box can be such a pair.
 bool CellsLinked(const PointCloud& cloud, const ClusterGrid& grid, const GridCell& a,
                  const GridCell& b, float tol_sq) {
+    thread_local std::vector<Eigen::Vector3f> near_b;
+    near_b.clear();
+    for (std::uint32_t j = b.begin; j < b.end; ++j) {
+        const Eigen::Vector3f& q = cloud.points[grid.points[j]];
+        if (PointBoxGapSquared(q, a) <= tol_sq) near_b.push_back(q);
+    }
+    if (near_b.empty()) return false;
     for (std::uint32_t i = a.begin; i < a.end; ++i) {
         const Eigen::Vector3f& p = cloud.points[grid.points[i]];
-        for (std::uint32_t j = b.begin; j < b.end; ++j) {
-            if ((cloud.points[grid.points[j]] - p).squaredNorm() <= tol_sq) return true;
+        if (PointBoxGapSquared(p, b) > tol_sq) continue;
+        for (const Eigen::Vector3f& q : near_b) {
+            if ((q - p).squaredNorm() <= tol_sq) return true;
         }
     }
     return false;
