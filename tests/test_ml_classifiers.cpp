@@ -120,6 +120,24 @@ TEST(MlScaling, UnitDependentClassifiersScaleTheirInputsInsideTheModel) {
         EXPECT_TRUE(loaded->scales_input());
         EXPECT_EQ(loaded->PredictProba(test), scaled->PredictProba(test)) << spec;
     }
+    // A version 1 file (before scaling: no scaling block after the columns) reads as unscaled.
+    auto raw = CreateClassifier("knn:k=5,scale=none");
+    raw->Fit(train);
+    const std::string v2 = UnwrapContainer(raw->Serialize(), "MCUEMODL", kModelFormatVersion,
+                                           "classifier model", "v2");
+    ByteWriter head;
+    head.PutString(raw->type());
+    head.PutString(raw->spec());
+    head.Put<std::uint32_t>(raw->seed);
+    head.PutStrings(raw->class_names());
+    head.PutStrings(raw->feature_names());
+    const std::size_t at = head.bytes().size();
+    const std::size_t block = 1 + 8 + 8;  // mode, two empty arrays
+    const std::string v1 = WrapContainer("MCUEMODL", 1, v2.substr(0, at) + v2.substr(at + block));
+    EXPECT_EQ(ContainerVersion(v1), 1u);
+    const auto old = DeserializeClassifier(v1, "v1");
+    EXPECT_FALSE(old->scales_input());
+    EXPECT_EQ(old->PredictProba(test), raw->PredictProba(test));
     // Unit-free classifiers are left alone unless asked.
     auto trees = CreateClassifier("rtrees:trees=10");
     trees->Fit(train);

@@ -56,6 +56,10 @@ struct PointCloud {
 
     bool HasNormals() const { return !normals.empty(); }
     bool HasColors() const { return !colors.empty(); }
+    /// Whether the sensor stands away from the origin: the cloud is then in a world frame. A
+    /// rotation alone is not a pose (OpenNI grabbers and PCL's sample scans store the optical
+    /// frame with the orientation 0 1 0 0, a viewer convention).
+    bool HasSensorPosition() const { return sensor_origin.norm() >= 1e-9f; }
     bool HasCurvature() const { return !curvature.empty(); }
     bool HasLabels() const { return !labels.empty(); }
     bool HasIntensity() const { return !intensity.empty(); }

@@ -14,14 +14,6 @@ namespace multicue::ml {
 
 namespace {
 constexpr std::string_view kModelMagic = "MCUEMODL";
-
-// The format version in a container's header (0 when too short to hold one).
-std::uint32_t FileVersion(std::string_view bytes) {
-    if (bytes.size() < 12) return 0;
-    std::uint32_t v = 0;
-    for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(bytes[8 + k]);
-    return v;
-}
 }  // namespace
 
 void Classifier::Fit(const Dataset& train, Progress* progress) {
@@ -152,7 +144,7 @@ void Classifier::Save(const std::filesystem::path& path) const {
 std::unique_ptr<Classifier> DeserializeClassifier(const std::string& bytes,
                                                   const std::string& what) {
     // Version 1 (no input scaling) is still read.
-    const std::uint32_t version = FileVersion(bytes) == 1 ? 1 : kModelFormatVersion;
+    const std::uint32_t version = ContainerVersion(bytes) == 1 ? 1 : kModelFormatVersion;
     const std::string payload =
         UnwrapContainer(bytes, kModelMagic, version, "classifier model", what);
     ByteReader r(payload, what);

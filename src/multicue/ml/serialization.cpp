@@ -86,6 +86,12 @@ void WriteContainer(const std::filesystem::path& path, std::string_view magic,
     WriteBytesAtomically(path, WrapContainer(magic, version, payload));
 }
 
+std::uint32_t ContainerVersion(std::string_view bytes) {
+    if (bytes.size() < 12) return 0;
+    ByteReader r(bytes.substr(8, 4), "container header");
+    return r.Get<std::uint32_t>();
+}
+
 std::string UnwrapContainer(std::string_view bytes, std::string_view magic, std::uint32_t version,
                             std::string_view kind, const std::string& what) {
     const std::string k(kind);

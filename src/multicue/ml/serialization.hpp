@@ -98,6 +98,8 @@ std::string ReadContainer(const std::filesystem::path& path, std::string_view ma
                           std::uint32_t version, std::string_view kind);
 
 /// Same checks on bytes already in memory (`what` names them in messages).
+/// The format version in a container's header; 0 when `bytes` are too short to hold one.
+std::uint32_t ContainerVersion(std::string_view bytes);
 std::string UnwrapContainer(std::string_view bytes, std::string_view magic, std::uint32_t version,
                             std::string_view kind, const std::string& what);
 /// Container bytes for `payload` (what WriteContainer writes).

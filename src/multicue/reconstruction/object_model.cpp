@@ -330,6 +330,13 @@ float FitPrimitive(const PointCloud& cloud, const PerceivedObject& object,
     return inlier_ratio;
 }
 
+// Bounding box of a mesh's vertices (empty for a mesh without vertices).
+Eigen::AlignedBox3f MeshBounds(const TriangleMesh& mesh) {
+    Eigen::AlignedBox3f box;
+    for (const auto& v : mesh.vertices) box.extend(v);
+    return box;
+}
+
 // Verification of the model's mesh against the frame (section 4.2.4.3), none when it is off or
 // the model is too large for the grid (a whole room without a table). Surface inside the table
 // is as impossible as surface in free space, but hidden from the sensor: samples more than two
@@ -340,11 +347,8 @@ std::optional<ModelVerificationSummary> VerifyInFrame(const PointCloud& cloud,
                                                       const ModelParams& params) {
     const VerificationParams& vp = params.verification;
     if (!params.verification.enabled) return std::nullopt;
-    Eigen::Vector3f lo = mesh.vertices.front(), hi = lo;
-    for (const auto& v : mesh.vertices) {
-        lo = lo.cwiseMin(v);
-        hi = hi.cwiseMax(v);
-    }
+    const Eigen::AlignedBox3f bounds = MeshBounds(mesh);
+    Eigen::Vector3f lo = bounds.min(), hi = bounds.max();
     const Eigen::Vector3d cells =
         ((hi - lo).array() + 2.0f * vp.margin).cast<double>() / vp.voxel_size + 1.0;
     if (cells.prod() > 0.9 * static_cast<double>(vp.max_cells)) return std::nullopt;
@@ -375,21 +379,13 @@ std::optional<ModelVerificationSummary> VerifyInFrame(const PointCloud& cloud,
 // Whether the model's mesh has the size of the object's points (ModelParams::max_size_ratio).
 bool FitsPointSize(const PointCloud& cloud, const Indices& indices, const TriangleMesh& mesh,
                    const ModelParams& params) {
-    if (mesh.vertices.empty()) return true;
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    Eigen::Vector3f hi = -lo;
+    Eigen::AlignedBox3f points;
     for (Index i : indices) {
-        if (!cloud.IsFinite(i)) continue;
-        lo = lo.cwiseMin(cloud.points[i]);
-        hi = hi.cwiseMax(cloud.points[i]);
+        if (cloud.IsFinite(i)) points.extend(cloud.points[i]);
     }
-    if (!(hi.x() >= lo.x())) return true;
-    Eigen::Vector3f mlo = mesh.vertices.front(), mhi = mlo;
-    for (const auto& v : mesh.vertices) {
-        mlo = mlo.cwiseMin(v);
-        mhi = mhi.cwiseMax(v);
-    }
-    return (mhi - mlo).norm() <= params.max_size_ratio * (hi - lo).norm() + params.size_margin;
+    if (mesh.vertices.empty() || points.isEmpty()) return true;
+    return MeshBounds(mesh).diagonal().norm() <=
+           params.max_size_ratio * points.diagonal().norm() + params.size_margin;
 }
 
 // A rejected primitive becomes a triangulated mesh of the object's points (section 5.4.2.3);

@@ -237,8 +237,7 @@ std::optional<std::pair<double, double>> LatticeOf(std::vector<double> values) {
 }  // namespace
 
 std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud) {
-    if (cloud.IsOrganized() || cloud.empty() || cloud.sensor_origin.norm() >= 1e-9f)
-        return std::nullopt;
+    if (cloud.IsOrganized() || cloud.empty() || cloud.HasSensorPosition()) return std::nullopt;
     const std::size_t n = cloud.size();
     std::vector<double> a, b;
     a.reserve(n);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -56,11 +57,6 @@ void CheckParams(const SupportPlaneParams& p) {
     }
 }
 
-// A cloud is in a world frame when its sensor stands somewhere other than the origin. A rotation
-// alone is not a pose: OpenNI grabbers and PCL's sample scans store the optical frame with the
-// orientation (0, 1, 0, 0), a viewer convention.
-bool HasSensorPosition(const PointCloud& c) { return c.sensor_origin.norm() >= 1e-9f; }
-
 // Largest patch of the plane's inliers connected within `tolerance` in 3D (not in the image:
 // the objects on a table cut its visible top into pieces that no pixel path joins). Other
 // surfaces at the same height farther away (a second table, a shelf) are left out.
@@ -95,7 +91,7 @@ UpPrior ChooseUp(const PointCloud& cloud, const SupportPlaneParams& params) {
     if (params.up) {
         up.axis = params.up->normalized();
         up.source = UpSource::kGiven;
-    } else if (HasSensorPosition(cloud)) {
+    } else if (cloud.HasSensorPosition()) {
         up.axis = Eigen::Vector3f::UnitZ();
         up.source = UpSource::kViewpoint;
     } else {
@@ -145,6 +141,29 @@ std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& 
     return candidates;
 }
 
+// The edges of a convex hull on a plane (counter-clockwise seen from its normal `up`), for
+// signed distances of points from them.
+class HullEdges {
+  public:
+    HullEdges(const std::vector<Eigen::Vector3f>& hull, const Eigen::Vector3f& up) : hull_(hull) {
+        inward_.resize(hull.size());
+        for (std::size_t k = 0; k < hull.size(); ++k)
+            inward_[k] = up.cross(hull[(k + 1) % hull.size()] - hull[k]).normalized();
+    }
+    /// The largest distance of p outside an edge's line: negative inside the hull (minus the
+    /// distance to the nearest edge), at most the distance to the hull outside it.
+    float Outside(const Eigen::Vector3f& p) const {
+        float out = -std::numeric_limits<float>::max();
+        for (std::size_t k = 0; k < hull_.size(); ++k)
+            out = std::max(out, -inward_[k].dot(p - hull_[k]));
+        return out;
+    }
+
+  private:
+    const std::vector<Eigen::Vector3f>& hull_;
+    std::vector<Eigen::Vector3f> inward_;
+};
+
 // What a candidate supports (section 2.4, "by what it supports"): the subsample's points that
 // stand above it, inside the hull of its largest patch of inliers (shrunk by a margin, so that a
 // wall rising from its edge does not count), no higher than the prism reaches. The top of a box
@@ -161,17 +180,9 @@ std::size_t CountSupported(const PointCloud& sample_cloud, const Indices& inlier
         PlaneConvexHull(sample_cloud, patches.clusters.front(), plane);
     if (hull.size() < 3) return 0;
     const Eigen::Vector3f up = plane.head<3>();
-    std::vector<Eigen::Vector3f> inward(hull.size());
-    for (std::size_t k = 0; k < hull.size(); ++k) {
-        inward[k] = up.cross(hull[(k + 1) % hull.size()] - hull[k]).normalized();
-    }
+    const HullEdges edges(hull, up);
     const float margin = 2.0f * params.distance_threshold;
-    auto inside = [&](const Eigen::Vector3f& p) {
-        for (std::size_t k = 0; k < hull.size(); ++k) {
-            if (inward[k].dot(p - hull[k]) < margin) return false;
-        }
-        return true;
-    };
+    auto inside = [&](const Eigen::Vector3f& p) { return edges.Outside(p) <= -margin; };
     const float low = std::max(prism.min_height, params.distance_threshold);
     const float high = std::max(low, prism.max_height);
     const float eye = up.dot(viewpoint) + plane.w();  // > 0: the normal faces the viewpoint
@@ -190,6 +201,28 @@ std::size_t CountSupported(const PointCloud& sample_cloud, const Indices& inlier
 
 float ViewDistance(const PlaneFit& c, const PointCloud& cloud) {
     return std::abs(c.plane.head<3>().dot(cloud.sensor_origin) + c.plane.w());
+}
+
+// A table standing on the floor (SupportPlaneParams::raised_gap): among the candidates
+// `eligible` to be one, parallel to candidates[base] and at least raised_gap nearer the
+// viewpoint, the one with the highest `score`; `base` when there is none or raised_gap <= 0.
+template <typename Eligible, typename Score>
+std::size_t RaisedAbove(const std::vector<PlaneFit>& candidates, const PointCloud& cloud,
+                        std::size_t base, const SupportPlaneParams& params, Eligible eligible,
+                        Score score) {
+    if (params.raised_gap <= 0.0f) return base;
+    const float base_distance = ViewDistance(candidates[base], cloud);
+    std::size_t best = base;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        if (k == base || !eligible(k)) continue;
+        const bool parallel =
+            std::abs(candidates[k].plane.head<3>().dot(candidates[base].plane.head<3>())) > 0.95f;
+        if (parallel && ViewDistance(candidates[k], cloud) <= base_distance - params.raised_gap &&
+            (best == base || score(k) > score(best))) {
+            best = k;
+        }
+    }
+    return best;
 }
 
 // Without support evidence: the largest plane nearest the viewpoint, unless a raised table stands
@@ -212,27 +245,14 @@ std::size_t ChooseByView(const std::vector<PlaneFit>& candidates, const PointClo
             best_distance = d;
         }
     }
-    if (params.raised_gap > 0.0f) {
-        // A robot sees the floor around a small table: the largest parallel candidate at least
-        // raised_gap nearer the viewpoint is the table standing on it.
-        const std::size_t chosen = best;
-        const float floor_distance = best_distance;
-        for (std::size_t k = 0; k < candidates.size(); ++k) {
-            const PlaneFit& c = candidates[k];
-            if (k == chosen || static_cast<float>(c.inliers.size()) <
-                                   params.raised_ratio * static_cast<float>(largest)) {
-                continue;
-            }
-            const float d = ViewDistance(c, cloud);
-            const bool parallel =
-                std::abs(c.plane.head<3>().dot(candidates[chosen].plane.head<3>())) > 0.95f;
-            if (parallel && d <= floor_distance - params.raised_gap &&
-                (best == chosen || c.inliers.size() > candidates[best].inliers.size())) {
-                best = k;
-            }
-        }
-    }
-    return best;
+    // A robot sees the floor around a small table: the largest such candidate wins.
+    const auto size = [&](std::size_t k) { return candidates[k].inliers.size(); };
+    return RaisedAbove(
+        candidates, cloud, best, params,
+        [&](std::size_t k) {
+            return static_cast<float>(size(k)) >= params.raised_ratio * static_cast<float>(largest);
+        },
+        size);
 }
 
 // The chosen candidate: the one that supports the most points, when any supports at least
@@ -257,11 +277,12 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
         supported[k] = CountSupported(sample_cloud, local, candidates[k].plane, cloud.sensor_origin,
                                       params, prism);
     }
-    const auto needed = static_cast<std::size_t>(
-        std::ceil(params.min_supported_fraction * static_cast<float>(sample.size())));
+    const std::size_t enough = std::max<std::size_t>(
+        1, static_cast<std::size_t>(
+               std::ceil(params.min_supported_fraction * static_cast<float>(sample.size()))));
     std::size_t best = candidates.size();
     for (std::size_t k = 0; k < candidates.size(); ++k) {
-        if (supported[k] < std::max<std::size_t>(needed, 1)) continue;
+        if (supported[k] < enough) continue;
         if (best == candidates.size() || supported[k] > supported[best] ||
             (supported[k] == supported[best] &&
              ViewDistance(candidates[k], cloud) < ViewDistance(candidates[best], cloud))) {
@@ -269,24 +290,11 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
         }
     }
     if (best == candidates.size()) return ChooseByView(candidates, cloud, params);
-    // A table standing on the floor: a supporting plane at least raised_gap above the winner
-    // (parallel, nearer the viewpoint) is the table, whatever the floor holds (its legs, chairs).
-    if (params.raised_gap > 0.0f) {
-        const std::size_t floor = best;
-        const float floor_distance = ViewDistance(candidates[floor], cloud);
-        for (std::size_t k = 0; k < candidates.size(); ++k) {
-            if (k == floor || supported[k] < std::max<std::size_t>(needed, 1)) continue;
-            const bool parallel =
-                std::abs(candidates[k].plane.head<3>().dot(candidates[floor].plane.head<3>())) >
-                0.95f;
-            if (parallel && ViewDistance(candidates[k], cloud) <=
-                                floor_distance - params.raised_gap &&
-                (best == floor || supported[k] > supported[best])) {
-                best = k;
-            }
-        }
-    }
-    return best;
+    // A supporting plane well above the winner is the table standing on the floor, whatever the
+    // floor holds (its legs, chairs): the one that supports the most.
+    return RaisedAbove(
+        candidates, cloud, best, params, [&](std::size_t k) { return supported[k] >= enough; },
+        [&](std::size_t k) { return supported[k]; });
 }
 
 // All points of the full cloud within the distance threshold of the plane.
@@ -351,9 +359,7 @@ void AddObjectsBeyondTheHull(const PointCloud& cloud, const SupportPlane& s,
     constexpr float kRise = 0.10f;        // looked at above max_height, to see what rises [m]
     constexpr std::size_t kMinPoints = 50;
     const Eigen::Vector3f up = s.plane.head<3>();
-    std::vector<Eigen::Vector3f> inward(s.hull.size());
-    for (std::size_t k = 0; k < s.hull.size(); ++k)
-        inward[k] = up.cross(s.hull[(k + 1) % s.hull.size()] - s.hull[k]).normalized();
+    const HullEdges edges(s.hull, up);
     std::vector<std::uint8_t> in_region(cloud.size(), 0);
     for (Index i : region) in_region[i] = 1;
     Indices beyond;
@@ -363,9 +369,7 @@ void AddObjectsBeyondTheHull(const PointCloud& cloud, const SupportPlane& s,
         const Eigen::Vector3f& p = cloud.points[i];
         const float h = up.dot(p) + s.plane.w();
         if (h < prism.min_height || h > prism.max_height + kRise) continue;
-        float out = 0.0f;  // the largest edge violation: at most the distance to the hull
-        for (std::size_t k = 0; k < s.hull.size(); ++k)
-            out = std::max(out, -inward[k].dot(p - s.hull[k]));
+        const float out = edges.Outside(p);  // outside: at most the distance to the hull
         if (out <= 0.0f || out > prism.edge_reach) continue;
         outside_by[i] = out;
         beyond.push_back(static_cast<Index>(i));
