@@ -212,11 +212,16 @@ def sim_split(args, osd_eval, mode):
     out, per_scene, failed = perceive_split(args, name, frames,
                                             lambda s: os.path.join(sim_dir, s + ".pcd"))
     gt_of = lambda s: os.path.join(gt_dir, s + ".pcd")  # noqa: E731
-    res = {"all": {"multicue": aggregate(osd_eval, gt_of, out, frames,
-                                         scored_as=lambda k: f"sim{k}")},
+    scored_as = lambda k: f"sim{k}"  # noqa: E731
+    res = {"all": {"multicue": aggregate(osd_eval, gt_of, out, frames, scored_as)},
            "timing": timing(per_scene), "failed": failed,
            "no_objects": [s for s, r in per_scene.items() if r.get("objects") == 0],
            "per_scene": per_scene}
+    peers = run_peers(args, name, sim_dir, frames)
+    if peers:
+        res["all"]["lccp"] = aggregate(osd_eval, gt_of, peers[0], frames, scored_as)
+        if peers[1]:
+            res["lccp_timing"] = timing({s: {"wall_s": t} for s, t in peers[1].items()})
     return res
 
 
