@@ -131,7 +131,8 @@ void RandomCurvature(PointCloud& c, std::mt19937& rng, float lo = 0.0f, float hi
 // depth sensor would, so that neighbouring pixels on one object are never far apart in 3D.
 struct OrganizedScene {
     PointCloud cloud;
-    std::vector<int> object;  // per pixel: -1 background, else 0..3
+    std::vector<int> object;             // per pixel: -1 background, else 0..3
+    std::vector<Eigen::Vector3f> normal;  // per pixel: the surface normal, NaN on the background
 };
 
 OrganizedScene MakeOrganizedScene(std::uint32_t seed) {
@@ -166,6 +167,7 @@ OrganizedScene MakeOrganizedScene(std::uint32_t seed) {
     OrganizedScene scene;
     scene.cloud.points.assign(kWidth * kHeight, Eigen::Vector3f::Constant(kNaN));
     scene.object.assign(kWidth * kHeight, -1);
+    scene.normal.assign(kWidth * kHeight, Eigen::Vector3f::Constant(kNaN));
     for (int v = 0; v < kHeight; ++v) {
         for (int u = 0; u < kWidth; ++u) {
             const Eigen::Vector3f d =
@@ -213,6 +215,7 @@ OrganizedScene MakeOrganizedScene(std::uint32_t seed) {
                 static_cast<std::size_t>(v) * kWidth + static_cast<std::size_t>(u);
             scene.cloud.points[i] = (best_t + depth_noise(rng)) * d;
             scene.object[i] = best_object;
+            scene.normal[i] = best_n;
         }
     }
     scene.cloud.width = kWidth;
@@ -943,6 +946,68 @@ TEST(RegionGrowing, EmptyInputGivesEmptyResult) {
     const auto n = RegionGrowing(nan_only, nan_tree, {});
     EXPECT_TRUE(n.parts.empty());
     EXPECT_EQ(n.part_ids, std::vector<std::int32_t>(3, kNoPart));
+}
+
+// Region growing on the pixel windows of an organized frame: where the window holds every
+// point's k nearest points of the mask, the parts are those grown on a k-d tree over the mask.
+TEST(RegionGrowingOrganized, MatchesTheTreeWhereTheWindowHoldsTheNearest) {
+    const OrganizedScene scene = MakeOrganizedScene(13);
+    PointCloud c = scene.cloud;
+    c.normals = scene.normal;
+    std::mt19937 rng(14);
+    RandomCurvature(c, rng);
+    Indices objects;
+    std::vector<std::uint8_t> mask(c.size(), 0);
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        if (scene.object[i] < 0) continue;
+        objects.push_back(static_cast<Index>(i));
+        mask[i] = 1;
+    }
+    ASSERT_GT(objects.size(), 3000u);
+    const KdTree tree(c, objects);
+    for (int k : {6, 16}) {
+        for (float angle : {20.0f, 40.0f}) {
+            const RegionGrowingParams params{
+                .radius = 0.03f, .k = k, .max_angle_deg = angle, .subset = objects};
+            const auto expected = RegionGrowing(c, tree, params);
+            const auto got =
+                RegionGrowingOrganized(c, params, {.half_window = 6, .mask = mask});
+            EXPECT_EQ(got.parts, expected.parts) << "k " << k << " angle " << angle;
+            EXPECT_EQ(got.part_ids, expected.part_ids);
+            EXPECT_EQ(got.num_merged_parts, expected.num_merged_parts);
+            EXPECT_GT(got.parts.size(), 4u);
+        }
+    }
+    // Only a part of the objects: the parts lie within it.
+    Indices first(objects.begin(), objects.begin() + objects.size() / 3);
+    const auto part = RegionGrowingOrganized(
+        c, {.radius = 0.03f, .k = 8, .subset = first}, {.half_window = 3, .mask = mask});
+    for (const auto& p : part.parts)
+        for (Index i : p) EXPECT_TRUE(std::binary_search(first.begin(), first.end(), i));
+}
+
+TEST(RegionGrowingOrganized, RejectsBadInputAndHandlesEmptyInput) {
+    const OrganizedScene scene = MakeOrganizedScene(15);
+    PointCloud c = scene.cloud;
+    c.normals = scene.normal;
+    std::mt19937 rng(16);
+    RandomCurvature(c, rng);
+    std::vector<std::uint8_t> mask(c.size(), 0);
+    EXPECT_THROW(RegionGrowingOrganized(c, {}, {.half_window = 0}), InvalidArgument);
+    EXPECT_THROW(RegionGrowingOrganized(c, {.radius = -1.0f}, {}), InvalidArgument);
+    std::vector<std::uint8_t> short_mask(c.size() - 1, 1);
+    EXPECT_THROW(RegionGrowingOrganized(c, {}, {.mask = short_mask}), InvalidArgument);
+    // Every finite point is to be segmented, but the mask holds none of them.
+    EXPECT_THROW(RegionGrowingOrganized(c, {}, {.mask = mask}), InvalidArgument);
+    PointCloud unorganized = c;
+    unorganized.SetUnorganized();
+    EXPECT_THROW(RegionGrowingOrganized(unorganized, {}, {}), InvalidArgument);
+    PointCloud no_normals = c;
+    no_normals.normals.clear();
+    EXPECT_THROW(RegionGrowingOrganized(no_normals, {}, {}), DataError);
+
+    const PointCloud empty;
+    EXPECT_TRUE(RegionGrowingOrganized(empty, {}, {}).parts.empty());
 }
 
 TEST(RegionGrowing, DeterministicAndIndependentOfPointOrder) {

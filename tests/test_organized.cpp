@@ -105,6 +105,41 @@ TEST(OrganizedSearch, KnnMatchesBruteForceOverWindow) {
     }
 }
 
+// A mask leaves pixels out of every neighbourhood, as if they were invalid.
+TEST(OrganizedSearch, MaskedPixelsAreNoNeighbours) {
+    const PointCloud c = PinholeCloud(40, 30, 33.0f, 7);
+    std::mt19937 rng(8);
+    std::vector<std::uint8_t> mask(c.size());
+    for (auto& m : mask) m = rng() % 3 == 0 ? 0 : 1;
+    PointCloud masked = c;  // the same frame with the masked-out pixels made invalid
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        if (mask[i] == 0) masked.points[i] = Eigen::Vector3f::Constant(kNaN);
+    }
+    Indices idx, expected_idx;
+    std::vector<float> d2, expected_d2;
+    for (Index i = 0; i < c.size(); ++i) {
+        if (mask[i] == 0) continue;  // masked pixels as centres: see below
+        const OrganizedSearchParams p{.half_window = 3, .radius = 0.1f, .mask = mask};
+        const OrganizedSearchParams plain{.half_window = 3, .radius = 0.1f};
+        OrganizedRadiusSearch(c, i, p, idx, d2);
+        OrganizedRadiusSearch(masked, i, plain, expected_idx, expected_d2);
+        EXPECT_EQ(idx, expected_idx);
+        EXPECT_EQ(d2, expected_d2);
+        OrganizedKnnSearch(c, i, 7, p, idx, d2);
+        OrganizedKnnSearch(masked, i, 7, plain, expected_idx, expected_d2);
+        EXPECT_EQ(idx, expected_idx);
+        EXPECT_EQ(d2, expected_d2);
+    }
+    // A centre outside the mask still finds the mask's pixels around it, itself not among them.
+    Index outside = 0;
+    while (mask[outside] != 0 || !c.points[outside].allFinite()) ++outside;
+    OrganizedRadiusSearch(c, outside, {.half_window = 2, .mask = mask}, idx, d2);
+    for (Index j : idx) EXPECT_EQ(mask[j], 1);
+    std::vector<std::uint8_t> short_mask(c.size() - 1, 1);
+    EXPECT_THROW(OrganizedRadiusSearch(c, 0, {.mask = short_mask}, idx, d2), InvalidArgument);
+    EXPECT_THROW(OrganizedKnnSearch(c, 0, 3, {.mask = short_mask}, idx, d2), InvalidArgument);
+}
+
 TEST(OrganizedSearch, EqualDistancesAreOrderedByIndex) {
     PointCloud c;
     c.width = 3;

@@ -34,6 +34,10 @@ Window CheckedWindow(const PointCloud& cloud, Index center, const OrganizedSearc
     if (!(params.radius > 0.0f)) {
         throw InvalidArgument(fmt::format("radius must be > 0, got {}", params.radius));
     }
+    if (!params.mask.empty() && params.mask.size() != cloud.size()) {
+        throw InvalidArgument(fmt::format("the search mask has {} entries for a cloud of {} points",
+                                          params.mask.size(), cloud.size()));
+    }
     const std::size_t w = cloud.width, h = cloud.height;
     const std::size_t hw = static_cast<std::size_t>(params.half_window);
     const std::size_t u = center % w, v = center / w;
@@ -69,9 +73,11 @@ std::size_t OrganizedRadiusSearch(const PointCloud& cloud, Index center,
     if (!c.allFinite()) return 0;
     const float r2 = SquaredRadius(params.radius);
     const std::size_t w = cloud.width;
+    const std::uint8_t* mask = params.mask.empty() ? nullptr : params.mask.data();
     for (std::size_t v = win.v0; v <= win.v1; ++v) {
         const Eigen::Vector3f* row = cloud.points.data() + v * w;
         for (std::size_t u = win.u0; u <= win.u1; ++u) {
+            if (mask != nullptr && mask[v * w + u] == 0) continue;
             const float d2 = (row[u] - c).squaredNorm();
             if (d2 <= r2) {
                 indices.push_back(static_cast<Index>(v * w + u));
@@ -99,6 +105,7 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
     const auto kk = static_cast<std::size_t>(k);
     const float r2 = SquaredRadius(params.radius);
     const std::size_t w = cloud.width;
+    const std::uint8_t* mask = params.mask.empty() ? nullptr : params.mask.data();
     std::size_t m = 0;
     if (kk <= kInsertionMaxK) {
         // Small k: keep the best k sorted and insert the rare candidates that beat the worst.
@@ -108,6 +115,7 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
         for (std::size_t v = win.v0; v <= win.v1; ++v) {
             const Eigen::Vector3f* row = cloud.points.data() + v * w;
             for (std::size_t u = win.u0; u <= win.u1; ++u) {
+                if (mask != nullptr && mask[v * w + u] == 0) continue;
                 const float d2 = (row[u] - c).squaredNorm();
                 if (!(d2 <= r2)) continue;
                 const std::uint64_t key = Pack(d2, static_cast<Index>(v * w + u));
@@ -129,6 +137,7 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
         for (std::size_t v = win.v0; v <= win.v1; ++v) {
             const Eigen::Vector3f* row = cloud.points.data() + v * w;
             for (std::size_t u = win.u0; u <= win.u1; ++u) {
+                if (mask != nullptr && mask[v * w + u] == 0) continue;
                 const float d2 = (row[u] - c).squaredNorm();
                 if (d2 <= r2) best.push_back(Pack(d2, static_cast<Index>(v * w + u)));
             }

@@ -10,8 +10,10 @@
 /// comparisons), and are safe to run from many threads at once.
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "multicue/core/point_cloud.hpp"
@@ -23,13 +25,16 @@ struct OrganizedSearchParams {
     int half_window = 3;  ///< half-size of the square pixel window [pixels]: 3 examines 7x7 pixels
     float radius = std::numeric_limits<float>::infinity();  ///< max 3D distance to the centre
                                                             ///< point [m]; infinity = whole window
+    /// Pixels that may be neighbours: one entry per pixel, 0 = never a neighbour (as if it were
+    /// invalid). Empty = every finite pixel. The centre need not be in it.
+    std::span<const std::uint8_t> mask = {};
 };
 
 /// Finite pixels in the window around pixel `center` whose 3D distance to the centre point is
 /// <= params.radius, the centre itself included (distance 0). Results come in ascending index
 /// order (row-major window scan) with their squared distances. A non-finite centre has no
 /// neighbours (returns 0). Throws InvalidArgument if the cloud is not organized, `center` is out
-/// of range, half_window < 1, or radius is not > 0.
+/// of range, half_window < 1, radius is not > 0, or a mask is given whose size is not the cloud's.
 std::size_t OrganizedRadiusSearch(const PointCloud& cloud, Index center,
                                   const OrganizedSearchParams& params, Indices& indices,
                                   std::vector<float>& squared_distances);

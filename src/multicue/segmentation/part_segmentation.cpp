@@ -1,10 +1,14 @@
 #include "multicue/segmentation/part_segmentation.hpp"
 
 #include <algorithm>
+#include <optional>
+
+#include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/search/kdtree.hpp"
+#include "multicue/search/organized.hpp"
 
 namespace multicue {
 namespace {
@@ -26,6 +30,10 @@ std::vector<Indices> PartsOf(const Indices& object, const std::vector<Indices>& 
 void PartSegmentationParams::Validate() const {
     ValidateNode("region_growing", [&] { region_growing.Validate(); });
     ValidateNode("convexity", [&] { convexity.Validate(); });
+    if (organized_half_window < 0) {
+        throw InvalidArgument(fmt::format("organized_half_window must be >= 0 [pixels], got {}",
+                                          organized_half_window));
+    }
     ResolveThreadCount(num_threads);
 }
 
@@ -36,17 +44,32 @@ PartSegmentationResult SegmentParts(const PointCloud& cloud, const std::vector<I
     params.Validate();
     if (!clusters.empty() && !cloud.HasNormals())
         throw DataError("part segmentation needs normals");
-    Indices all;
-    for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
-    std::sort(all.begin(), all.end());
-    const KdTree tree(cloud, all);
+    // Neighbours among the points of every hypothesis: a pixel mask on organized frames, else
+    // one k-d tree over all of them.
+    const bool organized = cloud.IsOrganized() && params.organized_half_window > 0;
+    std::vector<std::uint8_t> mask;
+    std::optional<KdTree> tree;
+    if (organized) {
+        mask.assign(cloud.size(), 0);
+        for (const auto& c : clusters)
+            for (Index i : c) mask.at(i) = 1;
+    } else {
+        Indices all;
+        for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
+        std::sort(all.begin(), all.end());
+        tree.emplace(cloud, all);
+    }
+    const OrganizedSearchParams window{.half_window = params.organized_half_window,
+                                       .mask = mask};
     std::vector<std::vector<ObjectSegment>> split(clusters.size());
     ParallelFor(
         clusters.size(), params.num_threads,
         [&](std::size_t k) {
             RegionGrowingParams rg = params.region_growing;
             rg.subset = clusters[k];
-            const std::vector<Indices> parts = RegionGrowing(cloud, tree, rg).parts;
+            const std::vector<Indices> parts = organized
+                                                   ? RegionGrowingOrganized(cloud, rg, window).parts
+                                                   : RegionGrowing(cloud, *tree, rg).parts;
             std::vector<Indices> groups;
             if (params.convexity.enabled) {
                 ConvexitySplitParams cp = params.convexity;

@@ -29,6 +29,9 @@ struct PartSegmentationParams {
     /// Splitting hypotheses along concave part borders; off: every hypothesis stays one object.
     /// Its min_object_points is replaced by SegmentParts' argument.
     Switchable<ConvexitySplitParams> convexity{};
+    /// On organized frames a point's k nearest neighbours are searched among the hypotheses'
+    /// points in this pixel window around it instead of a k-d tree; 0 = always the tree [pixels]
+    int organized_half_window = 3;
     int num_threads = 0;  ///< 0 = all cores; hypotheses are segmented in parallel
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -39,6 +42,9 @@ struct PartSegmentationParams {
         v.Node("region_growing", region_growing);
         v.Switch("convexity", convexity,
                  "split hypotheses where their parts meet in concave creases");
+        v("organized_half_window", organized_half_window,
+          "on organized frames, the k nearest neighbours from this pixel window instead of a "
+          "k-d tree (0 = always the tree) [pixels]");
     }
 };
 
@@ -50,7 +56,7 @@ struct PartSegmentationResult {
 };
 
 /// Parts of every hypothesis of `clusters` (indices into `cloud`, which needs normals), grown on
-/// one k-d tree over all of them, and the objects after the concave split: pieces with fewer than
+/// one k-d tree over all of them (on organized frames, in pixel windows over them), and the objects after the concave split: pieces with fewer than
 /// `min_object_points` points are no objects. `plane` (a, b, c, d, normal up; zero when unknown)
 /// gives the heights SplitByConvexity compares. Deterministic for any thread count. Throws
 /// InvalidArgument for bad parameters, DataError without normals.

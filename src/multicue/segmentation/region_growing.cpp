@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/search/organized.hpp"
 #include "multicue/segmentation/disjoint_sets.hpp"
 
 namespace multicue {
@@ -45,14 +46,28 @@ void CheckFields(const PointCloud& cloud) {
 }
 
 // Neighbourhoods of the growth and merging phases: all points within the radius, or the k
-// nearest of them. Checks that the tree indexes the query point and belongs to this cloud.
+// nearest of them, from a k-d tree or from the pixel window of an organized frame.
 class Neighborhoods {
   public:
-    Neighborhoods(const PointCloud& cloud, const KdTree& tree, const RegionGrowingParams& params)
+    virtual ~Neighborhoods() = default;
+    /// Neighbours of point q (q included), nearest first; see indices() and squared_distances().
+    virtual void Search(Index q) = 0;
+    const Indices& indices() const { return indices_; }
+    const std::vector<float>& squared_distances() const { return squared_distances_; }
+
+  protected:
+    Indices indices_;
+    std::vector<float> squared_distances_;
+};
+
+// From a k-d tree. Checks that the tree indexes the query point and belongs to this cloud.
+class TreeNeighborhoods final : public Neighborhoods {
+  public:
+    TreeNeighborhoods(const PointCloud& cloud, const KdTree& tree,
+                      const RegionGrowingParams& params)
         : cloud_(cloud), tree_(tree), radius_(params.radius), k_(params.k) {}
 
-    /// Neighbours of point q (q included), nearest first; see indices() and squared_distances().
-    void Search(Index q) {
+    void Search(Index q) override {
         const Eigen::Vector3f& p = cloud_.points[q];
         bool self_may_be_left_out = false;
         if (k_ > 0) {
@@ -82,16 +97,47 @@ class Neighborhoods {
                 fmt::format("point {} is to be segmented but the k-d tree does not index it", q));
         }
     }
-    const Indices& indices() const { return indices_; }
-    const std::vector<float>& squared_distances() const { return squared_distances_; }
 
   private:
     const PointCloud& cloud_;
     const KdTree& tree_;
     float radius_;
     int k_;
-    Indices indices_;
-    std::vector<float> squared_distances_;
+};
+
+// From the pixel window of an organized frame: the window's pixels of the search mask within the
+// radius (strictly, as the k-d tree path keeps them); with k > 0 the k nearest of them, nearest
+// first, else all of them in pixel order (no phase depends on the order: growth takes every
+// neighbour, merging the nearest).
+class WindowNeighborhoods final : public Neighborhoods {
+  public:
+    WindowNeighborhoods(const PointCloud& cloud, const RegionGrowingParams& params,
+                        const OrganizedSearchParams& search)
+        : cloud_(cloud), search_(search), radius_sq_(params.radius * params.radius), k_(params.k) {
+        search_.radius = params.radius;
+    }
+
+    void Search(Index q) override {
+        if (k_ > 0) {
+            OrganizedKnnSearch(cloud_, q, k_, search_, indices_, squared_distances_);
+        } else {
+            OrganizedRadiusSearch(cloud_, q, search_, indices_, squared_distances_);
+        }
+        std::size_t kept = 0;
+        for (std::size_t m = 0; m < indices_.size(); ++m) {
+            if (!(squared_distances_[m] < radius_sq_)) continue;
+            indices_[kept] = indices_[m];
+            squared_distances_[kept++] = squared_distances_[m];
+        }
+        indices_.resize(kept);
+        squared_distances_.resize(kept);
+    }
+
+  private:
+    const PointCloud& cloud_;
+    OrganizedSearchParams search_;
+    float radius_sq_;
+    int k_;
 };
 
 // Marks the points with finite coordinates, normal and curvature in the subset (or cloud).
@@ -288,22 +334,14 @@ void CompactParts(GrownParts& grown, RegionGrowingResult& result) {
 
 void RegionGrowingParams::Validate() const { CheckParams(*this); }
 
-RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
-                                  const RegionGrowingParams& params) {
-    CheckParams(params);
-    RegionGrowingResult result;
-    const std::size_t n = cloud.size();
-    if (n == 0) return result;
-    CheckFields(cloud);
+namespace {
 
-    std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(cloud, params.subset, active);
-    result.part_ids.assign(n, kNoPart);
+// The growth and merging phases on marked points (`active`, result.num_points of them).
+void GrowAndMerge(const PointCloud& cloud, const std::vector<std::uint8_t>& active,
+                  const RegionGrowingParams& params, Neighborhoods& neighborhoods,
+                  RegionGrowingResult& result) {
     std::vector<std::int32_t>& part_of = result.part_ids;
-    if (result.num_points == 0) return result;
-
     const Indices order = SeedOrder(cloud, active, result.num_points);
-    Neighborhoods neighborhoods(cloud, tree, params);
     GrownParts grown = GrowParts(cloud, active, order, params, neighborhoods, part_of);
     result.num_grown_parts = grown.parts.size();
 
@@ -322,6 +360,62 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
     GroupSmallParts(is_large, pending, neighborhoods, grown.parts, part_of, result);
     DiscardSmallGroups(pending, min_size, params.discard_small_parts, grown.parts, part_of, result);
     CompactParts(grown, result);
+}
+
+}  // namespace
+
+RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
+                                  const RegionGrowingParams& params) {
+    CheckParams(params);
+    RegionGrowingResult result;
+    const std::size_t n = cloud.size();
+    if (n == 0) return result;
+    CheckFields(cloud);
+    std::vector<std::uint8_t> active;
+    result.num_points = MarkPoints(cloud, params.subset, active);
+    result.part_ids.assign(n, kNoPart);
+    if (result.num_points == 0) return result;
+    TreeNeighborhoods neighborhoods(cloud, tree, params);
+    GrowAndMerge(cloud, active, params, neighborhoods, result);
+    return result;
+}
+
+RegionGrowingResult RegionGrowingOrganized(const PointCloud& organized,
+                                           const RegionGrowingParams& params,
+                                           const OrganizedSearchParams& search) {
+    CheckParams(params);
+    RegionGrowingResult result;
+    const std::size_t n = organized.size();
+    if (n == 0) return result;
+    if (!organized.IsOrganized()) {
+        throw InvalidArgument(
+            fmt::format("organized region growing needs an organized cloud, got {}x{} for {} "
+                        "points",
+                        organized.width, organized.height, n));
+    }
+    if (search.half_window < 1) {
+        throw InvalidArgument(
+            fmt::format("half_window must be >= 1 [pixels], got {}", search.half_window));
+    }
+    if (!search.mask.empty() && search.mask.size() != n) {
+        throw InvalidArgument(fmt::format("the search mask has {} entries for a cloud of {} points",
+                                          search.mask.size(), n));
+    }
+    CheckFields(organized);
+    std::vector<std::uint8_t> active;
+    result.num_points = MarkPoints(organized, params.subset, active);
+    result.part_ids.assign(n, kNoPart);
+    if (result.num_points == 0) return result;
+    if (!search.mask.empty()) {
+        for (std::size_t i = 0; i < n; ++i) {
+            if (active[i] != 0 && search.mask[i] == 0) {
+                throw InvalidArgument(fmt::format(
+                    "point {} is to be segmented but the search mask leaves it out", i));
+            }
+        }
+    }
+    WindowNeighborhoods neighborhoods(organized, params, search);
+    GrowAndMerge(organized, active, params, neighborhoods, result);
     return result;
 }
 

@@ -22,6 +22,7 @@
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/types.hpp"
 #include "multicue/search/kdtree.hpp"
+#include "multicue/search/organized.hpp"
 
 namespace multicue {
 
@@ -80,5 +81,16 @@ struct RegionGrowingResult {
 /// from the number of points. An empty cloud gives an empty result.
 RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
                                   const RegionGrowingParams& params);
+
+/// The same on an organized frame without a k-d tree: a point's neighbours are the pixels of
+/// `search.mask` (all finite pixels when empty) in the square window of `search.half_window`
+/// around it that lie within the radius in 3D, and with params.k > 0 the k nearest of them.
+/// Where the window holds a point's k nearest points of the mask, they are the neighbours of
+/// RegionGrowing with a tree over the mask's points. Throws InvalidArgument as RegionGrowing does,
+/// and for an unorganized cloud, half_window < 1, a mask of the wrong size or a point to segment
+/// outside the mask.
+RegionGrowingResult RegionGrowingOrganized(const PointCloud& organized,
+                                           const RegionGrowingParams& params,
+                                           const OrganizedSearchParams& search);
 
 }  // namespace multicue
