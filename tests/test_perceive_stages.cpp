@@ -79,6 +79,45 @@ TEST(PerceiveStages, TableRegionHoldsTheObjectsAndNotTheTable) {
                  InvalidArgument);
 }
 
+// Area of a convex polygon on a plane with unit normal n.
+float HullArea(const std::vector<Eigen::Vector3f>& hull, const Eigen::Vector3f& n) {
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (std::size_t k = 0; k < hull.size(); ++k) sum += hull[k].cross(hull[(k + 1) % hull.size()]);
+    return 0.5f * std::abs(sum.dot(n));
+}
+
+// The organized frame's table (pixel pieces joined at their borders) is the table of the same
+// points without their pixel grid (3D clustering of every point): a table cut in two by a narrow
+// gap is one patch, one cut by a gap wider than the tolerance keeps its larger side.
+TEST(PerceiveStages, TableOfAnOrganizedFrameIsTheTableOfItsPoints) {
+    const auto& f = BoxAndCan();
+    for (const int gap : {4, 200}) {  // pixels: about 1 cm and 40 cm at the table
+        PointCloud cut = f.cloud;
+        for (std::size_t i = 0; i < cut.size(); ++i) {
+            const int u = static_cast<int>(i % cut.width);
+            if (cut.labels[i] < 20 && u >= 400 && u < 400 + gap)
+                cut.points[i].setConstant(std::numeric_limits<float>::quiet_NaN());
+        }
+        const SupportPlane organized = FindSupportPlane(cut, {}, PerceiveParams{}.prism);
+        const SupportPlane flat = FindSupportPlane(Unorganized(cut), {}, PerceiveParams{}.prism);
+        ASSERT_TRUE(organized.found);
+        ASSERT_TRUE(flat.found);
+        EXPECT_EQ(organized.plane, flat.plane);
+        EXPECT_EQ(organized.inliers, flat.inliers) << "gap " << gap;
+        const Eigen::Vector3f n = organized.plane.head<3>();
+        EXPECT_NEAR(HullArea(organized.hull, n), HullArea(flat.hull, n),
+                    1e-3f * HullArea(flat.hull, n));
+        std::size_t right = 0;
+        for (Index i : organized.inliers) right += i % cut.width >= 400 ? 1 : 0;
+        if (gap == 4) {
+            EXPECT_GT(right, 0u);  // both sides
+            EXPECT_LT(right, organized.inliers.size());
+        } else {
+            EXPECT_TRUE(right == 0 || right == organized.inliers.size());  // one side only
+        }
+    }
+}
+
 TEST(PerceiveStages, FrameNormalsCoverTheRegionOnly) {
     const auto& f = BoxAndCan();
     PointCloud frame = f.cloud;

@@ -45,9 +45,10 @@ class Evaluator {
           score_w_(score_w),
           sample_w_(sample_w) {}
 
-    // Calls visit(k, d, euclidean) for the k-th usable point, in order.
-    template <typename Visit>
-    void ForEach(const SacCoefficients& c, Visit&& visit) const {
+    // Calls visit(k, d, euclidean) for the k-th usable point, in order; after each chunk, stops
+    // early when stop() says so. Returns whether every point was visited.
+    template <typename Visit, typename Stop>
+    bool ForEach(const SacCoefficients& c, Visit&& visit, Stop&& stop) const {
         std::array<float, kChunk> dist{};
         std::array<float, kChunk> angle{};
         for (std::size_t begin = 0; begin < points_.size(); begin += kChunk) {
@@ -81,29 +82,51 @@ class Evaluator {
                     visit(begin + k, e, e);
                 }
             }
+            if (begin + n < points_.size() && stop()) return false;
         }
+        return true;
+    }
+    template <typename Visit>
+    void ForEach(const SacCoefficients& c, Visit&& visit) const {
+        ForEach(c, visit, [] { return false; });
     }
 
-    Score Evaluate(const SacCoefficients& c, SacMethod method) const {
+    // The score of a hypothesis. Every point adds a non-negative amount to the cost, so once the
+    // partial cost exceeds `bound` (the best cost so far) the hypothesis cannot win: it is left
+    // unfinished with an infinite cost, which changes no decision of the sampling loop.
+    Score Evaluate(const SacCoefficients& c, SacMethod method,
+                   double bound = std::numeric_limits<double>::infinity()) const {
         Score s;
         const double t2 = double{threshold_} * threshold_;
         const bool weighted = !score_w_.empty();
         const bool drawn = !sample_w_.empty();
-        ForEach(c, [&](std::size_t k, float d, float) {
-            // NaN distances (a model gone bad) count as outliers.
-            const bool inlier = d <= threshold_;
-            if (inlier) {
-                ++s.inliers;
-                if (drawn) s.drawn_mass += sample_w_[k];
-            }
-            const double w = weighted ? double{score_w_[k]} : 1.0;
-            if (method == SacMethod::kMsac) {
-                s.cost += w * (inlier ? double{d} * d : t2);
-            } else if (weighted && !inlier) {
-                s.cost += w;
-            }
-        });
-        if (method == SacMethod::kRansac && !weighted) {
+        const bool count_outliers = method == SacMethod::kRansac && !weighted;
+        std::size_t seen = 0;
+        const bool complete = ForEach(
+            c,
+            [&](std::size_t k, float d, float) {
+                // NaN distances (a model gone bad) count as outliers.
+                const bool inlier = d <= threshold_;
+                ++seen;
+                if (inlier) {
+                    ++s.inliers;
+                    if (drawn) s.drawn_mass += sample_w_[k];
+                }
+                const double w = weighted ? double{score_w_[k]} : 1.0;
+                if (method == SacMethod::kMsac) {
+                    s.cost += w * (inlier ? double{d} * d : t2);
+                } else if (weighted && !inlier) {
+                    s.cost += w;
+                }
+            },
+            [&] {
+                const double partial =
+                    count_outliers ? static_cast<double>(seen - s.inliers) : s.cost;
+                return partial > bound;
+            });
+        if (!complete) {
+            s.cost = std::numeric_limits<double>::infinity();
+        } else if (count_outliers) {
             s.cost = static_cast<double>(points_.size() - s.inliers);
         }
         return s;
@@ -282,9 +305,9 @@ void CheckModel(const SacModel& model) {
 // (each score depends on its hypothesis alone, so the order of evaluation does not matter).
 void ScoreBatch(const Evaluator& evaluator, SacMethod method, std::optional<tbb::task_arena>& arena,
                 std::size_t n, const std::vector<SacCoefficients>& hypotheses,
-                const std::vector<char>& valid, std::vector<Score>& scores) {
+                const std::vector<char>& valid, double bound, std::vector<Score>& scores) {
     auto score = [&](std::size_t j) {
-        if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], method);
+        if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], method, bound);
     };
     if (arena && n > 1) {
         arena->execute([&] {
@@ -341,7 +364,10 @@ Consensus SearchHypotheses(const PointCloud& cloud, const SacModel& model, const
             sampler.Draw(rng, positions, sample);
             valid[j] = model.fit_sample(cloud, sample, hypotheses[j]) ? 1 : 0;
         }
-        ScoreBatch(evaluator, params.method, arena, n, hypotheses, valid, scores);
+        // Hypotheses of the batch costlier than the best before it are left unfinished.
+        const double bound =
+            c.have_best ? c.best.cost : std::numeric_limits<double>::infinity();
+        ScoreBatch(evaluator, params.method, arena, n, hypotheses, valid, bound, scores);
         // Decide in drawing order, exactly as the serial loop does; samples drawn past its stop
         // are discarded.
         for (std::size_t j = 0; j < n; ++j) {

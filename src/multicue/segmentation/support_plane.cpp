@@ -8,6 +8,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/segmentation/disjoint_sets.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "multicue/segmentation/sac_plane.hpp"
@@ -65,6 +66,68 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
         EuclideanClusteringGrid(cloud, {.tolerance = tolerance, .subset = inliers});
     if (clusters.clusters.empty()) return {};
     return std::move(clusters.clusters.front());
+}
+
+// The table of an organized frame: the same largest patch without clustering every point. The
+// plane's pixels are first joined into pieces through neighbouring pixels (8-connected, within
+// the tolerance); two pieces belong to one patch when points of them lie within the tolerance,
+// and for pieces of one plane the nearest points of two pieces lie on their borders, so only the
+// border pixels (a 4-neighbour off the plane or outside the image) are clustered in 3D. Gives the
+// patch and its border pixels, whose convex hull is the patch's.
+struct Patch {
+    Indices points;  // ascending
+    Indices border;  // ascending
+};
+
+Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, float tolerance) {
+    const std::size_t w = cloud.width, h = cloud.height;
+    std::vector<std::uint8_t> in(cloud.size(), 0);
+    for (Index i : on_plane) in[i] = 1;
+    const float tol_sq = tolerance * tolerance;
+    detail::DisjointSets pieces(cloud.size());
+    Indices border;
+    for (std::size_t v = 0; v < h; ++v) {
+        for (std::size_t u = 0; u < w; ++u) {
+            const std::size_t i = v * w + u;
+            if (in[i] == 0) continue;
+            const Eigen::Vector3f& p = cloud.points[i];
+            auto link = [&](std::size_t j) {
+                if (in[j] != 0 && (cloud.points[j] - p).squaredNorm() <= tol_sq)
+                    pieces.Unite(static_cast<Index>(i), static_cast<Index>(j));
+            };
+            if (u + 1 < w) link(i + 1);
+            if (v + 1 < h) {
+                link(i + w);
+                if (u + 1 < w) link(i + w + 1);
+                if (u > 0) link(i + w - 1);
+            }
+            const bool inner = u > 0 && v > 0 && u + 1 < w && v + 1 < h && in[i - 1] != 0 &&
+                               in[i + 1] != 0 && in[i - w] != 0 && in[i + w] != 0;
+            if (!inner) border.push_back(static_cast<Index>(i));
+        }
+    }
+    const ClusteringResult linked =
+        EuclideanClusteringGrid(cloud, {.tolerance = tolerance, .subset = border});
+    for (const Indices& c : linked.clusters)
+        for (Index i : c) pieces.Unite(c.front(), i);
+    // The patch with the most points; ties: the one with the lowest pixel.
+    std::vector<Index> root(on_plane.size());
+    std::vector<std::size_t> count(cloud.size(), 0);
+    for (std::size_t k = 0; k < on_plane.size(); ++k) {
+        root[k] = pieces.Find(on_plane[k]);
+        ++count[root[k]];
+    }
+    Index best = on_plane.front();
+    for (std::size_t k = 0; k < on_plane.size(); ++k) {
+        if (count[root[k]] > count[best]) best = root[k];
+    }
+    Patch patch;
+    patch.points.reserve(count[best]);
+    for (std::size_t k = 0; k < on_plane.size(); ++k)
+        if (root[k] == best) patch.points.push_back(on_plane[k]);
+    for (Index i : border)
+        if (pieces.Find(i) == best) patch.border.push_back(i);
+    return patch;
 }
 
 // The cloud's finite points: the candidates and the table are taken among them.
@@ -333,13 +396,19 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
 
     // All points of the full cloud on the plane, then its largest connected patch.
     const Indices on_plane = PointsOnPlane(cloud, finite, plane, params.distance_threshold);
-    Indices table = LargestPatch(cloud, on_plane, params.cluster_tolerance);
-    if (table.size() < 3) return result;
+    Patch table;
+    if (cloud.IsOrganized() && !on_plane.empty()) {
+        table = LargestPatchOrganized(cloud, on_plane, params.cluster_tolerance);
+    } else {
+        table.points = LargestPatch(cloud, on_plane, params.cluster_tolerance);
+        table.border = table.points;
+    }
+    if (table.points.size() < 3) return result;
     result.found = true;
     result.plane = plane;
     result.up = plane.head<3>();
-    result.hull = PlaneConvexHull(cloud, table, plane);
-    result.inliers = std::move(table);
+    result.hull = PlaneConvexHull(cloud, table.border, plane);
+    result.inliers = std::move(table.points);
     result.supported = supported[chosen];
     LogDebug(
         "support plane ({:.3f}, {:.3f}, {:.3f}, {:.3f}) with {} points, supporting {} of {} "
