@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/segmentation/sac_internal.hpp"
 #include "multicue/segmentation/cylinder_least_squares.hpp"
 #include "multicue/segmentation/sac_circle.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
@@ -157,6 +158,19 @@ Scene CylinderScene(std::size_t n_in, std::size_t n_out, std::uint32_t seed = 3)
 }
 
 // ---- Eq. (4.6) ----
+
+// The normal angles of the scoring: the polynomial acos against the library's, over [0, 1].
+TEST(SampleConsensus, PolynomialAcosIsAcosToAFloatsRounding) {
+    double worst = 0.0;
+    for (int k = 0; k <= 1000000; ++k) {
+        const float x = static_cast<float>(k) / 1000000.0f;
+        worst = std::max(worst, std::abs(double{sac_internal::AcosUnit(x)} -
+                                         std::acos(static_cast<double>(x))));
+    }
+    EXPECT_LT(worst, 2e-7);
+    EXPECT_EQ(sac_internal::AcosUnit(1.0f), 0.0f);
+    EXPECT_NEAR(sac_internal::AcosUnit(0.0f), std::numbers::pi / 2.0, 1e-7);
+}
 
 TEST(SampleConsensus, AdaptiveIterationCountFollowsEq46) {
     // log(0.01) / log(1 - 0.5^3) = 34.49 -> 35.

@@ -545,7 +545,13 @@ AxisFit DescendLocalGrid(const std::vector<Sample>& samples, const Eigen::Vector
 /// up, the best few refined by successively finer local grids.
 AxisFit SearchNormalLineAxis(const std::vector<Sample>& samples, const AxisSearch& search,
                              const RotationalFitParams& params) {
-    const auto directions = CapDirections(search.pole, search.max_tilt, params.grid_directions);
+    // grid_directions cover the hemisphere; a cap around up gets the same density (its share of
+    // the hemisphere's area, 1 - cos(max_tilt)), at least 100 directions.
+    const double share = 1.0 - std::cos(search.max_tilt);
+    const int count = std::max(
+        std::min(100, params.grid_directions),
+        static_cast<int>(std::ceil(share * static_cast<double>(params.grid_directions))));
+    const auto directions = CapDirections(search.pole, search.max_tilt, count);
     const std::vector<std::size_t> candidates =
         BestCoarseDirections(samples, directions, search, params.refine_candidates);
     const double spacing =
