@@ -739,8 +739,11 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     const Indices usable = WithNormals(cloud, finite);
     if (usable.size() < 2) return model;
 
-    // 1. Hypothesis.
-    const CylinderFit fit = HypothesiseCylinder(cloud, usable, plane, params, guidance);
+    // 1. Hypothesis, on an even subset of the points.
+    const Indices hypothesis_points = params.hypothesis_points > 0
+                                          ? EvenSubset(usable, params.hypothesis_points)
+                                          : usable;
+    const CylinderFit fit = HypothesiseCylinder(cloud, hypothesis_points, plane, params, guidance);
     if (!fit.found || fit.inliers.empty()) return model;
 
     // 2. Refinement on the side points, with the axis snapped to the support when asked.

@@ -177,6 +177,10 @@ struct CylinderModelParams {
     std::size_t min_cap_points = 10;  ///< a cap fixes its end of the axis segment only with at
                                       ///< least this many points [points]; >= 1
     float inlier_threshold = 0.01f;   ///< distance to the surface for inlier_ratio [m]; > 0
+    /// The hypotheses are drawn and scored on at most this many of the object's points (an even
+    /// subset: the share of a surface they cover is the whole object's); the refinement, extent
+    /// and inlier ratio use every point [points]; 0 = all
+    std::size_t hypothesis_points = 3000;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
@@ -184,6 +188,8 @@ struct CylinderModelParams {
     template <typename V>
     void VisitParams(V& v) {
         v.Node("sac", sac);
+        v("hypothesis_points", hypothesis_points,
+          "hypotheses on at most this many points, an even subset (0 = all)");
         v("min_radius", min_radius, "smallest radius [m]");
         v("max_radius", max_radius, "largest radius [m]");
         v("upright_angle_deg", upright_angle_deg, "upright prior tolerance [deg]");
