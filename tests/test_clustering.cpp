@@ -986,6 +986,48 @@ TEST(RegionGrowingOrganized, MatchesTheTreeWhereTheWindowHoldsTheNearest) {
         for (Index i : p) EXPECT_TRUE(std::binary_search(first.begin(), first.end(), i));
 }
 
+// A neighbour table searched once for all objects serves each object's region growing, and is
+// the same for any thread count.
+TEST(RegionGrowingOrganized, OneNeighbourTableForSeveralGrowings) {
+    const OrganizedScene scene = MakeOrganizedScene(17);
+    PointCloud c = scene.cloud;
+    c.normals = scene.normal;
+    std::mt19937 rng(18);
+    RandomCurvature(c, rng);
+    std::vector<Indices> objects(4);
+    std::vector<std::uint8_t> mask(c.size(), 0);
+    Indices all;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        if (scene.object[i] < 0) continue;
+        objects[static_cast<std::size_t>(scene.object[i])].push_back(static_cast<Index>(i));
+        all.push_back(static_cast<Index>(i));
+        mask[i] = 1;
+    }
+    const OrganizedSearchParams search{.half_window = 3, .mask = mask};
+    const RegionGrowingParams params{.radius = 0.05f, .k = 16};
+    const NeighbourTable one = OrganizedNeighbourTable(c, all, params, search, 1);
+    const NeighbourTable two = OrganizedNeighbourTable(c, all, params, search, 2);
+    EXPECT_EQ(one.count, two.count);
+    EXPECT_EQ(one.neighbours, two.neighbours);
+    EXPECT_EQ(one.squared_distances, two.squared_distances);
+    for (const Indices& object : objects) {
+        RegionGrowingParams p = params;
+        p.subset = object;
+        const auto expected = RegionGrowingOrganized(c, p, search);
+        const auto got = RegionGrowing(c, one, p);
+        EXPECT_EQ(got.parts, expected.parts);
+        EXPECT_EQ(got.part_ids, expected.part_ids);
+        EXPECT_FALSE(got.parts.empty());
+    }
+    // A point without a row cannot be segmented with the table.
+    const NeighbourTable first = OrganizedNeighbourTable(c, objects[0], params, search, 1);
+    RegionGrowingParams p = params;
+    p.subset = objects[1];
+    EXPECT_THROW(RegionGrowing(c, first, p), InvalidArgument);
+    EXPECT_THROW(OrganizedNeighbourTable(c, {static_cast<Index>(c.size())}, params, search),
+                 InvalidArgument);
+}
+
 TEST(RegionGrowingOrganized, RejectsBadInputAndHandlesEmptyInput) {
     const OrganizedScene scene = MakeOrganizedScene(15);
     PointCloud c = scene.cloud;

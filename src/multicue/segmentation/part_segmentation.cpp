@@ -44,32 +44,31 @@ PartSegmentationResult SegmentParts(const PointCloud& cloud, const std::vector<I
     params.Validate();
     if (!clusters.empty() && !cloud.HasNormals())
         throw DataError("part segmentation needs normals");
-    // Neighbours among the points of every hypothesis: a pixel mask on organized frames, else
-    // one k-d tree over all of them.
+    // Neighbours among the points of every hypothesis: on organized frames searched once for all
+    // of them in pixel windows (in parallel), else from one k-d tree over all of them.
     const bool organized = cloud.IsOrganized() && params.organized_half_window > 0;
-    std::vector<std::uint8_t> mask;
+    Indices all;
+    for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
+    std::sort(all.begin(), all.end());
     std::optional<KdTree> tree;
+    NeighbourTable table;
     if (organized) {
-        mask.assign(cloud.size(), 0);
-        for (const auto& c : clusters)
-            for (Index i : c) mask.at(i) = 1;
+        std::vector<std::uint8_t> mask(cloud.size(), 0);
+        for (Index i : all) mask.at(i) = 1;
+        table = OrganizedNeighbourTable(cloud, all, params.region_growing,
+                                        {.half_window = params.organized_half_window, .mask = mask},
+                                        params.num_threads);
     } else {
-        Indices all;
-        for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
-        std::sort(all.begin(), all.end());
         tree.emplace(cloud, all);
     }
-    const OrganizedSearchParams window{.half_window = params.organized_half_window,
-                                       .mask = mask};
     std::vector<std::vector<ObjectSegment>> split(clusters.size());
     ParallelFor(
         clusters.size(), params.num_threads,
         [&](std::size_t k) {
             RegionGrowingParams rg = params.region_growing;
             rg.subset = clusters[k];
-            const std::vector<Indices> parts = organized
-                                                   ? RegionGrowingOrganized(cloud, rg, window).parts
-                                                   : RegionGrowing(cloud, *tree, rg).parts;
+            const std::vector<Indices> parts = organized ? RegionGrowing(cloud, table, rg).parts
+                                                         : RegionGrowing(cloud, *tree, rg).parts;
             std::vector<Indices> groups;
             if (params.convexity.enabled) {
                 ConvexitySplitParams cp = params.convexity;

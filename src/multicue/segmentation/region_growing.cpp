@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/search/organized.hpp"
 #include "multicue/segmentation/disjoint_sets.hpp"
 
@@ -105,39 +106,24 @@ class TreeNeighborhoods final : public Neighborhoods {
     int k_;
 };
 
-// From the pixel window of an organized frame: the window's pixels of the search mask within the
-// radius (strictly, as the k-d tree path keeps them); with k > 0 the k nearest of them, nearest
-// first, else all of them in pixel order (no phase depends on the order: growth takes every
-// neighbour, merging the nearest).
-class WindowNeighborhoods final : public Neighborhoods {
+// From a table of precomputed neighbourhoods (rows of the points to segment).
+class TableNeighborhoods final : public Neighborhoods {
   public:
-    WindowNeighborhoods(const PointCloud& cloud, const RegionGrowingParams& params,
-                        const OrganizedSearchParams& search)
-        : cloud_(cloud), search_(search), radius_sq_(params.radius * params.radius), k_(params.k) {
-        search_.radius = params.radius;
-    }
+    explicit TableNeighborhoods(const NeighbourTable& table) : table_(table) {}
 
     void Search(Index q) override {
-        if (k_ > 0) {
-            OrganizedKnnSearch(cloud_, q, k_, search_, indices_, squared_distances_);
-        } else {
-            OrganizedRadiusSearch(cloud_, q, search_, indices_, squared_distances_);
-        }
-        std::size_t kept = 0;
-        for (std::size_t m = 0; m < indices_.size(); ++m) {
-            if (!(squared_distances_[m] < radius_sq_)) continue;
-            indices_[kept] = indices_[m];
-            squared_distances_[kept++] = squared_distances_[m];
-        }
-        indices_.resize(kept);
-        squared_distances_.resize(kept);
+        const std::uint32_t row = table_.row_of[q];
+        const std::size_t begin = row * table_.stride;
+        const std::size_t n = table_.count[row];
+        indices_.assign(table_.neighbours.begin() + static_cast<std::ptrdiff_t>(begin),
+                        table_.neighbours.begin() + static_cast<std::ptrdiff_t>(begin + n));
+        squared_distances_.assign(
+            table_.squared_distances.begin() + static_cast<std::ptrdiff_t>(begin),
+            table_.squared_distances.begin() + static_cast<std::ptrdiff_t>(begin + n));
     }
 
   private:
-    const PointCloud& cloud_;
-    OrganizedSearchParams search_;
-    float radius_sq_;
-    int k_;
+    const NeighbourTable& table_;
 };
 
 // Marks the points with finite coordinates, normal and curvature in the subset (or cloud).
@@ -380,13 +366,11 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
     return result;
 }
 
-RegionGrowingResult RegionGrowingOrganized(const PointCloud& organized,
-                                           const RegionGrowingParams& params,
-                                           const OrganizedSearchParams& search) {
-    CheckParams(params);
-    RegionGrowingResult result;
+namespace {
+
+// Checks what an organized search needs of the cloud and of `search`.
+void CheckOrganized(const PointCloud& organized, const OrganizedSearchParams& search) {
     const std::size_t n = organized.size();
-    if (n == 0) return result;
     if (!organized.IsOrganized()) {
         throw InvalidArgument(
             fmt::format("organized region growing needs an organized cloud, got {}x{} for {} "
@@ -401,22 +385,125 @@ RegionGrowingResult RegionGrowingOrganized(const PointCloud& organized,
         throw InvalidArgument(fmt::format("the search mask has {} entries for a cloud of {} points",
                                           search.mask.size(), n));
     }
-    CheckFields(organized);
+}
+
+// The neighbours of one point: the window's pixels of the mask within the radius (strictly, as
+// the k-d tree path keeps them); with k > 0 the k nearest of them, nearest first, else all of
+// them in pixel order (no phase depends on the order: growth takes every neighbour, merging the
+// nearest).
+void WindowNeighbours(const PointCloud& cloud, Index q, int k, float radius_sq,
+                      const OrganizedSearchParams& search, Indices& indices,
+                      std::vector<float>& squared_distances) {
+    if (k > 0) {
+        OrganizedKnnSearch(cloud, q, k, search, indices, squared_distances);
+    } else {
+        OrganizedRadiusSearch(cloud, q, search, indices, squared_distances);
+    }
+    std::size_t kept = 0;
+    for (std::size_t m = 0; m < indices.size(); ++m) {
+        if (!(squared_distances[m] < radius_sq)) continue;
+        indices[kept] = indices[m];
+        squared_distances[kept++] = squared_distances[m];
+    }
+    indices.resize(kept);
+    squared_distances.resize(kept);
+}
+
+}  // namespace
+
+NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indices& points,
+                                       const RegionGrowingParams& params,
+                                       const OrganizedSearchParams& search, int num_threads) {
+    CheckParams(params);
+    CheckOrganized(organized, search);
+    NeighbourTable table;
+    const std::size_t n = organized.size();
+    const auto window = static_cast<std::size_t>(2 * search.half_window + 1);
+    table.stride = window * window;
+    if (params.k > 0) table.stride = std::min(table.stride, static_cast<std::size_t>(params.k));
+    if (table.stride > 0xffff) {
+        throw InvalidArgument(
+            fmt::format("a neighbour table row holds at most 65535 entries, the "
+                        "window of {} pixels more",
+                        search.half_window));
+    }
+    table.row_of.assign(n, NeighbourTable::kNoRow);
+    for (std::size_t r = 0; r < points.size(); ++r) {
+        if (points[r] >= n) {
+            throw InvalidArgument(
+                fmt::format("index {} is out of range for a cloud of {} points", points[r], n));
+        }
+        table.row_of[points[r]] = static_cast<std::uint32_t>(r);
+    }
+    table.count.assign(points.size(), 0);
+    table.neighbours.resize(points.size() * table.stride);
+    table.squared_distances.resize(points.size() * table.stride);
+    OrganizedSearchParams s = search;
+    s.radius = params.radius;
+    const float radius_sq = params.radius * params.radius;
+    ParallelForChunks(
+        points.size(), num_threads,
+        [&](std::size_t begin, std::size_t end) {
+            Indices nb;
+            std::vector<float> d2;
+            for (std::size_t r = begin; r < end; ++r) {
+                WindowNeighbours(organized, points[r], params.k, radius_sq, s, nb, d2);
+                const std::size_t m = std::min(nb.size(), table.stride);
+                std::copy_n(nb.begin(), m, table.neighbours.begin() + r * table.stride);
+                std::copy_n(d2.begin(), m, table.squared_distances.begin() + r * table.stride);
+                table.count[r] = static_cast<std::uint16_t>(m);
+            }
+        },
+        1024);
+    return table;
+}
+
+RegionGrowingResult RegionGrowing(const PointCloud& cloud, const NeighbourTable& table,
+                                  const RegionGrowingParams& params) {
+    CheckParams(params);
+    RegionGrowingResult result;
+    const std::size_t n = cloud.size();
+    if (n == 0) return result;
+    CheckFields(cloud);
+    if (table.row_of.size() != n) {
+        throw InvalidArgument(fmt::format("the neighbour table is for a cloud of {} points, not {}",
+                                          table.row_of.size(), n));
+    }
     std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(organized, params.subset, active);
+    result.num_points = MarkPoints(cloud, params.subset, active);
     result.part_ids.assign(n, kNoPart);
     if (result.num_points == 0) return result;
-    if (!search.mask.empty()) {
-        for (std::size_t i = 0; i < n; ++i) {
-            if (active[i] != 0 && search.mask[i] == 0) {
-                throw InvalidArgument(fmt::format(
-                    "point {} is to be segmented but the search mask leaves it out", i));
-            }
+    for (std::size_t i = 0; i < n; ++i) {
+        if (active[i] != 0 && table.row_of[i] == NeighbourTable::kNoRow) {
+            throw InvalidArgument(fmt::format(
+                "point {} is to be segmented but the neighbour table has no row for it", i));
         }
     }
-    WindowNeighborhoods neighborhoods(organized, params, search);
-    GrowAndMerge(organized, active, params, neighborhoods, result);
+    TableNeighborhoods neighborhoods(table);
+    GrowAndMerge(cloud, active, params, neighborhoods, result);
     return result;
+}
+
+RegionGrowingResult RegionGrowingOrganized(const PointCloud& organized,
+                                           const RegionGrowingParams& params,
+                                           const OrganizedSearchParams& search) {
+    CheckParams(params);
+    if (organized.size() == 0) return {};
+    CheckOrganized(organized, search);
+    CheckFields(organized);
+    std::vector<std::uint8_t> active;
+    MarkPoints(organized, params.subset, active);
+    Indices points;
+    for (std::size_t i = 0; i < organized.size(); ++i) {
+        if (active[i] == 0) continue;
+        if (!search.mask.empty() && search.mask[i] == 0) {
+            throw InvalidArgument(
+                fmt::format("point {} is to be segmented but the search mask leaves it out", i));
+        }
+        points.push_back(static_cast<Index>(i));
+    }
+    return RegionGrowing(organized, OrganizedNeighbourTable(organized, points, params, search),
+                         params);
 }
 
 }  // namespace multicue

@@ -93,4 +93,30 @@ RegionGrowingResult RegionGrowingOrganized(const PointCloud& organized,
                                            const RegionGrowingParams& params,
                                            const OrganizedSearchParams& search);
 
+/// The neighbourhoods of many points, searched once (in parallel) and read by any number of
+/// region growings over subsets of them. Row r holds the neighbours of point `points[r]`, nearest
+/// first: entries [r * stride, r * stride + count[r]).
+struct NeighbourTable {
+    static constexpr std::uint32_t kNoRow = 0xffffffffu;
+    std::size_t stride = 0;             ///< entries reserved per row
+    std::vector<std::uint32_t> row_of;  ///< per cloud point: its row, or kNoRow
+    std::vector<std::uint16_t> count;   ///< per row: its neighbours
+    Indices neighbours;                 ///< rows * stride
+    std::vector<float> squared_distances;
+};
+
+/// The neighbourhoods RegionGrowingOrganized uses (same params.radius, params.k and `search`) of
+/// `points` (indices into `organized`), searched on `num_threads` threads (0 = all cores); the
+/// same table for any thread count. Throws InvalidArgument as RegionGrowingOrganized does and for
+/// an index out of range.
+NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indices& points,
+                                       const RegionGrowingParams& params,
+                                       const OrganizedSearchParams& search, int num_threads = 1);
+
+/// Region growing with the neighbourhoods of `table` (from OrganizedNeighbourTable with the same
+/// radius and k): the result of RegionGrowingOrganized. Throws as RegionGrowing does, and
+/// InvalidArgument when a point to segment has no row in the table.
+RegionGrowingResult RegionGrowing(const PointCloud& cloud, const NeighbourTable& table,
+                                  const RegionGrowingParams& params);
+
 }  // namespace multicue
