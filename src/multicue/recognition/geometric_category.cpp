@@ -372,6 +372,9 @@ CylinderEvidence BestCylinder(const PointCloud& cloud, const Indices& sample,
 /// box-like; sets the result's sphere fields.
 float SphereScore(const PointCloud& cloud, const Indices& sample, const SacParams& sac,
                   float cos_inlier_normal, const CategoryParams& params, CategoryResult& r) {
+    // Box-like normals zero the sphere's score whatever sphere fits: then none is fitted (its
+    // measurements stay 0, as when no sphere is found).
+    if (r.axis_area >= params.sphere_box_axis_area_max) return 0.0f;
     SphereFitParams spp{
         .sac = sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
     const SphereFit sphere = FitSphere(cloud, sample, spp);

@@ -20,7 +20,7 @@
 /// - sphere: RANSAC sphere with normals (FitSphere); share of points on it (same test as the
 ///   cylinder side), provided the diameter matches the object's largest extent, fading out
 ///   as axis_area rises from sphere_box_axis_area to sphere_box_axis_area_max (the faces of a
-///   large box fit a large sphere within the threshold);
+///   large box fit a large sphere within the threshold); from there on no sphere is fitted;
 /// - plate: thin (thickness / largest extent) and round (hull area / minimum rectangle area
 ///   across the thin axis: pi/4 for a disc, 1 for a slab). With a support plane only objects
 ///   whose thin axis is up (lying plates) qualify: across a horizontal axis a single view shows
@@ -175,8 +175,8 @@ struct CategoryResult {
     float cylinder_radius = 0.0f;        ///< radius of the best cylinder, 0 if none [m]
     Eigen::Vector3f cylinder_axis = Eigen::Vector3f::Zero();  ///< its unit axis, 0 if none
     bool cylinder_upright = false;     ///< the best cylinder is the upright one
-    float sphere_inlier_ratio = 0.0f;  ///< share of points on the best sphere [-]
-    float sphere_radius = 0.0f;        ///< its radius, 0 if none [m]
+    float sphere_inlier_ratio = 0.0f;  ///< share of points on the best sphere, 0 if none [-]
+    float sphere_radius = 0.0f;        ///< its radius, 0 if none (or box-like: not fitted) [m]
     float thickness_ratio = 0.0f;      ///< e3 / e1 [-]
     float footprint_fill = 0.0f;   ///< convex hull area / rectangle area across the thinnest box
                                    ///< axis: 1 rectangle, pi/4 disc [-]
