@@ -61,8 +61,8 @@ void CdrReader::Align(std::size_t size) {
     pos_ = aligned;
 }
 
-const std::uint8_t* CdrReader::Take(std::size_t size) {
-    Align(size);
+const std::uint8_t* CdrReader::Take(std::size_t size, std::size_t align) {
+    Align(align);
     if (size > remaining()) {
         throw FormatError(fmt::format("{}: CDR data ends at byte {}, {} more bytes needed at {}",
                                       source_, body_.size() + kHeaderBytes, size,
@@ -73,23 +73,23 @@ const std::uint8_t* CdrReader::Take(std::size_t size) {
     return p;
 }
 
-std::uint8_t CdrReader::U8() { return *Take(1); }
+std::uint8_t CdrReader::U8() { return *Take(1, 1); }
 
 std::uint16_t CdrReader::U16() {
     std::uint16_t v;
-    std::memcpy(&v, Take(2), 2);
+    std::memcpy(&v, Take(2, 2), 2);
     return SwapFor(big_endian_) ? ByteSwap(v) : v;
 }
 
 std::uint32_t CdrReader::U32() {
     std::uint32_t v;
-    std::memcpy(&v, Take(4), 4);
+    std::memcpy(&v, Take(4, 4), 4);
     return SwapFor(big_endian_) ? ByteSwap(v) : v;
 }
 
 std::uint64_t CdrReader::U64() {
     std::uint64_t v;
-    std::memcpy(&v, Take(8), 8);
+    std::memcpy(&v, Take(8, 8), 8);
     return SwapFor(big_endian_) ? ByteSwap(v) : v;
 }
 
@@ -103,7 +103,7 @@ std::string CdrReader::String() {
                                       source_, length, pos_ + kHeaderBytes,
                                       body_.size() + kHeaderBytes));
     }
-    const std::uint8_t* p = Take(length);
+    const std::uint8_t* p = Take(length, 1);
     // The length counts the terminating NUL; tolerate writers that leave it out.
     std::size_t n = length;
     if (n > 0 && p[n - 1] == 0) --n;

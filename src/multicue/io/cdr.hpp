@@ -47,7 +47,8 @@ class CdrReader {
 
   private:
     void Align(std::size_t size);
-    const std::uint8_t* Take(std::size_t size);
+    /// `size` bytes after aligning to `align` (primitives: their size; byte runs: 1).
+    const std::uint8_t* Take(std::size_t size, std::size_t align);
 
     std::span<const std::uint8_t> body_;
     std::string source_;
