@@ -90,7 +90,7 @@ class McapWriter {
     std::vector<std::uint8_t> Build(const std::vector<Ros2BagTopic>& topics,
                                     const std::vector<Ros2BagMessage>& messages,
                                     bool with_summary = true) {
-        out_.clear();
+        out_ = {};
         Raw("\x89MCAP0\r\n", 8);
         Record(0x01, [&](Buf& b) {
             b.Str("ros2");
@@ -201,7 +201,9 @@ class McapWriter {
         out_.insert(out_.end(), p, p + 8);
         out_.insert(out_.end(), b.bytes.begin(), b.bytes.end());
     }
-    void Raw(const char* s, std::size_t n) { out_.insert(out_.end(), s, s + n); }
+    void Raw(const char* s, std::size_t n) {
+        for (std::size_t k = 0; k < n; ++k) out_.push_back(static_cast<std::uint8_t>(s[k]));
+    }
 
     std::vector<std::uint8_t> out_;
 };
