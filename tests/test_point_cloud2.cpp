@@ -10,6 +10,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/cdr.hpp"
+#include "multicue/io/depth_image.hpp"
 #include "multicue/io/point_cloud2.hpp"
 #include "multicue/io/ros_messages.hpp"
 #include "test_util.hpp"
@@ -338,6 +339,33 @@ TEST(MessageStamp, NanosecondsAndText) {
     EXPECT_EQ(s.ToString(), "1585866235.112411371");
     EXPECT_EQ(io::MessageStamp::FromNanoseconds(5).ToString(), "0.000000005");
     EXPECT_EQ(io::MessageStamp::FromNanoseconds(s.Nanoseconds()), s);
+}
+
+}  // namespace
+}  // namespace multicue
+
+namespace multicue {
+namespace {
+
+TEST(DepthImage, BackProjectsThroughThePinholeModel) {
+    io::DepthImage depth{4, 3, std::vector<float>(12, 0.0f)};
+    depth.depth[1 * 4 + 2] = 2.0f;   // u 2, v 1
+    depth.depth[2 * 4 + 0] = 1.0f;   // u 0, v 2
+    depth.depth[0] = std::numeric_limits<float>::quiet_NaN();
+    const io::CameraIntrinsics k{.fx = 100, .fy = 50, .cx = 2, .cy = 1};
+    std::vector<Color> colors(12, Color{1, 2, 3, 255});
+    const PointCloud c = io::DepthToCloud(depth, k, colors);
+    EXPECT_TRUE(c.IsOrganized());
+    EXPECT_EQ(c.width, 4u);
+    EXPECT_EQ(c.CountFinite(), 2u);
+    EXPECT_TRUE(c.At(2, 1).isApprox(Eigen::Vector3f(0, 0, 2)));
+    EXPECT_TRUE(c.At(0, 2).isApprox(Eigen::Vector3f(-0.02f, 0.02f, 1.0f)));
+    EXPECT_EQ(c.colors.size(), 12u);
+    EXPECT_THROW(io::DepthToCloud(depth, {.fx = 0, .fy = 1}), InvalidArgument);
+    EXPECT_THROW(io::DepthToCloud(depth, k, std::vector<Color>(5)), InvalidArgument);
+    depth.depth.pop_back();
+    EXPECT_THROW(io::DepthToCloud(depth, k), InvalidArgument);
+    EXPECT_TRUE(io::DepthToCloud(io::DepthImage{}, k).empty());
 }
 
 }  // namespace
