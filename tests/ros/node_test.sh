@@ -63,8 +63,9 @@ for _ in $(seq 100); do
 done
 rostopic list >/dev/null
 
-echo "== multicue_node"
-start "$work/node.log" "$build/multicue_node" "points:=$topic" _stats_period:=0.5 _threads:=2
+echo "== multicue_node (roslaunch multicue multicue.launch)"
+export ROS_PACKAGE_PATH=$build/ros
+start "$work/node.log" roslaunch multicue multicue.launch "points:=$topic" stats_period:=0.5 threads:=2
 for _ in $(seq 150); do
     rosservice list 2>/dev/null | grep -q /multicue_node/run_task && break
     sleep 0.2
