@@ -28,7 +28,11 @@ PerceptionNode::PerceptionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(
     if (pnh_.hasParam("config")) {
         XmlRpc::XmlRpcValue value;
         pnh_.getParam("config", value);
-        options.config_json = ParamToJson(value);
+        // A struct of parameters (rosparam, launch files), or JSON text (`_config:=...` on the
+        // command line, where roscpp keeps the value as a string).
+        options.config_json = value.getType() == XmlRpc::XmlRpcValue::TypeString
+                                   ? static_cast<std::string>(value)
+                                   : ParamToJson(value);
         options.config_source = pnh_.resolveName("config") + " (ROS parameters)";
     }
     pnh_.param("threads", options.threads, 0);

@@ -4,7 +4,8 @@
 #   2. `multicue perceive --bag` perceives the bag: the reference;
 #   3. roscore on a free port, multicue_node, a collector; `rosbag play` plays the bag;
 #   4. every labelled cloud, marker set and result the node published equals the reference;
-#   5. the task service enumerates the newest frame;
+#   5. bad clouds (no x/y/z, truncated data) are skipped; the task service enumerates the newest
+#      frame; a bad ~config parameter is refused by name;
 #   6. frames published faster than the node perceives them: it drops, it does not lag.
 # Rates are printed, not asserted. Everything started here is stopped on exit, also on failure.
 # usage: node_test.sh BUILD_DIR SHARED_DATA_DIR
@@ -57,20 +58,22 @@ echo "== frames and bag"
 
 echo "== roscore on port $port"
 start "$work/roscore.log" roscore -p "$port"
+ready=0
 for _ in $(seq 100); do
-    rostopic list >/dev/null 2>&1 && break
+    if rostopic list >/dev/null 2>&1; then ready=1; break; fi
     sleep 0.2
 done
-rostopic list >/dev/null
+[[ $ready -eq 1 ]] || { echo "roscore did not come up"; exit 1; }
 
 echo "== multicue_node (roslaunch multicue multicue.launch)"
 export ROS_PACKAGE_PATH=$build/ros
 start "$work/node.log" roslaunch multicue multicue.launch "points:=$topic" stats_period:=0.5 threads:=2
+ready=0
 for _ in $(seq 150); do
-    rosservice list 2>/dev/null | grep -q /multicue_node/run_task && break
+    if rosservice list 2>/dev/null | grep -q /multicue_node/run_task; then ready=1; break; fi
     sleep 0.2
 done
-rosservice list | grep -q /multicue_node/run_task
+[[ $ready -eq 1 ]] || { echo "multicue_node did not come up"; exit 1; }
 
 echo "== play the bag (frames 2 s apart)"
 start "$work/collect.log" "$build/tests/ros/ros_test_tool" collect "$work/got" "$frames_n" 120
@@ -82,6 +85,19 @@ for _ in $(seq 600); do kill -0 "$collector" 2>/dev/null || break; sleep 0.2; do
 cat "$work/collect.log"
 echo "node stats: $(cat "$work/got/stats.json")"
 "$build/tests/ros/ros_test_data" compare "$work/cli" "$work/got" 1
+
+echo "== bad clouds are skipped, the node goes on"
+"$build/tests/ros/ros_test_tool" publish-bad "$topic"
+sleep 1
+start "$work/collect_bad.log" "$build/tests/ros/ros_test_tool" collect "$work/got_bad" 1000000 1.5
+collector=${pids[-1]}
+for _ in $(seq 100); do kill -0 "$collector" 2>/dev/null || break; sleep 0.1; done
+/usr/bin/python3 -c '
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["failed"] == 2, s
+print("skipped", s["failed"], "bad clouds:", s)' "$work/got_bad/stats.json"
+grep -o "frame skipped: .*" "$work/node.log" | head -2
 
 echo "== task service"
 task=$("$build/tests/ros/ros_test_tool" call-task '{"task": "enumerate", "learn": false}')
@@ -123,6 +139,22 @@ assert processed >= 1, "nothing perceived"
 EOF2
 }
 cp "$work/got/stats.json" "$work/stats.json"
+echo "== the configuration from ROS parameters: an unknown key is refused by name"
+bad_config() {  # bad_config NAME ARGS...: the node must exit 2 naming support.bogus_key
+    local name=$1
+    shift
+    set +e
+    timeout 60 "$build/multicue_node" "__name:=$name" "$@" >"$work/$name.log" 2>&1
+    local rc=$?
+    set -e
+    grep -q "support.bogus_key" "$work/$name.log" && [[ $rc -eq 2 ]] ||
+        { echo "a bad ~config was not refused (exit $rc):"; cat "$work/$name.log"; exit 1; }
+    echo "refused: $(grep -o 'multicue_node: .*' "$work/$name.log" | head -1)"
+}
+rosparam set /bad_struct/config "{support: {bogus_key: 1}, threads: 1}"
+bad_config bad_struct
+bad_config bad_text '_config:={"support": {"bogus_key": 1}}'
+
 echo "== at 2 Hz, then faster than the node (20 Hz): it drops frames, it does not lag"
 rate_phase 2 2 2
 rate_phase 20 5 3

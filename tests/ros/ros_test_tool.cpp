@@ -10,6 +10,8 @@
 //       calls /multicue_node/run_task and prints {"ok": ..., "result": ...}
 //   ros_test_tool publish FRAMES_DIR TOPIC RATE_HZ REPEAT
 //       publishes the frames REPEAT times at RATE_HZ (faster than the node: it must drop)
+//   ros_test_tool publish-bad TOPIC
+//       publishes a cloud without x/y/z fields and one whose data is shorter than its layout
 
 #include <ros/ros.h>
 #include <rosbag/bag.h>
@@ -191,6 +193,43 @@ int Publish(int argc, char** argv, const fs::path& frames, const std::string& to
     return 0;
 }
 
+int PublishBad(int argc, char** argv, const std::string& topic) {
+    ros::init(argc, argv, "multicue_test_bad", ros::init_options::AnonymousName);
+    ros::NodeHandle nh;
+    auto pub = nh.advertise<sensor_msgs::PointCloud2>(topic, 1);
+    const ros::WallTime wait_end = ros::WallTime::now() + ros::WallDuration(10.0);
+    while (pub.getNumSubscribers() == 0 && ros::WallTime::now() < wait_end)
+        ros::WallDuration(0.05).sleep();
+    sensor_msgs::PointCloud2 msg;
+    msg.header.frame_id = "bad";
+    msg.height = 1;
+    msg.width = 10;
+    sensor_msgs::PointField f;
+    f.name = "intensity";
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    msg.fields = {f};
+    msg.point_step = 4;
+    msg.row_step = 40;
+    msg.data.assign(40, 0);
+    msg.header.stamp = ros::Time::now();
+    pub.publish(msg);  // no x/y/z
+    ros::WallDuration(0.5).sleep();
+    for (const char* name : {"x", "y", "z"}) {
+        f.name = name;
+        f.offset = static_cast<std::uint32_t>(msg.fields.size() * 4);
+        msg.fields.push_back(f);
+    }
+    msg.point_step = 16;
+    msg.row_step = 160;
+    msg.data.assign(100, 0);  // shorter than 10 points of 16 bytes
+    msg.header.stamp = ros::Time::now();
+    pub.publish(msg);
+    ros::WallDuration(0.5).sleep();
+    std::cout << "published 2 bad clouds\n";
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -201,6 +240,7 @@ int main(int argc, char** argv) {
         if (args.size() == 4 && args[0] == "collect")
             return Collect(argc, argv, args[1], std::stoi(args[2]), std::stod(args[3]));
         if (args.size() == 2 && args[0] == "call-task") return CallTask(argc, argv, args[1]);
+        if (args.size() == 2 && args[0] == "publish-bad") return PublishBad(argc, argv, args[1]);
         if (args.size() == 5 && args[0] == "publish")
             return Publish(argc, argv, args[1], args[2], std::stod(args[3]), std::stoi(args[4]));
     } catch (const std::exception& e) {
