@@ -31,8 +31,8 @@ PerceptionNode::PerceptionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(
         // A struct of parameters (rosparam, launch files), or JSON text (`_config:=...` on the
         // command line, where roscpp keeps the value as a string).
         options.config_json = value.getType() == XmlRpc::XmlRpcValue::TypeString
-                                   ? static_cast<std::string>(value)
-                                   : ParamToJson(value);
+                                  ? static_cast<std::string>(value)
+                                  : ParamToJson(value);
         options.config_source = pnh_.resolveName("config") + " (ROS parameters)";
     }
     pnh_.param("threads", options.threads, 0);

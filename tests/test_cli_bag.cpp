@@ -53,7 +53,7 @@ struct BagFixture {
 };
 
 const std::vector<test::Ros2BagTopic> kTopics = {{kTopic, "sensor_msgs/msg/PointCloud2"},
-                                                  {"/chatter", "std_msgs/msg/String"}};
+                                                 {"/chatter", "std_msgs/msg/String"}};
 
 TEST(CliBag, PerceivesEveryMessageOfARos2BagAsTheSameFrameFromAFile) {
     BagFixture f(2);
@@ -78,8 +78,8 @@ TEST(CliBag, PerceivesEveryMessageOfARos2BagAsTheSameFrameFromAFile) {
         const auto pcd = f.dir / ("frame" + std::to_string(k) + ".pcd");
         io::WritePcd(pcd, cloud);
         const auto ref = f.dir / ("ref" + std::to_string(k));
-        const auto rr = test::RunCli("perceive --no-report -q " + pcd.string() + " --out " +
-                                     ref.string());
+        const auto rr =
+            test::RunCli("perceive --no-report -q " + pcd.string() + " --out " + ref.string());
         ASSERT_EQ(rr.code, 0) << rr.output;
         EXPECT_EQ(Objects(result), Objects(ReadJson(ref / "result.json"))) << stamp;
         EXPECT_GT(result["objects"].size(), 0u) << stamp;
@@ -142,8 +142,8 @@ TEST(CliBag, BadMessagesAreSkippedAndATruncatedBagStopsWithAnError) {
     // Only bad messages: an error.
     records.pop_back();
     test::WriteBytes(f.dir / "bad.mcap", writer.Build(kTopics, records));
-    r = test::RunCli("perceive --no-report --bag " + (f.dir / "bad.mcap").string() +
-                     " --topic " + kTopic + " --out " + (f.dir / "out2").string());
+    r = test::RunCli("perceive --no-report --bag " + (f.dir / "bad.mcap").string() + " --topic " +
+                     kTopic + " --out " + (f.dir / "out2").string());
     EXPECT_NE(r.code, 0);
     EXPECT_NE(r.output.find("no message on " + kTopic + " could be perceived"), std::string::npos)
         << r.output;
@@ -154,8 +154,8 @@ TEST(CliBag, BadMessagesAreSkippedAndATruncatedBagStopsWithAnError) {
     auto bytes = writer.Build(kTopics, records);
     bytes.resize(bytes.size() * 3 / 4);
     test::WriteBytes(f.dir / "cut.mcap", bytes);
-    r = test::RunCli("perceive --no-report --bag " + (f.dir / "cut.mcap").string() +
-                     " --topic " + kTopic + " --out " + (f.dir / "out3").string());
+    r = test::RunCli("perceive --no-report --bag " + (f.dir / "cut.mcap").string() + " --topic " +
+                     kTopic + " --out " + (f.dir / "out3").string());
     EXPECT_NE(r.code, 0);
     EXPECT_NE(r.output.find("truncated"), std::string::npos) << r.output;
     index = ReadJson(f.dir / "out3" / "index.json");

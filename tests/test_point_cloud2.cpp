@@ -349,8 +349,8 @@ namespace {
 
 TEST(DepthImage, BackProjectsThroughThePinholeModel) {
     io::DepthImage depth{4, 3, std::vector<float>(12, 0.0f)};
-    depth.depth[1 * 4 + 2] = 2.0f;   // u 2, v 1
-    depth.depth[2 * 4 + 0] = 1.0f;   // u 0, v 2
+    depth.depth[1 * 4 + 2] = 2.0f;  // u 2, v 1
+    depth.depth[2 * 4 + 0] = 1.0f;  // u 0, v 2
     depth.depth[0] = std::numeric_limits<float>::quiet_NaN();
     const io::CameraIntrinsics k{.fx = 100, .fy = 50, .cx = 2, .cy = 1};
     std::vector<Color> colors(12, Color{1, 2, 3, 255});

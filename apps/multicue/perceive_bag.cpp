@@ -56,6 +56,64 @@ std::unique_ptr<io::BagReader> OpenBag(const fs::path& path,
                               path.string()));
 }
 
+namespace {
+
+/// The pipeline and what it needs, shared by every message of a run.
+struct BagRun {
+    const PerceiveBagOptions& options;
+    const PerceiveParams& pipeline;
+    const ReportParams& report;
+    const PerceiveModels& models;
+    const io::BagTopic& topic;
+    std::set<std::string> used_folders;
+};
+
+/// Perceives one message into OUT/<stamp>/; its index.json entry, with "skipped" and the reason
+/// when the message cannot be read.
+nlohmann::ordered_json PerceiveMessage(BagRun& run, const io::BagMessage& message,
+                                       std::size_t index) {
+    const std::string bag_name = run.options.bag.string();
+    const std::string source =
+        fmt::format("{} message {} on {}", bag_name, index, run.options.topic);
+    nlohmann::ordered_json entry;
+    entry["index"] = index;
+    entry["log_time_ns"] = message.log_time_ns;
+    try {
+        const auto start = std::chrono::steady_clock::now();
+        const io::PointCloud2Message msg = io::DecodePointCloud2(run.topic, message.data, source);
+        const PointCloud cloud = io::FromPointCloud2(msg, source);
+        if (cloud.CountFinite() == 0) {
+            throw DataError(fmt::format("{}: no finite point among {}", source, cloud.size()));
+        }
+        const double load_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
+        const std::string folder = MessageFolder(msg.stamp, message.log_time_ns, run.used_folders);
+        entry["stamp"] = msg.stamp.ToString();
+        entry["frame_id"] = msg.frame_id;
+        entry["folder"] = folder;
+        const PerceiveResult result = Perceive(cloud, run.pipeline, run.models);
+        auto json = PerceiveResultJson(source, result, {{"load", load_ms}});
+        json["message"] = {{"bag", bag_name},          {"topic", run.options.topic},
+                           {"index", index},           {"stamp", msg.stamp.ToString()},
+                           {"frame_id", msg.frame_id}, {"log_time_ns", message.log_time_ns}};
+        const std::string page = run.report.enabled
+                                     ? PerceiveReportPage(cloud, result, json, run.report).Render()
+                                     : std::string();
+        WritePerceiveOutputs(run.options.out / folder, json, PerceiveLabelsCloud(cloud, result),
+                             PerceiveModelsMesh(result), page);
+        entry["objects"] = result.objects.size();
+    } catch (const FormatError& e) {
+        entry["skipped"] = e.what();
+    } catch (const DataError& e) {
+        entry["skipped"] = e.what();
+    }
+    if (entry.contains("skipped")) LogWarning("skipping: {}", entry["skipped"].get<std::string>());
+    return entry;
+}
+
+}  // namespace
+
 void RunPerceiveBag(const PerceiveBagOptions& options, const PerceiveParams& pipeline,
                     const ReportParams& report, const PerceiveModels& models) {
     if (options.topic.empty()) throw InvalidArgument("perceive: --bag needs --topic");
@@ -86,7 +144,6 @@ void RunPerceiveBag(const PerceiveBagOptions& options, const PerceiveParams& pip
     index["messages"] = nlohmann::ordered_json::array();
     std::size_t perceived = 0, skipped = 0, seen = 0;
     std::string first_problem;
-    std::set<std::string> used;
     const auto write_index = [&](bool complete) {
         index["perceived"] = perceived;
         index["skipped"] = skipped;
@@ -95,57 +152,23 @@ void RunPerceiveBag(const PerceiveBagOptions& options, const PerceiveParams& pip
         io::WriteFileAtomically(options.out / "index.json", [&](std::ostream& o) { o << text; });
     };
 
+    BagRun run{options, pipeline, report, models, *topic, {}};
     io::BagMessage message;
     try {
         while (!InterruptRequested() &&
                (options.max_messages == 0 || seen < options.max_messages) && bag->Next(message)) {
-            const std::string source =
-                fmt::format("{} message {} on {}", bag_name, seen, options.topic);
-            nlohmann::ordered_json entry;
-            entry["index"] = seen++;
-            entry["log_time_ns"] = message.log_time_ns;
-            try {
-                const auto start = std::chrono::steady_clock::now();
-                const io::PointCloud2Message msg =
-                    io::DecodePointCloud2(*topic, message.data, source);
-                const PointCloud cloud = io::FromPointCloud2(msg, source);
-                if (cloud.CountFinite() == 0) {
-                    throw DataError(
-                        fmt::format("{}: no finite point among {}", source, cloud.size()));
-                }
-                const double load_ms = std::chrono::duration<double, std::milli>(
-                                           std::chrono::steady_clock::now() - start)
-                                           .count();
-                const std::string folder = MessageFolder(msg.stamp, message.log_time_ns, used);
-                entry["stamp"] = msg.stamp.ToString();
-                entry["frame_id"] = msg.frame_id;
-                entry["folder"] = folder;
-                const PerceiveResult result = Perceive(cloud, pipeline, models);
-                auto json = PerceiveResultJson(source, result, {{"load", load_ms}});
-                json["message"] = {
-                    {"bag", bag_name},          {"topic", options.topic},
-                    {"index", entry["index"]},  {"stamp", msg.stamp.ToString()},
-                    {"frame_id", msg.frame_id}, {"log_time_ns", message.log_time_ns}};
-                const std::string page =
-                    report.enabled ? PerceiveReportPage(cloud, result, json, report).Render()
-                                   : std::string();
-                WritePerceiveOutputs(options.out / folder, json, PerceiveLabelsCloud(cloud, result),
-                                     PerceiveModelsMesh(result), page);
-                entry["objects"] = result.objects.size();
-                ++perceived;
-                if (!options.quiet && progress.total() == 0) {
-                    std::printf("%s: %zu objects -> %s\n", msg.stamp.ToString().c_str(),
-                                result.objects.size(), (options.out / folder).c_str());
-                }
-            } catch (const FormatError& e) {
-                entry["skipped"] = e.what();
-            } catch (const DataError& e) {
-                entry["skipped"] = e.what();
-            }
+            auto entry = PerceiveMessage(run, message, seen++);
             if (entry.contains("skipped")) {
-                LogWarning("skipping: {}", entry["skipped"].get<std::string>());
                 if (first_problem.empty()) first_problem = entry["skipped"].get<std::string>();
                 ++skipped;
+            } else {
+                ++perceived;
+                if (!options.quiet && progress.total() == 0) {
+                    std::printf("%s: %zu objects -> %s\n",
+                                entry["stamp"].get<std::string>().c_str(),
+                                entry["objects"].get<std::size_t>(),
+                                (options.out / entry["folder"].get<std::string>()).c_str());
+                }
             }
             index["messages"].push_back(std::move(entry));
             write_index(false);

@@ -169,83 +169,78 @@ const PointField* PointCloud2Message::FindField(const std::string& name) const {
     return nullptr;
 }
 
-PointCloud FromPointCloud2(const PointCloud2Message& m, const std::string& source) {
-    CheckLayout(m, source);
-    const auto single = [&](const char* name) -> const PointField* {
-        const PointField* f = m.FindField(name);
-        return f != nullptr && f->count <= 1 ? f : nullptr;
-    };
-    const PointField* fx = single("x");
-    const PointField* fy = single("y");
-    const PointField* fz = single("z");
-    if (fx == nullptr || fy == nullptr || fz == nullptr) {
-        std::string names;
-        for (const auto& f : m.fields) names += (names.empty() ? "" : " ") + f.name;
-        throw FormatError(fmt::format("{}: no x/y/z fields (fields: {})", source,
-                                      names.empty() ? "none" : names));
-    }
-    const bool swap = m.is_bigendian != (std::endian::native == std::endian::big);
-    const std::size_t n = std::size_t{m.width} * m.height;
-    const auto point = [&](std::size_t i) {
+namespace {
+
+/// Reads the points of a checked message field by field; remembers the fields it used.
+struct MessageReader {
+    const PointCloud2Message& m;
+    bool swap = false;
+    std::size_t n = 0;
+    std::set<const PointField*> used;
+
+    explicit MessageReader(const PointCloud2Message& message)
+        : m(message),
+          swap(message.is_bigendian != (std::endian::native == std::endian::big)),
+          n(std::size_t{message.width} * message.height) {}
+
+    const Byte* Point(std::size_t i) const {
         return m.data.data() + (i / m.width) * std::size_t{m.row_step} +
                (i % m.width) * std::size_t{m.point_step};
-    };
-
-    PointCloud cloud;
-    std::set<const PointField*> used{fx, fy, fz};
-    const auto vec3 = [&](std::vector<Eigen::Vector3f>& out, const PointField* a,
-                          const PointField* b, const PointField* c) {
+    }
+    /// The field `name` holding one element per point, nullptr otherwise.
+    const PointField* Single(const char* name) const {
+        const PointField* f = m.FindField(name);
+        return f != nullptr && f->count <= 1 ? f : nullptr;
+    }
+    bool Vec3(std::vector<Eigen::Vector3f>& out, const char* a, const char* b, const char* c) {
+        const PointField* fa = Single(a);
+        const PointField* fb = Single(b);
+        const PointField* fc = Single(c);
+        if (fa == nullptr || fb == nullptr || fc == nullptr) return false;
         out.resize(n);
         for (std::size_t i = 0; i < n; ++i) {
-            const Byte* p = point(i);
-            out[i] = {ReadElement<float>(p + a->offset, a->datatype, swap),
-                      ReadElement<float>(p + b->offset, b->datatype, swap),
-                      ReadElement<float>(p + c->offset, c->datatype, swap)};
+            const Byte* p = Point(i);
+            out[i] = {ReadElement<float>(p + fa->offset, fa->datatype, swap),
+                      ReadElement<float>(p + fb->offset, fb->datatype, swap),
+                      ReadElement<float>(p + fc->offset, fc->datatype, swap)};
         }
-    };
-    vec3(cloud.points, fx, fy, fz);
-    const PointField* nx = single("normal_x");
-    const PointField* ny = single("normal_y");
-    const PointField* nz = single("normal_z");
-    if (nx != nullptr && ny != nullptr && nz != nullptr) {
-        vec3(cloud.normals, nx, ny, nz);
-        used.insert({nx, ny, nz});
+        used.insert({fa, fb, fc});
+        return true;
     }
-    const auto scalar = [&](const char* name, auto& out) {
-        const PointField* f = single(name);
+    template <typename T>
+    void Scalar(const char* name, std::vector<T>& out) {
+        const PointField* f = Single(name);
         if (f == nullptr) return;
-        using T = typename std::decay_t<decltype(out)>::value_type;
         out.resize(n);
         for (std::size_t i = 0; i < n; ++i)
-            out[i] = ReadElement<T>(point(i) + f->offset, f->datatype, swap);
+            out[i] = ReadElement<T>(Point(i) + f->offset, f->datatype, swap);
         used.insert(f);
-    };
-    scalar("curvature", cloud.curvature);
-    scalar("intensity", cloud.intensity);
-    scalar("confidence", cloud.confidence);
-    scalar("label", cloud.labels);
-
-    // Packed colour: 4 bytes whatever the datatype says (PCL declares rgb float32, rgba uint32).
-    const PointField* rgb = single("rgb");
-    const PointField* rgba = single("rgba");
-    const PointField* packed = nullptr;
-    if (rgb != nullptr && PointFieldTypeSize(rgb->datatype) == 4) {
-        packed = rgb;
-    } else if (rgba != nullptr && PointFieldTypeSize(rgba->datatype) == 4) {
-        packed = rgba;
     }
-    if (packed != nullptr) {
-        cloud.colors.resize(n);
-        const bool opaque_if_zero = packed == rgb;
-        for (std::size_t i = 0; i < n; ++i) {
-            Color c = UnpackRgba(ReadPacked(point(i) + packed->offset, swap));
-            if (opaque_if_zero && c.a == 0) c.a = 255;
-            cloud.colors[i] = c;
+    /// Packed rgb/rgba (4 bytes whatever the datatype says: PCL declares rgb float32, rgba
+    /// uint32), else separate r, g, b channels (0..255 for integers, 0..1 for floats).
+    void Colours(std::vector<Color>& out) {
+        const PointField* rgb = Single("rgb");
+        const PointField* rgba = Single("rgba");
+        const PointField* packed = nullptr;
+        if (rgb != nullptr && PointFieldTypeSize(rgb->datatype) == 4) {
+            packed = rgb;
+        } else if (rgba != nullptr && PointFieldTypeSize(rgba->datatype) == 4) {
+            packed = rgba;
         }
-        used.insert(packed);
-    } else if (const PointField* r = single("r"), *g = single("g"), *b = single("b");
-               r != nullptr && g != nullptr && b != nullptr) {
-        // Separate channels: 0..255 for integer types, 0..1 for floating point.
+        if (packed != nullptr) {
+            out.resize(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                Color c = UnpackRgba(ReadPacked(Point(i) + packed->offset, swap));
+                if (packed == rgb && c.a == 0) c.a = 255;  // older writers leave rgb's alpha 0
+                out[i] = c;
+            }
+            used.insert(packed);
+            return;
+        }
+        const PointField* r = Single("r");
+        const PointField* g = Single("g");
+        const PointField* b = Single("b");
+        if (r == nullptr || g == nullptr || b == nullptr) return;
         const auto channel = [&](const PointField* f, const Byte* p) {
             const double v = ReadElement<double>(p + f->offset, f->datatype, swap);
             const bool unit = f->datatype == static_cast<std::uint8_t>(PointFieldType::kFloat32) ||
@@ -254,36 +249,59 @@ PointCloud FromPointCloud2(const PointCloud2Message& m, const std::string& sourc
             return static_cast<std::uint8_t>(
                 std::clamp(std::isfinite(scaled) ? scaled : 0.0, 0.0, 255.0));
         };
-        cloud.colors.resize(n);
+        out.resize(n);
         for (std::size_t i = 0; i < n; ++i) {
-            const Byte* p = point(i);
-            cloud.colors[i] = Color{channel(r, p), channel(g, p), channel(b, p), 255};
+            const Byte* p = Point(i);
+            out[i] = Color{channel(r, p), channel(g, p), channel(b, p), 255};
         }
         used.insert({r, g, b});
     }
-
-    for (const auto& f : m.fields) {
-        if (used.count(&f) != 0 || f.name.empty() || f.name == "_") continue;
-        const std::size_t size = PointFieldTypeSize(f.datatype);
-        ExtraField e{f.name,
-                     TypeLetter(f.datatype),
-                     static_cast<std::uint8_t>(size),
-                     std::max<std::uint32_t>(f.count, 1),
-                     {}};
-        e.data.resize(n * e.BytesPerPoint());
-        for (std::size_t i = 0; i < n; ++i) {
-            const Byte* src = point(i) + f.offset;
-            Byte* dst = e.data.data() + i * e.BytesPerPoint();
-            for (std::uint32_t k = 0; k < e.count; ++k) {
-                for (std::size_t b = 0; b < size; ++b)
-                    dst[k * size + b] = swap ? src[k * size + size - 1 - b] : src[k * size + b];
+    /// Every field not used so far, byte-swapped to the machine's order.
+    void Extras(std::vector<ExtraField>& out) const {
+        for (const auto& f : m.fields) {
+            if (used.count(&f) != 0 || f.name.empty() || f.name == "_") continue;
+            const std::size_t size = PointFieldTypeSize(f.datatype);
+            ExtraField e{f.name,
+                         TypeLetter(f.datatype),
+                         static_cast<std::uint8_t>(size),
+                         std::max<std::uint32_t>(f.count, 1),
+                         {}};
+            e.data.resize(n * e.BytesPerPoint());
+            for (std::size_t i = 0; i < n; ++i) {
+                const Byte* src = Point(i) + f.offset;
+                Byte* dst = e.data.data() + i * e.BytesPerPoint();
+                for (std::uint32_t k = 0; k < e.count; ++k) {
+                    for (std::size_t b = 0; b < size; ++b)
+                        dst[k * size + b] = swap ? src[k * size + size - 1 - b] : src[k * size + b];
+                }
             }
+            out.push_back(std::move(e));
         }
-        cloud.extra_fields.push_back(std::move(e));
     }
+};
+
+}  // namespace
+
+PointCloud FromPointCloud2(const PointCloud2Message& m, const std::string& source) {
+    CheckLayout(m, source);
+    MessageReader reader(m);
+    PointCloud cloud;
+    if (!reader.Vec3(cloud.points, "x", "y", "z")) {
+        std::string names;
+        for (const auto& f : m.fields) names += (names.empty() ? "" : " ") + f.name;
+        throw FormatError(fmt::format("{}: no x/y/z fields (fields: {})", source,
+                                      names.empty() ? "none" : names));
+    }
+    reader.Vec3(cloud.normals, "normal_x", "normal_y", "normal_z");
+    reader.Scalar("curvature", cloud.curvature);
+    reader.Scalar("intensity", cloud.intensity);
+    reader.Scalar("confidence", cloud.confidence);
+    reader.Scalar("label", cloud.labels);
+    reader.Colours(cloud.colors);
+    reader.Extras(cloud.extra_fields);
     cloud.width = m.width;
     cloud.height = m.height;
-    if (m.height <= 1 || n == 0) cloud.SetUnorganized();
+    if (m.height <= 1 || reader.n == 0) cloud.SetUnorganized();
     return cloud;
 }
 
