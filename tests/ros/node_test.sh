@@ -19,6 +19,7 @@ pids=()
 
 cleanup() {
     local rc=$?
+    kill "${watchdog:-0}" 2>/dev/null || true
     for pid in "${pids[@]}"; do
         # Each process was started in its own session: stop its whole group.
         kill -INT -- "-$pid" 2>/dev/null || true
@@ -34,7 +35,11 @@ cleanup() {
     rm -rf "$work"
     exit $rc
 }
-trap cleanup EXIT INT TERM
+trap cleanup EXIT
+trap "exit 143" INT TERM
+# Stop on our own before ctest's timeout (300 s) would kill this script without its cleanup.
+( sleep "${MULTICUE_ROS_TEST_LIMIT:-240}"; echo "node_test: time limit reached"; kill -TERM $$ ) &
+watchdog=$!
 
 start() {  # start LOG CMD...: in its own session, so that cleanup stops its children too
     local log=$1
