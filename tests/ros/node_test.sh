@@ -143,7 +143,7 @@ assert b["received"] == b["processed"] + b["dropped"] + b["failed"], "frames una
 assert processed >= 1, "nothing perceived"
 EOF2
 }
-cp "$work/got/stats.json" "$work/stats.json"
+cp "$work/got_bad/stats.json" "$work/stats.json"
 echo "== the configuration from ROS parameters: an unknown key is refused by name"
 bad_config() {  # bad_config NAME ARGS...: the node must exit 2 naming support.bogus_key
     local name=$1
