@@ -77,6 +77,13 @@ else()
   # What the static libraries need from their private dependencies.
   set(MULTICUE_PC_LIBS_PRIVATE
       "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_core -lsvm")
+  # MCAP chunk decompression in multicue::io (optional, see src/multicue/io/CMakeLists.txt).
+  if(MULTICUE_ZSTD_LIBRARY)
+    string(APPEND MULTICUE_PC_LIBS_PRIVATE " -lzstd")
+  endif()
+  if(MULTICUE_LZ4_LIBRARY)
+    string(APPEND MULTICUE_PC_LIBS_PRIVATE " -llz4")
+  endif()
 endif()
 set(MULTICUE_PC_LIBS "${_pc_libs}")
 # Relocatable: the prefix is found from the .pc file's own folder (cmake --install --prefix P).

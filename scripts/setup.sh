@@ -2,8 +2,9 @@
 # Installs every Debian package that multicue's build, tests and benchmarks need, then the npm
 # packages of the report viewer (web/, `npm ci` from web/package-lock.json).
 # Idempotent and non-interactive; runs `apt-get update` once, `npm ci` only when the lock changed.
-#   scripts/setup.sh            library, CLI, Python module, tests, benchmarks and the PCL/Open3D peers
-#   scripts/setup.sh --minimal  library, CLI, Python module and tests only (no PCL/Open3D)
+#   scripts/setup.sh            library, CLI, Python module, tests, benchmarks, the PCL/Open3D peers
+#                               and ROS 1 (.bag files, multicue_node)
+#   scripts/setup.sh --minimal  library, CLI, Python module and tests only (no PCL/Open3D, no ROS)
 set -euo pipefail
 
 minimal=0
@@ -21,6 +22,8 @@ packages=(
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
     libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev
     libyaml-cpp-dev
+    # ROS 2 bags: zstd and lz4 compressed MCAP chunks.
+    libzstd-dev liblz4-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest
@@ -31,6 +34,12 @@ packages=(
 if [[ $minimal -eq 0 ]]; then
     # Peers for oracle tests and side-by-side benchmarks; never linked into the library.
     packages+=(libpcl-dev libopen3d-dev)
+    # ROS 1 (Debian's packages): .bag files, multicue_node (ros/), its service generator, and
+    # roscore, rosbag, rostopic, rosservice for its tests; pcl_conversions for the PointCloud2
+    # interoperability test.
+    packages+=(libroscpp-dev librosbag-dev libsensor-msgs-dev libstd-msgs-dev
+               libvisualization-msgs-dev python3-gencpp python3-genmsg ros-core rosbash
+               libpcl-conversions-dev)
 fi
 
 missing=()

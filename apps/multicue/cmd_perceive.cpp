@@ -24,6 +24,7 @@
 #include "multicue/system/perceive_report.hpp"
 #include "multicue/system/perceive_views.hpp"
 #include "multicue/training/part_graph_training.hpp"
+#include "perceive_bag.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -215,6 +216,16 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
                     "simulate scenes`; categories are fused over its frames in 5 mm voxels and "
                     "each frame's outputs go to OUT/<frame name>/");
     cmd->add_option("--scene", *scene, "with --manifest: the scene id (default: the first scene)");
+    auto bag = std::make_shared<PerceiveBagOptions>();
+    cmd->add_option("--bag", bag->bag,
+                    "a recorded bag instead of INPUT: ROS 1 .bag, ROS 2 .db3 or .mcap (or a ROS 2 "
+                    "bag folder); each message of --topic is perceived and written to "
+                    "OUT/<stamp>/, with OUT/index.json listing them");
+    cmd->add_option("--topic", bag->topic,
+                    "with --bag: the sensor_msgs/PointCloud2 topic, e.g. "
+                    "/camera/depth_registered/points");
+    cmd->add_option("--max-messages", bag->max_messages,
+                    "with --bag: perceive at most this many messages (0 = all)");
     cmd->add_option("--out", *out,
                     "output folder: result.json, labels.pcd, models.ply, report.html")
         ->required();
@@ -224,8 +235,11 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
                   "do not write report.html (same as \"report\": {\"enabled\": false})");
     cmd->add_flag("-q,--quiet", *quiet, "print nothing on success");
     cmd->callback([=, &global] {
-        if (in->empty() == manifest->empty()) {
-            throw InvalidArgument("perceive: give either INPUT or --manifest");
+        if (int(!in->empty()) + int(!manifest->empty()) + int(!bag->bag.empty()) != 1) {
+            throw InvalidArgument("perceive: give one of INPUT, --manifest or --bag");
+        }
+        if (bag->bag.empty() && (!bag->topic.empty() || bag->max_messages != 0)) {
+            throw InvalidArgument("perceive: --topic and --max-messages need --bag");
         }
         if (manifest->empty() && *scene >= 0) {
             throw InvalidArgument("perceive: --scene needs --manifest");
@@ -234,6 +248,12 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
         if (*no_report) options.report.enabled = false;
         if (!manifest->empty()) {
             RunPerceiveViews(*manifest, *scene, *out, options, *quiet);
+            return;
+        }
+        if (!bag->bag.empty()) {
+            bag->out = *out;
+            bag->quiet = *quiet;
+            RunPerceiveBag(*bag, options.pipeline, options.report, options.models);
             return;
         }
         const auto start = std::chrono::steady_clock::now();

@@ -19,6 +19,7 @@
 #include "multicue/io/config.hpp"
 #include "multicue/io/file_utils.hpp"
 #include "multicue/system/executive.hpp"
+#include "multicue/system/executive_json.hpp"
 #include "multicue/training/part_graph_training.hpp"
 
 namespace multicue::cli {
@@ -150,26 +151,7 @@ TaskFile ReadTaskFile(const fs::path& path) {
     };
     TaskFile t;
     try {
-        t.task.kind = ParseTaskKind(j.value("task", std::string("enumerate")));
-        if (j.contains("target")) {
-            t.task.target =
-                j["target"].is_string() ? j["target"].get<std::string>() : j["target"].dump();
-        }
-        t.task.learn = j.value("learn", true);
-        for (const auto& name : j.value("possible_objects", nlohmann::json::array())) {
-            t.task.possible_objects.push_back(name.is_string() ? name.get<std::string>()
-                                                               : name.dump());
-        }
-        if (j.contains("region")) {
-            const auto& r = j["region"];
-            CheckKeys(r, {"min", "max"}, where + " region");
-            const auto lo = r.at("min").get<std::vector<double>>();
-            const auto hi = r.at("max").get<std::vector<double>>();
-            if (lo.size() != 3 || hi.size() != 3)
-                throw InvalidArgument(where + ": region min/max need 3 numbers");
-            t.task.region = Eigen::AlignedBox3d(Eigen::Vector3d(lo[0], lo[1], lo[2]),
-                                                Eigen::Vector3d(hi[0], hi[1], hi[2]));
-        }
+        t.task = TaskFromJson(j, where);
         t.database = resolve(j.value("database", std::string()));
         t.output = resolve(j.value("output", std::string()));
         t.params = resolve(j.value("params", std::string()));
@@ -206,28 +188,6 @@ TaskFile ReadTaskFile(const fs::path& path) {
     return t;
 }
 
-nlohmann::ordered_json HypothesisJson(const Hypothesis& h, const ObjectDatabase* db) {
-    nlohmann::ordered_json j;
-    j["id"] = h.id;
-    j["object_id"] = h.object_id;
-    if (db != nullptr && h.object_id > 0) {
-        if (const auto o = db->GetObject(h.object_id)) j["object"] = o->name;
-    }
-    j["novel"] = h.novel;
-    j["by_position"] = h.by_position;
-    j["category"] = h.Category();
-    j["categories"] = h.categories;
-    nlohmann::ordered_json identities = nlohmann::ordered_json::object();
-    for (const auto& [id, p] : h.identities) identities[std::to_string(id)] = p;
-    j["identities"] = identities;
-    j["position"] = {h.position.x(), h.position.y(), h.position.z()};
-    j["extents"] = {h.extents.x(), h.extents.y(), h.extents.z()};
-    j["points"] = h.indices.size();
-    j["model"] = h.model;
-    j["provenance"] = h.provenance;
-    return j;
-}
-
 }  // namespace
 
 void AddRunCommand(CLI::App& app, const GlobalOptions& global) {
@@ -261,24 +221,7 @@ void AddRunCommand(CLI::App& app, const GlobalOptions& global) {
             frame.cloud = ReadNonEmptyCloud(t.files[i]);
             const FrameReport report = executive.Run(frame, t.task);
             frame.cloud = PointCloud();
-            nlohmann::ordered_json jf;
-            jf["frame"] = report.frame;
-            jf["time"] = report.time;
-            jf["methods"] = report.methods;
-            jf["learnt_objects"] = report.learnt_objects;
-            jf["learnt_views"] = report.learnt_views;
-            if (t.task.kind == Task::Kind::kFind) {
-                jf["found"] = report.found
-                                  ? nlohmann::ordered_json(report.hypotheses[*report.found].id)
-                                  : nlohmann::ordered_json(nullptr);
-            }
-            nlohmann::ordered_json hyps = nlohmann::ordered_json::array();
-            for (const auto& h : report.hypotheses)
-                hyps.push_back(HypothesisJson(h, db ? &*db : nullptr));
-            jf["hypotheses"] = hyps;
-            nlohmann::ordered_json timings = nlohmann::ordered_json::object();
-            for (const auto& [stage, ms] : report.timings_ms) timings[stage] = ms;
-            jf["timings_ms"] = timings;
+            nlohmann::ordered_json jf = FrameReportJson(report, t.task, db ? &*db : nullptr);
             frames.push_back(std::move(jf));
             progress.Advance();
         }
