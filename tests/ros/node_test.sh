@@ -19,7 +19,11 @@ pids=()
 
 cleanup() {
     local rc=$?
-    kill "${watchdog:-0}" 2>/dev/null || true
+    # The watchdog's sleep too: a left-over child holding the output keeps ctest waiting.
+    if [[ -n ${watchdog:-} ]]; then
+        pkill -P "$watchdog" 2>/dev/null || true
+        kill "$watchdog" 2>/dev/null || true
+    fi
     for pid in "${pids[@]}"; do
         # Each process was started in its own session: stop its whole group.
         kill -INT -- "-$pid" 2>/dev/null || true
