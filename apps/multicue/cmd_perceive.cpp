@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -22,6 +23,7 @@
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
+#include "multicue/system/report_writer.hpp"
 #include "multicue/system/perceive_views.hpp"
 #include "multicue/training/part_graph_training.hpp"
 #include "perceive_bag.hpp"
@@ -179,21 +181,23 @@ void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
         poses.push_back(frames[k].T_world_sensor);
     }
     FuseViewCategories(cloud_ptrs, poses, results, options.pipeline);
+    // The pages are written by a thread of their own while the next frames' files are written.
+    std::optional<ReportWriter> reports;
+    if (options.report.enabled) reports.emplace(options.report);
     for (std::size_t k = 0; k < frames.size(); ++k) {
         const auto dir = out / frames[k].file.stem();
         auto json = PerceiveResultJson(frames[k].file.string(), results[k], {{"load", load_ms[k]}});
         json["views"] = {{"frames", frames.size()}, {"voxel_size", ViewFusionParams{}.voxel_size}};
-        const std::string report =
-            options.report.enabled
-                ? PerceiveReportPage(clouds[k], results[k], json, options.report).Render()
-                : std::string();
+        RemoveStaleReport(dir);
         WritePerceiveOutputs(dir, json, PerceiveLabelsCloud(clouds[k], results[k]),
-                             PerceiveModelsMesh(results[k]), report);
+                             PerceiveModelsMesh(results[k]));
         if (!quiet) {
             std::printf("frame %zu of %zu: %s\n", k + 1, frames.size(), frames[k].file.c_str());
             std::fputs(Summary(results[k], dir, options.report).c_str(), stdout);
         }
+        if (reports) reports->Submit(dir, std::move(clouds[k]), std::move(results[k]), json);
     }
+    if (reports) reports->Finish();
 }
 
 }  // namespace
