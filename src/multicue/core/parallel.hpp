@@ -29,12 +29,22 @@ void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t 
         body(std::size_t{0}, n);
         return;
     }
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
+    auto loop = [&] {
         tbb::parallel_for(
             tbb::blocked_range<std::size_t>(0, n, grain),
             [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
-    });
+    };
+    // Nested in a parallel loop of at most `threads` threads (objects in parallel, each with
+    // loops of its own): the inner loop runs in that loop's arena, so that its threads help
+    // wherever work is left, and in isolation, so that a thread waiting for it takes no outer
+    // task that could reuse its thread-local buffers.
+    if (tbb::this_task_arena::current_thread_index() != tbb::task_arena::not_initialized &&
+        tbb::this_task_arena::max_concurrency() <= threads) {
+        tbb::this_task_arena::isolate(loop);
+        return;
+    }
+    tbb::task_arena arena(threads);
+    arena.execute(loop);
 }
 
 /// Calls body(i) for every i in [0, n).

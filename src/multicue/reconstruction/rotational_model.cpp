@@ -413,6 +413,7 @@ void CheckParams(const RotationalFitParams& p) {
     if (!(p.profile_tolerance > 0.0f))
         bad(fmt::format("profile_tolerance must be > 0, got {}", p.profile_tolerance));
     if (!(p.min_radius >= 0.0f)) bad(fmt::format("min_radius must be >= 0, got {}", p.min_radius));
+    if (p.num_threads < 0) bad(fmt::format("num_threads must be >= 0, got {}", p.num_threads));
 }
 
 float Median(std::vector<float>& v) {
@@ -491,11 +492,12 @@ AxisSearch MakeAxisSearch(const Eigen::Vector3f& up, const RotationalFitParams& 
 /// to rank them); the indices of the best `refine_candidates`, ties broken by index.
 std::vector<std::size_t> BestCoarseDirections(const std::vector<Sample>& samples,
                                               const std::vector<Eigen::Vector3d>& directions,
-                                              const AxisSearch& search, int refine_candidates) {
+                                              const AxisSearch& search, int refine_candidates,
+                                              int num_threads) {
     const std::size_t coarse_stride = std::max<std::size_t>(1, samples.size() / 300);
     std::vector<double> costs(directions.size());
     ParallelFor(
-        directions.size(), 0,
+        directions.size(), num_threads,
         [&](std::size_t d) {
             costs[d] = EvaluateDirection(samples, coarse_stride, directions[d], search.t,
                                          search.sin_parallel)
@@ -553,7 +555,8 @@ AxisFit SearchNormalLineAxis(const std::vector<Sample>& samples, const AxisSearc
         static_cast<int>(std::ceil(share * static_cast<double>(params.grid_directions))));
     const auto directions = CapDirections(search.pole, search.max_tilt, count);
     const std::vector<std::size_t> candidates =
-        BestCoarseDirections(samples, directions, search, params.refine_candidates);
+        BestCoarseDirections(samples, directions, search, params.refine_candidates,
+                             params.num_threads);
     const double spacing =
         std::sqrt(2.0 * kPi * (1.0 - std::cos(search.max_tilt)) / directions.size());
     AxisFit best;
