@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddDbCommand(app, global);
     multicue::cli::AddRunCommand(app, global);
     multicue::cli::AddSimulateCommand(app, global);
+    multicue::cli::AddSimulateKitchensCommand(*app.get_subcommand("simulate"), global);
     multicue::cli::AddFeaturesCommand(app, global);
     multicue::cli::AddMlCommands(app, global);
     multicue::cli::AddMeshCommand(app, global);
