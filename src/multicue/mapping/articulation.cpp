@@ -115,10 +115,15 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,
                                     const Front& f, const MotionParams& p) {
     p.Validate();
+    if (closed.empty() || opened.empty()) return {};
+    return ArticulationFromMotion(KdTree(closed), opened, f, p);
+}
+
+MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& opened, const Front& f,
+                                    const MotionParams& p) {
+    p.Validate();
     MotionResult out;
-    if (closed.empty() || opened.empty()) return out;
-    const KdTree before(closed);
-    if (before.empty()) return out;
+    if (before.empty() || opened.empty()) return out;
     const float plane_d = -f.normal.dot(f.center);
     const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
     const float reach = std::min(p.reach, std::max(width, height) + 0.05f);
@@ -193,6 +198,27 @@ MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& 
     a.lower = 0.0f;
     a.upper = out.opening;
     return out;
+}
+
+int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
+                                     const PointCloud& opened, const MotionParams& p) {
+    p.Validate();
+    int best = -1;
+    std::size_t best_points = 0;
+    MotionResult best_motion;
+    if (closed.empty() || opened.empty()) return -1;
+    const KdTree tree(closed);
+    for (std::size_t f = 0; f < map.fronts.size(); ++f) {
+        MotionResult m = ArticulationFromMotion(tree, opened, map.fronts[f], p);
+        if (m.found && m.moved.size() > best_points) {
+            best_points = m.moved.size();
+            best = static_cast<int>(f);
+            best_motion = std::move(m);
+        }
+    }
+    if (best >= 0)
+        map.fronts[static_cast<std::size_t>(best)].articulation = best_motion.articulation;
+    return best;
 }
 
 }  // namespace multicue::mapping

@@ -19,6 +19,7 @@
 
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/mapping/semantic_map.hpp"
+#include "multicue/search/kdtree.hpp"
 
 namespace multicue::mapping {
 
@@ -66,5 +67,15 @@ struct MotionResult {
 /// parameters; empty clouds give found = false.
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,
                                     const Front& front, const MotionParams& params = {});
+/// The same with a k-d tree over the closed scan built once (for trying many fronts).
+MotionResult ArticulationFromMotion(const KdTree& closed, const PointCloud& opened,
+                                    const Front& front, const MotionParams& params = {});
+
+/// The front that moved between the map's cloud `closed` and a scan `opened` of the same scene
+/// with one front opened: the front with the most new points in the space it can sweep. Its
+/// articulation is replaced by ArticulationFromMotion's when that finds the motion. Returns the
+/// front's index, or -1 when no front moved. `map` must have been built from `closed`.
+int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
+                                     const PointCloud& opened, const MotionParams& params = {});
 
 }  // namespace multicue::mapping
