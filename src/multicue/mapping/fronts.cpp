@@ -5,6 +5,7 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -34,14 +35,25 @@ std::pair<float, float> MedianMad(const std::vector<float>& a, const Indices& po
     return {m, median(v)};
 }
 
-/// Region of face points reachable from `seeds` through neighbours within the model.
+/// The model of a front: appearance and offset from the face, each as median and MAD.
+struct Model {
+    float a = 0.0f, a_mad = 0.0f;  ///< appearance
+    float h = 0.0f, h_mad = 0.0f;  ///< offset from the face plane [m]
+};
+
+/// Region of face points reachable from `seeds` through neighbours that fit the model.
 Indices Grow(const PointCloud& cloud, const KdTree& tree, const std::vector<float>& a,
-             const Indices& seeds, float median, float alpha, float radius,
-             std::vector<std::uint32_t>& stamp, std::uint32_t round) {
+             const std::vector<float>& h, const Indices& seeds, const Model& m, float alpha,
+             float h_alpha, float local_alpha, float radius, std::vector<std::uint32_t>& stamp,
+             std::uint32_t round) {
+    auto fits = [&](Index i) {
+        return !std::isnan(a[i]) && std::abs(a[i] - m.a) <= alpha &&
+               std::abs(h[i] - m.h) <= h_alpha;
+    };
     Indices region;
     std::deque<Index> queue;
     for (const Index s : seeds) {
-        if (stamp[s] == round || std::isnan(a[s]) || std::abs(a[s] - median) > alpha) continue;
+        if (stamp[s] == round || !fits(s)) continue;
         stamp[s] = round;
         queue.push_back(s);
     }
@@ -53,7 +65,8 @@ Indices Grow(const PointCloud& cloud, const KdTree& tree, const std::vector<floa
         region.push_back(i);
         tree.SearchRadius(cloud.points[i], radius, nbrs, d2);
         for (const Index j : nbrs) {
-            if (stamp[j] == round || std::isnan(a[j]) || std::abs(a[j] - median) > alpha) continue;
+            // The model, and no edge between the two points.
+            if (stamp[j] == round || !fits(j) || std::abs(a[j] - a[i]) > local_alpha) continue;
             stamp[j] = round;
             queue.push_back(j);
         }
@@ -99,6 +112,9 @@ void FrontParams::Validate() const {
     positive("intensity_scale", intensity_scale);
     positive("seed_max", seed_max);
     positive("grow_radius", grow_radius);
+    positive("smooth_radius", smooth_radius);
+    positive("local_alpha", local_alpha);
+    positive("min_offset_alpha", min_offset_alpha);
     positive("alpha_mads", alpha_mads);
     positive("stable_change", stable_change);
     if (!(seed_min >= 0.0f && seed_min < seed_max)) {
@@ -156,7 +172,10 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
     p.Validate();
     std::vector<Front> fronts;
     if (cloud.empty() || fixtures.empty()) return fronts;
-    const std::vector<float> a = AppearanceValues(cloud, p.cue, p.intensity_scale);
+    const std::vector<float> a_raw = AppearanceValues(cloud, p.cue, p.intensity_scale);
+    std::vector<float> a(cloud.size(), kNaN), h(cloud.size(), kNaN);
+    PointCloud flat;  // face points in face coordinates (u, v, 0)
+    flat.points.assign(cloud.size(), Eigen::Vector3f::Constant(kNaN));
     const std::vector<bool> panel = PanelKnobs(fixtures);
     std::vector<std::uint32_t> stamp(cloud.size(), 0);
     std::uint32_t round = 0;
@@ -169,7 +188,34 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             }
         }
         if (mine.empty()) continue;
-        const KdTree tree(cloud, face.indices);
+        // Neighbours in the face plane: depth noise and the depth camera's quantisation steps
+        // (centimetres at 2-3 m) must not cut a front into bands.
+        for (const Index i : face.indices) {
+            const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+            flat.points[i] = Eigen::Vector3f(q.x(), q.y(), 0.0f);
+        }
+        const KdTree tree(flat, face.indices);
+        // Appearance and offset from the face, averaged over each point's neighbourhood: the
+        // sensor's noise averages out, the edges between fronts and frames stay.
+        {
+            Indices nbrs;
+            std::vector<float> d2;
+            for (const Index i : face.indices) {
+                tree.SearchRadius(flat.points[i], p.smooth_radius, nbrs, d2, 64);
+                double sa = 0.0, sh = 0.0;
+                std::size_t na = 0;
+                for (const Index j : nbrs) {
+                    sh += face.plane.head<3>().dot(cloud.points[j]) + face.plane.w();
+                    if (!std::isnan(a_raw[j])) {
+                        sa += a_raw[j];
+                        ++na;
+                    }
+                }
+                a[i] = na > 0 ? static_cast<float>(sa / static_cast<double>(na)) : kNaN;
+                h[i] =
+                    nbrs.empty() ? kNaN : static_cast<float>(sh / static_cast<double>(nbrs.size()));
+            }
+        }
         std::vector<Eigen::Vector2f> face_uv(face.indices.size());
         for (std::size_t k = 0; k < face.indices.size(); ++k) {
             face_uv[k] = PlaneCoordinates(face, frame, cloud.points[face.indices[k]]);
@@ -191,22 +237,28 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             Front front;
             front.face = static_cast<int>(f);
             front.fixtures = {x};
-            auto [m, mad] = MedianMad(a, seeds);
-            if (seeds.empty() || std::isnan(m)) continue;
+            Model m;
+            std::tie(m.a, m.a_mad) = MedianMad(a, seeds);
+            std::tie(m.h, m.h_mad) = MedianMad(h, seeds);
+            if (seeds.empty() || std::isnan(m.a) || std::isnan(m.h)) continue;
             Indices region;
             for (int r = 0; r < p.max_rounds; ++r) {
-                const float alpha = std::max(p.alpha_mads * mad, p.min_alpha);
-                region = Grow(cloud, tree, a, seeds, m, alpha, p.grow_radius, stamp, ++round);
+                const float alpha = std::max(p.alpha_mads * m.a_mad, p.min_alpha);
+                const float h_alpha = std::max(p.alpha_mads * m.h_mad, p.min_offset_alpha);
+                region = Grow(flat, tree, a, h, seeds, m, alpha, h_alpha, p.local_alpha,
+                              p.grow_radius, stamp, ++round);
                 front.model_iterations = r + 1;
-                const auto [m2, mad2] = MedianMad(a, region);
-                if (std::isnan(m2)) break;
-                const bool stable =
-                    std::abs(m2 - m) < p.stable_change && std::abs(mad2 - mad) < p.stable_change;
-                m = m2;
-                mad = mad2;
+                Model next;
+                std::tie(next.a, next.a_mad) = MedianMad(a, region);
+                std::tie(next.h, next.h_mad) = MedianMad(h, region);
+                if (std::isnan(next.a)) break;
+                const bool stable = std::abs(next.a - m.a) < p.stable_change &&
+                                    std::abs(next.a_mad - m.a_mad) < p.stable_change;
+                m = next;
                 if (stable) break;
             }
-            front.appearance_median = m;
+            const float mad = m.a_mad;
+            front.appearance_median = m.a;
             front.appearance_mad = mad;
             front.indices = std::move(region);
             footprints.push_back(std::move(fp));

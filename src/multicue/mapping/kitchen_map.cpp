@@ -54,6 +54,12 @@ void MapKitchenParams::Validate() const {
 
 MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
     MapKitchenParams p;
+    if (sensor == KitchenSensor::kKinect) {
+        // Disparity noise and its quantisation grow with the square of the range.
+        p.normal_half_window = 7;
+        p.structure.range_noise = 0.004f;
+        p.fixtures.aligned_noise = 0.003f;
+    }
     if (sensor == KitchenSensor::kLaser) {
         // Centimetre range noise and sparse rows: thicker planes, looser clusters.
         p.normal_half_window = 3;
@@ -83,7 +89,7 @@ KitchenSensor GuessKitchenSensor(const std::vector<PointCloud>& scans) {
 }
 
 PointCloud MergeScansWithNormals(const std::vector<PointCloud>& scans, const MapKitchenParams& p,
-                                 std::vector<std::size_t>& offsets) {
+                                 std::vector<std::size_t>& offsets, std::vector<float>& ranges) {
     if (scans.empty()) throw DataError("map kitchen: no scans");
     bool any_color = false, any_intensity = false;
     std::size_t total = 0;
@@ -99,12 +105,16 @@ PointCloud MergeScansWithNormals(const std::vector<PointCloud>& scans, const Map
     if (any_color) out.colors.reserve(total);
     if (any_intensity) out.intensity.reserve(total);
     offsets.clear();
+    ranges.clear();
+    ranges.reserve(total);
     for (const auto& s : scans) {
+        for (const auto& x : s.points) ranges.push_back((x - s.sensor_origin).norm());
         offsets.push_back(out.points.size());
         NormalsResult nr;
         if (s.IsOrganized()) {
             OrganizedNormalParams np;
             np.half_window = p.normal_half_window;
+            np.depth_dependent_window = true;
             np.num_threads = p.num_threads;
             nr = EstimateNormalsOrganized(s, np);
         } else {
@@ -169,7 +179,7 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     const auto t0 = std::chrono::steady_clock::now();
     MapKitchenResult r;
     // Normals per scan, scans merged.
-    r.cloud = MergeScansWithNormals(scans, p, r.scan_offsets);
+    r.cloud = MergeScansWithNormals(scans, p, r.scan_offsets, r.ranges);
     if (r.cloud.CountFinite() == 0) throw DataError("map kitchen: the scans hold no finite point");
     KitchenMap& map = r.map;
     // The room's main axes (RANSAC on the normal sphere).
@@ -177,14 +187,14 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     if (!axes.found) throw DataError("map kitchen: no dominant surface directions (room axes)");
     map.frame = axes.frame;
     // Floor, ceiling, walls, worktops and tables, furniture faces.
-    RoomStructure structure = SegmentRoomStructure(r.cloud, map.frame, p.structure);
+    RoomStructure structure = SegmentRoomStructure(r.cloud, map.frame, p.structure, r.ranges);
     map.floor_height = structure.floor_height;
     map.ceiling_height = structure.ceiling_height;
     bool vertical = false;
     for (const auto& c : structure.components) vertical = vertical || c.axis != 2;
     if (!vertical) throw DataError("map kitchen: no vertical planes (walls or furniture faces)");
     // Handles and knobs in front of the faces.
-    map.fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures).fixtures;
+    map.fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges).fixtures;
     // Door and drawer fronts grown from the fixtures.
     map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
     // How each front opens, from its fixture.

@@ -52,7 +52,8 @@ struct MapKitchenResult {
     /// The scans merged (in order, NaN points kept) with normals; map indices refer to it.
     PointCloud cloud;
     std::vector<std::size_t> scan_offsets;  ///< first point of each scan in `cloud`
-    double time_ms = 0.0;                   ///< whole pipeline [ms]
+    std::vector<float> ranges;  ///< per point of `cloud`: distance to its scan's sensor [m]
+    double time_ms = 0.0;       ///< whole pipeline [ms]
 };
 
 /// Maps a kitchen from scans that share one frame (z up when they carry sensor positions, as
@@ -63,10 +64,12 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
                             const ml::Classifier* classifier = nullptr);
 
 /// Merges scans into one cloud with normals (organized scans keep image-space normals): colours
-/// of scans without colours get alpha 0, intensities of scans without intensity NaN. Throws
-/// DataError when there are no scans.
+/// of scans without colours get alpha 0, intensities of scans without intensity NaN. `offsets`
+/// receives the first point of each scan, `ranges` each point's distance to its scan's sensor.
+/// Throws DataError when there are no scans.
 PointCloud MergeScansWithNormals(const std::vector<PointCloud>& scans,
-                                 const MapKitchenParams& params, std::vector<std::size_t>& offsets);
+                                 const MapKitchenParams& params, std::vector<std::size_t>& offsets,
+                                 std::vector<float>& ranges);
 
 /// Per-point classes and fronts of `map` (fills map.point_class and map.point_front).
 void LabelMapPoints(KitchenMap& map, std::size_t num_points,

@@ -27,15 +27,17 @@ struct AxisPlane {
 
 /// Planes along one axis: peaks of the histogram of the aligned points' coordinates.
 std::vector<AxisPlane> PlanesAlong(const PointCloud& cloud, const Eigen::Vector3f& a, int axis,
-                                   const RoomStructureParams& p, float cos_n) {
+                                   const RoomStructureParams& p, float cos_n,
+                                   const std::vector<float>& tolerance) {
     Indices cand;
-    std::vector<float> coord;
+    std::vector<float> coord, tol;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto& n = cloud.normals[i];
         if (!cloud.IsFinite(i) || !n.allFinite()) continue;
         if (std::abs(n.dot(a)) < cos_n) continue;
         cand.push_back(static_cast<Index>(i));
         coord.push_back(cloud.points[i].dot(a));
+        tol.push_back(tolerance[i]);
     }
     std::vector<AxisPlane> planes;
     if (cand.size() < p.min_plane_points) return planes;
@@ -87,7 +89,7 @@ std::vector<AxisPlane> PlanesAlong(const PointCloud& cloud, const Eigen::Vector3
         plane.offset = offset;
         double sign_sum = 0.0;
         for (std::size_t j = 0; j < cand.size(); ++j) {
-            if (claimed[j] || std::abs(coord[j] - offset) > p.distance_threshold) continue;
+            if (claimed[j] || std::abs(coord[j] - offset) > tol[j]) continue;
             claimed[j] = 1;
             plane.points.push_back(cand[j]);
             sign_sum += cloud.normals[cand[j]].dot(a);
@@ -144,6 +146,12 @@ void RoomStructureParams::Validate() const {
     positive("cell_size", cell_size);
     positive("min_room_height", min_room_height);
     positive("behind_margin", behind_margin);
+    positive("max_distance_threshold", max_distance_threshold);
+    if (!(range_noise >= 0.0f) || !(min_floor_depth >= 0.0f)) {
+        throw InvalidArgument(fmt::format(
+            "room structure: range_noise and min_floor_depth must be >= 0, got {} and {}",
+            range_noise, min_floor_depth));
+    }
     if (min_plane_points < 3 || min_component_points < 3) {
         throw InvalidArgument(
             "room structure: min_plane_points and min_component_points must be "
@@ -175,16 +183,32 @@ Eigen::Vector2f PlaneCoordinates(const PlanarComponent& c, const RoomFrame& fram
 }
 
 RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& frame,
-                                   const RoomStructureParams& p) {
+                                   const RoomStructureParams& p, const std::vector<float>& ranges) {
     p.Validate();
     RoomStructure out;
     out.floor_height = out.ceiling_height = kNaN;
     out.point_component.assign(cloud.size(), -1);
-    out.on_plane.assign(cloud.size(), 0);
+    out.plane_axis.assign(cloud.size(), -1);
     if (cloud.empty()) return out;
     if (cloud.normals.size() != cloud.size()) {
         throw DataError(fmt::format("room structure: the cloud has {} normals for {} points",
                                     cloud.normals.size(), cloud.size()));
+    }
+    if (!ranges.empty() && ranges.size() != cloud.size()) {
+        throw InvalidArgument(
+            fmt::format("room structure: {} ranges for {} points", ranges.size(), cloud.size()));
+    }
+    // Each point's plane tolerance, growing with its range.
+    std::vector<float> tolerance(cloud.size(), p.distance_threshold);
+    if (p.range_noise > 0.0f) {
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            const float r =
+                ranges.empty() ? (cloud.points[i] - cloud.sensor_origin).norm() : ranges[i];
+            if (std::isfinite(r)) {
+                tolerance[i] = std::clamp(p.range_noise * r * r, p.distance_threshold,
+                                          p.max_distance_threshold);
+            }
+        }
     }
     const float cos_n = std::cos(p.normal_angle_deg * 0.017453292519943295f);
     const Eigen::Vector3f up = frame.Up();
@@ -196,8 +220,8 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
     };
     std::vector<PlaneInfo> planes;
     for (int k = 0; k < 3; ++k) {
-        for (auto& pl : PlanesAlong(cloud, frame.axes.col(k), k, p, cos_n)) {
-            for (const Index i : pl.points) out.on_plane[i] = 1;
+        for (auto& pl : PlanesAlong(cloud, frame.axes.col(k), k, p, cos_n, tolerance)) {
+            for (const Index i : pl.points) out.plane_axis[i] = static_cast<std::int8_t>(k);
             planes.push_back({std::move(pl), {}});
         }
     }
@@ -238,8 +262,11 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
     // seen from below, high enough above the floor.
     const PlaneInfo* floor = nullptr;
     const PlaneInfo* ceiling = nullptr;
+    const float sensor_height = cloud.HasSensorPosition() ? cloud.sensor_origin.dot(up)
+                                                          : std::numeric_limits<float>::infinity();
     for (const auto& pl : planes) {
         if (pl.plane.axis != 2 || plane_area(pl) < p.min_floor_area) continue;
+        if (pl.plane.offset > sensor_height - p.min_floor_depth) continue;
         if (pl.plane.sign > 0 && (!floor || pl.plane.offset < floor->plane.offset)) floor = &pl;
     }
     for (const auto& pl : planes) {
