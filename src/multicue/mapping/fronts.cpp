@@ -10,7 +10,6 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
-#include "multicue/search/kdtree.hpp"
 
 namespace multicue::mapping {
 namespace {
@@ -18,10 +17,11 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 /// Median and MAD of the values of `points` (skipping NaN).
-std::pair<float, float> MedianMad(const std::vector<float>& a, const Indices& points) {
+template <typename Ids>
+std::pair<float, float> MedianMad(const std::vector<float>& a, const Ids& points) {
     std::vector<float> v;
     v.reserve(points.size());
-    for (const Index i : points) {
+    for (const auto i : points) {
         if (!std::isnan(a[i])) v.push_back(a[i]);
     }
     if (v.empty()) return {kNaN, kNaN};
@@ -41,37 +41,41 @@ struct Model {
     float h = 0.0f, h_mad = 0.0f;  ///< offset from the face plane [m]
 };
 
-/// Region of face points reachable from `seeds` through neighbours that fit the model.
-Indices Grow(const PointCloud& cloud, const KdTree& tree, const std::vector<float>& a,
-             const std::vector<float>& h, const Indices& seeds, const Model& m, float alpha,
-             float h_alpha, float local_alpha, float radius, std::vector<std::uint32_t>& stamp,
-             std::uint32_t round) {
-    auto fits = [&](Index i) {
-        return !std::isnan(a[i]) && std::abs(a[i] - m.a) <= alpha &&
-               std::abs(h[i] - m.h) <= h_alpha;
+using Cells = std::vector<std::uint32_t>;
+
+/// Cells reachable from `seeds` through 8-neighbours that fit the model and show no edge.
+Cells Grow(const std::vector<float>& a, const std::vector<float>& h, int nu, int nv,
+           const Cells& seeds, const Model& m, float alpha, float h_alpha, float local_alpha,
+           std::vector<std::uint32_t>& stamp, std::uint32_t round) {
+    auto fits = [&](std::uint32_t c) {
+        return !std::isnan(a[c]) && std::abs(a[c] - m.a) <= alpha &&
+               std::abs(h[c] - m.h) <= h_alpha;
     };
-    Indices region;
-    std::deque<Index> queue;
-    for (const Index s : seeds) {
-        if (stamp[s] == round || !fits(s)) continue;
-        stamp[s] = round;
-        queue.push_back(s);
+    Cells region;
+    std::deque<std::uint32_t> queue;
+    for (const std::uint32_t c : seeds) {
+        if (stamp[c] == round || !fits(c)) continue;
+        stamp[c] = round;
+        queue.push_back(c);
     }
-    Indices nbrs;
-    std::vector<float> d2;
     while (!queue.empty()) {
-        const Index i = queue.front();
+        const std::uint32_t c = queue.front();
         queue.pop_front();
-        region.push_back(i);
-        tree.SearchRadius(cloud.points[i], radius, nbrs, d2);
-        for (const Index j : nbrs) {
-            // The model, and no edge between the two points.
-            if (stamp[j] == round || !fits(j) || std::abs(a[j] - a[i]) > local_alpha) continue;
-            stamp[j] = round;
-            queue.push_back(j);
+        region.push_back(c);
+        const int u = static_cast<int>(c % static_cast<std::uint32_t>(nu));
+        const int v = static_cast<int>(c / static_cast<std::uint32_t>(nu));
+        for (int dv = -1; dv <= 1; ++dv) {
+            for (int du = -1; du <= 1; ++du) {
+                const int uu = u + du, vv = v + dv;
+                if ((du == 0 && dv == 0) || uu < 0 || vv < 0 || uu >= nu || vv >= nv) continue;
+                const auto n = static_cast<std::uint32_t>(vv * nu + uu);
+                // The model, and no edge between the two cells.
+                if (stamp[n] == round || !fits(n) || std::abs(a[n] - a[c]) > local_alpha) continue;
+                stamp[n] = round;
+                queue.push_back(n);
+            }
         }
     }
-    std::sort(region.begin(), region.end());
     return region;
 }
 
@@ -111,8 +115,7 @@ void FrontParams::Validate() const {
     };
     positive("intensity_scale", intensity_scale);
     positive("seed_max", seed_max);
-    positive("grow_radius", grow_radius);
-    positive("smooth_radius", smooth_radius);
+    positive("cell_size", cell_size);
     positive("local_alpha", local_alpha);
     positive("min_offset_alpha", min_offset_alpha);
     positive("alpha_mads", alpha_mads);
@@ -173,12 +176,7 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
     std::vector<Front> fronts;
     if (cloud.empty() || fixtures.empty()) return fronts;
     const std::vector<float> a_raw = AppearanceValues(cloud, p.cue, p.intensity_scale);
-    std::vector<float> a(cloud.size(), kNaN), h(cloud.size(), kNaN);
-    PointCloud flat;  // face points in face coordinates (u, v, 0)
-    flat.points.assign(cloud.size(), Eigen::Vector3f::Constant(kNaN));
     const std::vector<bool> panel = PanelKnobs(fixtures);
-    std::vector<std::uint32_t> stamp(cloud.size(), 0);
-    std::uint32_t round = 0;
     for (std::size_t f = 0; f < s.components.size(); ++f) {
         const PlanarComponent& face = s.components[f];
         std::vector<int> mine;
@@ -188,51 +186,74 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             }
         }
         if (mine.empty()) continue;
-        // Neighbours in the face plane: depth noise and the depth camera's quantisation steps
-        // (centimetres at 2-3 m) must not cut a front into bands.
-        for (const Index i : face.indices) {
-            const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-            flat.points[i] = Eigen::Vector3f(q.x(), q.y(), 0.0f);
-        }
-        const KdTree tree(flat, face.indices);
-        // Appearance and offset from the face, averaged over each point's neighbourhood: the
-        // sensor's noise averages out, the edges between fronts and frames stay.
-        {
-            Indices nbrs;
-            std::vector<float> d2;
-            for (const Index i : face.indices) {
-                tree.SearchRadius(flat.points[i], p.smooth_radius, nbrs, d2, 64);
-                double sa = 0.0, sh = 0.0;
-                std::size_t na = 0;
-                for (const Index j : nbrs) {
-                    sh += face.plane.head<3>().dot(cloud.points[j]) + face.plane.w();
-                    if (!std::isnan(a_raw[j])) {
-                        sa += a_raw[j];
-                        ++na;
-                    }
-                }
-                a[i] = na > 0 ? static_cast<float>(sa / static_cast<double>(na)) : kNaN;
-                h[i] =
-                    nbrs.empty() ? kNaN : static_cast<float>(sh / static_cast<double>(nbrs.size()));
+        // The face as a grid of cells in its plane, each with the mean appearance and offset of
+        // its points: the region grows over cells, so neither the sensor's noise nor the depth
+        // camera's quantisation steps (centimetres at 2-3 m) cut a front into pieces.
+        const float cs = p.cell_size;
+        Eigen::Vector2f lo = face.min - Eigen::Vector2f::Constant(cs);
+        const auto nu = static_cast<int>(std::ceil((face.max.x() - lo.x()) / cs)) + 2;
+        const auto nv = static_cast<int>(std::ceil((face.max.y() - lo.y()) / cs)) + 2;
+        const std::size_t ncells = static_cast<std::size_t>(nu) * static_cast<std::size_t>(nv);
+        std::vector<double> sum_a(ncells, 0.0), sum_h(ncells, 0.0);
+        std::vector<std::uint32_t> n_a(ncells, 0), n_h(ncells, 0);
+        std::vector<std::uint32_t> cell_of(face.indices.size());
+        auto cell_at = [&](const Eigen::Vector2f& q) {
+            const int iu = std::clamp(static_cast<int>((q.x() - lo.x()) / cs), 0, nu - 1);
+            const int iv = std::clamp(static_cast<int>((q.y() - lo.y()) / cs), 0, nv - 1);
+            return static_cast<std::uint32_t>(iv * nu + iu);
+        };
+        for (std::size_t k = 0; k < face.indices.size(); ++k) {
+            const Index i = face.indices[k];
+            const std::uint32_t c = cell_at(PlaneCoordinates(face, frame, cloud.points[i]));
+            cell_of[k] = c;
+            sum_h[c] += face.plane.head<3>().dot(cloud.points[i]) + face.plane.w();
+            ++n_h[c];
+            if (!std::isnan(a_raw[i])) {
+                sum_a[c] += a_raw[i];
+                ++n_a[c];
             }
         }
-        std::vector<Eigen::Vector2f> face_uv(face.indices.size());
-        for (std::size_t k = 0; k < face.indices.size(); ++k) {
-            face_uv[k] = PlaneCoordinates(face, frame, cloud.points[face.indices[k]]);
+        std::vector<float> a(ncells, kNaN), h(ncells, kNaN);
+        for (std::size_t c = 0; c < ncells; ++c) {
+            if (n_a[c] > 0) a[c] = static_cast<float>(sum_a[c] / n_a[c]);
+            if (n_h[c] > 0) h[c] = static_cast<float>(sum_h[c] / n_h[c]);
         }
+        auto centre = [&](std::uint32_t c) {
+            return Eigen::Vector2f(
+                lo.x() + (static_cast<float>(c % static_cast<std::uint32_t>(nu)) + 0.5f) * cs,
+                lo.y() + (static_cast<float>(c / static_cast<std::uint32_t>(nu)) + 0.5f) * cs);
+        };
+        std::vector<std::uint32_t> stamp(ncells, 0);
+        std::uint32_t round = 0;
         std::vector<std::vector<Eigen::Vector2f>> footprints;
         std::vector<Front> grown;
         for (const int x : mine) {
             const Fixture& fx = fixtures[static_cast<std::size_t>(x)];
             std::vector<Eigen::Vector2f> fp;
-            for (const Index i : fx.indices)
+            for (const Index i : fx.indices) {
                 fp.push_back(PlaneCoordinates(face, frame, cloud.points[i]));
-            // Seeds: face points in a ring around the footprint.
-            Indices seeds;
+            }
+            // Seeds: cells in a ring around the footprint.
+            Eigen::Vector2f flo = fp.front(), fhi = fp.front();
+            for (const auto& q : fp) {
+                flo = flo.cwiseMin(q);
+                fhi = fhi.cwiseMax(q);
+            }
+            Cells seeds;
             const float lo2 = p.seed_min * p.seed_min, hi2 = p.seed_max * p.seed_max;
-            for (std::size_t k = 0; k < face.indices.size(); ++k) {
-                const float d2 = FootprintDistance2(fp, face_uv[k]);
-                if (d2 >= lo2 && d2 <= hi2) seeds.push_back(face.indices[k]);
+            const std::uint32_t c0 = cell_at(flo - Eigen::Vector2f::Constant(p.seed_max));
+            const std::uint32_t c1 = cell_at(fhi + Eigen::Vector2f::Constant(p.seed_max));
+            const auto u0 = c0 % static_cast<std::uint32_t>(nu),
+                       v0 = c0 / static_cast<std::uint32_t>(nu);
+            const auto u1 = c1 % static_cast<std::uint32_t>(nu),
+                       v1 = c1 / static_cast<std::uint32_t>(nu);
+            for (std::uint32_t v = v0; v <= v1; ++v) {
+                for (std::uint32_t u = u0; u <= u1; ++u) {
+                    const std::uint32_t c = v * static_cast<std::uint32_t>(nu) + u;
+                    if (std::isnan(a[c])) continue;
+                    const float d2 = FootprintDistance2(fp, centre(c));
+                    if (d2 >= lo2 && d2 <= hi2) seeds.push_back(c);
+                }
             }
             Front front;
             front.face = static_cast<int>(f);
@@ -241,12 +262,12 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             std::tie(m.a, m.a_mad) = MedianMad(a, seeds);
             std::tie(m.h, m.h_mad) = MedianMad(h, seeds);
             if (seeds.empty() || std::isnan(m.a) || std::isnan(m.h)) continue;
-            Indices region;
+            Cells region;
             for (int r = 0; r < p.max_rounds; ++r) {
                 const float alpha = std::max(p.alpha_mads * m.a_mad, p.min_alpha);
                 const float h_alpha = std::max(p.alpha_mads * m.h_mad, p.min_offset_alpha);
-                region = Grow(flat, tree, a, h, seeds, m, alpha, h_alpha, p.local_alpha,
-                              p.grow_radius, stamp, ++round);
+                region =
+                    Grow(a, h, nu, nv, seeds, m, alpha, h_alpha, p.local_alpha, stamp, ++round);
                 front.model_iterations = r + 1;
                 Model next;
                 std::tie(next.a, next.a_mad) = MedianMad(a, region);
@@ -257,10 +278,15 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                 m = next;
                 if (stable) break;
             }
-            const float mad = m.a_mad;
             front.appearance_median = m.a;
-            front.appearance_mad = mad;
-            front.indices = std::move(region);
+            front.appearance_mad = m.a_mad;
+            // The region's points: the face points in its cells.
+            std::vector<std::uint8_t> in(ncells, 0);
+            for (const std::uint32_t c : region) in[c] = 1;
+            for (std::size_t k = 0; k < face.indices.size(); ++k) {
+                if (in[cell_of[k]]) front.indices.push_back(face.indices[k]);
+            }
+            std::sort(front.indices.begin(), front.indices.end());
             footprints.push_back(std::move(fp));
             grown.push_back(std::move(front));
         }

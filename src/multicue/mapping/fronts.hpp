@@ -26,12 +26,14 @@ enum class AppearanceCue {
 struct FrontParams {
     AppearanceCue cue = AppearanceCue::kAuto;
     float intensity_scale = 255.0f;  ///< intensity -> appearance units [-]
-    float seed_min = 0.01f;      ///< seeds lie at least this far from the fixture's footprint [m]
-    float seed_max = 0.05f;      ///< and at most this far (the search radius) [m]
-    float grow_radius = 0.015f;  ///< neighbourhood of the region growing [m]
-    float alpha_mads = 2.0f;     ///< alpha = alpha_mads * MAD (the thesis' 2 MAD) [-]
-    float min_alpha = 40.0f;     ///< alpha is at least this [appearance units]
-    /// Neighbours joined in one step differ by at most this (after averaging): the region stops
+    float seed_min = 0.01f;  ///< seeds lie at least this far from the fixture's footprint [m]
+    float seed_max = 0.05f;  ///< and at most this far (the search radius) [m]
+    /// The face is gridded into cells of this size in its plane; the region grows over cells
+    /// holding the mean appearance and offset of their points [m]
+    float cell_size = 0.015f;
+    float alpha_mads = 2.0f;  ///< alpha = alpha_mads * MAD (the thesis' 2 MAD) [-]
+    float min_alpha = 40.0f;  ///< alpha is at least this [appearance units]
+    /// Neighbours joined in one step differ by at most this : the region stops
     /// at the edges around a front even where light makes the front's colour drift
     /// [appearance units]
     float local_alpha = 3.0f;
@@ -39,8 +41,6 @@ struct FrontParams {
     /// standing out of its frame ends where the offset changes. The offset's alpha is
     /// alpha_mads * its MAD, at least this [m]
     float min_offset_alpha = 0.03f;
-    /// Appearance and offset are averaged over this neighbourhood before growing [m]
-    float smooth_radius = 0.012f;
     int max_rounds = 8;             ///< model re-estimations at most [rounds]
     float stable_change = 0.5f;     ///< stable when median and MAD move less [appearance units]
     std::size_t min_points = 30;    ///< smaller regions are no fronts [points]

@@ -74,7 +74,7 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.fixtures.line_threshold = 0.015f;
         p.fixtures.circle_threshold = 0.01f;
         p.fronts.cue = AppearanceCue::kIntensity;
-        p.fronts.grow_radius = 0.04f;
+        p.fronts.cell_size = 0.04f;
         p.fronts.seed_max = 0.08f;
         p.fronts.min_points = 8;
     }
@@ -176,16 +176,25 @@ void LabelMapPoints(KitchenMap& map, std::size_t n, const std::vector<std::int32
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& p,
                             const ml::Classifier* classifier) {
     p.Validate();
-    const auto t0 = std::chrono::steady_clock::now();
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    auto last = t0;
     MapKitchenResult r;
+    auto stage = [&](const char* name) {
+        const auto now = Clock::now();
+        r.timings.emplace_back(name, std::chrono::duration<double, std::milli>(now - last).count());
+        last = now;
+    };
     // Normals per scan, scans merged.
     r.cloud = MergeScansWithNormals(scans, p, r.scan_offsets, r.ranges);
     if (r.cloud.CountFinite() == 0) throw DataError("map kitchen: the scans hold no finite point");
+    stage("normals");
     KitchenMap& map = r.map;
     // The room's main axes (RANSAC on the normal sphere).
     const RoomAxesResult axes = EstimateRoomAxes(r.cloud, p.axes);
     if (!axes.found) throw DataError("map kitchen: no dominant surface directions (room axes)");
     map.frame = axes.frame;
+    stage("axes");
     // Floor, ceiling, walls, worktops and tables, furniture faces.
     RoomStructure structure = SegmentRoomStructure(r.cloud, map.frame, p.structure, r.ranges);
     map.floor_height = structure.floor_height;
@@ -193,22 +202,26 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     bool vertical = false;
     for (const auto& c : structure.components) vertical = vertical || c.axis != 2;
     if (!vertical) throw DataError("map kitchen: no vertical planes (walls or furniture faces)");
+    stage("structure");
     // Handles and knobs in front of the faces.
     map.fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges).fixtures;
+    stage("fixtures");
     // Door and drawer fronts grown from the fixtures.
     map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+    stage("fronts");
     // How each front opens, from its fixture.
     for (Front& f : map.fronts) {
         f.articulation =
             ArticulationFromFixtures(f, map.fixtures, map.frame, map.floor_height, p.articulation);
     }
+    stage("articulation");
     // Furniture pieces, kitchenettes and container types.
     map.components = std::move(structure.components);
     GroupFurniture(map, p.containers);
     TypeContainers(map, classifier, p.containers);
     LabelMapPoints(map, r.cloud.size(), structure.point_component);
-    r.time_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stage("containers");
+    r.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     LogInfo("map kitchen: {} components, {} fixtures, {} fronts, {} pieces in {:.0f} ms",
             map.components.size(), map.fixtures.size(), map.fronts.size(), map.furniture.size(),
             r.time_ms);

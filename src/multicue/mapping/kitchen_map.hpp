@@ -5,6 +5,8 @@
 /// in order and labels the points.
 
 #include <cstddef>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "multicue/core/point_cloud.hpp"
@@ -54,6 +56,9 @@ struct MapKitchenResult {
     std::vector<std::size_t> scan_offsets;  ///< first point of each scan in `cloud`
     std::vector<float> ranges;  ///< per point of `cloud`: distance to its scan's sensor [m]
     double time_ms = 0.0;       ///< whole pipeline [ms]
+    /// Stage times in pipeline order: normals, axes, structure, fixtures, fronts, articulation,
+    /// containers [ms]
+    std::vector<std::pair<std::string, double>> timings;
 };
 
 /// Maps a kitchen from scans that share one frame (z up when they carry sensor positions, as
