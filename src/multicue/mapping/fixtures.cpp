@@ -34,6 +34,7 @@ void FixtureParams::Validate() const {
             fmt::format("fixtures: aligned_noise must be >= 0, got {}", aligned_noise));
     }
     positive("attach_cell", attach_cell);
+    positive("min_blocking_area", min_blocking_area);
     if (!(max_attached_share >= 0.0f && max_attached_share <= 1.0f)) {
         throw InvalidArgument(fmt::format("fixtures: max_attached_share must be in [0, 1], got {}",
                                           max_attached_share));
@@ -167,7 +168,13 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
     if (faces.empty()) return result;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         if (!cloud.IsFinite(i)) continue;
-        const int axis = i < s.plane_axis.size() ? s.plane_axis[i] : -1;
+        // The orientation of the plane the point lies on; only planes of some size block (a flat
+        // handle's sides are planes too, but small ones).
+        int axis = i < s.plane_axis.size() ? s.plane_axis[i] : -1;
+        const int comp = i < s.point_component.size() ? s.point_component[i] : -1;
+        const bool blocking =
+            comp >= 0 && s.components[static_cast<std::size_t>(comp)].area >= p.min_blocking_area;
+        if (!blocking && axis >= 0 && comp >= 0) axis = -1;
         const Eigen::Vector3f& x = cloud.points[i];
         const float r = ranges.empty() ? (x - cloud.sensor_origin).norm() : ranges[i];
         const float aligned_min = std::max(p.min_height, p.aligned_noise * r * r);
@@ -177,7 +184,7 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         for (const int f : faces) {
             const PlanarComponent& c = s.components[static_cast<std::size_t>(f)];
             // Points on planes of other orientations (a worktop, a side panel) are no fixtures.
-            if (axis >= 0 && axis != c.axis) continue;
+            if (blocking && axis != c.axis) continue;
             const float h = c.plane.head<3>().dot(x) + c.plane.w();
             if (h > p.max_height || h < -p.min_height || h >= best_h) continue;
             const Eigen::Vector2f q = PlaneCoordinates(c, frame, x);
@@ -188,6 +195,7 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
             // A point on some face's surface (the edge of a door standing in front of the
             // frame, where normals bend) is no fixture point.
             if (h < p.min_height) {
+                if (c.area < p.min_blocking_area) continue;
                 on_surface = true;
                 break;
             }
@@ -209,6 +217,7 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         return (c(q.x()) << 42) | (c(q.y()) << 21) | c(q.z());
     };
     for (const PlanarComponent& c : s.components) {
+        if (c.area < p.min_blocking_area) continue;
         for (const Index i : c.indices) plane_cells[cell_key(cloud.points[i])] |= 1u << c.axis;
     }
     auto attached_share = [&](const Indices& cluster, int axis) {

@@ -33,7 +33,10 @@ struct FixtureParams {
     /// Clusters with more than this share of points next to a plane of another orientation (the
     /// edge of a worktop above a face, a side panel beside it) are edges, not fixtures [-]
     float max_attached_share = 0.1f;
-    float attach_cell = 0.02f;        ///< cell of the attachment test [m]
+    float attach_cell = 0.02f;  ///< cell of the attachment test [m]
+    /// Points of planar components at least this large and of another orientation than the face
+    /// (a worktop, a side panel) are never fixture points [m^2]
+    float min_blocking_area = 0.03f;
     float min_handle_length = 0.05f;  ///< a handle is at least this long [m]
     float min_elongation = 2.2f;      ///< length / width of a handle's footprint [-]
     float max_knob_size = 0.09f;      ///< largest extent of a knob [m]

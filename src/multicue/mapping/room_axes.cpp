@@ -106,7 +106,33 @@ RoomAxesResult EstimateRoomAxes(const PointCloud& cloud, const RoomAxesParams& p
             best = R;
         }
     }
-    if (best_score < 10) return result;
+    if (best_score < 10) {
+        // One direction only (a floor seen alone): the frame around it, the horizontal axes
+        // arbitrary, so that later stages can say what is missing.
+        const Eigen::Vector3f up =
+            params.up ? params.up->normalized()
+                      : (cloud.HasSensorPosition() ? Eigen::Vector3f::UnitZ()
+                                                   : Eigen::Vector3f(0.0f, -1.0f, 0.0f));
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        std::size_t support = 0;
+        for (const auto& v : n) {
+            if (std::abs(v.dot(up)) >= cos_t) {
+                sum += v.dot(up) > 0 ? v : Eigen::Vector3f(-v);
+                ++support;
+            }
+        }
+        if (support < 10) return result;
+        const Eigen::Vector3f z = sum.normalized();
+        Eigen::Vector3f x = Eigen::Vector3f::UnitX() - z.x() * z;
+        if (x.norm() < 0.1f) x = Eigen::Vector3f::UnitY() - z.y() * z;
+        x.normalize();
+        result.frame.axes.col(0) = x;
+        result.frame.axes.col(1) = z.cross(x);
+        result.frame.axes.col(2) = z;
+        result.inliers = support;
+        result.found = true;
+        return result;
+    }
     for (int round = 0; round < 3; ++round) best = Refine(n, best, cos_t);
     result.inliers = Score(n, best, cos_t);
     // Order the axes: z nearest to up (and along it), then x, y right-handed.
