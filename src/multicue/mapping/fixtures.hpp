@@ -22,11 +22,11 @@ struct FixtureParams {
     float aligned_noise = 0.0f;
     float face_margin = 0.02f;         ///< fixtures may reach this far beyond the face's extent [m]
     float cluster_tolerance = 0.015f;  ///< Euclidean clustering tolerance [m]
-    float merge_gap = 0.01f;           ///< clusters whose boxes lie closer are one fixture [m]
+    float merge_gap = 0.025f;          ///< clusters whose boxes lie closer are one fixture [m]
     std::size_t min_points = 12;       ///< smaller clusters are noise [points]
     float max_diameter = 0.6f;         ///< larger clusters are too big to grasp [m]
     float max_protrusion_extent = 0.09f;  ///< larger extent along the face normal: no fixture [m]
-    float min_protrusion = 0.022f;  ///< a fixture reaches at least this far out of its face [m]
+    float min_protrusion = 0.029f;  ///< a fixture reaches at least this far out of its face [m]
     /// Face points lie within this of a fixture's centre (in the face plane): fixtures are in
     /// front of the face, not beside it [m]
     float footprint_reach = 0.06f;

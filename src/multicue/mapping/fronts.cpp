@@ -116,6 +116,9 @@ void FrontParams::Validate() const {
     positive("intensity_scale", intensity_scale);
     positive("seed_max", seed_max);
     positive("cell_size", cell_size);
+    if (!(min_fill >= 0.0f && min_fill <= 1.0f)) {
+        throw InvalidArgument(fmt::format("fronts: min_fill must be in [0, 1], got {}", min_fill));
+    }
     positive("local_alpha", local_alpha);
     positive("min_offset_alpha", min_offset_alpha);
     positive("alpha_mads", alpha_mads);
@@ -366,6 +369,23 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             fr.u_axis = u;
             fr.v_axis = v;
             fr.normal = face.plane.head<3>();
+            // The rectangle stands for the front (thesis section 4.1.2: it still includes what
+            // shadows kept the region from reaching): the face points inside it, when the region
+            // fills most of it.
+            if (p.fill_rectangle) {
+                Indices inside;
+                for (const Index i : face.indices) {
+                    const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                    if ((q.array() >= fr.min.array()).all() &&
+                        (q.array() <= fr.max.array()).all()) {
+                        inside.push_back(i);
+                    }
+                }
+                if (static_cast<float>(fr.indices.size()) >=
+                    p.min_fill * static_cast<float>(inside.size())) {
+                    fr.indices = std::move(inside);
+                }
+            }
             const Eigen::Vector2f c = (fr.min + fr.max) / 2;
             // The point of the plane at (u, v) = c: u * c.x + v * c.y + n * (-d).
             fr.center = u * c.x() + v * c.y() - fr.normal * face.plane.w();

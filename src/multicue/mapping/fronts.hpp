@@ -46,6 +46,10 @@ struct FrontParams {
     std::size_t min_points = 30;    ///< smaller regions are no fronts [points]
     float overlap_share = 0.1f;     ///< regions sharing this share of the smaller overlap [-]
     float rect_percentile = 0.01f;  ///< rectangle from these lower/upper quantiles of u, v [-]
+    /// A front's points become the face points inside its rectangle when its region fills at
+    /// least min_fill of them (shadows and noise left holes); otherwise the region stays
+    bool fill_rectangle = true;
+    float min_fill = 0.6f;  ///< [-]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
