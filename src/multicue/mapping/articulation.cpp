@@ -49,7 +49,7 @@ void ArticulationParams::Validate() const {
 void MotionParams::Validate() const {
     if (!(change_distance > 0.0f) || !(min_offset >= 0.0f) || !(reach > 0.0f) ||
         !(plane_threshold > 0.0f) || !(parallel_deg > 0.0f && parallel_deg < 45.0f) ||
-        min_points < 3) {
+        !(parallel_share > 0.0f && parallel_share <= 1.0f) || min_points < 3) {
         throw InvalidArgument(fmt::format(
             "motion: need change_distance > 0, min_offset >= 0, reach > 0, plane_threshold > 0, "
             "parallel_deg in (0, 45), min_points >= 3 (got {}, {}, {}, {}, {}, {})",
@@ -151,8 +151,19 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     pp.sac.seed = p.seed;
     pp.sac.num_threads = 1;
     pp.viewpoint = f.center + f.normal * 2.0f;
-    const PlaneFit fit = FitPlane(opened, moved, pp);
+    PlaneFit fit = FitPlane(opened, moved, pp);
     if (!fit.found || fit.inliers.size() < p.min_points) return out;
+    // A drawer shows its sides and bottom too, and the largest plane may be one of them: the
+    // front moved parallel to itself when a plane parallel to it holds most as many points.
+    PlaneFitParams parallel = pp;
+    parallel.axis = f.normal;
+    parallel.axis_mode = PlaneAxisMode::kParallel;
+    parallel.max_angle = p.parallel_deg * kDegToRad;
+    const PlaneFit fit_parallel = FitPlane(opened, moved, parallel);
+    if (fit_parallel.found && static_cast<float>(fit_parallel.inliers.size()) >=
+                                  p.parallel_share * static_cast<float>(fit.inliers.size())) {
+        fit = fit_parallel;
+    }
     out.found = true;
     out.moved = fit.inliers;
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();

@@ -49,6 +49,9 @@ struct MotionParams {
     float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
     float parallel_deg = 8.0f;       ///< planes closer than this: prismatic [deg]
+    /// A plane parallel to the closed front wins over the best plane when it holds this share
+    /// of its points (a drawer's sides and bottom can outnumber its front) [-]
+    float parallel_share = 1.0f;
     std::uint64_t seed = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
