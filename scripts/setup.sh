@@ -24,6 +24,8 @@ packages=(
     libyaml-cpp-dev
     # ROS 2 bags: zstd and lz4 compressed MCAP chunks.
     libzstd-dev liblz4-dev
+    # URDF models (kitchen models and kitchen maps); check_urdf for the export tests.
+    liburdfdom-dev liburdfdom-tools
     libgtest-dev libgmock-dev libbenchmark-dev
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest
