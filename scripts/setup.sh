@@ -21,6 +21,8 @@ packages=(
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
     libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev
     libyaml-cpp-dev
+    # Occupancy maps (search module) of the registration's multi-view maps.
+    liboctomap-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest

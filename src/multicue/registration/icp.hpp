@@ -1,0 +1,116 @@
+#pragma once
+/// \file Fine registration by the iterative closest point algorithm (thesis section 2.2): pair
+/// every source point with its nearest target point, move the source to reduce the distances,
+/// repeat. Variants:
+///   - point-to-point (Besl and McKay 1992): closed-form weighted rigid fit of the pairs;
+///   - point-to-plane (Chen and Medioni 1992): Gauss-Newton on n_q . (T p - q), which slides
+///     along surfaces and converges in far fewer iterations on scans of planar scenes;
+///   - symmetric (Rusinkiewicz 2019): Gauss-Newton on (n_p + n_q) . (T p - q), both normals,
+///     which widens the basin of convergence on curved surfaces.
+/// Robust kernels (Huber, Tukey, Cauchy) reweight the pairs every iteration (IRLS); the gate may
+/// start wide and shrink (coarse to fine) so that a rough initial guess still converges.
+///
+/// After the loop the result is checked, and `converged` is true only when every check passes:
+/// the update fell below the tolerances, at least min_fitness of the source found a partner, and
+/// the point-to-plane information matrix is well conditioned (min_condition). One plane, two
+/// parallel walls (a corridor) or a sphere leave a motion unconstrained: their smallest scaled
+/// eigenvalue is near zero and the result says `degenerate`, whatever the residuals look like.
+///
+/// Sums over points are taken in fixed blocks, so the result is the same for any thread count.
+
+#include <cstddef>
+#include <functional>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/registration/correspondences.hpp"
+#include "multicue/registration/registration_result.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue {
+
+enum class IcpMethod {
+    kPointToPoint,  ///< closed-form rigid fit of the pairs
+    kPointToPlane,  ///< Gauss-Newton on the target normals
+    kSymmetric,     ///< Gauss-Newton on the sum of both normals
+};
+
+/// "point-to-point", "point-to-plane", "symmetric"; and back (InvalidArgument naming the choices).
+const char* IcpMethodName(IcpMethod method);
+IcpMethod ParseIcpMethod(const std::string& name);
+
+enum class RobustKernelType {
+    kNone,    ///< least squares
+    kHuber,   ///< weight min(1, k / |r|)
+    kTukey,   ///< weight (1 - (r / k)^2)^2 inside k, 0 outside
+    kCauchy,  ///< weight 1 / (1 + (r / k)^2)
+};
+
+/// "none", "huber", "tukey", "cauchy"; and back (InvalidArgument naming the choices).
+const char* RobustKernelName(RobustKernelType type);
+RobustKernelType ParseRobustKernel(const std::string& name);
+
+/// IRLS weight of a residual r for kernel scale k > 0.
+double RobustWeight(RobustKernelType type, double r, double k);
+
+struct IcpParams {
+    IcpMethod method = IcpMethod::kPointToPlane;         ///< objective
+    CorrespondenceParams correspondences{};              ///< partner search and final gates
+    RobustKernelType kernel = RobustKernelType::kTukey;  ///< reweighting of the residuals
+    float kernel_scale = 0.0f;  ///< k of the kernel [m]; 0 = the current distance gate
+    /// Coarse to fine: the distance gate starts here and shrinks by gate_decay per iteration to
+    /// correspondences.max_distance [m]; 0 = fixed gate.
+    float initial_max_distance = 0.0f;
+    float gate_decay = 0.7f;               ///< factor per iteration, in (0, 1) [-]
+    int max_iterations = 50;               ///< [iterations], >= 1
+    double translation_tolerance = 1e-5;   ///< stop when an update moves less [m]
+    double rotation_tolerance_deg = 1e-3;  ///< and turns less [deg]
+    /// Weight every pair by the inverse variance of structured-light depth noise, which grows
+    /// with the square of the distance to the sensor (Khoshelham and Elberink 2012): w = 2 /
+    /// (d_s^4 + d_t^4), d the distances [m] of the two points to their clouds' sensor_origin
+    /// (at least 0.3 m). Far, coarsely quantised surfaces (a floor 4 m away) then no longer bias
+    /// the fit. For RGB-D frames; laser scans have a flat noise and leave it off.
+    bool depth_weighting = false;
+    /// Source points used (evenly strided over the finite ones); 0 = all [points]
+    std::size_t max_source_points = 0;
+    std::size_t min_correspondences = 20;  ///< fewer pairs stop the loop [pairs]
+    double min_fitness = 0.2;  ///< share of source points with a partner for success [-]
+    /// Smallest acceptable condition of the scaled information matrix, in [0, 1): below it the
+    /// result is `degenerate` [-]
+    double min_condition = 2e-3;
+    /// Distance within which a source point counts as overlapping after alignment [m];
+    /// 0 = half the final gate
+    float overlap_distance = 0.0f;
+    int num_threads = 0;  ///< 0 = all cores; never changes the result
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Extra Gauss-Newton terms added to the point terms every iteration (the plane
+/// correspondences of plane_registration.hpp): given the current estimate, add J^T W J to H and
+/// J^T W r to g, J the derivative of the residuals with respect to the twist (rotation about
+/// `center`, in the target frame, then translation) applied on the left of the estimate, and
+/// return their cost sum r^T W r. Called from one thread.
+using ExtraTerms = std::function<double(const Eigen::Isometry3d& T_target_source,
+                                        const Eigen::Vector3d& center, Matrix6d& H, Vector6d& g)>;
+
+/// Registers `source` to `target` from `T_init` (source -> target). `target_tree` must index
+/// `target` (it may be null when the projective path applies, see CorrespondenceSearcher).
+/// Point-to-plane needs target normals, symmetric needs both clouds' normals (DataError
+/// otherwise); the normal gate and the degeneracy check use them when present (point-to-point
+/// without normals estimates target normals at the final pairs for the check).
+/// Throws InvalidArgument for bad parameters. Empty or NaN-only clouds give converged = false,
+/// status kEmptyInput.
+RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& target,
+                               const KdTree* target_tree, const IcpParams& params,
+                               const Eigen::Isometry3d& T_init = Eigen::Isometry3d::Identity(),
+                               const ExtraTerms& extra_terms = {});
+
+/// The same, building the k-d tree of the target when one is needed.
+RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& target,
+                               const IcpParams& params,
+                               const Eigen::Isometry3d& T_init = Eigen::Isometry3d::Identity());
+
+}  // namespace multicue
