@@ -76,7 +76,8 @@ if(BUILD_SHARED_LIBS)
 else()
   # What the static libraries need from their private dependencies.
   set(MULTICUE_PC_LIBS_PRIVATE
-      "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_core -lsvm -loctomap -loctomath")
+      "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_features2d -lopencv_imgproc \
+-lopencv_flann -lopencv_core -lsvm -loctomap -loctomath")
 endif()
 set(MULTICUE_PC_LIBS "${_pc_libs}")
 # Relocatable: the prefix is found from the .pc file's own folder (cmake --install --prefix P).
