@@ -322,6 +322,8 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
     float gate = std::max(final_gate, params.initial_max_distance);
     std::vector<Correspondence> corr;
     Eigen::Isometry3d T = T_init;
+    Eigen::Isometry3d T_last = T_init;         // the estimate one iteration ago
+    Eigen::Isometry3d T_before_last = T_init;  // and two iterations ago
     bool settled = false;
     bool too_few = false;
     int it = 0;
@@ -356,13 +358,26 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
         T = delta * T;
         // Re-orthonormalise: hundreds of products of rotations drift from SO(3).
         T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
-        const bool small = RotationAngleDeg(delta) < params.rotation_tolerance_deg &&
-                           TranslationNorm(delta) < params.translation_tolerance;
+        // Settled when the update is below the tolerances, or when the estimate came back to
+        // where it was two iterations before: pairs flipping between two sets (few points, a
+        // tight gate) make a 2-cycle whose states differ by less than the noise.
+        const Eigen::Isometry3d back = T_before_last.inverse() * T;
+        const bool small = (RotationAngleDeg(delta) < params.rotation_tolerance_deg &&
+                            TranslationNorm(delta) < params.translation_tolerance) ||
+                           (it > 2 && RotationAngleDeg(back) < params.rotation_tolerance_deg &&
+                            TranslationNorm(back) < params.translation_tolerance);
+        T_before_last = T_last;
+        T_last = T;
         if (small && gate <= final_gate) {
             settled = true;
             break;
         }
-        gate = std::max(final_gate, gate * params.gate_decay);
+        // Coarse to fine: the gate shrinks once the estimate has settled at the current gate
+        // (it moved less than a tenth of the gate), so a far initial guess is first brought
+        // within reach, then refined with fewer wrong pairs.
+        if (gate > final_gate && (small || TranslationNorm(delta) < 0.1 * gate)) {
+            gate = std::max(final_gate, gate * params.gate_decay);
+        }
     }
     result.iterations = it;
     if (!T.matrix().allFinite()) {

@@ -60,13 +60,14 @@ struct IcpParams {
     CorrespondenceParams correspondences{};              ///< partner search and final gates
     RobustKernelType kernel = RobustKernelType::kTukey;  ///< reweighting of the residuals
     float kernel_scale = 0.0f;  ///< k of the kernel [m]; 0 = the current distance gate
-    /// Coarse to fine: the distance gate starts here and shrinks by gate_decay per iteration to
+    /// Coarse to fine: the distance gate starts here and shrinks by gate_decay, each time an
+    /// update moved the source less than a tenth of the gate, down to
     /// correspondences.max_distance [m]; 0 = fixed gate.
     float initial_max_distance = 0.0f;
-    float gate_decay = 0.7f;               ///< factor per iteration, in (0, 1) [-]
-    int max_iterations = 50;               ///< [iterations], >= 1
-    double translation_tolerance = 1e-5;   ///< stop when an update moves less [m]
-    double rotation_tolerance_deg = 1e-3;  ///< and turns less [deg]
+    float gate_decay = 0.7f;               ///< factor per shrinking step, in (0, 1) [-]
+    int max_iterations = 60;               ///< [iterations], >= 1
+    double translation_tolerance = 5e-5;   ///< stop when an update moves less [m]
+    double rotation_tolerance_deg = 5e-3;  ///< and turns less [deg]
     /// Weight every pair by the inverse variance of structured-light depth noise, which grows
     /// with the square of the distance to the sensor (Khoshelham and Elberink 2012): w = 2 /
     /// (d_s^4 + d_t^4), d the distances [m] of the two points to their clouds' sensor_origin
