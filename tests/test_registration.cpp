@@ -245,7 +245,7 @@ TEST(Icp, ProjectiveAndTreeCorrespondencesOnKinectFrames) {
         IcpParams params;
         params.correspondences.search = search;
         params.initial_max_distance = 0.15f;
-        params.depth_weighting = true;
+        params.depth_noise = 1.4e-3f;
         const auto& target =
             search == CorrespondenceSearch::kProjective ? target_frame : target_down;
         const auto r = RegisterIcp(source, target, params, init);

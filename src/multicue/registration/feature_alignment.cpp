@@ -335,6 +335,9 @@ void FpfhAlignParams::Validate() const {
     if (!(fpfh.radius > 0.0f) || !std::isfinite(fpfh.radius)) {
         throw InvalidArgument(fmt::format("fpfh.radius must be > 0, got {}", fpfh.radius));
     }
+    if (max_points < 10) {
+        throw InvalidArgument(fmt::format("max_points must be >= 10, got {}", max_points));
+    }
     ValidateNode("matching", [&] { matching.Validate(); });
     ValidateNode("pruning", [&] { pruning.Validate(); });
     ValidateNode("ransac", [&] { ransac.Validate(); });
@@ -356,11 +359,28 @@ RegistrationResult AlignFpfh(const PointCloud& source, const KdTree& source_tree
     }
     PairFeatureParams fp = params.fpfh;
     fp.num_threads = params.num_threads;
-    const FeatureMatrix fs = ComputeFpfh(source, source_tree, fp);
-    const FeatureMatrix ft = ComputeFpfh(target, target_tree, fp);
+    // Descriptors of every point (each uses its full neighbourhood), matched on an even subset.
+    auto described = [&](const PointCloud& cloud, const KdTree& tree, Indices& rows) {
+        const FeatureMatrix all = ComputeFpfh(cloud, tree, fp);
+        Indices defined;
+        for (Eigen::Index i = 0; i < all.rows(); ++i) {
+            if (all.row(i).allFinite()) defined.push_back(static_cast<Index>(i));
+        }
+        rows = EvenSubset(defined, params.max_points);
+        FeatureMatrix out(static_cast<Eigen::Index>(rows.size()), all.cols());
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+            out.row(static_cast<Eigen::Index>(k)) = all.row(rows[k]);
+        }
+        return out;
+    };
+    Indices source_rows, target_rows;
+    const FeatureMatrix fs = described(source, source_tree, source_rows);
+    const FeatureMatrix ft = described(target, target_tree, target_rows);
     FeatureMatchParams mp = params.matching;
     mp.num_threads = params.num_threads;
-    const PointMatches all = MatchFeatureRows(fs, ft, mp);
+    PointMatches all = MatchFeatureRows(fs, ft, mp);
+    for (auto& i : all.source) i = source_rows[i];
+    for (auto& i : all.target) i = target_rows[i];
     LengthConsistencyParams lp = params.pruning;
     lp.num_threads = params.num_threads;
     const auto kept = PruneByLengthConsistency(source, target, all, lp);

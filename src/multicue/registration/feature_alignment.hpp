@@ -90,6 +90,9 @@ RegistrationResult AlignMatchesRansac(const PointCloud& source, const PointCloud
 
 struct FpfhAlignParams {
     PairFeatureParams fpfh{.radius = 0.05f};  ///< FPFH neighbourhood (about 5 voxels)
+    /// Points per cloud whose descriptors are matched (evenly strided over those with a
+    /// defined descriptor); the matching costs their product [points]; >= 10
+    std::size_t max_points = 3000;
     FeatureMatchParams matching{};
     LengthConsistencyParams pruning{};
     RansacParams ransac{};

@@ -20,17 +20,19 @@ namespace {
 // sums are added in order: the result does not depend on the threads.
 constexpr std::size_t kBlock = 512;
 
-// The depth-noise weight of a pair (IcpParams::depth_weighting), 1 when it is off.
+// The depth-noise weight of a pair (IcpParams::depth_noise), 1 when it is off.
 struct DepthWeights {
-    bool enabled = false;
+    double k = 0.0;   // sigma = k d^2
+    double s0 = 0.0;  // noise floor
     Eigen::Vector3f source_origin = Eigen::Vector3f::Zero();
     Eigen::Vector3f target_origin = Eigen::Vector3f::Zero();
 
     double operator()(const Eigen::Vector3f& p_source, const Eigen::Vector3f& q_target) const {
-        if (!enabled) return 1.0;
-        const double ds = std::max(0.3, static_cast<double>((p_source - source_origin).norm()));
-        const double dt = std::max(0.3, static_cast<double>((q_target - target_origin).norm()));
-        return 2.0 / (ds * ds * ds * ds + dt * dt * dt * dt);
+        if (k <= 0.0) return 1.0;
+        const double ds = (p_source - source_origin).squaredNorm();
+        const double dt = (q_target - target_origin).squaredNorm();
+        const double floor2 = 2.0 * s0 * s0;
+        return floor2 / (floor2 + k * k * (ds * ds + dt * dt));
     }
 };
 
@@ -272,6 +274,12 @@ void IcpParams::Validate() const {
         throw InvalidArgument(
             fmt::format("ICP min_condition must be in [0, 1), got {}", min_condition));
     }
+    if (!(depth_noise >= 0.0f) || !std::isfinite(depth_noise) || !(noise_floor > 0.0f) ||
+        !std::isfinite(noise_floor)) {
+        throw InvalidArgument(fmt::format(
+            "ICP depth_noise must be >= 0 and noise_floor > 0, got {} and {}", depth_noise,
+            noise_floor));
+    }
     if (!(overlap_distance >= 0.0f) || !std::isfinite(overlap_distance)) {
         throw InvalidArgument(
             fmt::format("ICP overlap_distance must be >= 0, got {}", overlap_distance));
@@ -316,7 +324,8 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
         return finish(RegistrationStatus::kEmptyInput, "target has no finite point");
     }
     const CorrespondenceSearcher searcher(target, target_tree, params.correspondences);
-    const DepthWeights depth{params.depth_weighting, source.sensor_origin, target.sensor_origin};
+    const DepthWeights depth{params.depth_noise, params.noise_floor, source.sensor_origin,
+                             target.sensor_origin};
 
     const float final_gate = params.correspondences.max_distance;
     float gate = std::max(final_gate, params.initial_max_distance);

@@ -68,12 +68,14 @@ struct IcpParams {
     int max_iterations = 60;               ///< [iterations], >= 1
     double translation_tolerance = 5e-5;   ///< stop when an update moves less [m]
     double rotation_tolerance_deg = 5e-3;  ///< and turns less [deg]
-    /// Weight every pair by the inverse variance of structured-light depth noise, which grows
-    /// with the square of the distance to the sensor (Khoshelham and Elberink 2012): w = 2 /
-    /// (d_s^4 + d_t^4), d the distances [m] of the two points to their clouds' sensor_origin
-    /// (at least 0.3 m). Far, coarsely quantised surfaces (a floor 4 m away) then no longer bias
-    /// the fit. For RGB-D frames; laser scans have a flat noise and leave it off.
-    bool depth_weighting = false;
+    /// Weight every pair by the inverse variance of its residual under a depth-noise model:
+    /// structured-light cameras measure depth with sigma = depth_noise * d^2 (Khoshelham and
+    /// Elberink 2012; 1.4e-3 for a Kinect), d the distance [m] of a point to its cloud's
+    /// sensor_origin, on top of a floor noise_floor of everything else (sampling, calibration):
+    /// w = 2 s0^2 / (2 s0^2 + sigma_s^2 + sigma_t^2). Far, coarsely quantised surfaces (a floor
+    /// 4 m away) then no longer bias the fit. 0 = off (laser scans: flat noise) [1/m]
+    float depth_noise = 0.0f;
+    float noise_floor = 0.003f;  ///< s0 of depth_noise [m]; > 0
     /// Source points used (evenly strided over the finite ones); 0 = all [points]
     std::size_t max_source_points = 0;
     std::size_t min_correspondences = 20;  ///< fewer pairs stop the loop [pairs]
