@@ -276,9 +276,9 @@ void IcpParams::Validate() const {
     }
     if (!(depth_noise >= 0.0f) || !std::isfinite(depth_noise) || !(noise_floor > 0.0f) ||
         !std::isfinite(noise_floor)) {
-        throw InvalidArgument(fmt::format(
-            "ICP depth_noise must be >= 0 and noise_floor > 0, got {} and {}", depth_noise,
-            noise_floor));
+        throw InvalidArgument(
+            fmt::format("ICP depth_noise must be >= 0 and noise_floor > 0, got {} and {}",
+                        depth_noise, noise_floor));
     }
     if (!(overlap_distance >= 0.0f) || !std::isfinite(overlap_distance)) {
         throw InvalidArgument(

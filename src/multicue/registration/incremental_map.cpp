@@ -52,9 +52,9 @@ void MapMeshParams::Validate() const {
         throw InvalidArgument(
             fmt::format("mesh vertex_spacing must be > 0, got {}", vertex_spacing));
     }
-    for (const auto& [name, v] : {std::pair{"overlap_radius", overlap_radius},
-                                  std::pair{"overlap_step", overlap_step},
-                                  std::pair{"curvature_slope", curvature_slope}}) {
+    for (const auto& [name, v] :
+         {std::pair{"overlap_radius", overlap_radius}, std::pair{"overlap_step", overlap_step},
+          std::pair{"curvature_slope", curvature_slope}}) {
         if (!(v >= 0.0f) || !std::isfinite(v)) {
             throw InvalidArgument(fmt::format("mesh {} must be >= 0, got {}", name, v));
         }
@@ -89,6 +89,21 @@ struct IncrementalMap::Impl {
     Eigen::Isometry3d last_pose = Eigen::Isometry3d::Identity();
     std::optional<Eigen::Isometry3d> last_odometry;
     PointCloud last_prepared;
+    PointCloud last_frame;  // raw, for the free-space check
+
+    // The free-space check of an alignment of `frame` against the last frame of the map.
+    void CheckVisibility(const PointCloud& frame, const PointCloud& prepared,
+                         RegistrationResult& r) const {
+        if (!registration.free_space.enabled || !r.converged) return;
+        RegistrationResult relative = r;
+        relative.T_target_source = last_pose.inverse() * r.T_target_source;
+        CheckAgainstFreeSpace(prepared, last_prepared, &frame, &last_frame, registration.free_space,
+                              relative);
+        r.free_space_violation = relative.free_space_violation;
+        r.converged = relative.converged;
+        r.status = relative.status;
+        r.reason = relative.reason;
+    }
 
     RegistrationResult Align(const PointCloud& prepared, const KdTree& prepared_tree,
                              const Eigen::Isometry3d& guess) const {
@@ -120,9 +135,9 @@ struct IncrementalMap::Impl {
         out.map_points = map.size();
         const PointCloud raw_world = TransformCloud(frame, pose);
         if (occupancy) {
-            const PointCloud thin =
-                VoxelGrid(raw_world, {.leaf_size = static_cast<float>(occupancy->resolution()),
-                                      .num_threads = threads});
+            const PointCloud thin = VoxelGrid(
+                raw_world,
+                {.leaf_size = static_cast<float>(occupancy->resolution()), .num_threads = threads});
             occupancy->InsertScan(thin, raw_world.sensor_origin);
         }
         if (triangulation) AddToMesh(raw_world, out);
@@ -139,7 +154,8 @@ struct IncrementalMap::Impl {
         if (points.empty()) return;
         const TriangleMesh& mesh = triangulation->mesh();
         if (!mesh.vertices.empty()) {
-            const float radius = mp.overlap_radius > 0.0f ? mp.overlap_radius : 3.0f * mp.vertex_spacing;
+            const float radius =
+                mp.overlap_radius > 0.0f ? mp.overlap_radius : 3.0f * mp.vertex_spacing;
             const float step = mp.overlap_step > 0.0f ? mp.overlap_step : 2.0f * mp.vertex_spacing;
             const PointCloud vertices(mesh.vertices);
             const KdTree vertex_tree(vertices);
@@ -147,8 +163,8 @@ struct IncrementalMap::Impl {
             Index j = 0;
             float d2 = 0.0f;
             for (std::size_t i = 0; i < points.size(); ++i) {
-                const bool near = vertex_tree.SearchNearest(points.points[i], j, d2) &&
-                                  d2 <= radius * radius;
+                const bool near =
+                    vertex_tree.SearchNearest(points.points[i], j, d2) && d2 <= radius * radius;
                 (near ? overlap : fresh).push_back(static_cast<Index>(i));
             }
             if (overlap.size() >= 10) {
@@ -200,7 +216,8 @@ MapFrameResult IncrementalMap::AddFrame(
     Impl& m = *impl_;
     frame.Validate();
     if (T_world_sensor_odometry && !T_world_sensor_odometry->matrix().allFinite()) {
-        throw InvalidArgument(fmt::format("frame {}: odometry pose is not finite", m.frames.size()));
+        throw InvalidArgument(
+            fmt::format("frame {}: odometry pose is not finite", m.frames.size()));
     }
     MapFrameResult out;
     PreprocessParams pre = m.registration.preprocess;
@@ -234,19 +251,21 @@ MapFrameResult IncrementalMap::AddFrame(
     } else {
         const KdTree prepared_tree(prepared);
         out.registration = m.Align(prepared, prepared_tree, guess);
+        m.CheckVisibility(frame, prepared, out.registration);
         if (!out.registration.converged && m.params.global_fallback) {
             RegistrationParams global = m.registration;
             global.method = RegistrationMethod::kGlobal;
             const KdTree last_tree(m.last_prepared);
             const RegistrationResult g =
                 RegisterPrepared(prepared, prepared_tree, m.last_prepared, last_tree, global,
-                                 std::nullopt);
+                                 std::nullopt, &frame, &m.last_frame);
             if (g.converged) {
                 RegistrationResult r =
                     m.Align(prepared, prepared_tree, m.last_pose * g.T_target_source);
+                m.CheckVisibility(frame, prepared, r);
                 if (r.converged) {
-                    r.reason = fmt::format("global fallback ({}), then {}",
-                                           g.reason.substr(0, 200), r.reason);
+                    r.reason = fmt::format("global fallback ({}), then {}", g.reason.substr(0, 200),
+                                           r.reason);
                     out.registration = std::move(r);
                     out.global_fallback_used = true;
                 }
@@ -265,6 +284,7 @@ MapFrameResult IncrementalMap::AddFrame(
         m.last_pose = out.T_world_sensor;
         m.last_odometry = T_world_sensor_odometry;
         m.last_prepared = std::move(prepared);
+        m.last_frame = frame;
     } else {
         out.map_points = m.map.size();
     }
@@ -285,8 +305,8 @@ std::vector<MapFrameResult> AlignFrameSequence(
     const std::vector<const PointCloud*>& frames,
     const std::vector<std::optional<Eigen::Isometry3d>>& odometry, MapParams params) {
     if (frames.size() != odometry.size()) {
-        throw InvalidArgument(fmt::format("{} frames but {} odometry poses", frames.size(),
-                                          odometry.size()));
+        throw InvalidArgument(
+            fmt::format("{} frames but {} odometry poses", frames.size(), odometry.size()));
     }
     params.occupancy.enabled = false;
     params.mesh.enabled = false;

@@ -50,7 +50,7 @@ struct MapMeshParams {
 struct MapParams {
     /// Frame-to-map alignment; kAuto uses points and planes from the guess.
     RegistrationParams registration = RegistrationParams::ForResolution(0.01f);
-    float map_voxel = 0.01f;  ///< voxel of the map cloud [m]; > 0
+    float map_voxel = 0.01f;      ///< voxel of the map cloud [m]; > 0
     bool register_frames = true;  ///< false: take the given poses as they are
     bool global_fallback = true;  ///< retry failed frames globally against the previous frame
     Switchable<OccupancyMapParams> occupancy{};  ///< the occupancy map
@@ -62,16 +62,16 @@ struct MapParams {
 
 /// What happened to one frame.
 struct MapFrameResult {
-    Eigen::Isometry3d T_world_sensor = Eigen::Isometry3d::Identity();  ///< the pose used
+    Eigen::Isometry3d T_world_sensor = Eigen::Isometry3d::Identity();        ///< the pose used
     Eigen::Isometry3d T_world_sensor_guess = Eigen::Isometry3d::Identity();  ///< its start
     /// True when the frame was aligned (or is the first frame, or register_frames is off) and
     /// joined the map; false when its alignment failed and it was left out.
     bool in_map = false;
-    bool global_fallback_used = false;  ///< the global retry gave the pose
-    RegistrationResult registration;    ///< the alignment (default for the first frame)
-    std::size_t map_points = 0;         ///< map cloud size after the frame
+    bool global_fallback_used = false;         ///< the global retry gave the pose
+    RegistrationResult registration;           ///< the alignment (default for the first frame)
+    std::size_t map_points = 0;                ///< map cloud size after the frame
     IncrementalTriangulation::AddResult mesh;  ///< mesh update (zeros without a mesh)
-    std::size_t resampled_overlap = 0;  ///< overlap points replaced by MLS re-sampling
+    std::size_t resampled_overlap = 0;         ///< overlap points replaced by MLS re-sampling
 };
 
 /// A map grown frame by frame. Not thread-safe; the work inside AddFrame is parallel.

@@ -79,6 +79,7 @@ RegistrationParams RegistrationParams::ForResolution(float r) {
     p.fpfh.ransac.inlier_distance = 3.0f * r;
     p.fpfh.ransac.min_edge = 2.0f * r;
     p.fpfh.pruning.absolute = 2.0f * r;
+    p.free_space.tolerance = 3.0f * r;
     return p;
 }
 
@@ -90,6 +91,7 @@ void RegistrationParams::Validate() const {
     ValidateNode("plane_global", [&] { plane_global.Validate(); });
     ValidateNode("fpfh", [&] { fpfh.Validate(); });
     ValidateNode("rgb", [&] { rgb.Validate(); });
+    if (free_space.enabled) ValidateNode("free_space", [&] { free_space.Validate(); });
     if (num_threads < 0) {
         throw InvalidArgument(fmt::format("num_threads must be >= 0, got {}", num_threads));
     }
@@ -121,14 +123,14 @@ float SuggestResolution(const PointCloud& cloud) {
     return std::round(r / magnitude) * magnitude;
 }
 
-RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree& source_tree,
-                                    const PointCloud& target, const KdTree& target_tree,
-                                    const RegistrationParams& params,
-                                    const std::optional<Eigen::Isometry3d>& T_init,
-                                    const PointCloud* source_frame,
-                                    const PointCloud* target_frame) {
+namespace {
+
+RegistrationResult Dispatch(const PointCloud& source, const KdTree& source_tree,
+                            const PointCloud& target, const KdTree& target_tree,
+                            const RegistrationParams& params,
+                            const std::optional<Eigen::Isometry3d>& T_init,
+                            const PointCloud* source_frame, const PointCloud* target_frame) {
     const auto start = std::chrono::steady_clock::now();
-    params.Validate();
     RegistrationMethod method = params.method;
     if (method == RegistrationMethod::kAuto) {
         method = T_init ? RegistrationMethod::kPlane : RegistrationMethod::kGlobal;
@@ -195,6 +197,56 @@ RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree& sour
     best.reason = trail;
     best.time_ms = MsSince(start);
     return best;
+}
+
+}  // namespace
+
+void CheckAgainstFreeSpace(const PointCloud& source, const PointCloud& target,
+                           const PointCloud* source_frame, const PointCloud* target_frame,
+                           const FreeSpaceParams& params, RegistrationResult& result) {
+    double worst = 0.0;
+    if (target_frame != nullptr) {
+        worst = std::max(
+            worst, CheckFreeSpace(source, *target_frame, result.T_target_source, params).ratio);
+    }
+    if (source_frame != nullptr) {
+        worst = std::max(
+            worst,
+            CheckFreeSpace(target, *source_frame, result.T_target_source.inverse(), params).ratio);
+    }
+    result.free_space_violation = worst;
+    if (result.converged && worst > params.max_violation) {
+        result.converged = false;
+        result.status = RegistrationStatus::kInconsistent;
+        result.reason = fmt::format(
+            "{:.1f} % of the points lie where the other frame saw free space (at most {:.1f} %): "
+            "{}",
+            100.0 * worst, 100.0 * params.max_violation, result.reason);
+    }
+}
+
+RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree& source_tree,
+                                    const PointCloud& target, const KdTree& target_tree,
+                                    const RegistrationParams& params,
+                                    const std::optional<Eigen::Isometry3d>& T_init,
+                                    const PointCloud* source_frame,
+                                    const PointCloud* target_frame) {
+    params.Validate();
+    RegistrationResult r = Dispatch(source, source_tree, target, target_tree, params, T_init,
+                                    source_frame, target_frame);
+    if (params.free_space.enabled) {
+        CheckAgainstFreeSpace(source, target, source_frame, target_frame, params.free_space, r);
+    }
+    return r;
+}
+
+RegistrationParams SuggestRegistrationParams(const PointCloud& cloud) {
+    if (EstimatePinhole(cloud)) {
+        RegistrationParams p = RegistrationParams::ForResolution(0.01f);
+        p.icp.depth_noise = 1.4e-3f;  // Khoshelham and Elberink 2012: sigma = 1.4e-3 z^2
+        return p;
+    }
+    return RegistrationParams::ForResolution(SuggestResolution(cloud));
 }
 
 RegistrationResult Register(const PointCloud& source, const PointCloud& target,

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include "multicue/core/params.hpp"
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/registration/feature_alignment.hpp"
 #include "multicue/registration/icp.hpp"
@@ -22,6 +23,7 @@
 #include "multicue/registration/preprocess.hpp"
 #include "multicue/registration/registration_result.hpp"
 #include "multicue/registration/rgb_keypoints.hpp"
+#include "multicue/registration/visibility.hpp"
 
 namespace multicue {
 
@@ -47,9 +49,12 @@ struct RegistrationParams {
     PointPlaneParams point_plane{};    ///< plane pairs and weight (its icp is `icp`)
     PlaneGlobalParams plane_global{};  ///< plane triples (its refine is point_plane)
     FpfhAlignParams fpfh{};            ///< feature alignment when the planes fail
-    bool rgb_keypoints = true;         ///< also try RGB keypoints on coloured organized frames
-    RgbKeypointParams rgb{};           ///< their detector and matching
-    int num_threads = 0;  ///< 0 = all cores (overrides the stages'); never changes results
+    /// The free-space check of every result when the raw organized frames are known: a result
+    /// that puts too much of one frame into space the other saw as free is rejected.
+    Switchable<FreeSpaceParams> free_space{};
+    bool rgb_keypoints = true;  ///< also try RGB keypoints on coloured organized frames
+    RgbKeypointParams rgb{};    ///< their detector and matching
+    int num_threads = 0;        ///< 0 = all cores (overrides the stages'); never changes results
 
     /// The defaults scaled to a scene resolution r [m] (the voxel size): correspondence gate
     /// 3 r shrinking from 15 r, FPFH radius 5 r, plane growing radius 3 r, plane flatness r,
@@ -64,6 +69,11 @@ struct RegistrationParams {
 /// cloud with fewer than 3 finite points.
 float SuggestResolution(const PointCloud& cloud);
 
+/// Parameters suited to a scan: ForResolution of 1 cm for an organized depth frame (in its
+/// sensor frame, see EstimatePinhole) with the structured-light depth noise (1.4e-3 / m), else
+/// ForResolution(SuggestResolution(cloud)). Throws DataError for fewer than 3 finite points.
+RegistrationParams SuggestRegistrationParams(const PointCloud& cloud);
+
 /// Registers `source` to `target` (raw clouds; both are preprocessed here). `T_init` is the
 /// initial guess (source -> target); without one, kAuto runs the global method and the fine
 /// methods start from the identity. Throws InvalidArgument for bad parameters and DataError for
@@ -74,12 +84,20 @@ RegistrationResult Register(const PointCloud& source, const PointCloud& target,
                             const std::optional<Eigen::Isometry3d>& T_init = std::nullopt);
 
 /// The same on clouds already preprocessed (normals present) with their trees; the raw frames
-/// (organized, with colours) may be given for RGB keypoints (null: none).
+/// (organized; with colours for RGB keypoints) may be given for RGB keypoints and the free-space
+/// check (null: none).
 RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree& source_tree,
                                     const PointCloud& target, const KdTree& target_tree,
                                     const RegistrationParams& params,
                                     const std::optional<Eigen::Isometry3d>& T_init,
                                     const PointCloud* source_frame = nullptr,
                                     const PointCloud* target_frame = nullptr);
+
+/// The free-space check of `result` (visibility.hpp) in both directions, where the raw frames are
+/// given (null: skipped): sets free_space_violation and, above params.max_violation, turns a
+/// converged result into kInconsistent.
+void CheckAgainstFreeSpace(const PointCloud& source, const PointCloud& target,
+                           const PointCloud* source_frame, const PointCloud* target_frame,
+                           const FreeSpaceParams& params, RegistrationResult& result);
 
 }  // namespace multicue

@@ -31,6 +31,8 @@ const char* RegistrationStatusName(RegistrationStatus status) {
             return "degenerate";
         case RegistrationStatus::kNoHypothesis:
             return "no_hypothesis";
+        case RegistrationStatus::kInconsistent:
+            return "inconsistent";
     }
     return "unknown";
 }

@@ -30,10 +30,12 @@ enum class RegistrationStatus {
     kDegenerate,             ///< the geometry leaves a direction unconstrained (one plane,
                              ///< a corridor, a sphere): the transform is not determined
     kNoHypothesis,           ///< a global method found no acceptable hypothesis
+    kInconsistent,           ///< the aligned scans contradict each other: one lies in space the
+                             ///< other saw as free (visibility.hpp)
 };
 
 /// "converged", "max_iterations", "empty_input", "too_few_correspondences", "low_overlap",
-/// "degenerate", "no_hypothesis".
+/// "degenerate", "no_hypothesis", "inconsistent".
 const char* RegistrationStatusName(RegistrationStatus status);
 
 /// 6x6 matrices over the twist (rx, ry, rz, tx, ty, tz): rotation [rad] about the centroid of
@@ -81,6 +83,9 @@ struct RegistrationResult {
     /// Point-to-plane information at the solution; its inverse times inlier_rmse^2 approximates
     /// the covariance of the twist (rotation about the inlier centroid, then translation).
     ConstraintAnalysis constraints;
+    /// Largest share of points found in the other frame's free space (visibility.hpp), when
+    /// organized frames were given; 0 otherwise [-]
+    double free_space_violation = 0.0;
     double time_ms = 0.0;  ///< wall time of the call [ms]
 };
 
