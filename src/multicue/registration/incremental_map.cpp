@@ -178,12 +178,19 @@ struct IncrementalMap::Impl {
                 mls.viewpoint = raw_world.sensor_origin;
                 mls.num_threads = params.num_threads;
                 MlsResult resampled = MovingLeastSquares(near_points, near_tree, mls);
-                PointCloud merged = SelectByIndex(points, fresh);
-                merged.curvature.clear();
-                merged.points.insert(merged.points.end(), resampled.cloud.points.begin(),
-                                     resampled.cloud.points.end());
-                merged.normals.insert(merged.normals.end(), resampled.cloud.normals.begin(),
-                                      resampled.cloud.normals.end());
+                // Fresh points as they are, the overlap re-sampled: points, normals and (when
+                // both have them) colours.
+                const PointCloud kept = SelectByIndex(points, fresh);
+                const PointCloud& re = resampled.cloud;
+                PointCloud merged;
+                merged.points = kept.points;
+                merged.points.insert(merged.points.end(), re.points.begin(), re.points.end());
+                merged.normals = kept.normals;
+                merged.normals.insert(merged.normals.end(), re.normals.begin(), re.normals.end());
+                if (kept.HasColors() && re.HasColors()) {
+                    merged.colors = kept.colors;
+                    merged.colors.insert(merged.colors.end(), re.colors.begin(), re.colors.end());
+                }
                 merged.SetUnorganized();
                 merged.sensor_origin = raw_world.sensor_origin;
                 out.resampled_overlap = overlap.size();

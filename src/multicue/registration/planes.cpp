@@ -165,13 +165,18 @@ std::vector<PlanePair> MatchPlanes(const std::vector<PlanarPatch>& source,
         std::size_t best_t = 0;
         for (std::size_t t = 0; t < target.size(); ++t) {
             if (n.dot(target[t].normal) < min_cos) continue;
-            if (std::abs(target[t].normal.dot(c) + target[t].d) > params.max_offset) continue;
+            const double offset = std::abs(target[t].normal.dot(c) + target[t].d);
+            if (offset > params.max_offset) continue;
             // 2.5 RMS spreads cover most of a patch (a uniform rectangle's half side is 1.7).
             const double reach =
                 2.5 * (std::max(source[s].extent(0), target[t].extent(0))) + params.centroid_slack;
             const double dist = (c - target[t].centroid).norm();
-            if (dist > reach || dist >= best) continue;
-            best = dist;
+            if (dist > reach) continue;
+            // The nearest plane first (parallel planes a few centimetres apart: a box top and
+            // the table), then the nearest centroid (coplanar faces side by side).
+            const double score = offset / params.max_offset + dist / reach;
+            if (score >= best) continue;
+            best = score;
             best_t = t;
         }
         if (std::isfinite(best)) pairs.push_back({s, best_t});

@@ -77,9 +77,10 @@ struct PlanePair {
     std::size_t target = 0;
 };
 
-/// For every source patch moved by T_target_source, the target patch with a parallel normal
-/// (same side), the source centroid near its plane and the nearest centroid; source patches
-/// without one are left out. Several source patches may match one target patch.
+/// For every source patch moved by T_target_source, among the target patches with a parallel
+/// normal (same side), the source centroid within max_offset of their plane and their centroid
+/// within reach, the one with the smallest offset / max_offset + centroid distance / reach;
+/// source patches without one are left out. Several source patches may match one target patch.
 std::vector<PlanePair> MatchPlanes(const std::vector<PlanarPatch>& source,
                                    const std::vector<PlanarPatch>& target,
                                    const Eigen::Isometry3d& T_target_source,

@@ -5,6 +5,10 @@
 #include <string>
 
 #include <fmt/format.h>
+// OctoMap's templates print debug lines while trees are read and written; compiled here, they
+// are silenced (library code does not print). The .bt header is written and parsed here too,
+// because the library's own readBinary / writeBinary print.
+#define OCTOMAP_NODEBUGOUT
 #include <octomap/OcTree.h>
 
 #include "multicue/core/exceptions.hpp"
@@ -154,31 +158,63 @@ double OccupancyMap::resolution() const { return impl_->tree.getResolution(); }
 bool OccupancyMap::empty() const { return impl_->tree.size() == 0; }
 const OccupancyMapParams& OccupancyMap::params() const { return impl_->params; }
 
+namespace {
+constexpr const char* kBinaryHeader = "# Octomap OcTree binary file";
+}  // namespace
+
 void OccupancyMap::WriteBinary(std::ostream& out) const {
-    if (!impl_->tree.writeBinaryConst(out) || !out) {
-        throw IoError("occupancy map: writing the binary tree failed");
-    }
+    // OctoMap's .bt layout: header lines, then two bits per child of every inner node.
+    out << kBinaryHeader << "\n# written by multicue\nid " << impl_->tree.getTreeType() << "\nsize "
+        << impl_->tree.size() << "\nres " << impl_->tree.getResolution() << "\ndata\n";
+    impl_->tree.writeBinaryData(out);
+    if (!out) throw IoError("occupancy map: writing the binary tree failed");
 }
 
 OccupancyMap OccupancyMap::ReadBinary(std::istream& in, const char* source,
                                       const OccupancyMapParams& params) {
-    // OctoMap's reader reports problems on stderr only; check the header here so that a file
-    // that is not a binary tree gives one clear error.
-    std::string first;
-    std::getline(in, first);
-    if (first.rfind("# Octomap OcTree binary file", 0) != 0) {
+    std::string line;
+    std::getline(in, line);
+    if (line.rfind(kBinaryHeader, 0) != 0) {
         throw FormatError(fmt::format("{}: not an OctoMap binary tree (.bt)", source));
     }
-    std::stringstream rest;
-    rest << first << '\n' << in.rdbuf();
-    OccupancyMapParams p = params;
-    p.Validate();
-    OccupancyMap map(p);
-    if (!map.impl_->tree.readBinary(rest)) {
-        throw FormatError(fmt::format("{}: truncated or malformed OctoMap binary tree", source));
+    std::string id;
+    std::size_t size = 0;
+    double resolution = 0.0;
+    bool data = false;
+    std::string token;
+    while (!data && in >> token) {
+        if (token.front() == '#') {
+            std::getline(in, line);
+        } else if (token == "id") {
+            in >> id;
+        } else if (token == "size") {
+            in >> size;
+        } else if (token == "res") {
+            in >> resolution;
+        } else if (token == "data") {
+            std::getline(in, line);
+            data = true;
+        } else {
+            throw FormatError(fmt::format("{}: unknown header entry '{}'", source, token));
+        }
     }
-    map.impl_->params.resolution = map.impl_->tree.getResolution();
-    Configure(map.impl_->tree, map.impl_->params);
+    if (!data || !in) throw FormatError(fmt::format("{}: truncated .bt header", source));
+    if (id != "OcTree") {
+        throw FormatError(fmt::format("{}: tree type '{}', expected OcTree", source, id));
+    }
+    OccupancyMapParams p = params;
+    p.resolution = resolution;
+    try {
+        p.Validate();
+    } catch (const InvalidArgument& e) {
+        throw FormatError(fmt::format("{}: {}", source, e.what()));
+    }
+    OccupancyMap map(p);
+    if (size > 0) map.impl_->tree.readBinaryData(in);
+    if (map.impl_->tree.size() != size || (size > 0 && !in)) {
+        throw FormatError(fmt::format("{}: truncated or malformed tree ({} of {} nodes)", source,
+                                      map.impl_->tree.size(), size));
+    }
     return map;
 }
 
