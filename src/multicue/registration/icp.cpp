@@ -29,10 +29,8 @@ struct DepthWeights {
 
     double operator()(const Eigen::Vector3f& p_source, const Eigen::Vector3f& q_target) const {
         if (k <= 0.0) return 1.0;
-        const double ds = (p_source - source_origin).squaredNorm();
-        const double dt = (q_target - target_origin).squaredNorm();
-        const double floor2 = 2.0 * s0 * s0;
-        return floor2 / (floor2 + k * k * (ds * ds + dt * dt));
+        return DepthNoiseWeight((p_source - source_origin).norm(), (q_target - target_origin).norm(),
+                                k, s0);
     }
 };
 
@@ -239,6 +237,15 @@ double RobustWeight(RobustKernelType type, double r, double k) {
             break;
     }
     return 1.0;
+}
+
+double DepthNoiseWeight(double d_source, double d_target, double depth_noise,
+                        double noise_floor) {
+    if (depth_noise <= 0.0) return 1.0;
+    const double ss = depth_noise * d_source * d_source;
+    const double st = depth_noise * d_target * d_target;
+    const double floor2 = 2.0 * noise_floor * noise_floor;
+    return floor2 / (floor2 + ss * ss + st * st);
 }
 
 void IcpParams::Validate() const {

@@ -55,6 +55,11 @@ RobustKernelType ParseRobustKernel(const std::string& name);
 /// IRLS weight of a residual r for kernel scale k > 0.
 double RobustWeight(RobustKernelType type, double r, double k);
 
+/// Weight of a pair under the depth-noise model of IcpParams::depth_noise: 2 s0^2 / (2 s0^2 +
+/// (k d_s^2)^2 + (k d_t^2)^2), d the distances [m] of the two points to their sensors; 1 when
+/// k = 0.
+double DepthNoiseWeight(double d_source, double d_target, double depth_noise, double noise_floor);
+
 struct IcpParams {
     IcpMethod method = IcpMethod::kPointToPlane;         ///< objective
     CorrespondenceParams correspondences{};              ///< partner search and final gates

@@ -73,8 +73,21 @@ RegistrationResult RegisterPointsAndPlanes(const PointCloud& source, const Point
                      Vector6d& g) {
             const auto pairs = MatchPlanes(source_patches, target_patches, T, params.matching);
             matched = pairs.size();
-            return AddPlaneTerms(source_patches, target_patches, pairs, T, center,
-                                 params.plane_weight, H, g);
+            // The depth-noise weights of the point pairs, at the patches' centroids: a far,
+            // coarsely quantised floor must not outweigh the objects through its planes either.
+            std::vector<double> weights;
+            for (const auto& pair : pairs) {
+                const double ds = (source_patches[pair.source].centroid -
+                                   source.sensor_origin.cast<double>())
+                                      .norm();
+                const double dt = (target_patches[pair.target].centroid -
+                                   target.sensor_origin.cast<double>())
+                                      .norm();
+                weights.push_back(params.plane_weight *
+                                  DepthNoiseWeight(ds, dt, params.icp.depth_noise,
+                                                   params.icp.noise_floor));
+            }
+            return AddPlaneTerms(source_patches, target_patches, pairs, weights, T, center, H, g);
         };
     }
     RegistrationResult r = RegisterIcp(source, target, target_tree, params.icp, T_init, planes);

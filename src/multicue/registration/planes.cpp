@@ -70,6 +70,12 @@ void PlaneExtractionParams::Validate() const {
         throw InvalidArgument(
             fmt::format("plane extraction max_rmse must be > 0, got {}", max_rmse));
     }
+    if (!(min_extent >= 0.0f) || !std::isfinite(min_extent) || !(depth_noise >= 0.0f) ||
+        !std::isfinite(depth_noise)) {
+        throw InvalidArgument(fmt::format(
+            "plane extraction min_extent and depth_noise must be >= 0, got {} and {}", min_extent,
+            depth_noise));
+    }
     if (max_planes < 1) {
         throw InvalidArgument(
             fmt::format("plane extraction max_planes must be >= 1, got {}", max_planes));
@@ -97,11 +103,16 @@ std::vector<PlanarPatch> ExtractPlanarPatches(const PointCloud& cloud, const KdT
     const auto regions = RegionGrowing(cloud, tree, growing);
     const Eigen::Vector3d viewpoint = cloud.sensor_origin.cast<double>();
 
+    auto acceptable = [&](const PlanarPatch& p) {
+        if (p.rmse > params.max_rmse || p.extent(1) < params.min_extent) return false;
+        const double d = (p.centroid - viewpoint).norm();
+        return params.depth_noise * d * d <= params.max_rmse;
+    };
     std::vector<PlanarPatch> patches;
     for (const auto& part : regions.parts) {
         PlanarPatch p;
         if (part.size() >= params.min_points && FitPatch(cloud, part, viewpoint, p) &&
-            p.rmse <= params.max_rmse) {
+            acceptable(p)) {
             patches.push_back(std::move(p));
         }
     }
@@ -185,11 +196,18 @@ std::vector<PlanePair> MatchPlanes(const std::vector<PlanarPatch>& source,
 }
 
 double AddPlaneTerms(const std::vector<PlanarPatch>& source, const std::vector<PlanarPatch>& target,
-                     const std::vector<PlanePair>& pairs, const Eigen::Isometry3d& T_target_source,
-                     const Eigen::Vector3d& center, double weight, Matrix6d& H, Vector6d& g) {
+                     const std::vector<PlanePair>& pairs, const std::vector<double>& weights,
+                     const Eigen::Isometry3d& T_target_source, const Eigen::Vector3d& center,
+                     Matrix6d& H, Vector6d& g) {
+    if (weights.size() != pairs.size()) {
+        throw InvalidArgument(fmt::format("plane terms: {} pairs but {} weights", pairs.size(),
+                                          weights.size()));
+    }
     double cost = 0.0;
     const Eigen::Matrix3d R = T_target_source.linear();
-    for (const auto& pair : pairs) {
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        const PlanePair& pair = pairs[k];
+        const double weight = weights[k];
         const PlanarPatch& ps = source[pair.source];
         const Eigen::Vector3d& n = target[pair.target].normal;
         const double d = target[pair.target].d;

@@ -46,6 +46,12 @@ struct PlaneExtractionParams {
     float max_angle_deg = 12.0f;    ///< normal deviation from the region's seed [deg], (0, 90]
     std::size_t min_points = 60;    ///< smaller patches are dropped [points]; >= 3
     float max_rmse = 0.01f;         ///< patches less flat than this are dropped [m]; > 0
+    /// Patches narrower than this (RMS spread along their shorter in-plane axis) are dropped:
+    /// a depth camera's far quantisation terraces are perfectly flat strips, not planes [m]
+    float min_extent = 0.03f;
+    /// Patches whose depth noise at their centroid (depth_noise * d^2, d from the cloud's
+    /// sensor_origin) exceeds max_rmse are dropped; 0 = no depth model [1/m]
+    float depth_noise = 0.0f;
     int max_planes = 16;            ///< the largest patches kept [patches]; >= 1
     float merge_angle_deg = 4.0f;   ///< patches of one plane (a table split by objects) whose
                                     ///< normals differ by less are merged [deg] ...
@@ -87,9 +93,11 @@ std::vector<PlanePair> MatchPlanes(const std::vector<PlanarPatch>& source,
                                    const PlaneMatchParams& params);
 
 /// Adds the Gauss-Newton terms of the pairs (see the file comment) at T_target_source, the twist
-/// about `center`, each patch point weighing `weight`, to H and g; returns their cost.
+/// about `center`, each point of pair k's patch weighing weights[k] (one per pair), to H and g;
+/// returns their cost. Throws InvalidArgument when the sizes differ.
 double AddPlaneTerms(const std::vector<PlanarPatch>& source, const std::vector<PlanarPatch>& target,
-                     const std::vector<PlanePair>& pairs, const Eigen::Isometry3d& T_target_source,
-                     const Eigen::Vector3d& center, double weight, Matrix6d& H, Vector6d& g);
+                     const std::vector<PlanePair>& pairs, const std::vector<double>& weights,
+                     const Eigen::Isometry3d& T_target_source, const Eigen::Vector3d& center,
+                     Matrix6d& H, Vector6d& g);
 
 }  // namespace multicue

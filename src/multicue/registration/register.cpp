@@ -74,6 +74,7 @@ RegistrationParams RegistrationParams::ForResolution(float r) {
     p.planes.radius = 3.0f * r;
     p.planes.max_rmse = r;
     p.planes.merge_distance = 1.5f * r;
+    p.planes.min_extent = 3.0f * r;
     p.point_plane.matching.max_offset = 2.0f * r;
     p.point_plane.matching.centroid_slack = 15.0f * r;
     p.plane_global.score_distance = 2.0f * r;
@@ -154,8 +155,10 @@ RegistrationResult Dispatch(const PointCloud& source, const KdTree& source_tree,
     if (icp.method == IcpMethod::kPointToPoint) icp.method = IcpMethod::kPointToPlane;
     PointPlaneParams point_plane = params.point_plane;
     point_plane.icp = icp;
-    const auto source_patches = ExtractPlanarPatches(source, source_tree, params.planes);
-    const auto target_patches = ExtractPlanarPatches(target, target_tree, params.planes);
+    PlaneExtractionParams planes = params.planes;
+    if (planes.depth_noise == 0.0f) planes.depth_noise = icp.depth_noise;
+    const auto source_patches = ExtractPlanarPatches(source, source_tree, planes);
+    const auto target_patches = ExtractPlanarPatches(target, target_tree, planes);
     if (method == RegistrationMethod::kPlane) {
         RegistrationResult r = RegisterPointsAndPlanes(source, target, &target_tree, source_patches,
                                                        target_patches, point_plane, init);

@@ -22,7 +22,9 @@ struct FreeSpaceParams {
     float depth_noise = 1.4e-3f;    ///< sigma = depth_noise * depth^2 of the frame [1/m]; >= 0
     std::size_t max_points = 5000;  ///< source points tested (evenly strided) [points]; >= 1
     /// Share of violating points above which an alignment is rejected, (0, 1] [-]
-    double max_violation = 0.08;
+    /// (0.02: chosen on the simulated validation sequences, where right alignments put at most
+    /// 1.2 % and wrong ones 2.7-7.9 % of their points into free space)
+    double max_violation = 0.02;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
