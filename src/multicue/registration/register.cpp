@@ -85,6 +85,7 @@ RegistrationParams RegistrationParams::ForResolution(float r) {
     p.fpfh.ransac.min_edge = 2.0f * r;
     p.fpfh.pruning.absolute = 2.0f * r;
     p.free_space.tolerance = 3.0f * r;
+    p.free_space.max_gap = 10.0f * r;
     return p;
 }
 
