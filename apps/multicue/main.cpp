@@ -59,9 +59,9 @@ int main(int argc, char** argv) {
     multicue::cli::AddMeshCommand(app, global);
     multicue::cli::AddTrainCommand(app, global);
     multicue::cli::AddDatasetExtractCommand(app, global);
+    multicue::cli::AddRegisterCommand(app, global);
     // `map`: maps built from several scans; `map kitchen` is the kitchen's semantic map.
-    auto* map_command = app.add_subcommand("map", "Maps from scans: map kitchen");
-    map_command->require_subcommand(1);
+    auto* map_command = multicue::cli::AddMapCommand(app, global);
     multicue::cli::AddMapKitchenCommand(*map_command, global);
 
     app.parse_complete_callback([&] {

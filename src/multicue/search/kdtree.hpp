@@ -67,6 +67,13 @@ class KdTree {
     /// Original cloud index of the single nearest point (or false if the tree is empty).
     bool SearchNearest(const Eigen::Vector3f& query, Index& index, float& squared_distance) const;
 
+    /// The nearest indexed point within `max_distance` of `query` (distance <= max_distance), or
+    /// false when there is none. The search never leaves that ball, so queries far from every
+    /// point (the parts of one scan that another does not overlap) cost little. Throws
+    /// InvalidArgument if max_distance is not > 0 and finite.
+    bool SearchNearestWithin(const Eigen::Vector3f& query, float max_distance, Index& index,
+                             float& squared_distance) const;
+
     /// The nodes, root first (empty for an empty tree).
     const std::vector<Node>& Nodes() const;
     /// The indexed points in tree order: each node covers a contiguous range.
