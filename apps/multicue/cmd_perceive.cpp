@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <string>
 
@@ -24,6 +23,7 @@
 #include "multicue/system/perceive_report.hpp"
 #include "multicue/system/perceive_views.hpp"
 #include "multicue/training/part_graph_training.hpp"
+#include "sim_manifest.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -101,29 +101,19 @@ std::string Summary(const PerceiveResult& result, const std::filesystem::path& o
 }
 
 /// One frame of a simulator manifest: its file and pose in the scene's world frame.
-struct ManifestFrame {
+struct ViewFrame {
     std::filesystem::path file;
     Eigen::Isometry3f T_world_sensor = Eigen::Isometry3f::Identity();
 };
 
 /// The frames of scene `scene_id` (the first scene if negative) of a `multicue simulate scenes`
 /// manifest.json.
-std::vector<ManifestFrame> ReadManifestFrames(const std::filesystem::path& path, int scene_id) {
-    std::ifstream in(path);
-    if (!in) throw IoError(path.string() + ": cannot open the manifest");
-    nlohmann::json manifest;
-    try {
-        manifest = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw FormatError(path.string() + ": not a JSON manifest (" + e.what() + ")");
-    }
+std::vector<ViewFrame> ReadManifestFrames(const std::filesystem::path& path, int scene_id) {
+    const auto scenes = ReadSimManifest(path);
     const auto where = path.string();
-    if (!manifest.is_object() || !manifest.contains("scenes") || !manifest["scenes"].is_array()) {
-        throw FormatError(where + ": no 'scenes' array (a manifest of `multicue simulate scenes`)");
-    }
-    const nlohmann::json* scene = nullptr;
-    for (const auto& s : manifest["scenes"]) {
-        if (scene_id < 0 || (s.contains("id") && s["id"] == scene_id)) {
+    const ManifestScene* scene = nullptr;
+    for (const auto& s : scenes) {
+        if (scene_id < 0 || s.id == scene_id) {
             scene = &s;
             break;
         }
@@ -131,26 +121,12 @@ std::vector<ManifestFrame> ReadManifestFrames(const std::filesystem::path& path,
     if (scene == nullptr) {
         throw InvalidArgument(fmt::format("{}: no scene with id {}", where, scene_id));
     }
-    std::vector<ManifestFrame> frames;
-    try {
-        for (const auto& f : scene->at("frames")) {
-            ManifestFrame frame;
-            frame.file = path.parent_path() / f.at("file").get<std::string>();
-            const auto& T = f.at("T_world_sensor");
-            if (!T.is_array() || T.size() != 4) throw FormatError("T_world_sensor is not 4x4");
-            for (int r = 0; r < 4; ++r) {
-                if (!T[r].is_array() || T[r].size() != 4) {
-                    throw FormatError("T_world_sensor is not 4x4");
-                }
-                for (int c = 0; c < 4; ++c)
-                    frame.T_world_sensor.matrix()(r, c) = T[r][c].get<float>();
-            }
-            frames.push_back(std::move(frame));
-        }
-    } catch (const nlohmann::json::exception& e) {
-        throw FormatError(fmt::format("{}: bad frame entry ({})", where, e.what()));
-    } catch (const FormatError& e) {
-        throw FormatError(fmt::format("{}: {}", where, e.what()));
+    std::vector<ViewFrame> frames;
+    for (const auto& f : scene->frames) {
+        ViewFrame frame;
+        frame.file = path.parent_path() / f.file;
+        frame.T_world_sensor.matrix() = f.T_world_sensor.cast<float>();
+        frames.push_back(std::move(frame));
     }
     if (frames.empty()) throw FormatError(where + ": the scene has no frames");
     return frames;

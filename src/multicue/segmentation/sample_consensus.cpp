@@ -287,12 +287,16 @@ void ScoreBatch(const Evaluator& evaluator, SacMethod method, std::optional<tbb:
         if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], method);
     };
     if (arena && n > 1) {
+        detail::TsanFork();
         arena->execute([&] {
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
                               [&](const tbb::blocked_range<std::size_t>& r) {
+                                  detail::TsanTaskStart();
                                   for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
+                                  detail::TsanTaskEnd();
                               });
         });
+        detail::TsanJoin();
     } else {
         for (std::size_t j = 0; j < n; ++j) score(j);
     }
