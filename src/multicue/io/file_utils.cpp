@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <system_error>
@@ -53,10 +55,18 @@ void WriteFileAtomically(const std::filesystem::path& path,
     try {
         {
             std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-            if (!out) throw IoError(fmt::format("{}: cannot open for writing", path.string()));
+            if (!out) {
+                throw IoError(fmt::format("{}: cannot open for writing: {}", path.string(),
+                                          std::strerror(errno)));
+            }
+            errno = 0;
             write(out);
-            out.flush();
-            if (!out) throw IoError(fmt::format("{}: write failed (disk full?)", path.string()));
+            out.close();
+            if (!out) {
+                // errno of the failed write: ENOSPC (disk full), EFBIG (ulimit -f), EIO, ...
+                throw IoError(fmt::format("{}: write failed: {}", path.string(),
+                                          errno != 0 ? std::strerror(errno) : "stream error"));
+            }
         }
         std::filesystem::rename(tmp, path, ec);
         if (ec) {

@@ -3,6 +3,8 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <system_error>
@@ -141,17 +143,27 @@ void WriteBytesAtomically(const std::filesystem::path& path, std::string_view by
     static std::atomic<unsigned> counter{0};
     auto dir = path.parent_path();
     if (dir.empty()) dir = ".";
-    const auto tmp = dir / (path.filename().string() + ".tmp" + std::to_string(::getpid()) + "." +
-                            std::to_string(counter++));
+    // Hidden and named like io::WriteFileAtomically's, so a file left by a killed process is
+    // recognisable as one.
+    std::string name = ".";
+    name.append(path.filename().string());
+    name.append(".tmp-").append(std::to_string(::getpid()));
+    name.append("-").append(std::to_string(counter++));
+    const auto tmp = dir / name;
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(path.string() + ": cannot open for writing");
-        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        out.flush();
         if (!out) {
+            throw IoError(path.string() + ": cannot open for writing: " + std::strerror(errno));
+        }
+        errno = 0;
+        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        out.close();
+        if (!out) {
+            // errno of the failed write: ENOSPC (disk full), EFBIG (ulimit -f), EIO, ...
+            const std::string why = errno != 0 ? std::strerror(errno) : "stream error";
             std::error_code ec;
             std::filesystem::remove(tmp, ec);
-            throw IoError(path.string() + ": write failed");
+            throw IoError(path.string() + ": write failed: " + why);
         }
     }
     std::error_code ec;

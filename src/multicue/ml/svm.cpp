@@ -12,6 +12,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/ml/serialization.hpp"
+#include "multicue/ml/svm_model_text.hpp"
 
 namespace multicue::ml {
 
@@ -277,6 +278,10 @@ void SvmClassifier::ReadModel(ByteReader& r) {
     num_classes_ = r.Get<std::int32_t>();
     model_text_ = r.GetString();
     if (num_classes_ != static_cast<int>(num_classes())) r.Fail("bad SVM class count");
+    if (const std::string problem = SvmModelTextProblem(model_text_, num_features(), num_classes());
+        !problem.empty()) {
+        r.Fail("bad embedded libsvm model: " + problem);
+    }
     std::lock_guard<std::mutex> lock(LibsvmMutex());
     svm_model* m = ModelFromText(model_text_);
     if (m == nullptr) r.Fail("libsvm cannot read the embedded model");
