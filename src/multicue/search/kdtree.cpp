@@ -134,6 +134,14 @@ struct KdTree::Impl {
             // 2 nodes.
             nodes.reserve(4 * items.size() / static_cast<std::size_t>(leaf_size) + 2);
             BuildNode(items, 0, items.size(), static_cast<std::size_t>(leaf_size));
+            const float reach =
+                std::max(nodes[0].min.cwiseAbs().maxCoeff(), nodes[0].max.cwiseAbs().maxCoeff());
+            if (reach > KdTree::kMaxCoordinate) {
+                throw DataError(fmt::format(
+                    "a point lies {:.3g} m from the origin: a k-d tree searches points within "
+                    "{:.0e} m of it, where squared distances stay finite (wrong units?)",
+                    reach, KdTree::kMaxCoordinate));
+            }
         }
         points.resize(items.size());
         cloud_index.resize(items.size());

@@ -228,6 +228,21 @@ const std::vector<KnnBatch::Neighbourhood>& KnnBatch::Group(const TreeGroups& gr
     for (Index t = group.begin; t < group.end; ++t) {
         spread = std::max(spread, (points_[t] - f).norm());
     }
+    if (rf == 0.0f && spread == 0.0f) {
+        // Every point of the group coincides with f, which has k copies: the k nearest of each are
+        // copies of itself at distance 0, and their moments are the same whichever copies they
+        // are. Searching them leaf by leaf would narrow every leaf of the copies down from every
+        // other: quadratic in the copies (a cloud of one point, invalid pixels written as 0 0 0).
+        for (Index t = group.begin; t < group.end; ++t) {
+            Neighbourhood& out = out_.emplace_back();
+            out.position = t;
+            for (std::size_t j = 0; j < k_; ++j) out.moments.Add(Eigen::Vector3f::Zero());
+        }
+        const KdTree::Node& last = nodes_[groups.leaves[groups.first_leaf[g + 1] - 1]];
+        prev_begin_ = last.begin;
+        prev_kth_.assign(last.end - last.begin, 0.0f);
+        return out_;
+    }
     FindLeavesNear(group.min, group.max, std::min(Square(rf + spread) * kMargin, cap2_));
     for (std::size_t l = groups.first_leaf[g]; l < groups.first_leaf[g + 1]; ++l) {
         Leaf(groups.leaves[l], f, rf);
@@ -364,9 +379,13 @@ void KnnBatch::NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi
     leaves_.resize(n);
 }
 
-// Candidates within `bound` (squared) of q, in tree order (branch-free append).
+// Candidates within `bound` (squared) of q, in tree order (branch-free append). Once k of them
+// coincide with q, no later candidate can rank before them (the order is by distance, then tree
+// position): the collection stops there, so that a point repeated many times (a sensor writing
+// invalid pixels as 0 0 0, a cloud of one point) costs k candidates per query instead of all
+// the copies.
 std::size_t KnnBatch::Collect(const Eigen::Vector3f& q, float bound) {
-    std::size_t count = 0;
+    std::size_t count = 0, same = 0;
     for (Index id : leaves_) {
         const KdTree::Node& node = nodes_[id];
         if (BoxGapSquared(node.min, node.max, q, q) > bound) continue;
@@ -375,7 +394,9 @@ std::size_t KnnBatch::Collect(const Eigen::Vector3f& q, float bound) {
             dist_[count] = d;
             pos_[count] = i;
             count += d <= bound ? 1 : 0;
+            same += d == 0.0f ? 1 : 0;
         }
+        if (same >= k_) break;
     }
     return count;
 }
@@ -399,9 +420,15 @@ std::size_t KnnBatch::SelectNearest(std::size_t count, float bound, float& kth2)
         top = 0.0f;
         for (std::size_t j = 0; j < count; ++j) top = std::max(top, dist_[j]);
     }
-    const float scale = top > 0.0f ? kBuckets / top : 0.0f;
+    // Squared distances of points beyond about 1.8e19 m overflow to infinity: such candidates go
+    // to the top bucket (d * scale is NaN or at least kBuckets there), never past the histogram.
+    const float scale = top > 0.0f && std::isfinite(top) ? kBuckets / top : 0.0f;
+    const auto bucket_of = [scale](float d) {
+        const float b = d * scale;
+        return b < static_cast<float>(kBuckets) ? static_cast<int>(b) : kBuckets;
+    };
     std::array<std::uint32_t, kBuckets + 1> histogram{};
-    for (std::size_t j = 0; j < count; ++j) ++histogram[static_cast<int>(dist_[j] * scale)];
+    for (std::size_t j = 0; j < count; ++j) ++histogram[bucket_of(dist_[j])];
     // The bucket of the k-th, scanning down from the top (the k-th lies in the upper half when
     // the bound was tight).
     int bucket = kBuckets;
@@ -410,7 +437,7 @@ std::size_t KnnBatch::SelectNearest(std::size_t count, float bound, float& kth2)
     std::size_t ties = 0;
     for (std::size_t j = 0; j < count; ++j) {
         ties_[ties] = CandidateKey(dist_[j], pos_[j]);
-        ties += static_cast<int>(dist_[j] * scale) == bucket ? 1 : 0;
+        ties += bucket_of(dist_[j]) == bucket ? 1 : 0;
     }
     // The k-th is the (k - below)-th smallest key of its bucket. Shells of equal distance on the
     // sensor's pixel grid often fill a bucket with a few points; ranking them by counting costs

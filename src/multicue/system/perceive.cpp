@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <optional>
 
 #include <fmt/format.h>
@@ -156,6 +157,35 @@ PerceiveResult PerceiveFrame(const PointCloud& input, const PerceiveParams& para
     return result;
 }
 
+// The cloud with the points farther than kMaxPerceiveRange from the sensor frame's origin made
+// invalid (NaN), or nullopt when there are none. Such points are no measurement of a table top (a
+// corrupt pixel, a value in the wrong units); beyond about 1e18 m squared distances would not even
+// be finite, and the voxel grids of the stages would leave the 32-bit range much sooner.
+std::optional<PointCloud> WithoutFarPoints(const PointCloud& input) {
+    const auto far = [](const Eigen::Vector3f& p) {
+        return p.allFinite() && p.cwiseAbs().maxCoeff() > kMaxPerceiveRange;
+    };
+    const std::size_t n =
+        static_cast<std::size_t>(std::count_if(input.points.begin(), input.points.end(), far));
+    if (n == 0) return std::nullopt;
+    const std::size_t finite = input.CountFinite();
+    if (n == finite) {
+        throw DataError(fmt::format(
+            "no valid points: all {} finite points lie farther than {:.0e} m from the sensor "
+            "(wrong units?)",
+            finite, kMaxPerceiveRange));
+    }
+    LogWarning(
+        "perceive: {} of {} points lie farther than {:.0e} m from the sensor and are left "
+        "out as invalid",
+        n, finite, kMaxPerceiveRange);
+    PointCloud cloud = input;
+    for (auto& p : cloud.points) {
+        if (far(p)) p = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    }
+    return cloud;
+}
+
 // Point indices of the recovered grid mapped to the input's, ascending.
 void ToInput(Indices& indices, const ImageGrid& grid) {
     for (Index& i : indices) i = grid.input_of[i];
@@ -164,10 +194,12 @@ void ToInput(Indices& indices, const ImageGrid& grid) {
 
 }  // namespace
 
-PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
+PerceiveResult Perceive(const PointCloud& given_input, const PerceiveParams& given,
                         const PerceiveModels& models) {
     const PerceiveParams params = ApplyThreadCount(given);
-    CheckInputs(input, params, models);
+    CheckInputs(given_input, params, models);
+    const std::optional<PointCloud> near = WithoutFarPoints(given_input);
+    const PointCloud& input = near ? *near : given_input;
     PerceiveResult result;
     const auto start = std::chrono::steady_clock::now();
     std::optional<ImageGrid> grid;
