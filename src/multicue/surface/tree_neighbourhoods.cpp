@@ -19,6 +19,8 @@ constexpr float kMargin = 1.0f + 1e-4f;
 constexpr float kGuessShare = 0.3f;
 // Largest bucket that SelectNearest ranks by counting rather than partitioning.
 constexpr std::size_t kMaxRankTies = 24;
+// Candidates beyond which the first query of a leaf takes its bound from an ordinary search.
+constexpr std::size_t kMaxCandidates = 4096;
 // Size of the groups of leaves that share one tree traversal [points].
 constexpr Index kGroupPoints = 192;
 
@@ -275,13 +277,25 @@ void KnnBatch::Leaf(Index leaf_id, const Eigen::Vector3f& f, float rf) {
         const std::size_t next = NextPending();
         const Index t = pending_[next];
         const std::size_t j = t - leaf.begin;
-        const float bound = std::min(Square(bound_[j]) * kMargin, cap2_);
+        float bound = std::min(Square(bound_[j]) * kMargin, cap2_);
         if (first) {
-            NarrowLeaves(points_[t], points_[t], bound);
+            std::size_t capacity = NarrowLeaves(points_[t], points_[t], bound);
+            if (capacity > std::max<std::size_t>(kMaxCandidates, 64 * k_)) {
+                // Far from every point done so far (a sparse region, a group that spans a gap):
+                // the bound would take in a large part of the cloud, in time and in scratch
+                // memory. An ordinary search gives the query its own k-th distance, which bounds
+                // the same k nearest.
+                tree_.SearchKnn(points_[t], static_cast<int>(k_), idx_, d2_);
+                if (idx_.size() == k_) {
+                    bound = std::min(bound, d2_.back() * kMargin);
+                    capacity = NarrowLeaves(points_[t], points_[t], bound);
+                }
+            }
+            Reserve(capacity);
         } else if (pending_.size() + 1 == size) {
             float reach = 0.0f;
             for (Index other : pending_) reach = std::max(reach, bound_[other - leaf.begin]);
-            NarrowLeaves(leaf.min, leaf.max, std::min(Square(reach) * kMargin, cap2_));
+            Reserve(NarrowLeaves(leaf.min, leaf.max, std::min(Square(reach) * kMargin, cap2_)));
         }
         first = false;
         Done(next, Query(t, bound, Square(guess_[j]) * kMargin));
@@ -346,37 +360,45 @@ void KnnBatch::FindLeavesNear(const Eigen::Vector3f& lo, const Eigen::Vector3f& 
     std::array<Index, 64> stack;
     std::size_t top = 0;
     stack[top++] = 0;
-    std::size_t capacity = 1;  // one spare slot for the branch-free append in Collect
     while (top > 0) {
         const Index id = stack[--top];
         const KdTree::Node& node = nodes_[id];
         if (BoxGapSquared(node.min, node.max, lo, hi) > r2) continue;
         if (node.IsLeaf()) {
             group_leaves_.push_back(id);
-            capacity += node.end - node.begin;
             continue;
         }
         stack[top++] = node.second_child;
         stack[top++] = id + 1;
     }
+}
+
+// The group's leaves within sqrt(r2) of the box [lo, hi], into leaves_ (branch-free append);
+// returns how many candidates they can give (Reserve).
+std::size_t KnnBatch::NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2) {
+    leaves_.resize(group_leaves_.size());
+    std::size_t n = 0;
+    std::size_t capacity = 1;  // one spare slot for the branch-free append in Collect
+    for (Index id : group_leaves_) {
+        const KdTree::Node& node = nodes_[id];
+        leaves_[n] = id;
+        const bool near = BoxGapSquared(node.min, node.max, lo, hi) <= r2;
+        n += near ? 1 : 0;
+        capacity += near ? node.end - node.begin : 0;
+    }
+    leaves_.resize(n);
+    return capacity;
+}
+
+// Candidate buffers for `capacity` candidates: sized for the leaves a query looks at, not for all
+// the group's, which in sparse regions can hold most of the cloud (once per thread).
+void KnnBatch::Reserve(std::size_t capacity) {
     if (dist_.size() < capacity) {
         dist_.resize(capacity);
         pos_.resize(capacity);
         ties_.resize(capacity);
         selected_.resize(capacity);
     }
-}
-
-// The group's leaves within sqrt(r2) of the box [lo, hi], into leaves_ (branch-free append).
-void KnnBatch::NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2) {
-    leaves_.resize(group_leaves_.size());
-    std::size_t n = 0;
-    for (Index id : group_leaves_) {
-        const KdTree::Node& node = nodes_[id];
-        leaves_[n] = id;
-        n += BoxGapSquared(node.min, node.max, lo, hi) <= r2 ? 1 : 0;
-    }
-    leaves_.resize(n);
 }
 
 // Candidates within `bound` (squared) of q, in tree order (branch-free append). Once k of them

@@ -109,4 +109,10 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result);
 PerceiveResult Perceive(const PointCloud& cloud, const PerceiveParams& params,
                         const PerceiveModels& models = {});
 
+/// Perceive without a working copy of the cloud (for large clouds: the copy is the size of the
+/// input): normals and curvature are added to `cloud` when it has none, and points beyond
+/// kMaxPerceiveRange become NaN. Same result as Perceive.
+PerceiveResult PerceiveInPlace(PointCloud& cloud, const PerceiveParams& params,
+                               const PerceiveModels& models = {});
+
 }  // namespace multicue
