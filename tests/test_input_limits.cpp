@@ -5,18 +5,22 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <string>
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include "ml_test_data.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/config.hpp"
+#include "multicue/io/file_utils.hpp"
 #include "multicue/io/json_text.hpp"
 #include "multicue/io/pcd.hpp"
 #include "multicue/io/ply.hpp"
 #include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
 #include "multicue/ml/svm_model_text.hpp"
 #include "multicue/system/perceive.hpp"
 #include "sim_manifest.hpp"
@@ -178,6 +182,50 @@ TEST(InputLimits, LibsvmModelTextIsCheckedBeforeLibsvmReadsIt) {
     EXPECT_NE(ml::SvmModelTextProblem(text.substr(0, text.size() - 40), 5, 3), "");  // cut
     EXPECT_NE(ml::SvmModelTextProblem("", 5, 3), "");
     EXPECT_NE(ml::SvmModelTextProblem(text, 5, 2), "");  // more classes than the model has
+}
+
+TEST(AtomicWrites, TemporariesOfKilledWritersAreRemovedByTheNextWrite) {
+    const test::TempDir dir;
+    // No process has the id 999999999 (beyond any pid_max); the current process is alive.
+    const auto dead = dir / ".out.pcd.tmp-999999999-0";
+    const auto dead_model = dir / ".m.mcd.tmp-999999999-3";
+    const auto alive = dir / (".out.pcd.tmp-" + std::to_string(::getpid()) + "-7");
+    const auto other = dir / ".other.pcd.tmp-999999999-0";
+    for (const auto& p : {dead, dead_model, alive, other}) std::ofstream(p) << "half";
+    PointCloud c;
+    c.points = {Eigen::Vector3f(1, 2, 3)};
+    c.SetUnorganized();
+    io::WritePcd(dir / "out.pcd", c);
+    EXPECT_FALSE(std::filesystem::exists(dead));
+    EXPECT_TRUE(std::filesystem::exists(alive));
+    EXPECT_TRUE(std::filesystem::exists(other));  // another file's: left to its own next write
+    ml::Dataset d = test::Blobs(2, 2, 1, 3, 0.1f);
+    ml::SaveDataset(d, dir / "m.mcd");
+    EXPECT_FALSE(std::filesystem::exists(dead_model));
+    EXPECT_EQ(io::ReadPcd(dir / "out.pcd").size(), 1u);
+}
+
+TEST(AtomicWrites, AFailedWriteNamesTheFileAndTheReasonAndKeepsTheOldFile) {
+    const test::TempDir dir;
+    const auto path = dir / "keep.txt";
+    std::ofstream(path) << "old";
+    try {
+        io::WriteFileAtomically(path, [](std::ostream& out) {
+            out << "new";
+            out.setstate(std::ios::badbit);  // as a full disk leaves the stream
+        });
+        ADD_FAILURE() << "no error";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("keep.txt: write failed"), std::string::npos)
+            << e.what();
+    }
+    std::ifstream in(path);
+    std::string text;
+    in >> text;
+    EXPECT_EQ(text, "old");
+    for (const auto& f : std::filesystem::directory_iterator(dir.path())) {
+        EXPECT_EQ(f.path().filename(), "keep.txt");  // no temporary file left
+    }
 }
 
 }  // namespace

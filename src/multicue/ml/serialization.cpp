@@ -4,11 +4,14 @@
 #include <atomic>
 #include <bit>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <system_error>
 
+#include <signal.h>
 #include <unistd.h>
 
 namespace multicue::ml {
@@ -139,12 +142,33 @@ std::string ReadBytes(const std::filesystem::path& path) {
     return std::move(ss).str();
 }
 
+namespace {
+
+// Removes the temporary files of `name` in `dir` left by killed writers (their process is gone);
+// as io::WriteFileAtomically does for its own.
+void RemoveStaleTemporaries(const std::filesystem::path& dir, const std::string& name) {
+    const std::string prefix = "." + name + ".tmp-";
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string file = it->path().filename().string();
+        if (file.rfind(prefix, 0) != 0) continue;
+        const long pid = std::strtol(file.c_str() + prefix.size(), nullptr, 10);
+        if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+            std::error_code remove_ec;
+            std::filesystem::remove(it->path(), remove_ec);
+        }
+    }
+}
+
+}  // namespace
+
 void WriteBytesAtomically(const std::filesystem::path& path, std::string_view bytes) {
     static std::atomic<unsigned> counter{0};
     auto dir = path.parent_path();
     if (dir.empty()) dir = ".";
     // Hidden and named like io::WriteFileAtomically's, so a file left by a killed process is
     // recognisable as one.
+    RemoveStaleTemporaries(dir, path.filename().string());
     std::string name = ".";
     name.append(path.filename().string());
     name.append(".tmp-").append(std::to_string(::getpid()));

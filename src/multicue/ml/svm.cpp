@@ -3,6 +3,8 @@
 #include <libsvm/svm.h>
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
@@ -68,10 +70,15 @@ std::filesystem::path TempModelPath() {
 // libsvm reads and writes models only through files: go through a private temporary file.
 std::string ModelToText(const svm_model* model) {
     const auto path = TempModelPath();
+    errno = 0;
     const int rc = svm_save_model(path.c_str(), model);
+    const int error = errno;
     std::string text;
     try {
-        if (rc != 0) throw IoError("libsvm could not write its model to " + path.string());
+        if (rc != 0) {
+            throw IoError("libsvm could not write its model to " + path.string() + ": " +
+                          (error != 0 ? std::strerror(error) : "unknown error"));
+        }
         text = ReadBytes(path);
     } catch (...) {
         std::error_code ec;
