@@ -355,7 +355,41 @@ class Run(Job):
         return None  # a second run over the same frames learns other views: no fixed reference
 
 
-JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier]}
+class Convert(Job):
+    """multicue convert of a large cloud: most of the time goes to writing, so kills land in the
+    middle of the atomic write."""
+    name = "convert"
+
+    def prepare(self):
+        import array
+        n = 3_000_000
+        rng = random.Random(3)
+        xyz = array.array("f", (rng.uniform(-1.0, 1.0) for _ in range(3 * n)))
+        header = (f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                  f"WIDTH {n}\nHEIGHT 1\nPOINTS {n}\nDATA binary\n")
+        with open(self.work / "big.pcd", "wb") as f:
+            f.write(header.encode())
+            xyz.tofile(f)
+        self.old = self.work / "old"
+        self.old.mkdir(exist_ok=True)
+        sh([self.cli, "convert", self.work / "big.pcd", self.old / "out.pcd", "--format",
+            "binary"])
+
+    def cmd(self, out):
+        return [self.cli, "convert", self.work / "big.pcd", out / "out.pcd", "--format", "ascii"]
+
+    def place_old(self, out):
+        super().place_old(out)
+        shutil.copy(self.old / "out.pcd", out / "out.pcd")
+
+    def outputs(self):
+        return ["out.pcd"]
+
+    def check(self, out, ref):
+        return self.check_old_or_new(out, ref, self.old)
+
+
+JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier, Convert]}
 
 
 def run_job(job, kills, rng, report):
