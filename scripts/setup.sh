@@ -32,6 +32,8 @@ packages=(
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest
     clang-format
+    # libFuzzer targets of fuzz/ (scripts/fuzz.sh, -DMULTICUE_BUILD_FUZZERS=ON).
+    clang-14 libclang-rt-14-dev
     # The report page's viewer is bundled from npm; its browser test drives Debian's Chromium.
     nodejs chromium chromium-driver
 )

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -71,11 +70,12 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
     return options;
 }
 
-/// Runs the pipeline on `cloud` and writes the outputs; returns the result for a summary.
-PerceiveResult RunPerceive(const PointCloud& cloud, const std::string& input_name,
+/// Runs the pipeline on `cloud` and writes the outputs; returns the result for a summary. The
+/// pipeline works in `cloud` itself (it gains normals), so a large cloud is not held twice.
+PerceiveResult RunPerceive(PointCloud& cloud, const std::string& input_name,
                            const std::filesystem::path& out, const PerceiveOptions& options,
                            double load_ms) {
-    const PerceiveResult result = Perceive(cloud, options.pipeline, options.models);
+    const PerceiveResult result = PerceiveInPlace(cloud, options.pipeline, options.models);
     const auto json = PerceiveResultJson(input_name, result, {{"load", load_ms}});
     const std::string report =
         options.report.enabled ? PerceiveReportPage(cloud, result, json, options.report).Render()
@@ -297,7 +297,7 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
             return;
         }
         const auto start = std::chrono::steady_clock::now();
-        const PointCloud cloud = ReadNonEmptyCloud(*in);
+        PointCloud cloud = ReadNonEmptyCloud(*in);
         const double load_ms = MsSince(start);
         const PerceiveResult result = RunPerceive(cloud, *in, *out, options, load_ms);
         if (!*quiet) std::fputs(Summary(result, *out, options.report).c_str(), stdout);
@@ -361,7 +361,7 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
         const std::uint64_t seed = sim::SubSeed(1, 3);
         const sim::Scene scene = sim::MakeTableScene(table, seed);
         const auto pose = sim::TableViewpoints(scene, 1, {}, seed).front();
-        const PointCloud cloud =
+        PointCloud cloud =
             sim::ScanKinect(scene, pose, sim::KinectParams{}, sim::SubSeed(seed, 100));
         std::error_code ec;
         std::filesystem::create_directories(dir, ec);

@@ -36,8 +36,13 @@ class KdTree {
         bool IsLeaf() const { return second_child == 0; }
     };
 
+    /// Largest coordinate magnitude a tree accepts [m]: squared distances between points within
+    /// it stay finite in single precision.
+    static constexpr float kMaxCoordinate = 1e18f;
+
     /// Indexes the finite points of `cloud` (NaN points are left out). The tree keeps its own
-    /// copy of the coordinates, so the cloud may change or go away afterwards.
+    /// copy of the coordinates, so the cloud may change or go away afterwards. Throws DataError
+    /// when a coordinate exceeds kMaxCoordinate.
     explicit KdTree(const PointCloud& cloud, const KdTreeParams& params = {});
     /// Indexes the given points of `cloud` only (non-finite ones are still left out).
     KdTree(const PointCloud& cloud, const Indices& subset, const KdTreeParams& params = {});

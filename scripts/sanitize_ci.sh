@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# The sanitizer job of CI (.ci/run runs it after the README's test command; docs/hardening.md):
+#
+#   1. build-asan/: AddressSanitizer + UndefinedBehaviorSanitizer (-DMULTICUE_SANITIZE=
+#      address,undefined): the library, the CLI and the tests, then every unit test (ctest);
+#   2. build-tsan/: ThreadSanitizer (-DMULTICUE_SANITIZE=thread): the tests of the parallel
+#      stages (normals, perceive, training, simulation), run directly.
+#
+# Both builds are -O1 -g1 with g++, without benchmarks, accuracy drivers, examples, the Python
+# module, the PCL/Open3D tests and the report viewer; ccache makes a second run cheap. Tests that
+# need the shared scans are skipped (MULTICUE_SHARED_DATA_DIR points nowhere) to keep the job's
+# time bounded. Any sanitizer report fails the job.
+#
+#   scripts/sanitize_ci.sh [asan|tsan ...]   (default: both)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+stages=("$@")
+if [[ ${#stages[@]} -eq 0 ]]; then stages=(asan tsan); fi
+
+common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+        -DMULTICUE_BUILD_BENCH=OFF -DMULTICUE_BUILD_EVAL=OFF -DMULTICUE_BUILD_EXAMPLES=OFF
+        -DMULTICUE_BUILD_PYTHON=OFF -DMULTICUE_INSTALL=OFF -DMULTICUE_PCL_TESTS=OFF
+        -DMULTICUE_OPEN3D_TESTS=OFF -DMULTICUE_REPORT_VIEWER=OFF
+        -DMULTICUE_SHARED_DATA_DIR="$PWD/build-no-shared-data")
+
+supp="$PWD/scripts/sanitizers"
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0"
+export LSAN_OPTIONS="suppressions=$supp/lsan.supp"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
+
+seconds() { date +%s; }
+
+for stage in "${stages[@]}"; do
+    start=$(seconds)
+    case "$stage" in
+        asan)
+            cmake -S . -B build-asan "${common[@]}" -DMULTICUE_SANITIZE=address,undefined
+            cmake --build build-asan -j2
+            built=$(seconds)
+            # The browser test drives Chromium over the CLI (minutes under ASan, and Chromium is
+            # not ours); the documentation checks do not run multicue code.
+            ctest --test-dir build-asan --output-on-failure -j2 -E '^(report_browser|docs_)'
+            ;;
+        tsan)
+            tests=(test_normals test_perceive test_perceive_stages test_part_graph_training
+                   test_sim test_executive)
+            cmake -S . -B build-tsan "${common[@]}" -DMULTICUE_SANITIZE=thread
+            cmake --build build-tsan -j2 --target "${tests[@]}"
+            built=$(seconds)
+            for t in "${tests[@]}"; do
+                echo "sanitize_ci.sh: $t under ThreadSanitizer"
+                "build-tsan/tests/$t" --gtest_brief=1
+            done
+            ;;
+        *)
+            echo "sanitize_ci.sh: unknown stage '$stage' (asan, tsan)" >&2
+            exit 2
+            ;;
+    esac
+    end=$(seconds)
+    echo "sanitize_ci.sh: $stage: build $((built - start)) s, tests $((end - built)) s"
+done
