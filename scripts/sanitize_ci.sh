@@ -1,22 +1,38 @@
 #!/usr/bin/env bash
-# The sanitizer job of CI (.ci/run runs it after the README's test command; docs/hardening.md):
+# The sanitizer job (docs/hardening.md#sanitizers). Two scopes:
 #
-#   1. build-asan/: AddressSanitizer + UndefinedBehaviorSanitizer (-DMULTICUE_SANITIZE=
-#      address,undefined): the library, the CLI and the tests, then every unit test (ctest);
-#   2. build-tsan/: ThreadSanitizer (-DMULTICUE_SANITIZE=thread): the tests of the parallel
-#      stages (normals, perceive, training, simulation), run directly.
+#   scripts/sanitize_ci.sh [asan|tsan ...]          the CI scope: the readers' tests under
+#                                                   AddressSanitizer + UndefinedBehaviorSanitizer
+#                                                   (`asan`, which .ci/run runs after the README's
+#                                                   test command) and the thread pool's and the
+#                                                   normals' tests under ThreadSanitizer (`tsan`)
+#   scripts/sanitize_ci.sh --full [asan|tsan ...]   every unit test under ASan + UBSan and the
+#                                                   tests of all parallel stages (normals, perceive,
+#                                                   training, simulation, executive) under TSan;
+#                                                   about an hour cold on two cores
 #
-# Both builds are -O1 -g1 with g++, without benchmarks, accuracy drivers, examples, the Python
-# module, the PCL/Open3D tests and the report viewer; ccache makes a second run cheap. Tests that
-# need the shared scans are skipped (MULTICUE_SHARED_DATA_DIR points nowhere) to keep the job's
-# time bounded. Any sanitizer report fails the job.
-#
-#   scripts/sanitize_ci.sh [asan|tsan ...]   (default: both)
+# Builds: build-asan/ (-DMULTICUE_SANITIZE=address,undefined) and build-tsan/
+# (-DMULTICUE_SANITIZE=thread), -O1 -g1 with g++, without benchmarks, accuracy drivers,
+# examples, the Python module, the PCL/Open3D tests and the report viewer; ccache makes a second
+# run cheap. Tests that need the shared scans are skipped (MULTICUE_SHARED_DATA_DIR points
+# nowhere) to keep the time bounded. Any sanitizer report fails the job.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+full=0
+if [[ "${1:-}" == "--full" ]]; then
+    full=1
+    shift
+fi
 stages=("$@")
 if [[ ${#stages[@]} -eq 0 ]]; then stages=(asan tsan); fi
+
+# The CI scope: the readers (PCD, PLY, OBJ, configuration, PointCloud2, ROS bags, URDF) and the
+# core, search and normals code under ASan + UBSan; the parallel loops of core and the normals
+# under TSan.
+ci_asan_tests=(test_core test_pcd test_config test_ply_obj test_point_cloud2 test_ros_bags test_urdf
+               test_search test_normals)
+ci_tsan_tests=(test_core test_normals)
 
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
         -DMULTICUE_BUILD_BENCH=OFF -DMULTICUE_BUILD_EVAL=OFF -DMULTICUE_BUILD_EXAMPLES=OFF
@@ -37,15 +53,27 @@ for stage in "${stages[@]}"; do
     case "$stage" in
         asan)
             cmake -S . -B build-asan "${common[@]}" -DMULTICUE_SANITIZE=address,undefined
-            cmake --build build-asan -j2
-            built=$(seconds)
-            # The browser test drives Chromium over the CLI (minutes under ASan, and Chromium is
-            # not ours); the documentation checks do not run multicue code.
-            ctest --test-dir build-asan --output-on-failure -j2 -E '^(report_browser|docs_)'
+            if [[ $full -eq 1 ]]; then
+                cmake --build build-asan -j2
+                built=$(seconds)
+                # The browser test drives Chromium over the CLI (minutes under ASan, and Chromium
+                # is not ours); the documentation checks do not run multicue code.
+                ctest --test-dir build-asan --output-on-failure -j2 -E '^(report_browser|docs_)'
+            else
+                cmake --build build-asan -j2 --target "${ci_asan_tests[@]}"
+                built=$(seconds)
+                for t in "${ci_asan_tests[@]}"; do
+                    echo "sanitize_ci.sh: $t under AddressSanitizer + UndefinedBehaviorSanitizer"
+                    "build-asan/tests/$t" --gtest_brief=1
+                done
+            fi
             ;;
         tsan)
-            tests=(test_normals test_perceive test_perceive_stages test_part_graph_training
-                   test_sim test_executive)
+            tests=("${ci_tsan_tests[@]}")
+            if [[ $full -eq 1 ]]; then
+                tests=(test_core test_normals test_perceive test_perceive_stages
+                       test_part_graph_training test_sim test_executive)
+            fi
             cmake -S . -B build-tsan "${common[@]}" -DMULTICUE_SANITIZE=thread
             cmake --build build-tsan -j2 --target "${tests[@]}"
             built=$(seconds)
