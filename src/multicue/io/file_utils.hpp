@@ -8,17 +8,16 @@
 #include <ostream>
 #include <string>
 
+#include "multicue/core/atomic_file.hpp"
+
 namespace multicue::io {
 
 /// Reads a whole file into memory. Throws IoError naming the file if it is missing, a directory
 /// or unreadable.
 std::string ReadFileBytes(const std::filesystem::path& path);
 
-/// Calls `write` with a binary stream on a temporary file next to `path`, then renames it over
-/// `path`. If `write` throws or the stream fails, the temporary file is removed, `path` is left as
-/// it was and the exception propagates (stream failures become IoError).
-void WriteFileAtomically(const std::filesystem::path& path,
-                         const std::function<void(std::ostream&)>& write);
+/// Atomic writes (core/atomic_file.hpp), also under io's name.
+using multicue::WriteFileAtomically;
 
 /// Lower-case extension of `path` without the dot ("pcd", "ply", "obj"), or "" if none.
 std::string LowerExtension(const std::filesystem::path& path);
