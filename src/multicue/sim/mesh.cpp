@@ -146,6 +146,33 @@ void PartMesh::Validate() const {
     }
 }
 
+namespace {
+
+// Assimp's PLY importer runs past the end of a header that never ends (no `end_header` line) and
+// crashes; such a file is refused here first. A PLY header is ASCII lines of known keywords up to
+// `end_header`; anything else is not a PLY file Assimp should see.
+void CheckPlyHeader(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    if (!std::getline(in, line)) return;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line != "ply") return;  // not a PLY file: Assimp picks the importer
+    constexpr int kMaxHeaderLines = 10000;
+    for (int n = 0; n < kMaxHeaderLines && std::getline(in, line); ++n) {
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (line == "end_header") return;
+        const std::string word = line.substr(0, line.find(' '));
+        if (word != "format" && word != "comment" && word != "obj_info" && word != "element" &&
+            word != "property") {
+            throw FormatError(fmt::format("{}: malformed PLY header (line '{}')", path.string(),
+                                          line.substr(0, 40)));
+        }
+    }
+    throw FormatError(fmt::format("{}: PLY header without end_header", path.string()));
+}
+
+}  // namespace
+
 PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& params) {
     if (!(params.scale > 0.0f) || !std::isfinite(params.scale)) {
         throw InvalidArgument(fmt::format("mesh scale must be > 0, got {}", params.scale));
@@ -154,6 +181,7 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
     if (!std::filesystem::is_regular_file(path, ec)) {
         throw IoError(fmt::format("{}: no such mesh file", path.string()));
     }
+    CheckPlyHeader(path);
     Assimp::Importer importer;
     // No vertex joining: OBJ/PLY files already share vertices, and joining would merge parts.
     // The importers take face indices and counts from the file as they are: the scene is
