@@ -2,6 +2,7 @@
 /// \file Parallel helpers over TBB. The thread count is a parameter of each call (0 = all cores),
 /// applied locally through a task arena, never process-wide.
 
+#include <algorithm>
 #include <cstddef>
 
 #include <tbb/blocked_range.h>
@@ -10,30 +11,18 @@
 
 #include "multicue/core/exceptions.hpp"
 
-#if defined(MULTICUE_TSAN_ANNOTATIONS)
-#include <sanitizer/tsan_interface.h>
-#endif
+#include <functional>
 
 namespace multicue {
 
 namespace detail {
-// ThreadSanitizer sees no order between a TBB task and the thread that spawned or joined it, since
-// TBB's scheduler is not instrumented (Debian's build). In a ThreadSanitizer build
-// (MULTICUE_TSAN_ANNOTATIONS, cmake/MulticueSanitize.cmake) these calls state the order that
-// tbb::parallel_for guarantees: all before the loop happens before every task, every task before
-// all after it. Elsewhere they are empty.
-#if defined(MULTICUE_TSAN_ANNOTATIONS)
-inline char tsan_fork_token, tsan_join_token;
-inline void TsanFork() { __tsan_release(&tsan_fork_token); }
-inline void TsanTaskStart() { __tsan_acquire(&tsan_fork_token); }
-inline void TsanTaskEnd() { __tsan_release(&tsan_join_token); }
-inline void TsanJoin() { __tsan_acquire(&tsan_join_token); }
-#else
-inline void TsanFork() {}
-inline void TsanTaskStart() {}
-inline void TsanTaskEnd() {}
-inline void TsanJoin() {}
-#endif
+/// Runs chunk(0) ... chunk(count - 1) on `count` threads (the calling one and count - 1 new
+/// std::threads), joins them and rethrows the first exception. ThreadSanitizer builds
+/// (MULTICUE_TSAN_PLAIN_THREADS, cmake/MulticueSanitize.cmake) run the parallel loops this way:
+/// Debian's TBB is not built with ThreadSanitizer, so the order its scheduler guarantees between
+/// a loop and its tasks, and the reuse of its task objects, are invisible to the sanitizer, while
+/// thread creation and joining are seen. The races the sanitizer then reports are multicue's.
+void RunOnThreads(std::size_t count, const std::function<void(std::size_t)>& chunk);
 }  // namespace detail
 
 /// Number of threads `num_threads` stands for (0 = all cores). Throws on negative values.
@@ -53,15 +42,17 @@ void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t 
         body(std::size_t{0}, n);
         return;
     }
+#if defined(MULTICUE_TSAN_PLAIN_THREADS)
+    const auto chunks =
+        std::min<std::size_t>(static_cast<std::size_t>(threads), (n + grain - 1) / grain);
+    detail::RunOnThreads(chunks,
+                         [&](std::size_t c) { body(n * c / chunks, n * (c + 1) / chunks); });
+#else
     auto loop = [&] {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              detail::TsanTaskStart();
-                              body(r.begin(), r.end());
-                              detail::TsanTaskEnd();
-                          });
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, n, grain),
+            [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
     };
-    detail::TsanFork();
     // Nested in a parallel loop of at most `threads` threads (objects in parallel, each with
     // loops of its own): the inner loop runs in that loop's arena, so that its threads help
     // wherever work is left, and in isolation, so that a thread waiting for it takes no outer
@@ -73,7 +64,7 @@ void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t 
         tbb::task_arena arena(threads);
         arena.execute(loop);
     }
-    detail::TsanJoin();
+#endif
 }
 
 /// Calls body(i) for every i in [0, n).
