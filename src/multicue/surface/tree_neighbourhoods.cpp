@@ -21,6 +21,9 @@ constexpr float kGuessShare = 0.3f;
 constexpr std::size_t kMaxRankTies = 24;
 // Candidates beyond which the first query of a leaf takes its bound from an ordinary search.
 constexpr std::size_t kMaxCandidates = 4096;
+// Candidates of a whole leaf's neighbourhood beyond which its queries narrow the leaves each for
+// itself (sparse regions, leaves that span a gap): it bounds the scratch memory per thread.
+constexpr std::size_t kMaxLeafCandidates = 16 * kMaxCandidates;
 // Size of the groups of leaves that share one tree traversal [points].
 constexpr Index kGroupPoints = 192;
 
@@ -271,31 +274,27 @@ void KnnBatch::Leaf(Index leaf_id, const Eigen::Vector3f& f, float rf) {
     }
     // Queries go greedily in the order of smallest bound, each tightening the others. The first
     // one looks only at the leaves near itself, the others at those near the leaf within the
-    // largest bound left.
+    // largest bound left, or, where those hold too many points, each at the leaves near itself.
     bool first = true;
+    bool each = false;  // every query narrows the leaves for itself
     while (!pending_.empty()) {
         const std::size_t next = NextPending();
         const Index t = pending_[next];
         const std::size_t j = t - leaf.begin;
         float bound = std::min(Square(bound_[j]) * kMargin, cap2_);
-        if (first) {
-            std::size_t capacity = NarrowLeaves(points_[t], points_[t], bound);
-            if (capacity > std::max<std::size_t>(kMaxCandidates, 64 * k_)) {
-                // Far from every point done so far (a sparse region, a group that spans a gap):
-                // the bound would take in a large part of the cloud, in time and in scratch
-                // memory. An ordinary search gives the query its own k-th distance, which bounds
-                // the same k nearest.
-                tree_.SearchKnn(points_[t], static_cast<int>(k_), idx_, d2_);
-                if (idx_.size() == k_) {
-                    bound = std::min(bound, d2_.back() * kMargin);
-                    capacity = NarrowLeaves(points_[t], points_[t], bound);
-                }
-            }
-            Reserve(capacity);
+        if (first || each) {
+            bound = PrepareQuery(t, bound);
         } else if (pending_.size() + 1 == size) {
             float reach = 0.0f;
             for (Index other : pending_) reach = std::max(reach, bound_[other - leaf.begin]);
-            Reserve(NarrowLeaves(leaf.min, leaf.max, std::min(Square(reach) * kMargin, cap2_)));
+            const std::size_t capacity =
+                NarrowLeaves(leaf.min, leaf.max, std::min(Square(reach) * kMargin, cap2_));
+            each = capacity > std::max<std::size_t>(kMaxLeafCandidates, 64 * k_);
+            if (each) {
+                bound = PrepareQuery(t, bound);
+            } else {
+                Reserve(capacity);
+            }
         }
         first = false;
         Done(next, Query(t, bound, Square(guess_[j]) * kMargin));
@@ -303,6 +302,23 @@ void KnnBatch::Leaf(Index leaf_id, const Eigen::Vector3f& f, float rf) {
     prev_begin_ = leaf.begin;
     prev_kth_.swap(done_kth_);
     done_kth_.clear();
+}
+
+// The leaves near query t within `bound` (squared) and buffers for their points; returns the
+// bound, tightened by an ordinary search when the query is far from every point done so far (a
+// sparse region, a group that spans a gap): the bound would take in a large part of the cloud,
+// in time and in scratch memory, and the query's own k-th distance bounds the same k nearest.
+float KnnBatch::PrepareQuery(Index t, float bound) {
+    std::size_t capacity = NarrowLeaves(points_[t], points_[t], bound);
+    if (capacity > std::max<std::size_t>(kMaxCandidates, 64 * k_)) {
+        tree_.SearchKnn(points_[t], static_cast<int>(k_), idx_, d2_);
+        if (idx_.size() == k_) {
+            bound = std::min(bound, d2_.back() * kMargin);
+            capacity = NarrowLeaves(points_[t], points_[t], bound);
+        }
+    }
+    Reserve(capacity);
+    return bound;
 }
 
 // Tightens the bound of pending query j with a done point p whose k-th neighbour is at kth.

@@ -77,6 +77,7 @@ class KnnBatch {
 
   private:
     void Leaf(Index leaf_id, const Eigen::Vector3f& f, float rf);
+    float PrepareQuery(Index t, float bound);
     void Tighten(std::size_t j, float kth, const Eigen::Vector3f& p);
     std::size_t NextPending() const;
     void Done(std::size_t i, float kth);
