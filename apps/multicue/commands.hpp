@@ -22,6 +22,10 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
 void AddDbCommand(CLI::App& app, const GlobalOptions& global);
 void AddRunCommand(CLI::App& app, const GlobalOptions& global);
 void AddSimulateCommand(CLI::App& app, const GlobalOptions& global);
+/// `simulate kitchens` (cmd_simulate_kitchens.cpp), attached to the `simulate` command.
+void AddSimulateKitchensCommand(CLI::App& simulate, const GlobalOptions& global);
+/// `map kitchen` (cmd_map_kitchen.cpp), attached to the `map` command.
+void AddMapKitchenCommand(CLI::App& map_command, const GlobalOptions& global);
 void AddFeaturesCommand(CLI::App& app, const GlobalOptions& global);
 void AddTrainCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset`, `classifier` and `ensemble` (cmd_ml.cpp).
@@ -29,5 +33,10 @@ void AddMlCommands(CLI::App& app, const GlobalOptions& global);
 void AddMeshCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset extract` (cmd_dataset_extract.cpp); call after AddMlCommands.
 void AddDatasetExtractCommand(CLI::App& app, const GlobalOptions& global);
+/// `register SOURCE TARGET` (cmd_register.cpp).
+void AddRegisterCommand(CLI::App& app, const GlobalOptions& global);
+/// `map SCANS... | --manifest M` (cmd_map.cpp). Returns the `map` command so that other map jobs
+/// attach subcommands to it (`map kitchen ...`); its own callback skips when one of them ran.
+CLI::App* AddMapCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli
