@@ -14,19 +14,19 @@
 // usage: border_training --train PATH... [--validate PATH...] [--out FILE.json] [--l2 0.01]
 //                        [--threshold 0.9] [--rows FILE.csv]
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
-#include <Eigen/Dense>
 
 #include "driver_options.hpp"
 #include "multicue/core/exceptions.hpp"
+#include "multicue/io/file_utils.hpp"
 #include "multicue/io/pcd.hpp"
 #include "multicue/segmentation/border_classifier.hpp"
 #include "multicue/system/perceive.hpp"
@@ -35,12 +35,6 @@ using namespace multicue;
 namespace fs = std::filesystem;
 
 namespace {
-
-struct Row {
-    BorderFeatures f{};
-    int same = 0;
-    double weight = 1.0;
-};
 
 // Ground-truth object of every point: simulated frames have a category field and objects from
 // label 10, mOSD frames objects from label 20 (object = label / 10); 0 = no object.
@@ -106,7 +100,7 @@ Frame Prepare(const fs::path& file, const PerceiveParams& params) {
 
 // Rows of every border between two large parts of the frame's hypotheses.
 void AddRows(const Frame& fr, const ConvexitySplitParams& cp, double real_weight,
-             std::vector<Row>& rows) {
+             std::vector<BorderExample>& rows) {
     const PartBorderParams bp{.patch_size = cp.patch_size, .smooth_angle_deg = cp.smooth_angle_deg};
     for (std::size_t h = 0; h < fr.hypotheses.size(); ++h) {
         const Indices& object = fr.hypotheses[h];
@@ -127,59 +121,9 @@ void AddRows(const Frame& fr, const ConvexitySplitParams& cp, double real_weight
             const std::uint32_t gb = Majority(parts[b.b], fr.truth);
             if (ga == 0 || gb == 0) continue;
             rows.push_back({ComputeBorderFeatures(b, borders, summaries, fr.plane.head<3>()),
-                            ga == gb ? 1 : 0, fr.simulated ? 1.0 : real_weight});
+                            ga == gb, fr.simulated ? 1.0 : real_weight});
         }
     }
-}
-
-// Logistic regression on standardised inputs, L2 on the weights, Newton steps; returned in the
-// features' own units.
-BorderClassifierParams Fit(const std::vector<Row>& rows, double l2, BorderClassifierParams out) {
-    constexpr std::size_t d = kBorderFeatureCount;
-    const auto n = static_cast<Eigen::Index>(rows.size());
-    Eigen::MatrixXd x(n, d + 1);
-    Eigen::VectorXd y(n);
-    Eigen::VectorXd weight(n);
-    for (Eigen::Index r = 0; r < n; ++r) {
-        weight(r) = rows[r].weight;
-        for (std::size_t k = 0; k < d; ++k) x(r, k) = rows[r].f[k];
-        x(r, d) = 1.0;
-        y(r) = rows[r].same;
-    }
-    const double total = weight.sum();
-    Eigen::VectorXd mean = (x.transpose() * weight) / total;
-    Eigen::VectorXd scale(d + 1);
-    for (std::size_t k = 0; k < d; ++k) {
-        const double sd =
-            std::sqrt(((x.col(k).array() - mean(k)).square() * weight.array()).sum() / total);
-        scale(k) = sd > 1e-9 ? sd : 1.0;
-        x.col(k) = (x.col(k).array() - mean(k)) / scale(k);
-    }
-    mean(d) = 0.0;
-    scale(d) = 1.0;
-    Eigen::VectorXd beta = Eigen::VectorXd::Zero(d + 1);
-    Eigen::VectorXd penalty = Eigen::VectorXd::Constant(d + 1, l2);
-    penalty(d) = 0.0;
-    for (int it = 0; it < 30; ++it) {
-        const Eigen::VectorXd p =
-            (-(x * beta)).array().exp().unaryExpr([](double e) { return 1.0 / (1.0 + e); });
-        const Eigen::VectorXd grad =
-            x.transpose() * (weight.array() * (p - y).array()).matrix() / total +
-            penalty.cwiseProduct(beta);
-        const Eigen::VectorXd w = weight.array() * p.array() * (1.0 - p.array());
-        Eigen::MatrixXd hess = x.transpose() * w.asDiagonal() * x / total;
-        hess.diagonal() += penalty;
-        const Eigen::VectorXd step = hess.ldlt().solve(grad);
-        beta -= step;
-        if (step.norm() < 1e-8) break;
-    }
-    double bias = beta(d);
-    for (std::size_t k = 0; k < d; ++k) {
-        out.weights[k] = static_cast<float>(beta(k) / scale(k));
-        bias -= beta(k) * mean(k) / scale(k);
-    }
-    out.bias = static_cast<float>(bias);
-    return out;
 }
 
 // Share of the frame's ground-truth objects that one object of `objects` matches with F >= 0.75.
@@ -281,10 +225,10 @@ int main(int argc, char** argv) {
     try {
         PerceiveParams params;
         const std::vector<Frame> train_frames = Load(Expand(train), params, "train");
-        std::vector<Row> rows;
+        std::vector<BorderExample> rows;
         for (const Frame& fr : train_frames) AddRows(fr, params.parts.convexity, real_weight, rows);
         std::size_t same = 0;
-        for (const Row& r : rows) same += static_cast<std::size_t>(r.same);
+        for (const BorderExample& r : rows) same += r.same ? 1 : 0;
         std::printf("training rows: %zu (same object %zu, two objects %zu)\n", rows.size(), same,
                     rows.size() - same);
         if (rows.empty() || same == 0 || same == rows.size()) {
@@ -293,32 +237,33 @@ int main(int argc, char** argv) {
         }
         BorderClassifierParams fitted = params.parts.convexity.classifier;
         fitted.threshold = threshold;
-        fitted = Fit(rows, l2, fitted);
+        fitted = FitBorderClassifier(rows, l2, fitted);
         std::printf("bias %.6g\n", fitted.bias);
         for (std::size_t k = 0; k < kBorderFeatureCount; ++k) {
             std::printf("%-20s %+.6g\n", std::string(kBorderFeatureNames[k]).c_str(),
                         fitted.weights[k]);
         }
         if (!rows_file.empty()) {
-            std::ofstream csv(rows_file);
-            for (const auto& name : kBorderFeatureNames) csv << name << ',';
-            csv << "same\n";
-            for (const Row& r : rows) {
-                for (float v : r.f) csv << v << ',';
-                csv << r.same << '\n';
+            std::string csv;
+            for (const auto& name : kBorderFeatureNames) csv += fmt::format("{},", name);
+            csv += "same\n";
+            for (const BorderExample& r : rows) {
+                for (float v : r.features) csv += fmt::format("{},", v);
+                csv += r.same ? "1\n" : "0\n";
             }
+            io::WriteFileAtomically(rows_file, [&](std::ostream& o) { o << csv; });
         }
         if (!out_file.empty()) {
-            std::ofstream json(out_file);
-            json << "{\"parts\": {\"convexity\": {\"learned\": true, \"classifier\": {"
-                 << fmt::format("\"threshold\": {}, \"bias\": {:.6g}, \"weights\": {{",
-                                fitted.threshold, fitted.bias);
+            std::string json = fmt::format(
+                "{{\"parts\": {{\"convexity\": {{\"learned\": true, \"classifier\": {{"
+                "\"threshold\": {}, \"bias\": {:.6g}, \"weights\": {{",
+                fitted.threshold, fitted.bias);
             for (std::size_t k = 0; k < kBorderFeatureCount; ++k) {
-                json << fmt::format("{}\"{}\": {:.6g}", k ? ", " : "", kBorderFeatureNames[k],
+                json += fmt::format("{}\"{}\": {:.6g}", k ? ", " : "", kBorderFeatureNames[k],
                                     fitted.weights[k]);
             }
-            json << "}}}}}\n";
-            if (!json) throw IoError(fmt::format("cannot write {}", out_file));
+            json += "}}}}}\n";
+            io::WriteFileAtomically(out_file, [&](std::ostream& o) { o << json; });
         }
         // Each validation path on its own: the rules, then the classifier at several thresholds.
         for (const std::string& path : validate) {

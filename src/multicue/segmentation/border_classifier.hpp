@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "multicue/segmentation/border_features.hpp"
 
@@ -47,5 +48,21 @@ struct BorderClassifierParams {
 
 /// p(same object) of a border with features `f`.
 float JoinProbability(const BorderFeatures& f, const BorderClassifierParams& params);
+
+/// One labelled border to learn from.
+struct BorderExample {
+    BorderFeatures features{};
+    bool same = false;    ///< the two parts belong to one object
+    double weight = 1.0;  ///< the row's weight in the fit [-], >= 0
+};
+
+/// Fits the bias and weights of a logistic regression to `rows`: the features standardised
+/// (weighted mean and standard deviation), an L2 penalty `l2` on the standardised weights (not
+/// on the bias), Newton steps until they stop changing; returned in the features' own units, with
+/// the threshold and large_part_points of `start`. Deterministic. Throws InvalidArgument when l2
+/// is negative or not finite, a feature or weight is not finite or a weight negative, or the
+/// rows do not hold both kinds with positive weight.
+BorderClassifierParams FitBorderClassifier(const std::vector<BorderExample>& rows, double l2,
+                                           BorderClassifierParams start = {});
 
 }  // namespace multicue
