@@ -226,7 +226,16 @@ class ProfileObjective {
 class RimObjective {
   public:
     RimObjective(std::vector<Eigen::Vector3d> points, int bins, double tolerance)
-        : points_(std::move(points)), bins_(bins), tolerance_(tolerance) {}
+        : points_(std::move(points)), bins_(bins), tolerance_(tolerance) {
+        // Sector b starts at the angle 2 pi b / bins from the direction -e1 (atan2 = -pi);
+        // its start as a pseudo-angle, so that no point needs a trigonometric function.
+        starts_.resize(static_cast<std::size_t>(bins));
+        for (int b = 0; b < bins; ++b) {
+            const double angle = 2.0 * kPi * b / bins;
+            starts_[static_cast<std::size_t>(b)] =
+                b == 0 ? 0.0 : Pseudo(std::sin(angle), std::cos(angle));
+        }
+    }
 
     double operator()(const Eigen::Vector3d& a, const Eigen::Vector3d& c) const {
         Eigen::Vector3d e1, e2;
@@ -239,9 +248,7 @@ class RimObjective {
         count_.assign(bins, 0);
         for (const auto& p : points_) {
             const Eigen::Vector3d q = p - c;
-            const double phi = std::atan2(q.dot(e2), q.dot(e1));
-            const auto b = static_cast<std::size_t>(
-                std::clamp(static_cast<int>((phi + kPi) / (2.0 * kPi) * bins_), 0, bins_ - 1));
+            const auto b = Sector(q.dot(e2), q.dot(e1));
             const double h = q.dot(a);
             ++count_[b];
             for (const auto& [k, v] : {std::pair{b, h}, std::pair{b + bins, -h}}) {
@@ -257,6 +264,26 @@ class RimObjective {
     }
 
   private:
+    /// A strictly increasing function of the angle of (x, y) from the x axis over [0, 2 pi),
+    /// with values in [0, 4): the position on the unit diamond |x| + |y| = 1.
+    static double Pseudo(double y, double x) {
+        const double l1 = std::abs(x) + std::abs(y);
+        if (l1 == 0.0) return 0.0;
+        if (y >= 0.0) return x >= 0.0 ? y / l1 : 1.0 - x / l1;
+        return x < 0.0 ? 2.0 - y / l1 : 3.0 + x / l1;
+    }
+
+    /// The sector of the direction (x, y) as `floor((atan2(y, x) + pi) / (2 pi) * bins)` gives
+    /// it: the angle from -e1 is the angle of (-x, -y).
+    std::size_t Sector(double y, double x) const {
+        const double p = (x == 0.0 && y == 0.0) ? 2.0 : Pseudo(-y, -x);  // atan2(0, 0) = 0
+        const auto last = static_cast<std::size_t>(bins_ - 1);
+        auto b = std::min(last, static_cast<std::size_t>(p * 0.25 * bins_));
+        while (b > 0 && p < starts_[b]) --b;
+        while (b < last && p >= starts_[b + 1]) ++b;
+        return b;
+    }
+
     double LevelCost(std::size_t offset) const {
         levels_.clear();
         for (std::size_t b = 0; b < count_.size(); ++b) {
@@ -277,6 +304,7 @@ class RimObjective {
     std::vector<Eigen::Vector3d> points_;
     int bins_;
     double tolerance_;
+    std::vector<double> starts_;
     mutable std::vector<double> first_, second_, levels_, sorted_;
     mutable std::vector<int> count_;
 };
