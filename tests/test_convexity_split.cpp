@@ -126,16 +126,19 @@ TEST(ConvexitySplit, HollowBowlStaysWhole) {
     ASSERT_EQ(bowl.parts.size(), 4u);
     for (const auto& part : bowl.parts) ASSERT_GT(part.size(), 150u);
 
-    // The inside meets itself in concave bends: without the bend rule the bowl falls apart.
-    ConvexitySplitParams no_bends;
+    // The rules (not the learned classifier): the inside meets itself in concave bends, and
+    // without the bend rule the bowl falls apart.
+    ConvexitySplitParams rules;
+    rules.learned = false;
+    ConvexitySplitParams no_bends = rules;
     no_bends.bend_angle_deg = 0.0f;
     const auto split = SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, no_bends, kTable);
     EXPECT_GE(split.objects.size(), 2u);
     EXPECT_EQ(split.bend_joins, 0u);
     // Without a support plane there are no heights, so no bends are joined either.
-    EXPECT_GE(SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, {}).objects.size(), 2u);
+    EXPECT_GE(SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, rules).objects.size(), 2u);
 
-    const auto whole = SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, {}, kTable);
+    const auto whole = SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, rules, kTable);
     ASSERT_EQ(whole.objects.size(), 1u);
     EXPECT_EQ(whole.objects[0], bowl.object);
     EXPECT_GE(whole.bend_joins, 1u);
@@ -147,6 +150,7 @@ TEST(ConvexitySplit, StackedBoxesSplitEvenWhenEveryCreaseCountsAsABend) {
     for (const float bend : {0.0f, 35.0f, 180.0f}) {
         SCOPED_TRACE(bend);
         ConvexitySplitParams params;
+        params.learned = false;
         params.bend_angle_deg = bend;
         const auto split = SplitByConvexity(boxes.cloud, boxes.object, boxes.parts, params, kTable);
         ASSERT_EQ(split.objects.size(), 2u);
@@ -155,6 +159,38 @@ TEST(ConvexitySplit, StackedBoxesSplitEvenWhenEveryCreaseCountsAsABend) {
         EXPECT_EQ(split.bend_joins, 0u);
         EXPECT_GE(split.concave_borders, 1u);
     }
+}
+
+// The learned classifier (the default with a support plane): same objects as the rules here.
+TEST(ConvexitySplit, LearnedClassifierKeepsTheBowlWholeAndSplitsTheStackedBoxes) {
+    Scene bowl = HollowBowl();
+    bowl.cloud.sensor_origin = Eigen::Vector3f(0.0f, -0.5f, 0.56f);
+    const auto whole = SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, {}, kTable);
+    ASSERT_EQ(whole.objects.size(), 1u);
+    EXPECT_EQ(whole.objects[0], bowl.object);
+    EXPECT_EQ(whole.bend_joins, 0u);  // no rule at work
+
+    Scene boxes = StackedBoxes();
+    boxes.cloud.sensor_origin = Eigen::Vector3f(0.4f, -0.6f, 0.6f);
+    const auto split = SplitByConvexity(boxes.cloud, boxes.object, boxes.parts, {}, kTable);
+    ASSERT_EQ(split.objects.size(), 2u);
+    EXPECT_TRUE(GroupsArePure(boxes, split.objects));
+    // Each object's parts are the given parts that lie in it, three faces each.
+    ASSERT_EQ(split.parts.size(), 2u);
+    for (std::size_t o = 0; o < 2; ++o) {
+        EXPECT_EQ(split.parts[o].size(), 3u);
+        std::size_t points = 0;
+        for (const auto& part : split.parts[o]) points += part.size();
+        EXPECT_EQ(points, split.objects[o].size());
+    }
+    // A threshold of almost 1 joins nothing: six faces, and each group is one face or folded
+    // into a neighbour when too small.
+    ConvexitySplitParams strict;
+    strict.classifier.threshold = 0.999999f;
+    strict.min_object_points = 1;
+    EXPECT_EQ(
+        SplitByConvexity(boxes.cloud, boxes.object, boxes.parts, strict, kTable).objects.size(),
+        6u);
 }
 
 TEST(ConvexitySplit, RejectsBadParametersAndMissingNormals) {
@@ -167,6 +203,12 @@ TEST(ConvexitySplit, RejectsBadParametersAndMissingNormals) {
     EXPECT_THROW(SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, p), InvalidArgument);
     p = {};
     p.max_top_difference = -0.01f;
+    EXPECT_THROW(SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, p), InvalidArgument);
+    p = {};
+    p.classifier.threshold = 1.0f;
+    EXPECT_THROW(SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, p), InvalidArgument);
+    p = {};
+    p.fold.min_fold_deg = 0.0f;
     EXPECT_THROW(SplitByConvexity(bowl.cloud, bowl.object, bowl.parts, p), InvalidArgument);
     p = {};
     p.patch_size = 0.0f;

@@ -301,6 +301,8 @@ TEST(Perceive, InsideAndOutsideOfAPotAreOneObject) {
     if (!test::HasSharedData()) GTEST_SKIP() << "no shared data";
     const PointCloud cloud = io::ReadPcd(test::SharedData("scans/mosd-learn/learn38.pcd"));
     PerceiveParams params;
+    // The rules' concave split, which leaves the walls apart (the learned grouping joins some).
+    params.parts.convexity.learned = false;
     params.models.contained.enabled = false;  // would join them as well
     params.models.concentric.enabled = false;
     const std::size_t apart = Perceive(cloud, params).objects.size();
@@ -325,6 +327,11 @@ TEST(Perceive, StackedBoxesAreSplitAtTheLowerTopFace) {
     };
     PerceiveParams params;
     params.models.stacked.enabled = false;
+    // The learned grouping of parts splits them by itself.
+    const PerceiveResult learned = Perceive(cloud, params);
+    EXPECT_NE(majority(learned, 30), majority(learned, 40));
+    EXPECT_NE(majority(learned, 30), 0u);
+    params.parts.convexity.learned = false;  // the rules keep them together
     const PerceiveResult together = Perceive(cloud, params);
     EXPECT_EQ(majority(together, 30), majority(together, 40));
     params.models.stacked.enabled = true;
@@ -377,6 +384,9 @@ TEST(Perceive, CanStandingInABowlIsSplitByTwoCylinders) {
     };
     PerceiveParams params;
     params.models.touching.round_enabled = false;
+    // The learned grouping of parts splits them by itself; the rules keep them together.
+    EXPECT_EQ(Perceive(cloud, params).objects.size(), 2u);
+    params.parts.convexity.learned = false;
     const PerceiveResult together = Perceive(cloud, params);
     EXPECT_EQ(together.objects.size(), 1u);
     params.models.touching.round_enabled = true;

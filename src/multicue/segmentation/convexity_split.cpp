@@ -4,38 +4,21 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <unordered_map>
 
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/segmentation/border_features.hpp"
 #include "multicue/segmentation/disjoint_sets.hpp"
+#include "multicue/segmentation/part_borders.hpp"
 
 namespace multicue {
 namespace {
 
-struct Patch {
-    Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-    Eigen::Vector3f normal = Eigen::Vector3f::Zero();
-    int part = -1;  // majority part of its points, -1 if none
-    std::size_t count = 0;
-};
-
-std::uint64_t PackKey(const Eigen::Vector3i& c) {
-    constexpr std::int64_t kBias = 1 << 20;
-    return (static_cast<std::uint64_t>(c.x() + kBias) << 42) |
-           (static_cast<std::uint64_t>(c.y() + kBias) << 21) |
-           static_cast<std::uint64_t>(c.z() + kBias);
-}
-
 void CheckParams(const ConvexitySplitParams& p) {
-    if (!(p.patch_size > 0.0f) || !std::isfinite(p.patch_size)) {
-        throw InvalidArgument(fmt::format("patch_size must be > 0, got {}", p.patch_size));
-    }
-    if (!(p.smooth_angle_deg >= 0.0f && p.smooth_angle_deg <= 90.0f)) {
-        throw InvalidArgument(
-            fmt::format("smooth_angle_deg must be in [0, 90], got {}", p.smooth_angle_deg));
-    }
+    PartBorderParams{.patch_size = p.patch_size, .smooth_angle_deg = p.smooth_angle_deg}.Validate();
+    ValidateNode("classifier", [&] { p.classifier.Validate(); });
+    ValidateNode("fold", [&] { p.fold.Validate(); });
     if (!(p.min_convex_share >= 0.0f && p.min_convex_share <= 1.0f)) {
         throw InvalidArgument(
             fmt::format("min_convex_share must be in [0, 1], got {}", p.min_convex_share));
@@ -48,114 +31,6 @@ void CheckParams(const ConvexitySplitParams& p) {
         throw InvalidArgument(
             fmt::format("max_top_difference must be >= 0, got {}", p.max_top_difference));
     }
-}
-
-struct Border {
-    std::size_t convex = 0;
-    std::vector<float> angles;  // between the normals of each patch pair [deg]
-};
-
-using Borders = std::map<std::pair<int, int>, Border>;
-
-float Median(std::vector<float> values) {
-    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-    std::nth_element(values.begin(), mid, values.end());
-    return *mid;
-}
-
-/// The part of each point of a part (the last part listed wins for a point in several).
-std::unordered_map<Index, int> PartOfPoints(const Indices& object,
-                                            const std::vector<Indices>& parts) {
-    std::unordered_map<Index, int> part_of;
-    part_of.reserve(object.size());
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-        for (Index i : parts[k]) part_of[i] = static_cast<int>(k);
-    }
-    return part_of;
-}
-
-/// Voxel patches over the object's points with a finite normal: mean position, mean normal and
-/// majority part, so that borders are judged on smoothed surface pieces rather than noisy points.
-struct PatchGrid {
-    std::unordered_map<std::uint64_t, std::size_t> patch_of_key;
-    std::vector<Patch> patches;
-    std::vector<Eigen::Vector3i> coords;
-    std::vector<std::size_t> point_patch;  // per object point, SIZE_MAX without a finite normal
-};
-
-PatchGrid BuildPatches(const PointCloud& cloud, const Indices& object,
-                       const std::unordered_map<Index, int>& part_of, float patch_size) {
-    const float inv = 1.0f / patch_size;
-    PatchGrid grid;
-    auto& patches = grid.patches;
-    std::vector<std::map<int, std::size_t>> votes;
-    grid.point_patch.assign(object.size(), SIZE_MAX);
-    for (std::size_t n = 0; n < object.size(); ++n) {
-        const Index i = object[n];
-        const Eigen::Vector3f& p = cloud.points[i];
-        const Eigen::Vector3f& nv = cloud.normals[i];
-        if (!p.allFinite() || !nv.allFinite()) continue;
-        const Eigen::Vector3i c = (p * inv).array().floor().cast<int>();
-        auto [it, inserted] = grid.patch_of_key.try_emplace(PackKey(c), patches.size());
-        if (inserted) {
-            patches.emplace_back();
-            grid.coords.push_back(c);
-            votes.emplace_back();
-        }
-        Patch& patch = patches[it->second];
-        patch.centroid += p;
-        patch.normal += nv;
-        ++patch.count;
-        const auto pit = part_of.find(i);
-        if (pit != part_of.end()) ++votes[it->second][pit->second];
-        grid.point_patch[n] = it->second;
-    }
-    for (std::size_t v = 0; v < patches.size(); ++v) {
-        Patch& patch = patches[v];
-        patch.centroid /= static_cast<float>(patch.count);
-        if (patch.normal.norm() > 0.0f) patch.normal.normalize();
-        std::size_t best = 0;
-        for (const auto& [part, count] : votes[v]) {
-            if (count > best) {
-                best = count;
-                patch.part = part;
-            }
-        }
-    }
-    return grid;
-}
-
-/// Border votes between parts, from every pair of neighbouring patches of different parts:
-/// convex when n1.d > n2.d for d = c1 - c2 (the patches bend away from each other, seen from the
-/// sensor), or when the normals hardly differ.
-Borders VoteBorders(const PatchGrid& grid, float smooth_angle_deg) {
-    const auto& patches = grid.patches;
-    const float smooth_cos = std::cos(smooth_angle_deg * static_cast<float>(M_PI) / 180.0f);
-    const float rad_to_deg = 180.0f / static_cast<float>(M_PI);
-    Borders borders;
-    for (std::size_t v = 0; v < patches.size(); ++v) {
-        const Patch& a = patches[v];
-        if (a.part < 0) continue;
-        for (int dx = -1; dx <= 1; ++dx) {
-            for (int dy = -1; dy <= 1; ++dy) {
-                for (int dz = -1; dz <= 1; ++dz) {
-                    const auto it = grid.patch_of_key.find(
-                        PackKey(grid.coords[v] + Eigen::Vector3i(dx, dy, dz)));
-                    if (it == grid.patch_of_key.end() || it->second <= v) continue;
-                    const Patch& b = patches[it->second];
-                    if (b.part < 0 || b.part == a.part) continue;
-                    const Eigen::Vector3f d = a.centroid - b.centroid;
-                    const bool convex =
-                        a.normal.dot(b.normal) >= smooth_cos || a.normal.dot(d) > b.normal.dot(d);
-                    auto& border = borders[{std::min(a.part, b.part), std::max(a.part, b.part)}];
-                    border.convex += convex ? 1 : 0;
-                    border.angles.push_back(
-                        std::acos(std::clamp(a.normal.dot(b.normal), -1.0f, 1.0f)) * rad_to_deg);
-                }
-            }
-        }
-    }
-    return borders;
 }
 
 /// Groups of parts (union-find over part numbers; a group is named by its smallest part).
@@ -176,21 +51,19 @@ class PartGroups {
 /// Joins the parts across every mostly convex border (enough patch pairs to judge); returns the
 /// concave borders that bend gently, candidates for the inside of a hollow object.
 std::vector<std::pair<std::size_t, std::size_t>> JoinConvexBorders(
-    const Borders& borders, const ConvexitySplitParams& params, PartGroups& groups,
+    const std::vector<PartBorder>& borders, const ConvexitySplitParams& params, PartGroups& groups,
     ConvexitySplitResult& result) {
     std::vector<std::pair<std::size_t, std::size_t>> bends;
-    for (const auto& [pair, border] : borders) {
-        if (border.angles.size() < params.min_border) continue;
-        const auto a = static_cast<std::size_t>(pair.first);
-        const auto b = static_cast<std::size_t>(pair.second);
-        const float share =
-            static_cast<float>(border.convex) / static_cast<float>(border.angles.size());
-        if (share >= params.min_convex_share) {
-            groups.Unite(a, b);
+    for (const PartBorder& border : borders) {
+        if (border.pairs < params.min_border) continue;
+        if (border.ConvexShare() >= params.min_convex_share) {
+            groups.Unite(border.a, border.b);
             ++result.convex_borders;
         } else {
             ++result.concave_borders;
-            if (Median(border.angles) < params.bend_angle_deg) bends.emplace_back(a, b);
+            if (border.median_angle_deg < params.bend_angle_deg) {
+                bends.emplace_back(border.a, border.b);
+            }
         }
     }
     return bends;
@@ -231,7 +104,8 @@ void JoinLevelBends(const PointCloud& cloud, const std::vector<Indices>& parts,
 
 /// Folds groups too small to be objects into their best-connected neighbour (the most patch pairs
 /// on their common borders), in up to 3 rounds; returns the point count of every group by root.
-std::vector<std::size_t> FoldSmallGroups(const std::vector<Indices>& parts, const Borders& borders,
+std::vector<std::size_t> FoldSmallGroups(const std::vector<Indices>& parts,
+                                         const std::vector<PartBorder>& borders,
                                          std::size_t min_object_points, PartGroups& groups) {
     std::vector<std::size_t> group_size(parts.size(), 0);
     for (std::size_t k = 0; k < parts.size(); ++k) group_size[groups.Find(k)] += parts[k].size();
@@ -241,11 +115,11 @@ std::vector<std::size_t> FoldSmallGroups(const std::vector<Indices>& parts, cons
             const std::size_t g = groups.Find(k);
             if (g != k || group_size[g] >= min_object_points) continue;
             std::map<std::size_t, std::size_t> links;
-            for (const auto& [pair, border] : borders) {
-                const std::size_t ga = groups.Find(static_cast<std::size_t>(pair.first));
-                const std::size_t gb = groups.Find(static_cast<std::size_t>(pair.second));
-                if (ga == g && gb != g) links[gb] += border.angles.size();
-                if (gb == g && ga != g) links[ga] += border.angles.size();
+            for (const PartBorder& border : borders) {
+                const std::size_t ga = groups.Find(border.a);
+                const std::size_t gb = groups.Find(border.b);
+                if (ga == g && gb != g) links[gb] += border.pairs;
+                if (gb == g && ga != g) links[ga] += border.pairs;
             }
             if (links.empty()) continue;
             const auto best =
@@ -265,9 +139,8 @@ std::vector<std::size_t> FoldSmallGroups(const std::vector<Indices>& parts, cons
 /// The object's points by group, largest first: by their part, else by their patch's part, else
 /// the largest group.
 std::vector<Indices> GroupPoints(const Indices& object, std::size_t part_count,
-                                 const std::unordered_map<Index, int>& part_of,
-                                 const PatchGrid& grid, const std::vector<std::size_t>& group_size,
-                                 PartGroups& groups) {
+                                 const PartBorders& borders,
+                                 const std::vector<std::size_t>& group_size, PartGroups& groups) {
     std::map<std::size_t, Indices> by_root;
     std::size_t largest_root = groups.Find(0);
     for (std::size_t k = 0; k < part_count; ++k) {
@@ -275,15 +148,13 @@ std::vector<Indices> GroupPoints(const Indices& object, std::size_t part_count,
         if (group_size[r] > group_size[largest_root]) largest_root = r;
     }
     for (std::size_t n = 0; n < object.size(); ++n) {
-        const Index i = object[n];
-        const auto pit = part_of.find(i);
-        int part = pit != part_of.end() ? pit->second : -1;
-        if (part < 0 && grid.point_patch[n] != SIZE_MAX) {
-            part = grid.patches[grid.point_patch[n]].part;
+        int part = borders.point_part[n];
+        if (part < 0 && borders.point_patch[n] != SIZE_MAX) {
+            part = borders.patches[borders.point_patch[n]].part;
         }
         const std::size_t root =
             part >= 0 ? groups.Find(static_cast<std::size_t>(part)) : largest_root;
-        by_root[root].push_back(i);
+        by_root[root].push_back(object[n]);
     }
     std::vector<Indices> objects;
     for (auto& [root, indices] : by_root) {
@@ -293,6 +164,70 @@ std::vector<Indices> GroupPoints(const Indices& object, std::size_t part_count,
     std::stable_sort(objects.begin(), objects.end(),
                      [](const Indices& a, const Indices& b) { return a.size() > b.size(); });
     return objects;
+}
+
+/// The learned decision: large parts join across borders the classifier finds likely enough
+/// to be inside one object; then every small part joins the neighbour whose border scores best
+/// (a large one before a small one), so that a small part never bridges two objects.
+void JoinByClassifier(const std::vector<Indices>& parts, const PartBorders& borders,
+                      const Eigen::Vector4f& plane, const ConvexitySplitParams& params,
+                      PartGroups& groups, ConvexitySplitResult& result) {
+    const auto& cp = params.classifier;
+    const std::vector<PartSummary> summaries = SummarizeParts(parts, borders, plane);
+    std::vector<float> p(borders.borders.size());
+    for (std::size_t e = 0; e < p.size(); ++e) {
+        p[e] = JoinProbability(
+            ComputeBorderFeatures(borders.borders[e], borders, summaries, plane.head<3>()), cp);
+    }
+    const auto large = [&](std::size_t k) { return parts[k].size() >= cp.large_part_points; };
+    for (std::size_t e = 0; e < p.size(); ++e) {
+        const PartBorder& b = borders.borders[e];
+        if (!large(b.a) || !large(b.b) || b.pairs < params.min_border) continue;
+        if (p[e] >= cp.threshold) {
+            groups.Unite(b.a, b.b);
+            ++result.convex_borders;
+        } else {
+            ++result.concave_borders;
+        }
+    }
+    std::vector<std::size_t> small;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+        if (!large(k)) small.push_back(k);
+    }
+    std::stable_sort(small.begin(), small.end(), [&](std::size_t x, std::size_t y) {
+        return parts[x].size() > parts[y].size();
+    });
+    for (std::size_t k : small) {
+        float best_score = -1.0f;
+        std::size_t best = k;
+        for (std::size_t e = 0; e < p.size(); ++e) {
+            const PartBorder& b = borders.borders[e];
+            if (b.a != k && b.b != k) continue;
+            const std::size_t other = b.a == k ? b.b : b.a;
+            const float score = p[e] * (large(other) ? 1.0f : 0.5f);
+            if (score > best_score) {
+                best_score = score;
+                best = other;
+            }
+        }
+        if (best != k) groups.Unite(k, best);
+    }
+}
+
+// The parts (of `parts`) of each object: a part lies wholly in one group.
+std::vector<std::vector<Indices>> PartsByObject(const std::vector<Indices>& objects,
+                                                const std::vector<Indices>& parts) {
+    std::vector<std::vector<Indices>> out(objects.size());
+    for (const auto& part : parts) {
+        if (part.empty()) continue;
+        for (std::size_t o = 0; o < objects.size(); ++o) {
+            if (std::binary_search(objects[o].begin(), objects[o].end(), part.front())) {
+                out[o].push_back(part);
+                break;
+            }
+        }
+    }
+    return out;
 }
 
 }  // namespace
@@ -309,20 +244,36 @@ ConvexitySplitResult SplitByConvexity(const PointCloud& cloud, const Indices& ob
     if (object.empty()) return result;
     if (parts.size() < 2) {
         result.objects.push_back(object);
+        result.parts.push_back(parts);
         return result;
     }
-    const std::unordered_map<Index, int> part_of = PartOfPoints(object, parts);
-    const PatchGrid grid = BuildPatches(cloud, object, part_of, params.patch_size);
-    const Borders borders = VoteBorders(grid, params.smooth_angle_deg);
-    PartGroups groups(parts.size());
-    const auto bends = JoinConvexBorders(borders, params, groups, result);
-    if (!bends.empty() && support_plane.head<3>().norm() > 0.5f) {
-        JoinLevelBends(cloud, parts, bends, support_plane, params.max_top_difference, groups,
-                       result);
+    const PartBorderParams border_params{.patch_size = params.patch_size,
+                                         .smooth_angle_deg = params.smooth_angle_deg};
+    const bool learned = params.learned && support_plane.head<3>().norm() > 0.5f;
+    PartBorders borders = ComputePartBorders(cloud, object, parts, border_params, support_plane);
+    std::vector<Indices> refined;
+    if (learned && params.fold.enabled) {
+        refined = SplitFoldedParts(cloud, object, parts, borders, params.fold);
+        if (refined.size() != parts.size()) {
+            result.folded_parts = refined.size() - parts.size();
+            borders = ComputePartBorders(cloud, object, refined, border_params, support_plane);
+        }
+    }
+    const std::vector<Indices>& used = refined.empty() ? parts : refined;
+    PartGroups groups(used.size());
+    if (learned) {
+        JoinByClassifier(used, borders, support_plane, params, groups, result);
+    } else {
+        const auto bends = JoinConvexBorders(borders.borders, params, groups, result);
+        if (!bends.empty() && support_plane.head<3>().norm() > 0.5f) {
+            JoinLevelBends(cloud, used, bends, support_plane, params.max_top_difference, groups,
+                           result);
+        }
     }
     const std::vector<std::size_t> group_size =
-        FoldSmallGroups(parts, borders, params.min_object_points, groups);
-    result.objects = GroupPoints(object, parts.size(), part_of, grid, group_size, groups);
+        FoldSmallGroups(used, borders.borders, params.min_object_points, groups);
+    result.objects = GroupPoints(object, used.size(), borders, group_size, groups);
+    result.parts = PartsByObject(result.objects, used);
     return result;
 }
 

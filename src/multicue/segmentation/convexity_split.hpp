@@ -16,8 +16,11 @@
 
 #include <Eigen/Core>
 
+#include "multicue/core/params.hpp"
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/types.hpp"
+#include "multicue/segmentation/border_classifier.hpp"
+#include "multicue/segmentation/folded_parts.hpp"
 
 namespace multicue {
 
@@ -32,6 +35,12 @@ struct ConvexitySplitParams {
     float bend_angle_deg = 35.0f;
     float max_top_difference = 0.015f;  ///< groups across a bend join when their highest points
                                         ///< above the support plane differ less than this [m]
+    /// With a support plane: decide every border by the learned classifier (whether the two
+    /// parts are one object) instead of the convex share and the bends above; folded parts are
+    /// cut first. Without a plane the rules decide.
+    bool learned = true;
+    BorderClassifierParams classifier{};
+    Switchable<FoldSplitParams> fold{};  ///< cut parts that fold over two faces (learned only)
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
@@ -48,14 +57,22 @@ struct ConvexitySplitParams {
           "concave borders with a median patch angle below this are bends [deg]; 0 = off");
         v("max_top_difference", max_top_difference,
           "groups across a bend join when their tops differ less than this [m]");
+        v("learned", learned,
+          "decide borders by the learned classifier (with a support plane) instead of the convex "
+          "share and the bends");
+        v.Node("classifier", classifier);
+        v.Switch("fold", fold, "cut parts whose normals fold over two faces (learned only)");
     }
 };
 
 struct ConvexitySplitResult {
-    std::vector<Indices> objects;     ///< the object's points split into groups, largest first
+    std::vector<Indices> objects;  ///< the object's points split into groups, largest first
+    /// The parts of each of `objects`: the given parts, folded ones cut into their pieces.
+    std::vector<std::vector<Indices>> parts;
     std::size_t convex_borders = 0;   ///< part borders judged convex (joined)
     std::size_t concave_borders = 0;  ///< part borders judged concave (cut)
     std::size_t bend_joins = 0;       ///< groups joined again across a gradual concave bend
+    std::size_t folded_parts = 0;     ///< parts cut where they fold (learned)
 };
 
 /// Splits `object` (indices into `cloud`, which must have normals oriented towards the sensor)

@@ -69,17 +69,15 @@ PartSegmentationResult SegmentParts(const PointCloud& cloud, const std::vector<I
             rg.subset = clusters[k];
             const std::vector<Indices> parts = organized ? RegionGrowing(cloud, table, rg).parts
                                                          : RegionGrowing(cloud, *tree, rg).parts;
-            std::vector<Indices> groups;
             if (params.convexity.enabled) {
                 ConvexitySplitParams cp = params.convexity;
                 cp.min_object_points = min_object_points;
-                groups = SplitByConvexity(cloud, clusters[k], parts, cp, plane).objects;
+                ConvexitySplitResult r = SplitByConvexity(cloud, clusters[k], parts, cp, plane);
+                for (std::size_t g = 0; g < r.objects.size(); ++g) {
+                    split[k].push_back({std::move(r.objects[g]), std::move(r.parts[g])});
+                }
             } else {
-                groups.push_back(clusters[k]);
-            }
-            for (auto& g : groups) {
-                std::vector<Indices> own = PartsOf(g, parts);
-                split[k].push_back({std::move(g), std::move(own)});
+                split[k].push_back({clusters[k], PartsOf(clusters[k], parts)});
             }
         },
         1);
