@@ -58,7 +58,8 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         // Disparity noise and its quantisation grow with the square of the range.
         p.normal_half_window = 7;
         p.structure.range_noise = 0.004f;
-        p.fixtures.aligned_noise = 0.003f;
+        p.fixtures.noise_floor = 0.002f;
+        p.fixtures.range_noise = 0.0015f;
     }
     if (sensor == KitchenSensor::kLaser) {
         // Centimetre range noise and sparse rows: thicker planes, looser clusters.
@@ -69,6 +70,14 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.structure.min_component_points = 20;
         p.structure.min_plane_points = 40;
         p.fixtures.min_height = 0.02f;
+        p.fixtures.noise_floor = 0.01f;
+        p.fixtures.residual_sigmas = 2.0f;
+        p.fixtures.min_residual = 0.015f;
+        p.fixtures.residual_cell = 0.025f;
+        p.fixtures.background_cell = 0.05f;
+        p.fixtures.background_tolerance = 0.02f;
+        p.fixtures.surround_inner = 0.015f;
+        p.fixtures.surround_outer = 0.08f;
         p.fixtures.cluster_tolerance = 0.03f;
         p.fixtures.min_points = 5;
         p.fixtures.line_threshold = 0.015f;
@@ -174,7 +183,8 @@ void LabelMapPoints(KitchenMap& map, std::size_t n, const std::vector<std::int32
 }
 
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& p,
-                            const ml::Classifier* classifier) {
+                            const ml::Classifier* classifier,
+                            const ml::Classifier* fixture_classifier) {
     p.Validate();
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
@@ -204,9 +214,11 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     if (!vertical) throw DataError("map kitchen: no vertical planes (walls or furniture faces)");
     stage("structure");
     // Handles and knobs in front of the faces.
-    FixtureResult fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges);
+    FixtureResult fixtures =
+        DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges, fixture_classifier);
     map.fixtures = std::move(fixtures.fixtures);
     r.rejected_fixtures = std::move(fixtures.rejected);
+    r.fixture_candidates = std::move(fixtures.candidates);
     stage("fixtures");
     // Door and drawer fronts grown from the fixtures.
     map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);

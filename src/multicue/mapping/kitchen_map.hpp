@@ -55,19 +55,23 @@ struct MapKitchenResult {
     PointCloud cloud;
     std::vector<std::size_t> scan_offsets;  ///< first point of each scan in `cloud`
     std::vector<float> ranges;  ///< per point of `cloud`: distance to its scan's sensor [m]
-    std::vector<RejectedCluster> rejected_fixtures;  ///< clusters that became no fixture
-    double time_ms = 0.0;                            ///< whole pipeline [ms]
+    std::vector<RejectedCluster> rejected_fixtures;    ///< clusters that became no fixture
+    std::vector<FixtureCandidate> fixture_candidates;  ///< every measured fixture candidate
+    double time_ms = 0.0;                              ///< whole pipeline [ms]
     /// Stage times in pipeline order: normals, axes, structure, fixtures, fronts, articulation,
     /// containers [ms]
     std::vector<std::pair<std::string, double>> timings;
 };
 
 /// Maps a kitchen from scans that share one frame (z up when they carry sensor positions, as
-/// `multicue simulate kitchens` writes them). `classifier` types the furniture (nullptr: rules).
-/// Throws InvalidArgument for bad parameters; DataError when there are no scans, no finite point,
-/// or no vertical plane to look for furniture on.
+/// `multicue simulate kitchens` writes them). `classifier` types the furniture, and
+/// `fixture_classifier` decides which fixture candidates are handles and knobs (nullptr: rules).
+/// Throws InvalidArgument for bad parameters or a fixture classifier trained on other features;
+/// DataError when there are no scans, no finite point, or no vertical plane to look for furniture
+/// on.
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& params,
-                            const ml::Classifier* classifier = nullptr);
+                            const ml::Classifier* classifier = nullptr,
+                            const ml::Classifier* fixture_classifier = nullptr);
 
 /// Merges scans into one cloud with normals (organized scans keep image-space normals): colours
 /// of scans without colours get alpha 0, intensities of scans without intensity NaN. `offsets`
