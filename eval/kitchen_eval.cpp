@@ -4,12 +4,15 @@
 // types and hinge axes against each kitchen's ground-truth URDF, container types (confusion
 // matrix), and joints from opened-front scan pairs.
 //
-// The container classifier is trained on kitchens of the other half of the models (never the
-// ones scored); --rules types containers by rules instead.
+// The fixture classifiers (one per sensor, as `multicue train fixtures` trains them) and the
+// container classifier are trained on kitchens of the other half of the models (never the ones
+// scored; --train-split tune trains on the tune half when the tune half is scored, to validate);
+// --fixture-kitchens 0 finds fixtures by rules, --rules types containers by rules.
 //
-//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--views 3] [--seed 1]
-//                           [--sensor both|kinect|laser] [--split test] [--rules] [--json F]
-//                           [--save-containers MODEL]
+//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--fixture-kitchens 12]
+//                           [--views 3] [--seed 1] [--sensor both|kinect|laser] [--split test]
+//                           [--train-split other|tune|test] [--rules] [--json F]
+//                           [--save-containers MODEL] [--save-fixtures PREFIX]
 
 #include <algorithm>
 #include <array>
@@ -34,6 +37,7 @@
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "multicue/training/kitchen_training.hpp"
 
 #ifndef MULTICUE_SHARED_DATA_DIR
 #define MULTICUE_SHARED_DATA_DIR "../shared/data"
@@ -59,6 +63,13 @@ struct Options {
     bool verbose = false;
     std::string json;
     std::string save_containers;
+    std::string train_split = "other";
+    int tune_fold = -1;
+    int fixture_kitchens = 12;
+    std::uint64_t fixture_seed = 7;
+    std::string fixture_spec = "rtrees:trees=100";
+    float fixture_confidence = mapping::FixtureParams{}.min_confidence;
+    std::string save_fixtures;
 };
 
 /// Summary statistics of a list of values.
@@ -196,7 +207,37 @@ class Evaluator {
     mapping::MapKitchenResult Map(const Frame& f, const ml::Classifier* classifier) const {
         const auto sensor =
             f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
-        return mapping::MapKitchen({f.cloud}, mapping::KitchenParamsFor(sensor), classifier);
+        mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
+        params.fixtures.min_confidence = o_.fixture_confidence;
+        const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
+        return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
+    }
+
+    /// The fixture classifier of one sensor, trained as `multicue train fixtures` trains it.
+    std::unique_ptr<ml::Classifier> TrainFixtures(
+        const std::vector<sim::KitchenModelEntry>& library, sim::MeshSplit split,
+        sim::KitchenModelCache& cache, bool laser) {
+        training::FixtureTrainingOptions t;
+        t.kitchens = o_.fixture_kitchens;
+        t.views = laser ? o_.laser_views : o_.views;
+        t.sensor = laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
+        t.split = split;
+        t.seed = o_.fixture_seed;
+        t.fold = o_.tune_fold >= 0 ? 1 - o_.tune_fold : -1;
+        const ml::Dataset rows = training::CollectFixtureRows(library, cache, t);
+        std::size_t positive = 0;
+        for (const int l : rows.labels) positive += l > 0;
+        std::printf(
+            "%s fixture classifier: %zu candidates (%zu fixtures) from %d kitchens (%s half, "
+            "seed %llu)\n",
+            laser ? "laser" : "kinect", rows.rows(), positive, t.kitchens,
+            std::string(sim::MeshSplitName(split)).c_str(),
+            static_cast<unsigned long long>(t.seed));
+        auto c = training::TrainFixtureClassifier(rows, o_.fixture_spec);
+        if (!o_.save_fixtures.empty()) {
+            c->Save(o_.save_fixtures + (laser ? "_laser.mcm" : "_kinect.mcm"));
+        }
+        return c;
     }
 
     /// Training rows: the features of predicted furniture labelled by the true model whose fronts
@@ -469,11 +510,23 @@ class Evaluator {
     int Run() {
         const auto library = sim::ReadKitchenLibrary(o_.models);
         const auto test_split = sim::ParseMeshSplit(o_.split);
-        const auto train_split =
-            test_split == sim::MeshSplit::kTest ? sim::MeshSplit::kTune : sim::MeshSplit::kTest;
-        const auto test_lib = sim::SelectKitchenSplit(library, test_split);
-        const auto train_lib = sim::SelectKitchenSplit(library, train_split);
+        const auto train_split = o_.train_split != "other" ? sim::ParseMeshSplit(o_.train_split)
+                                 : test_split == sim::MeshSplit::kTest ? sim::MeshSplit::kTune
+                                                                       : sim::MeshSplit::kTest;
+        auto test_lib = sim::SelectKitchenSplit(library, test_split);
+        auto train_lib = sim::SelectKitchenSplit(library, train_split);
+        if (o_.tune_fold >= 0) {
+            // Validation on models never trained on, within the tune half.
+            test_lib = training::SelectKitchenFold(test_lib, o_.tune_fold);
+            train_lib = training::SelectKitchenFold(train_lib, 1 - o_.tune_fold);
+        }
         sim::KitchenModelCache cache;
+        if (o_.fixture_kitchens > 0) {
+            if (o_.sensor != "laser")
+                fixtures_kinect_ = TrainFixtures(library, train_split, cache, false);
+            if (o_.sensor != "kinect")
+                fixtures_laser_ = TrainFixtures(library, train_split, cache, true);
+        }
         std::unique_ptr<ml::Classifier> classifier;
         std::size_t train_rows = 0;
         if (!o_.rules && o_.train_kitchens > 0) {
@@ -528,6 +581,11 @@ class Evaluator {
                               {"kitchens", o_.kitchens},
                               {"seed", o_.seed},
                               {"containers", o_.rules ? "rules" : "rtrees"},
+                              {"fixtures", o_.fixture_kitchens > 0 ? o_.fixture_spec : "rules"},
+                              {"fixture_kitchens", o_.fixture_kitchens},
+                              {"fixture_confidence", o_.fixture_confidence},
+                              {"train_split", std::string(sim::MeshSplitName(train_split))},
+                              {"tune_fold", o_.tune_fold},
                               {"train_rows", train_rows}};
         if (o_.sensor != "laser") out["kinect"] = Report("kinect", kinect);
         if (o_.sensor != "kinect") out["laser"] = Report("laser", laser);
@@ -644,6 +702,7 @@ class Evaluator {
 
   private:
     Options o_;
+    std::unique_ptr<ml::Classifier> fixtures_kinect_, fixtures_laser_;
     sim::KinectParams kinect_;
     sim::LaserParams laser_;
 };
@@ -668,6 +727,25 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--models", o.models, "kitchen model library")->capture_default_str();
     app.add_flag("--rules", o.rules, "type containers by rules (no training)");
+    app.add_option("--train-split", o.train_split,
+                   "models the classifiers train on: other (the half not scored), tune or test")
+        ->capture_default_str();
+    app.add_option("--tune-fold", o.tune_fold,
+                   "with --split tune --train-split tune: score kitchens of fold 0 or 1 of the "
+                   "tune models, train on the other fold")
+        ->capture_default_str();
+    app.add_option("--fixture-kitchens", o.fixture_kitchens,
+                   "kitchens that train each sensor's fixture classifier (0: fixtures by rules)")
+        ->capture_default_str();
+    app.add_option("--fixture-seed", o.fixture_seed, "seed of those kitchens")
+        ->capture_default_str();
+    app.add_option("--fixture-classifier", o.fixture_spec, "classifier spec of the fixtures")
+        ->capture_default_str();
+    app.add_option("--fixture-confidence", o.fixture_confidence,
+                   "P(handle) + P(knob) a fixture needs")
+        ->capture_default_str();
+    app.add_option("--save-fixtures", o.save_fixtures,
+                   "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
     app.add_flag("-v,--verbose", o.verbose, "progress on stderr");
     app.add_option("--json", o.json, "also write the figures as JSON");
     app.add_option("--save-containers", o.save_containers,
@@ -679,6 +757,14 @@ int main(int argc, char** argv) {
             }
             if (o.split != "test" && o.split != "tune") {
                 throw CLI::ValidationError("--split", "must be test or tune");
+            }
+            if (o.train_split != "other" && o.train_split != "tune" && o.train_split != "test") {
+                throw CLI::ValidationError("--train-split", "must be other, tune or test");
+            }
+            if (o.tune_fold != -1 &&
+                !(o.split == "tune" && o.train_split == "tune" && o.tune_fold <= 1)) {
+                throw CLI::ValidationError("--tune-fold",
+                                           "0 or 1, only with --split tune --train-split tune");
             }
         })) {
         return *code;
