@@ -48,6 +48,8 @@ void MapKitchenParams::Validate() const {
     structure.Validate();
     fixtures.Validate();
     fronts.Validate();
+    image_edges.Validate();
+    outline.Validate();
     articulation.Validate();
     containers.Validate();
 }
@@ -82,6 +84,11 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.fixtures.min_points = 5;
         p.fixtures.line_threshold = 0.015f;
         p.fixtures.circle_threshold = 0.01f;
+        p.outline.cell = 0.025f;
+        p.outline.recess = 0.015f;
+        p.outline.step = 0.03f;
+        p.outline.hole_reach = 2;
+        p.outline.margin = 0.03f;
         p.fronts.cue = AppearanceCue::kIntensity;
         p.fronts.cell_size = 0.04f;
         p.fronts.seed_max = 0.08f;
@@ -220,8 +227,23 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     r.rejected_fixtures = std::move(fixtures.rejected);
     r.fixture_candidates = std::move(fixtures.candidates);
     stage("fixtures");
-    // Door and drawer fronts grown from the fixtures.
-    map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+    // Door and drawer fronts: rectangles between their outlines around the fixtures, or regions
+    // grown from them.
+    if (p.front_segmentation == FrontSegmentation::kOutline) {
+        FrontEvidence evidence;
+        evidence.point_face = std::move(fixtures.point_face);
+        evidence.point_residual = std::move(fixtures.point_residual);
+        evidence.image_edge.assign(r.cloud.size(), 0);
+        for (std::size_t k = 0; k < scans.size(); ++k) {
+            const std::vector<std::uint8_t> e = ImageEdges(scans[k], p.image_edges);
+            std::copy(e.begin(), e.end(),
+                      evidence.image_edge.begin() + static_cast<long>(r.scan_offsets[k]));
+        }
+        map.fronts =
+            FrontsFromEdges(r.cloud, map.frame, structure, map.fixtures, evidence, p.outline);
+    } else {
+        map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+    }
     stage("fronts");
     // How each front opens, from its fixture.
     for (Front& f : map.fronts) {

@@ -13,6 +13,7 @@
 #include "multicue/mapping/articulation.hpp"
 #include "multicue/mapping/containers.hpp"
 #include "multicue/mapping/fixtures.hpp"
+#include "multicue/mapping/front_edges.hpp"
 #include "multicue/mapping/fronts.hpp"
 #include "multicue/mapping/room_axes.hpp"
 #include "multicue/mapping/room_structure.hpp"
@@ -27,6 +28,12 @@ enum class KitchenSensor {
     kLaser,   ///< tilting laser sweeps, centimetre noise, intensity
 };
 
+/// How fronts are segmented.
+enum class FrontSegmentation {
+    kOutline,        ///< rectangles between the fronts' outlines (front_edges.hpp)
+    kRegionGrowing,  ///< colour region growing from the fixtures (fronts.hpp)
+};
+
 struct MapKitchenParams {
     /// Organized scans: image-space normals with this half window [pixels]; others: k-d tree
     /// normals within normal_radius.
@@ -35,7 +42,10 @@ struct MapKitchenParams {
     RoomAxesParams axes;
     RoomStructureParams structure;
     FixtureParams fixtures;
-    FrontParams fronts;
+    FrontSegmentation front_segmentation = FrontSegmentation::kOutline;
+    ImageEdgeParams image_edges;  ///< outline evidence of organized scans
+    FrontEdgeParams outline;      ///< kOutline
+    FrontParams fronts;           ///< kRegionGrowing
     ArticulationParams articulation;
     ContainerParams containers;
     int num_threads = 0;  ///< 0 = all cores
