@@ -360,17 +360,27 @@ void GrowAndMerge(const PointCloud& cloud, const std::vector<std::uint8_t>& acti
 
 }  // namespace
 
+namespace {
+
+// What every entry point starts with: the checks, the points to segment marked in `active`, every
+// part id kNoPart. False when there is nothing to segment.
+bool StartGrowing(const PointCloud& cloud, const RegionGrowingParams& params,
+                  std::vector<std::uint8_t>& active, RegionGrowingResult& result) {
+    CheckParams(params);
+    if (cloud.size() == 0) return false;
+    CheckFields(cloud);
+    result.num_points = MarkPoints(cloud, params.subset, active);
+    result.part_ids.assign(cloud.size(), kNoPart);
+    return result.num_points > 0;
+}
+
+}  // namespace
+
 RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
                                   const RegionGrowingParams& params) {
-    CheckParams(params);
     RegionGrowingResult result;
-    const std::size_t n = cloud.size();
-    if (n == 0) return result;
-    CheckFields(cloud);
     std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(cloud, params.subset, active);
-    result.part_ids.assign(n, kNoPart);
-    if (result.num_points == 0) return result;
+    if (!StartGrowing(cloud, params, active, result)) return result;
     TreeNeighborhoods neighborhoods(cloud, tree, params);
     GrowAndMerge(cloud, active, params, neighborhoods, result);
     return result;
@@ -470,19 +480,14 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
 
 RegionGrowingResult RegionGrowing(const PointCloud& cloud, const NeighbourTable& table,
                                   const RegionGrowingParams& params) {
-    CheckParams(params);
     RegionGrowingResult result;
+    std::vector<std::uint8_t> active;
+    if (!StartGrowing(cloud, params, active, result)) return result;
     const std::size_t n = cloud.size();
-    if (n == 0) return result;
-    CheckFields(cloud);
     if (table.row_of.size() != n) {
         throw InvalidArgument(fmt::format("the neighbour table is for a cloud of {} points, not {}",
                                           table.row_of.size(), n));
     }
-    std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(cloud, params.subset, active);
-    result.part_ids.assign(n, kNoPart);
-    if (result.num_points == 0) return result;
     for (std::size_t i = 0; i < n; ++i) {
         if (active[i] != 0 && table.row_of[i] == NeighbourTable::kNoRow) {
             throw InvalidArgument(fmt::format(

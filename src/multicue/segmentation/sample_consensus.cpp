@@ -320,16 +320,22 @@ void ScoreBatch(const Evaluator& evaluator, SacMethod method, ScoringThreads& th
     auto loop = [&] {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
+                              detail::TsanTaskStart();
                               for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
+                              detail::TsanTaskEnd();
                           });
     };
     if (!threads.parallel || n < 2) {
         for (std::size_t j = 0; j < n; ++j) score(j);
-    } else if (threads.arena) {
+        return;
+    }
+    detail::TsanFork();
+    if (threads.arena) {
         threads.arena->execute(loop);
     } else {
         tbb::this_task_arena::isolate(loop);
     }
+    detail::TsanJoin();
 }
 
 // The best hypothesis of the sampling loop and the loop's count of iterations, with the number
