@@ -70,7 +70,36 @@ struct Options {
     std::string fixture_spec = "rtrees:trees=100";
     float fixture_confidence = mapping::FixtureParams{}.min_confidence;
     std::string save_fixtures;
+    std::string fronts = "grow";
+    std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
+    std::string load_fixtures;
 };
+
+/// Sets one field of the region growing's parameters from NAME=VALUE.
+void SetFrontParam(mapping::FrontParams& p, const std::string& assignment) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos) throw InvalidArgument("--front-param: expected NAME=VALUE");
+    const std::string name = assignment.substr(0, eq);
+    const float v = std::stof(assignment.substr(eq + 1));
+    if (name == "alpha_mads")
+        p.alpha_mads = v;
+    else if (name == "min_alpha")
+        p.min_alpha = v;
+    else if (name == "local_alpha")
+        p.local_alpha = v;
+    else if (name == "min_offset_alpha")
+        p.min_offset_alpha = v;
+    else if (name == "min_fill")
+        p.min_fill = v;
+    else if (name == "cell_size")
+        p.cell_size = v;
+    else if (name == "seed_max")
+        p.seed_max = v;
+    else if (name == "rect_percentile")
+        p.rect_percentile = v;
+    else
+        throw InvalidArgument("--front-param: unknown parameter " + name);
+}
 
 /// Summary statistics of a list of values.
 struct Stats {
@@ -145,6 +174,9 @@ struct Scores {
     std::map<std::string, std::size_t> fp_on;   ///< class of the point under a false detection
     std::map<std::string, std::size_t> fn_why;  ///< why true fixtures were missed
     Stats front_iou_detectable, front_iou_all, front_iou_found;
+    /// Fronts whose fixture was detected and that were matched: share of the predicted front's
+    /// points on the true front (precision) and of the true front's points covered (recall).
+    Stats front_precision, front_recall;
     std::size_t joint_correct = 0, joint_total = 0;
     std::size_t sign_correct = 0;
     Stats axis_angle, axis_position;
@@ -209,6 +241,9 @@ class Evaluator {
             f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
         mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
         params.fixtures.min_confidence = o_.fixture_confidence;
+        params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
+                                                        : mapping::FrontSegmentation::kOutline;
+        for (const auto& a : o_.front_params) SetFrontParam(params.fronts, a);
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -217,6 +252,9 @@ class Evaluator {
     std::unique_ptr<ml::Classifier> TrainFixtures(
         const std::vector<sim::KitchenModelEntry>& library, sim::MeshSplit split,
         sim::KitchenModelCache& cache, bool laser) {
+        if (!o_.load_fixtures.empty()) {
+            return ml::LoadClassifier(o_.load_fixtures + (laser ? "_laser.mcm" : "_kinect.mcm"));
+        }
         training::FixtureTrainingOptions t;
         t.kitchens = o_.fixture_kitchens;
         t.views = laser ? o_.laser_views : o_.views;
@@ -404,6 +442,14 @@ class Evaluator {
                 }
             }
             if (found) s.front_iou_found.Add(iou);
+            if (found && it != match.end()) {
+                const auto& pidx = map.fronts[static_cast<std::size_t>(it->second.first)].indices;
+                std::size_t hit = 0;
+                for (const Index i : pidx) hit += t.IsFront(i) && t.Key(i) == key;
+                s.front_precision.Add(static_cast<double>(hit) /
+                                      static_cast<double>(std::max<std::size_t>(1, pidx.size())));
+                s.front_recall.Add(static_cast<double>(hit) / static_cast<double>(tf.points));
+            }
             if (it == match.end() || iou < 0.5f || tf.joint < 0) continue;
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(it->second.first)];
             furniture_votes[static_cast<int>(key >> 16) - 1][pf.furniture] += tf.points;
@@ -643,7 +689,11 @@ class Evaluator {
             "%.3f (n %zu)\n",
             s.front_iou_found.Mean(), s.front_iou_found.Median(), s.front_iou_found.Min(),
             s.front_iou_found.v.size());
+        std::printf("  matched fronts of those: point precision mean %.3f, recall mean %.3f\n",
+                    s.front_precision.Mean(), s.front_recall.Mean());
         j["front_iou"] = {{"fixture_detected", s.front_iou_found.Json()},
+                          {"found_precision", s.front_precision.Json()},
+                          {"found_recall", s.front_recall.Json()},
                           {"with_fixture", s.front_iou_detectable.Json()},
                           {"all", s.front_iou_all.Json()}};
         const double jacc =
@@ -746,6 +796,14 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--save-fixtures", o.save_fixtures,
                    "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
+    app.add_option("--fronts", o.fronts,
+                   "front segmentation: outline (rectangles between outlines) or grow (region "
+                   "growing)")
+        ->capture_default_str();
+    app.add_option("--front-param", o.front_params,
+                   "NAME=VALUE of the region growing's parameters (repeatable)");
+    app.add_option("--load-fixtures", o.load_fixtures,
+                   "fixture classifiers saved by --save-fixtures PREFIX (instead of training)");
     app.add_flag("-v,--verbose", o.verbose, "progress on stderr");
     app.add_option("--json", o.json, "also write the figures as JSON");
     app.add_option("--save-containers", o.save_containers,
@@ -760,6 +818,9 @@ int main(int argc, char** argv) {
             }
             if (o.train_split != "other" && o.train_split != "tune" && o.train_split != "test") {
                 throw CLI::ValidationError("--train-split", "must be other, tune or test");
+            }
+            if (o.fronts != "outline" && o.fronts != "grow") {
+                throw CLI::ValidationError("--fronts", "must be outline or grow");
             }
             if (o.tune_fold != -1 &&
                 !(o.split == "tune" && o.train_split == "tune" && o.tune_fold <= 1)) {

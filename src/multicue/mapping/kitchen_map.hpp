@@ -42,7 +42,7 @@ struct MapKitchenParams {
     RoomAxesParams axes;
     RoomStructureParams structure;
     FixtureParams fixtures;
-    FrontSegmentation front_segmentation = FrontSegmentation::kOutline;
+    FrontSegmentation front_segmentation = FrontSegmentation::kRegionGrowing;
     ImageEdgeParams image_edges;  ///< outline evidence of organized scans
     FrontEdgeParams outline;      ///< kOutline
     FrontParams fronts;           ///< kRegionGrowing
