@@ -66,6 +66,7 @@ struct Options {
     std::string train_split = "other";
     int tune_fold = -1;
     int fixture_kitchens = 12;
+    int fixture_views = 0;  ///< scans per training kitchen (0: --views / --laser-views)
     std::uint64_t fixture_seed = 7;
     std::string fixture_spec = "rtrees:trees=100";
     float fixture_confidence = mapping::FixtureParams{}.min_confidence;
@@ -76,29 +77,32 @@ struct Options {
 };
 
 /// Sets one field of the region growing's parameters from NAME=VALUE.
-void SetFrontParam(mapping::FrontParams& p, const std::string& assignment) {
+void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) {
     const auto eq = assignment.find('=');
     if (eq == std::string::npos) throw InvalidArgument("--front-param: expected NAME=VALUE");
     const std::string name = assignment.substr(0, eq);
     const float v = std::stof(assignment.substr(eq + 1));
-    if (name == "alpha_mads")
-        p.alpha_mads = v;
-    else if (name == "min_alpha")
-        p.min_alpha = v;
-    else if (name == "local_alpha")
-        p.local_alpha = v;
-    else if (name == "min_offset_alpha")
-        p.min_offset_alpha = v;
-    else if (name == "min_fill")
-        p.min_fill = v;
-    else if (name == "cell_size")
-        p.cell_size = v;
-    else if (name == "seed_max")
-        p.seed_max = v;
-    else if (name == "rect_percentile")
-        p.rect_percentile = v;
-    else
+    mapping::FrontParams& p = m.fronts;
+    const std::map<std::string, float*> fields = {{"alpha_mads", &p.alpha_mads},
+                                                  {"min_alpha", &p.min_alpha},
+                                                  {"local_alpha", &p.local_alpha},
+                                                  {"min_offset_alpha", &p.min_offset_alpha},
+                                                  {"min_fill", &p.min_fill},
+                                                  {"cell_size", &p.cell_size},
+                                                  {"seed_max", &p.seed_max},
+                                                  {"rect_percentile", &p.rect_percentile},
+                                                  {"max_extend", &m.outline.max_extend},
+                                                  {"min_support", &m.outline.min_support},
+                                                  {"min_coverage", &m.outline.min_coverage},
+                                                  {"recess", &m.outline.recess},
+                                                  {"step", &m.outline.step}};
+    if (name == "extend") {
+        m.extend_fronts = v != 0.0f;
+    } else if (const auto it = fields.find(name); it != fields.end()) {
+        *it->second = v;
+    } else {
         throw InvalidArgument("--front-param: unknown parameter " + name);
+    }
 }
 
 /// Summary statistics of a list of values.
@@ -177,6 +181,7 @@ struct Scores {
     /// Fronts whose fixture was detected and that were matched: share of the predicted front's
     /// points on the true front (precision) and of the true front's points covered (recall).
     Stats front_precision, front_recall;
+    Stats front_on_face;  ///< share of those fronts' true points the map put on a face
     std::size_t joint_correct = 0, joint_total = 0;
     std::size_t sign_correct = 0;
     Stats axis_angle, axis_position;
@@ -243,7 +248,7 @@ class Evaluator {
         params.fixtures.min_confidence = o_.fixture_confidence;
         params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
                                                         : mapping::FrontSegmentation::kOutline;
-        for (const auto& a : o_.front_params) SetFrontParam(params.fronts, a);
+        for (const auto& a : o_.front_params) SetFrontParam(params, a);
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -257,7 +262,7 @@ class Evaluator {
         }
         training::FixtureTrainingOptions t;
         t.kitchens = o_.fixture_kitchens;
-        t.views = laser ? o_.laser_views : o_.views;
+        t.views = o_.fixture_views > 0 ? o_.fixture_views : laser ? o_.laser_views : o_.views;
         t.sensor = laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
         t.split = split;
         t.seed = o_.fixture_seed;
@@ -449,6 +454,13 @@ class Evaluator {
                 s.front_precision.Add(static_cast<double>(hit) /
                                       static_cast<double>(std::max<std::size_t>(1, pidx.size())));
                 s.front_recall.Add(static_cast<double>(hit) / static_cast<double>(tf.points));
+                std::size_t on_face = 0;
+                for (std::size_t i = 0; i < f.cloud.size(); ++i) {
+                    if (!t.IsFront(i) || t.Key(i) != key) continue;
+                    const auto pc = map.point_class[i];
+                    on_face += pc == MapClass::kFace || pc == MapClass::kFront;
+                }
+                s.front_on_face.Add(static_cast<double>(on_face) / static_cast<double>(tf.points));
             }
             if (it == match.end() || iou < 0.5f || tf.joint < 0) continue;
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(it->second.first)];
@@ -689,8 +701,10 @@ class Evaluator {
             "%.3f (n %zu)\n",
             s.front_iou_found.Mean(), s.front_iou_found.Median(), s.front_iou_found.Min(),
             s.front_iou_found.v.size());
-        std::printf("  matched fronts of those: point precision mean %.3f, recall mean %.3f\n",
-                    s.front_precision.Mean(), s.front_recall.Mean());
+        std::printf(
+            "  matched fronts of those: point precision mean %.3f, recall mean %.3f (on a face "
+            "%.3f)\n",
+            s.front_precision.Mean(), s.front_recall.Mean(), s.front_on_face.Mean());
         j["front_iou"] = {{"fixture_detected", s.front_iou_found.Json()},
                           {"found_precision", s.front_precision.Json()},
                           {"found_recall", s.front_recall.Json()},
@@ -786,6 +800,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--fixture-kitchens", o.fixture_kitchens,
                    "kitchens that train each sensor's fixture classifier (0: fixtures by rules)")
+        ->capture_default_str();
+    app.add_option("--fixture-views", o.fixture_views,
+                   "scans of each sensor per fixture training kitchen (0: --views / --laser-views)")
         ->capture_default_str();
     app.add_option("--fixture-seed", o.fixture_seed, "seed of those kitchens")
         ->capture_default_str();

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -247,6 +248,67 @@ TEST(FrontsFromEdges, DoorBoundedByItsGap) {
                  InvalidArgument);
     EXPECT_THROW(FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, ev, {.rounds = 0}),
                  InvalidArgument);
+}
+
+TEST(FrontsFromEdges, AGrownFrontExtendsToItsOutline) {
+    const PointCloud c = DoorInAGap();
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    ASSERT_EQ(fx.fixtures.size(), 1u);
+    FrontEvidence ev;
+    ev.point_face = fx.point_face;
+    ev.point_residual = fx.point_residual;
+    // A front grown over the door's middle only (x 0.8 .. 1.0, z 0.4 .. 0.6).
+    const PlanarComponent& face = s.components[static_cast<std::size_t>(fx.fixtures[0].face)];
+    Front part;
+    part.face = fx.fixtures[0].face;
+    part.fixtures = {0};
+    part.u_axis = PlaneU(face, RoomFrame{});
+    part.v_axis = PlaneV(face, RoomFrame{});
+    part.normal = face.plane.head<3>();
+    const Eigen::Vector2f a = PlaneCoordinates(face, RoomFrame{}, {0.8f, 2.4f, 0.4f});
+    const Eigen::Vector2f b = PlaneCoordinates(face, RoomFrame{}, {1.0f, 2.4f, 0.6f});
+    part.min = a.cwiseMin(b);
+    part.max = a.cwiseMax(b);
+    for (const Index i : face.indices) {
+        const Eigen::Vector2f q = PlaneCoordinates(face, RoomFrame{}, c.points[i]);
+        if ((q.array() >= part.min.array()).all() && (q.array() <= part.max.array()).all())
+            part.indices.push_back(i);
+    }
+    std::vector<Front> fronts = {part};
+    ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts);
+    ASSERT_EQ(fronts.size(), 1u);
+    const Front& f = fronts[0];
+    const float x0 = std::min(f.min.x() * f.u_axis.x(), f.max.x() * f.u_axis.x());
+    const float x1 = std::max(f.min.x() * f.u_axis.x(), f.max.x() * f.u_axis.x());
+    EXPECT_NEAR(x0, 0.6f, 0.025f);
+    EXPECT_NEAR(x1, 1.1f, 0.025f);
+    EXPECT_NEAR(f.min.y(), 0.15f, 0.025f);
+    EXPECT_NEAR(f.max.y(), 0.8f, 0.025f);
+    EXPECT_GT(f.indices.size(), 3 * part.indices.size());
+    EXPECT_TRUE(std::is_sorted(f.indices.begin(), f.indices.end()));
+    // A front already on its outline stays; a neighbour's rectangle stops the extension.
+    std::vector<Front> again = fronts;
+    ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, again);
+    EXPECT_TRUE(again[0].min.isApprox(f.min, 1e-5f));
+    EXPECT_TRUE(again[0].max.isApprox(f.max, 1e-5f));
+    Front neighbour = part;
+    neighbour.fixtures = {};
+    neighbour.indices.clear();
+    const Eigen::Vector2f na = PlaneCoordinates(face, RoomFrame{}, {0.6f, 2.4f, 0.15f});
+    const Eigen::Vector2f nb = PlaneCoordinates(face, RoomFrame{}, {1.1f, 2.4f, 0.3f});
+    neighbour.min = na.cwiseMin(nb);
+    neighbour.max = na.cwiseMax(nb);
+    std::vector<Front> pair = {part, neighbour};
+    ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, pair);
+    EXPECT_NEAR(pair[0].min.y(), 0.3f, 0.005f);
+    FrontEvidence bad = ev;
+    bad.point_face.resize(2);
+    EXPECT_THROW(ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, bad, fronts),
+                 InvalidArgument);
+    EXPECT_THROW(
+        ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts, {.max_extend = 0.0f}),
+        InvalidArgument);
 }
 
 TEST(ImageEdges, ColourStepOfAnOrganizedScan) {

@@ -190,6 +190,45 @@ int FindSide(const OutlineGrid& g, bool columns, int start, int dir, int a, int 
     return last_seen;
 }
 
+/// Like FindSide, but walks at most `max_steps` lines: the index of the first line that is mostly
+/// outline, or of the last line with points when the face ends first; -1 when neither happens
+/// within max_steps.
+int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a, int b,
+                   int max_steps, const FrontEdgeParams& p) {
+    const int limit = columns ? g.nu : g.nv;
+    const int end_run = std::max(1, static_cast<int>(std::lround(p.face_end / g.cell)));
+    a = std::max(a, 0);
+    b = std::min(b, (columns ? g.nv : g.nu) - 1);
+    if (start < 0 || start >= limit || b < a) return -1;
+    int last_seen = start, empty_run = 0;
+    for (int k = start, steps = 0; k >= 0 && k < limit && steps <= max_steps; k += dir, ++steps) {
+        int with_points = 0, with_gap = 0;
+        for (int t = a; t <= b; ++t) {
+            bool points = false, gap = false;
+            for (int d = -1; d <= 1; ++d) {
+                const std::uint8_t m = columns ? g.At(k + d, t) : g.At(t, k + d);
+                points = points || m == kFaceCell || m == kGapCell;
+                gap = gap || m == kGapCell;
+            }
+            with_points += points;
+            with_gap += gap;
+        }
+        if (with_points == 0) {
+            if (++empty_run >= end_run) return last_seen;
+            continue;
+        }
+        empty_run = 0;
+        last_seen = k;
+        if (static_cast<float>(with_points) >= p.min_coverage * static_cast<float>(b - a + 1) &&
+            static_cast<float>(with_gap) >= p.min_support * static_cast<float>(with_points)) {
+            return k;
+        }
+    }
+    // The face's last points lie within reach: it ends there.
+    if (last_seen != start && (last_seen + dir < 0 || last_seen + dir >= limit)) return last_seen;
+    return -1;
+}
+
 /// Squared distance from q to the nearest point of a footprint.
 float Distance2(const std::vector<Eigen::Vector2f>& footprint, const Eigen::Vector2f& q) {
     float best = std::numeric_limits<float>::infinity();
@@ -267,6 +306,7 @@ void FrontEdgeParams::Validate() const {
     positive("face_end", face_end);
     positive("min_size", min_size);
     positive("start_reach", start_reach);
+    positive("max_extend", max_extend);
     if (!(min_support > 0.0f && min_support <= 1.0f) ||
         !(min_coverage >= 0.0f && min_coverage <= 1.0f) || !(margin >= 0.0f) ||
         !(shadow_factor >= 0.0f) || hole_reach < 0 || rounds < 1 ||
@@ -426,6 +466,113 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
         }
     }
     return fronts;
+}
+
+}  // namespace multicue::mapping
+
+namespace multicue::mapping {
+
+void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame, const RoomStructure& s,
+                            const std::vector<Fixture>& fixtures, const FrontEvidence& ev,
+                            std::vector<Front>& fronts, const FrontEdgeParams& p) {
+    p.Validate();
+    for (const std::size_t size :
+         {ev.point_face.size(), ev.point_residual.size(), ev.image_edge.size()}) {
+        if (size != 0 && size != cloud.size()) {
+            throw InvalidArgument(fmt::format("front edges: evidence of {} points for {} points",
+                                              size, cloud.size()));
+        }
+    }
+    if (cloud.empty() || fronts.empty()) return;
+    std::vector<std::uint8_t> is_fixture(cloud.size(), 0);
+    for (const Fixture& fx : fixtures) {
+        for (const Index i : fx.indices) {
+            if (i < cloud.size()) is_fixture[i] = 1;
+        }
+    }
+    // Which front holds each point now: extensions take no point of another front.
+    std::vector<std::int32_t> owner(cloud.size(), -1);
+    for (std::size_t r = 0; r < fronts.size(); ++r) {
+        for (const Index i : fronts[r].indices) owner[i] = static_cast<std::int32_t>(r);
+    }
+    for (std::size_t f = 0; f < s.components.size(); ++f) {
+        std::vector<std::size_t> mine;
+        for (std::size_t r = 0; r < fronts.size(); ++r) {
+            if (fronts[r].face == static_cast<int>(f)) mine.push_back(r);
+        }
+        if (mine.empty()) continue;
+        const PlanarComponent& face = s.components[f];
+        Indices grid_points;
+        if (ev.point_face.empty()) {
+            grid_points = face.indices;
+        } else {
+            for (std::size_t i = 0; i < cloud.size(); ++i) {
+                if (ev.point_face[i] == static_cast<std::int32_t>(f))
+                    grid_points.push_back(static_cast<Index>(i));
+            }
+        }
+        if (grid_points.empty()) continue;
+        OutlineGrid g = BuildGrid(cloud, frame, face, grid_points, ev, is_fixture, p);
+        if (g.nu == 0) continue;
+        for (const Fixture& fx : fixtures) {
+            if (fx.face != static_cast<int>(f) || fx.indices.empty()) continue;
+            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
+            Eigen::Vector2f hi = -lo;
+            for (const Index i : fx.indices) {
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                lo = lo.cwiseMin(q);
+                hi = hi.cwiseMax(q);
+            }
+            MaskFixture(g, lo, hi, p.margin,
+                        p.margin + p.shadow_factor * std::max(fx.protrusion, 0.0f));
+        }
+        const int steps = static_cast<int>(std::ceil(p.max_extend / g.cell));
+        std::vector<std::pair<Eigen::Vector2f, Eigen::Vector2f>> grown(mine.size());
+        for (std::size_t k = 0; k < mine.size(); ++k) {
+            const Front& fr = fronts[mine[k]];
+            Eigen::Vector2f lo = fr.min, hi = fr.max;
+            const int u0 = std::clamp(g.U(lo.x()), 0, g.nu - 1);
+            const int u1 = std::clamp(g.U(hi.x()), 0, g.nu - 1);
+            const int v0 = std::clamp(g.V(lo.y()), 0, g.nv - 1);
+            const int v1 = std::clamp(g.V(hi.y()), 0, g.nv - 1);
+            if (const int l = FindSideWithin(g, true, u0, -1, v0, v1, steps, p); l >= 0)
+                lo.x() = std::min(lo.x(), g.UAt(l));
+            if (const int r = FindSideWithin(g, true, u1, 1, v0, v1, steps, p); r >= 0)
+                hi.x() = std::max(hi.x(), g.UAt(r));
+            if (const int b = FindSideWithin(g, false, v0, -1, u0, u1, steps, p); b >= 0)
+                lo.y() = std::min(lo.y(), g.VAt(b));
+            if (const int t = FindSideWithin(g, false, v1, 1, u0, u1, steps, p); t >= 0)
+                hi.y() = std::max(hi.y(), g.VAt(t));
+            // Never into another front's rectangle.
+            for (const std::size_t o : mine) {
+                if (o == mine[k]) continue;
+                const Eigen::Vector2f olo = fronts[o].min, ohi = fronts[o].max;
+                const bool rows = olo.y() < fr.max.y() && ohi.y() > fr.min.y();
+                const bool cols = olo.x() < fr.max.x() && ohi.x() > fr.min.x();
+                if (rows && ohi.x() <= fr.min.x()) lo.x() = std::max(lo.x(), ohi.x());
+                if (rows && olo.x() >= fr.max.x()) hi.x() = std::min(hi.x(), olo.x());
+                if (cols && ohi.y() <= fr.min.y()) lo.y() = std::max(lo.y(), ohi.y());
+                if (cols && olo.y() >= fr.max.y()) hi.y() = std::min(hi.y(), olo.y());
+            }
+            grown[k] = {lo, hi};
+        }
+        for (std::size_t k = 0; k < mine.size(); ++k) {
+            Front& fr = fronts[mine[k]];
+            const auto& [lo, hi] = grown[k];
+            for (const Index i : face.indices) {
+                if (owner[i] >= 0 || is_fixture[i]) continue;
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                if ((q.array() < lo.array()).any() || (q.array() > hi.array()).any()) continue;
+                owner[i] = static_cast<std::int32_t>(mine[k]);
+                fr.indices.push_back(i);
+            }
+            std::sort(fr.indices.begin(), fr.indices.end());
+            fr.min = lo;
+            fr.max = hi;
+            const Eigen::Vector2f c = (lo + hi) / 2;
+            fr.center = fr.u_axis * c.x() + fr.v_axis * c.y() - fr.normal * face.plane.w();
+        }
+    }
 }
 
 }  // namespace multicue::mapping

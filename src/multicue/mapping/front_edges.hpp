@@ -52,6 +52,8 @@ struct FrontEdgeParams {
     /// Rectangles of two fixtures overlapping this much (IoU) are one front [-]
     float same_front_iou = 0.6f;
     std::size_t min_points = 30;  ///< fronts with fewer points are dropped [points]
+    /// ExtendFrontsToOutlines: a side moves at most this far out to reach its outline [m]
+    float max_extend = 0.3f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -75,5 +77,15 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
                                    const std::vector<Fixture>& fixtures,
                                    const FrontEvidence& evidence,
                                    const FrontEdgeParams& params = {});
+
+/// Grows the rectangle of each front (say, grown by SegmentFronts, which stops where the front's
+/// colour drifts) side by side outwards to its outline, at most params.max_extend, never into
+/// another front's rectangle; the face points in the grown part that belong to no front join it.
+/// A side already on an outline stays. Throws InvalidArgument for bad parameters or evidence of
+/// the wrong size.
+void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame,
+                            const RoomStructure& structure, const std::vector<Fixture>& fixtures,
+                            const FrontEvidence& evidence, std::vector<Front>& fronts,
+                            const FrontEdgeParams& params = {});
 
 }  // namespace multicue::mapping

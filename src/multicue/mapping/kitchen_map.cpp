@@ -227,10 +227,11 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     r.rejected_fixtures = std::move(fixtures.rejected);
     r.fixture_candidates = std::move(fixtures.candidates);
     stage("fixtures");
-    // Door and drawer fronts: rectangles between their outlines around the fixtures, or regions
-    // grown from them.
-    if (p.front_segmentation == FrontSegmentation::kOutline) {
-        FrontEvidence evidence;
+    // Door and drawer fronts: regions grown from the fixtures and then out to their outlines,
+    // or rectangles between the outlines around the fixtures.
+    const bool outline = p.front_segmentation == FrontSegmentation::kOutline;
+    FrontEvidence evidence;
+    if (outline || p.extend_fronts) {
         evidence.point_face = std::move(fixtures.point_face);
         evidence.point_residual = std::move(fixtures.point_residual);
         evidence.image_edge.assign(r.cloud.size(), 0);
@@ -239,10 +240,16 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
             std::copy(e.begin(), e.end(),
                       evidence.image_edge.begin() + static_cast<long>(r.scan_offsets[k]));
         }
+    }
+    if (outline) {
         map.fronts =
             FrontsFromEdges(r.cloud, map.frame, structure, map.fixtures, evidence, p.outline);
     } else {
         map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+        if (p.extend_fronts) {
+            ExtendFrontsToOutlines(r.cloud, map.frame, structure, map.fixtures, evidence,
+                                   map.fronts, p.outline);
+        }
     }
     stage("fronts");
     // How each front opens, from its fixture.

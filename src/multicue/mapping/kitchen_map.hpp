@@ -46,6 +46,9 @@ struct MapKitchenParams {
     ImageEdgeParams image_edges;  ///< outline evidence of organized scans
     FrontEdgeParams outline;      ///< kOutline
     FrontParams fronts;           ///< kRegionGrowing
+    /// kRegionGrowing: grown fronts are then extended to their outlines (ExtendFrontsToOutlines
+    /// with `outline`)
+    bool extend_fronts = true;
     ArticulationParams articulation;
     ContainerParams containers;
     int num_threads = 0;  ///< 0 = all cores
