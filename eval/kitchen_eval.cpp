@@ -4,7 +4,7 @@
 // types and hinge axes against each kitchen's ground-truth URDF, container types (confusion
 // matrix), and joints from opened-front scan pairs.
 //
-// The fixture classifiers (one per sensor, as `multicue train fixtures` trains them) and the
+// The fixture classifiers (one per sensor, CollectFixtureRows + TrainFixtureClassifier) and the
 // container classifier are trained on kitchens of the other half of the models (never the ones
 // scored; --train-split tune trains on the tune half when the tune half is scored, to validate);
 // --fixture-kitchens 0 finds fixtures by rules, --rules types containers by rules.
@@ -93,6 +93,7 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
                                                   {"rect_percentile", &p.rect_percentile},
                                                   {"max_extend", &m.outline.max_extend},
                                                   {"min_support", &m.outline.min_support},
+                                                  {"extend_support", &m.outline.extend_support},
                                                   {"min_coverage", &m.outline.min_coverage},
                                                   {"recess", &m.outline.recess},
                                                   {"step", &m.outline.step}};
@@ -253,7 +254,7 @@ class Evaluator {
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
 
-    /// The fixture classifier of one sensor, trained as `multicue train fixtures` trains it.
+    /// The fixture classifier of one sensor, trained on simulated kitchens (or loaded).
     std::unique_ptr<ml::Classifier> TrainFixtures(
         const std::vector<sim::KitchenModelEntry>& library, sim::MeshSplit split,
         sim::KitchenModelCache& cache, bool laser) {

@@ -58,7 +58,8 @@ OutlineGrid BuildGrid(const PointCloud& cloud, const RoomFrame& frame, const Pla
     g.nv = static_cast<int>(span.y() / g.cell) + 1;
     const auto n = static_cast<std::size_t>(g.nu) * static_cast<std::size_t>(g.nv);
     std::vector<std::uint32_t> count(n, 0), edges(n, 0), n_res(n, 0);
-    std::vector<float> sum_h(n, 0.0f), sum_res(n, 0.0f);
+    std::vector<float> sum_h(n, 0.0f), sum_res(n, 0.0f), sum_a(n, 0.0f);
+    std::vector<std::uint32_t> n_a(n, 0);
     const Eigen::Vector3f normal = face.plane.head<3>();
     for (std::size_t k = 0; k < points.size(); ++k) {
         const Index i = points[k];
@@ -72,7 +73,16 @@ OutlineGrid BuildGrid(const PointCloud& cloud, const RoomFrame& frame, const Pla
             sum_res[c] += ev.point_residual[i];
             ++n_res[c];
         }
+        if (!ev.appearance.empty() && std::isfinite(ev.appearance[i])) {
+            sum_a[c] += ev.appearance[i];
+            ++n_a[c];
+        }
     }
+    auto mean_a = [&](int u, int v) {
+        const auto c = static_cast<std::size_t>(v * g.nu + u);
+        return n_a[c] ? sum_a[c] / static_cast<float>(n_a[c])
+                      : std::numeric_limits<float>::quiet_NaN();
+    };
     g.mark.assign(n, kUnknown);
     auto mean_h = [&](int u, int v) {
         const auto c = static_cast<std::size_t>(v * g.nu + u);
@@ -85,12 +95,13 @@ OutlineGrid BuildGrid(const PointCloud& cloud, const RoomFrame& frame, const Pla
             if (count[c] == 0) continue;
             bool gap = edges[c] > 0 ||
                        (n_res[c] > 0 && sum_res[c] / static_cast<float>(n_res[c]) < -p.recess);
-            const float h = mean_h(u, v);
+            const float h = mean_h(u, v), a = mean_a(u, v);
             for (const auto& [du, dv] : {std::pair{1, 0}, {0, 1}, {-1, 0}, {0, -1}}) {
                 const int uu = u + du, vv = v + dv;
                 if (gap || uu < 0 || vv < 0 || uu >= g.nu || vv >= g.nv) continue;
-                const float o = mean_h(uu, vv);
-                gap = !std::isnan(o) && std::abs(o - h) > p.step;
+                const float o = mean_h(uu, vv), oa = mean_a(uu, vv);
+                gap = (!std::isnan(o) && std::abs(o - h) > p.step) ||
+                      (!std::isnan(a) && !std::isnan(oa) && std::abs(oa - a) > p.appearance_step);
             }
             g.mark[c] = gap ? kGapCell : kFaceCell;
         }
@@ -220,7 +231,7 @@ int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a
         empty_run = 0;
         last_seen = k;
         if (static_cast<float>(with_points) >= p.min_coverage * static_cast<float>(b - a + 1) &&
-            static_cast<float>(with_gap) >= p.min_support * static_cast<float>(with_points)) {
+            static_cast<float>(with_gap) >= p.extend_support * static_cast<float>(with_points)) {
             return k;
         }
     }
@@ -307,16 +318,18 @@ void FrontEdgeParams::Validate() const {
     positive("min_size", min_size);
     positive("start_reach", start_reach);
     positive("max_extend", max_extend);
+    positive("appearance_step", appearance_step);
     if (!(min_support > 0.0f && min_support <= 1.0f) ||
         !(min_coverage >= 0.0f && min_coverage <= 1.0f) || !(margin >= 0.0f) ||
         !(shadow_factor >= 0.0f) || hole_reach < 0 || rounds < 1 ||
-        !(same_front_iou > 0.0f && same_front_iou <= 1.0f) || min_points < 1) {
+        !(same_front_iou > 0.0f && same_front_iou <= 1.0f) || min_points < 1 ||
+        !(extend_support > 0.0f && extend_support <= 1.0f)) {
         throw InvalidArgument(fmt::format(
             "front edges: need min_support in (0, 1], min_coverage in [0, 1], margin >= 0, "
             "shadow_factor >= 0, hole_reach >= 0, rounds >= 1, same_front_iou in (0, 1], "
-            "min_points >= 1 (got {}, {}, {}, {}, {}, {}, {}, {})",
+            "min_points >= 1, extend_support in (0, 1] (got {}, {}, {}, {}, {}, {}, {}, {}, {})",
             min_support, min_coverage, margin, shadow_factor, hole_reach, rounds, same_front_iou,
-            min_points));
+            min_points, extend_support));
     }
 }
 
@@ -324,8 +337,8 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
                                    const RoomStructure& s, const std::vector<Fixture>& fixtures,
                                    const FrontEvidence& ev, const FrontEdgeParams& p) {
     p.Validate();
-    for (const std::size_t size :
-         {ev.point_face.size(), ev.point_residual.size(), ev.image_edge.size()}) {
+    for (const std::size_t size : {ev.point_face.size(), ev.point_residual.size(),
+                                   ev.image_edge.size(), ev.appearance.size()}) {
         if (size != 0 && size != cloud.size()) {
             throw InvalidArgument(fmt::format("front edges: evidence of {} points for {} points",
                                               size, cloud.size()));
@@ -476,8 +489,8 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame, con
                             const std::vector<Fixture>& fixtures, const FrontEvidence& ev,
                             std::vector<Front>& fronts, const FrontEdgeParams& p) {
     p.Validate();
-    for (const std::size_t size :
-         {ev.point_face.size(), ev.point_residual.size(), ev.image_edge.size()}) {
+    for (const std::size_t size : {ev.point_face.size(), ev.point_residual.size(),
+                                   ev.image_edge.size(), ev.appearance.size()}) {
         if (size != 0 && size != cloud.size()) {
             throw InvalidArgument(fmt::format("front edges: evidence of {} points for {} points",
                                               size, cloud.size()));

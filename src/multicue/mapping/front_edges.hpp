@@ -37,6 +37,9 @@ struct FrontEdgeParams {
     float recess = 0.006f;  ///< cells this far below the local background are gap [m]
     float step = 0.012f;    ///< neighbouring cells whose heights differ this much are gap [m]
     int hole_reach = 3;     ///< empty cells with face cells this near on both sides are gap [cells]
+    /// Neighbouring cells whose mean appearance (FrontEvidence::appearance) differs this much
+    /// are gap [grey levels or scaled intensity]
+    float appearance_step = 25.0f;
     /// A side is found where the cells along it (one cell either side) are gap in this share of
     /// the rows or columns that hold points [-]
     float min_support = 0.45f;
@@ -54,17 +57,24 @@ struct FrontEdgeParams {
     std::size_t min_points = 30;  ///< fronts with fewer points are dropped [points]
     /// ExtendFrontsToOutlines: a side moves at most this far out to reach its outline [m]
     float max_extend = 0.3f;
+    /// ExtendFrontsToOutlines: a side's line is outline in this share of the rows or columns
+    /// that hold points (a stricter min_support: a grown front already ends near its outline) [-]
+    float extend_support = 1.0f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
 
 /// What the outline search reads per point of the mapped cloud (each vector empty or one entry
 /// per point): the face the point was measured against and its height above that face's local
-/// background (FixtureResult::point_face and point_residual), and its image edge flag.
+/// background (FixtureResult::point_face and point_residual), its image edge flag, and its
+/// appearance where no image edges are known.
 struct FrontEvidence {
     std::vector<std::int32_t> point_face;
     std::vector<float> point_residual;
     std::vector<std::uint8_t> image_edge;
+    /// Grey level or scaled intensity of points whose scan gives no image edges (unorganized
+    /// scans); NaN elsewhere.
+    std::vector<float> appearance;
 };
 
 /// The fronts of the fixtures on the faces of `structure`: one rectangle per fixture (fixtures

@@ -235,10 +235,26 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
         evidence.point_face = std::move(fixtures.point_face);
         evidence.point_residual = std::move(fixtures.point_residual);
         evidence.image_edge.assign(r.cloud.size(), 0);
+        // Scans without an image (unorganized) show the outlines by their appearance instead.
+        std::vector<float> look;
+        bool any_unorganized = false;
+        for (const auto& scan : scans) any_unorganized = any_unorganized || !scan.IsOrganized();
+        if (any_unorganized) {
+            try {
+                look = AppearanceValues(r.cloud, p.fronts.cue, p.fronts.intensity_scale);
+                evidence.appearance.assign(r.cloud.size(), std::numeric_limits<float>::quiet_NaN());
+            } catch (const DataError&) {
+                look.clear();  // no colours or intensity of the cue's kind: heights only
+            }
+        }
         for (std::size_t k = 0; k < scans.size(); ++k) {
             const std::vector<std::uint8_t> e = ImageEdges(scans[k], p.image_edges);
-            std::copy(e.begin(), e.end(),
-                      evidence.image_edge.begin() + static_cast<long>(r.scan_offsets[k]));
+            const auto at = static_cast<long>(r.scan_offsets[k]);
+            std::copy(e.begin(), e.end(), evidence.image_edge.begin() + at);
+            if (!look.empty() && !scans[k].IsOrganized()) {
+                std::copy(look.begin() + at, look.begin() + at + static_cast<long>(scans[k].size()),
+                          evidence.appearance.begin() + at);
+            }
         }
     }
     if (outline) {

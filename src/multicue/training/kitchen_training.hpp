@@ -5,7 +5,8 @@
 /// MapKitchen, and every fixture candidate in front of a furniture face labelled by the
 /// simulator's ground truth: "handle" or "knob" when it lies within match_distance of a true
 /// handle's or knob's points, else "none". The rows (FixtureFeatureNames columns) train any
-/// multicue classifier; `multicue train fixtures` saves it for `map kitchen --fixtures`.
+/// multicue classifier; `kitchen_eval --save-fixtures` saves one per sensor for `map kitchen
+/// --fixtures`.
 
 #include <cstdint>
 #include <filesystem>
