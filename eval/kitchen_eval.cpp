@@ -4,12 +4,15 @@
 // types and hinge axes against each kitchen's ground-truth URDF, container types (confusion
 // matrix), and joints from opened-front scan pairs.
 //
-// The container classifier is trained on kitchens of the other half of the models (never the
-// ones scored); --rules types containers by rules instead.
+// The fixture classifiers (one per sensor, CollectFixtureRows + TrainFixtureClassifier) and the
+// container classifier are trained on kitchens of the other half of the models (never the ones
+// scored; --train-split tune trains on the tune half when the tune half is scored, to validate);
+// --fixture-kitchens 0 finds fixtures by rules, --rules types containers by rules.
 //
-//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--views 3] [--seed 1]
-//                           [--sensor both|kinect|laser] [--split test] [--rules] [--json F]
-//                           [--save-containers MODEL]
+//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--fixture-kitchens 12]
+//                           [--views 3] [--seed 1] [--sensor both|kinect|laser] [--split test]
+//                           [--train-split other|tune|test] [--rules] [--json F]
+//                           [--save-containers MODEL] [--save-fixtures PREFIX]
 
 #include <algorithm>
 #include <array>
@@ -34,6 +37,7 @@
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "multicue/training/kitchen_training.hpp"
 
 #ifndef MULTICUE_SHARED_DATA_DIR
 #define MULTICUE_SHARED_DATA_DIR "../shared/data"
@@ -59,7 +63,48 @@ struct Options {
     bool verbose = false;
     std::string json;
     std::string save_containers;
+    std::string train_split = "other";
+    int tune_fold = -1;
+    int fixture_kitchens = 12;
+    int fixture_views = 0;  ///< scans per training kitchen (0: --views / --laser-views)
+    std::uint64_t fixture_seed = 7;
+    std::string fixture_spec = "rtrees:trees=100";
+    float fixture_confidence = mapping::FixtureParams{}.min_confidence;
+    std::string save_fixtures;
+    std::string fronts = "grow";
+    std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
+    std::string load_fixtures;
 };
+
+/// Sets one field of the region growing's parameters from NAME=VALUE.
+void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos) throw InvalidArgument("--front-param: expected NAME=VALUE");
+    const std::string name = assignment.substr(0, eq);
+    const float v = std::stof(assignment.substr(eq + 1));
+    mapping::FrontParams& p = m.fronts;
+    const std::map<std::string, float*> fields = {{"alpha_mads", &p.alpha_mads},
+                                                  {"min_alpha", &p.min_alpha},
+                                                  {"local_alpha", &p.local_alpha},
+                                                  {"min_offset_alpha", &p.min_offset_alpha},
+                                                  {"min_fill", &p.min_fill},
+                                                  {"cell_size", &p.cell_size},
+                                                  {"seed_max", &p.seed_max},
+                                                  {"rect_percentile", &p.rect_percentile},
+                                                  {"max_extend", &m.outline.max_extend},
+                                                  {"min_support", &m.outline.min_support},
+                                                  {"extend_support", &m.outline.extend_support},
+                                                  {"min_coverage", &m.outline.min_coverage},
+                                                  {"recess", &m.outline.recess},
+                                                  {"step", &m.outline.step}};
+    if (name == "extend") {
+        m.extend_fronts = v != 0.0f;
+    } else if (const auto it = fields.find(name); it != fields.end()) {
+        *it->second = v;
+    } else {
+        throw InvalidArgument("--front-param: unknown parameter " + name);
+    }
+}
 
 /// Summary statistics of a list of values.
 struct Stats {
@@ -134,6 +179,10 @@ struct Scores {
     std::map<std::string, std::size_t> fp_on;   ///< class of the point under a false detection
     std::map<std::string, std::size_t> fn_why;  ///< why true fixtures were missed
     Stats front_iou_detectable, front_iou_all, front_iou_found;
+    /// Fronts whose fixture was detected and that were matched: share of the predicted front's
+    /// points on the true front (precision) and of the true front's points covered (recall).
+    Stats front_precision, front_recall;
+    Stats front_on_face;  ///< share of those fronts' true points the map put on a face
     std::size_t joint_correct = 0, joint_total = 0;
     std::size_t sign_correct = 0;
     Stats axis_angle, axis_position;
@@ -196,7 +245,43 @@ class Evaluator {
     mapping::MapKitchenResult Map(const Frame& f, const ml::Classifier* classifier) const {
         const auto sensor =
             f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
-        return mapping::MapKitchen({f.cloud}, mapping::KitchenParamsFor(sensor), classifier);
+        mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
+        params.fixtures.min_confidence = o_.fixture_confidence;
+        params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
+                                                        : mapping::FrontSegmentation::kOutline;
+        for (const auto& a : o_.front_params) SetFrontParam(params, a);
+        const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
+        return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
+    }
+
+    /// The fixture classifier of one sensor, trained on simulated kitchens (or loaded).
+    std::unique_ptr<ml::Classifier> TrainFixtures(
+        const std::vector<sim::KitchenModelEntry>& library, sim::MeshSplit split,
+        sim::KitchenModelCache& cache, bool laser) {
+        if (!o_.load_fixtures.empty()) {
+            return ml::LoadClassifier(o_.load_fixtures + (laser ? "_laser.mcm" : "_kinect.mcm"));
+        }
+        training::FixtureTrainingOptions t;
+        t.kitchens = o_.fixture_kitchens;
+        t.views = o_.fixture_views > 0 ? o_.fixture_views : laser ? o_.laser_views : o_.views;
+        t.sensor = laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
+        t.split = split;
+        t.seed = o_.fixture_seed;
+        t.fold = o_.tune_fold >= 0 ? 1 - o_.tune_fold : -1;
+        const ml::Dataset rows = training::CollectFixtureRows(library, cache, t);
+        std::size_t positive = 0;
+        for (const int l : rows.labels) positive += l > 0;
+        std::printf(
+            "%s fixture classifier: %zu candidates (%zu fixtures) from %d kitchens (%s half, "
+            "seed %llu)\n",
+            laser ? "laser" : "kinect", rows.rows(), positive, t.kitchens,
+            std::string(sim::MeshSplitName(split)).c_str(),
+            static_cast<unsigned long long>(t.seed));
+        auto c = training::TrainFixtureClassifier(rows, o_.fixture_spec);
+        if (!o_.save_fixtures.empty()) {
+            c->Save(o_.save_fixtures + (laser ? "_laser.mcm" : "_kinect.mcm"));
+        }
+        return c;
     }
 
     /// Training rows: the features of predicted furniture labelled by the true model whose fronts
@@ -363,6 +448,21 @@ class Evaluator {
                 }
             }
             if (found) s.front_iou_found.Add(iou);
+            if (found && it != match.end()) {
+                const auto& pidx = map.fronts[static_cast<std::size_t>(it->second.first)].indices;
+                std::size_t hit = 0;
+                for (const Index i : pidx) hit += t.IsFront(i) && t.Key(i) == key;
+                s.front_precision.Add(static_cast<double>(hit) /
+                                      static_cast<double>(std::max<std::size_t>(1, pidx.size())));
+                s.front_recall.Add(static_cast<double>(hit) / static_cast<double>(tf.points));
+                std::size_t on_face = 0;
+                for (std::size_t i = 0; i < f.cloud.size(); ++i) {
+                    if (!t.IsFront(i) || t.Key(i) != key) continue;
+                    const auto pc = map.point_class[i];
+                    on_face += pc == MapClass::kFace || pc == MapClass::kFront;
+                }
+                s.front_on_face.Add(static_cast<double>(on_face) / static_cast<double>(tf.points));
+            }
             if (it == match.end() || iou < 0.5f || tf.joint < 0) continue;
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(it->second.first)];
             furniture_votes[static_cast<int>(key >> 16) - 1][pf.furniture] += tf.points;
@@ -469,11 +569,23 @@ class Evaluator {
     int Run() {
         const auto library = sim::ReadKitchenLibrary(o_.models);
         const auto test_split = sim::ParseMeshSplit(o_.split);
-        const auto train_split =
-            test_split == sim::MeshSplit::kTest ? sim::MeshSplit::kTune : sim::MeshSplit::kTest;
-        const auto test_lib = sim::SelectKitchenSplit(library, test_split);
-        const auto train_lib = sim::SelectKitchenSplit(library, train_split);
+        const auto train_split = o_.train_split != "other" ? sim::ParseMeshSplit(o_.train_split)
+                                 : test_split == sim::MeshSplit::kTest ? sim::MeshSplit::kTune
+                                                                       : sim::MeshSplit::kTest;
+        auto test_lib = sim::SelectKitchenSplit(library, test_split);
+        auto train_lib = sim::SelectKitchenSplit(library, train_split);
+        if (o_.tune_fold >= 0) {
+            // Validation on models never trained on, within the tune half.
+            test_lib = training::SelectKitchenFold(test_lib, o_.tune_fold);
+            train_lib = training::SelectKitchenFold(train_lib, 1 - o_.tune_fold);
+        }
         sim::KitchenModelCache cache;
+        if (o_.fixture_kitchens > 0) {
+            if (o_.sensor != "laser")
+                fixtures_kinect_ = TrainFixtures(library, train_split, cache, false);
+            if (o_.sensor != "kinect")
+                fixtures_laser_ = TrainFixtures(library, train_split, cache, true);
+        }
         std::unique_ptr<ml::Classifier> classifier;
         std::size_t train_rows = 0;
         if (!o_.rules && o_.train_kitchens > 0) {
@@ -528,6 +640,11 @@ class Evaluator {
                               {"kitchens", o_.kitchens},
                               {"seed", o_.seed},
                               {"containers", o_.rules ? "rules" : "rtrees"},
+                              {"fixtures", o_.fixture_kitchens > 0 ? o_.fixture_spec : "rules"},
+                              {"fixture_kitchens", o_.fixture_kitchens},
+                              {"fixture_confidence", o_.fixture_confidence},
+                              {"train_split", std::string(sim::MeshSplitName(train_split))},
+                              {"tune_fold", o_.tune_fold},
                               {"train_rows", train_rows}};
         if (o_.sensor != "laser") out["kinect"] = Report("kinect", kinect);
         if (o_.sensor != "kinect") out["laser"] = Report("laser", laser);
@@ -585,7 +702,13 @@ class Evaluator {
             "%.3f (n %zu)\n",
             s.front_iou_found.Mean(), s.front_iou_found.Median(), s.front_iou_found.Min(),
             s.front_iou_found.v.size());
+        std::printf(
+            "  matched fronts of those: point precision mean %.3f, recall mean %.3f (on a face "
+            "%.3f)\n",
+            s.front_precision.Mean(), s.front_recall.Mean(), s.front_on_face.Mean());
         j["front_iou"] = {{"fixture_detected", s.front_iou_found.Json()},
+                          {"found_precision", s.front_precision.Json()},
+                          {"found_recall", s.front_recall.Json()},
                           {"with_fixture", s.front_iou_detectable.Json()},
                           {"all", s.front_iou_all.Json()}};
         const double jacc =
@@ -644,6 +767,7 @@ class Evaluator {
 
   private:
     Options o_;
+    std::unique_ptr<ml::Classifier> fixtures_kinect_, fixtures_laser_;
     sim::KinectParams kinect_;
     sim::LaserParams laser_;
 };
@@ -668,6 +792,36 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--models", o.models, "kitchen model library")->capture_default_str();
     app.add_flag("--rules", o.rules, "type containers by rules (no training)");
+    app.add_option("--train-split", o.train_split,
+                   "models the classifiers train on: other (the half not scored), tune or test")
+        ->capture_default_str();
+    app.add_option("--tune-fold", o.tune_fold,
+                   "with --split tune --train-split tune: score kitchens of fold 0 or 1 of the "
+                   "tune models, train on the other fold")
+        ->capture_default_str();
+    app.add_option("--fixture-kitchens", o.fixture_kitchens,
+                   "kitchens that train each sensor's fixture classifier (0: fixtures by rules)")
+        ->capture_default_str();
+    app.add_option("--fixture-views", o.fixture_views,
+                   "scans of each sensor per fixture training kitchen (0: --views / --laser-views)")
+        ->capture_default_str();
+    app.add_option("--fixture-seed", o.fixture_seed, "seed of those kitchens")
+        ->capture_default_str();
+    app.add_option("--fixture-classifier", o.fixture_spec, "classifier spec of the fixtures")
+        ->capture_default_str();
+    app.add_option("--fixture-confidence", o.fixture_confidence,
+                   "P(handle) + P(knob) a fixture needs")
+        ->capture_default_str();
+    app.add_option("--save-fixtures", o.save_fixtures,
+                   "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
+    app.add_option("--fronts", o.fronts,
+                   "front segmentation: outline (rectangles between outlines) or grow (region "
+                   "growing)")
+        ->capture_default_str();
+    app.add_option("--front-param", o.front_params,
+                   "NAME=VALUE of the region growing's parameters (repeatable)");
+    app.add_option("--load-fixtures", o.load_fixtures,
+                   "fixture classifiers saved by --save-fixtures PREFIX (instead of training)");
     app.add_flag("-v,--verbose", o.verbose, "progress on stderr");
     app.add_option("--json", o.json, "also write the figures as JSON");
     app.add_option("--save-containers", o.save_containers,
@@ -679,6 +833,17 @@ int main(int argc, char** argv) {
             }
             if (o.split != "test" && o.split != "tune") {
                 throw CLI::ValidationError("--split", "must be test or tune");
+            }
+            if (o.train_split != "other" && o.train_split != "tune" && o.train_split != "test") {
+                throw CLI::ValidationError("--train-split", "must be other, tune or test");
+            }
+            if (o.fronts != "outline" && o.fronts != "grow") {
+                throw CLI::ValidationError("--fronts", "must be outline or grow");
+            }
+            if (o.tune_fold != -1 &&
+                !(o.split == "tune" && o.train_split == "tune" && o.tune_fold <= 1)) {
+                throw CLI::ValidationError("--tune-fold",
+                                           "0 or 1, only with --split tune --train-split tune");
             }
         })) {
         return *code;

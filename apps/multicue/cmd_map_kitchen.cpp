@@ -32,6 +32,7 @@ struct MapKitchenOptions {
     std::string out;
     std::string sensor = "auto";
     std::string containers;
+    std::string fixtures;
     std::string name = "kitchen_map";
     bool report = true;
     bool quiet = false;
@@ -75,13 +76,19 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
     for (const auto& s : o.opened) opened.push_back(ReadNonEmptyCloud(s));
     std::unique_ptr<ml::Classifier> classifier;
     if (!o.containers.empty()) classifier = ml::LoadClassifier(o.containers);
+    std::unique_ptr<ml::Classifier> fixture_classifier;
+    if (!o.fixtures.empty()) {
+        fixture_classifier = ml::LoadClassifier(o.fixtures);
+        mapping::CheckFixtureClassifier(*fixture_classifier);
+    }
     const mapping::KitchenSensor sensor = o.sensor == "kinect" ? mapping::KitchenSensor::kKinect
                                           : o.sensor == "laser"
                                               ? mapping::KitchenSensor::kLaser
                                               : mapping::GuessKitchenSensor(scans);
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
     params.num_threads = global.threads;
-    mapping::MapKitchenResult r = mapping::MapKitchen(scans, params, classifier.get());
+    mapping::MapKitchenResult r =
+        mapping::MapKitchen(scans, params, classifier.get(), fixture_classifier.get());
     mapping::MotionParams motion;
     if (sensor == mapping::KitchenSensor::kLaser) {
         motion.change_distance = 0.04f;
@@ -160,6 +167,9 @@ void AddMapKitchenCommand(CLI::App& map_command, const GlobalOptions& global) {
         ->capture_default_str();
     cmd->add_option("--containers", o->containers,
                     "container classifier (multicue model file); default: rules");
+    cmd->add_option("--fixtures", o->fixtures,
+                    "fixture classifier of the sensor (kitchen_eval --save-fixtures); default: "
+                    "rules");
     cmd->add_option("--name", o->name, "name of the map in the URDF and OWL files")
         ->capture_default_str();
     cmd->add_flag(

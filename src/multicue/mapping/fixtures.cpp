@@ -12,6 +12,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/mapping/fronts.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/sac_circle.hpp"
 #include "multicue/segmentation/sac_line.hpp"
@@ -30,9 +31,27 @@ void FixtureParams::Validate() const {
     positive("max_protrusion_extent", max_protrusion_extent);
     positive("min_protrusion", min_protrusion);
     positive("footprint_reach", footprint_reach);
-    if (!(aligned_noise >= 0.0f)) {
+    if (!(range_noise >= 0.0f) || !std::isfinite(range_noise)) {
         throw InvalidArgument(
-            fmt::format("fixtures: aligned_noise must be >= 0, got {}", aligned_noise));
+            fmt::format("fixtures: range_noise must be >= 0, got {}", range_noise));
+    }
+    positive("noise_floor", noise_floor);
+    positive("background_cell", background_cell);
+    positive("residual_cell", residual_cell);
+    positive("min_residual", min_residual);
+    positive("point_sigmas", point_sigmas);
+    positive("surround_outer", surround_outer);
+    positive("background_tolerance", background_tolerance);
+    if (!(residual_sigmas >= 0.0f) || background_radius < 0 || background_radius > 20 ||
+        background_passes < 1 || background_passes > 5 ||
+        !(surround_inner >= 0.0f && surround_inner < surround_outer) ||
+        !(min_confidence >= 0.0f && min_confidence <= 1.0f) || min_sides < 0 || min_sides > 4) {
+        throw InvalidArgument(fmt::format(
+            "fixtures: need residual_sigmas >= 0, background_radius in [0, 20], background_passes "
+            "in [1, 5], 0 <= surround_inner < surround_outer, min_confidence in [0, 1], min_sides "
+            "in [0, 4] (got {}, {}, {}, {} and {}, {}, {})",
+            residual_sigmas, background_radius, background_passes, surround_inner, surround_outer,
+            min_confidence, min_sides));
     }
     positive("attach_cell", attach_cell);
     positive("min_blocking_area", min_blocking_area);
@@ -71,6 +90,13 @@ void FixtureParams::Validate() const {
 bool ClassifyFixture(const PointCloud& cloud, const Indices& cluster, const PlanarComponent& face,
                      const RoomFrame& frame, const FixtureParams& p, Fixture& out) {
     if (cluster.size() < 3) return false;
+    return MeasureFixture(cloud, cluster, face, frame, p, out) &&
+           out.protrusion >= p.min_protrusion && out.depth_extent <= p.max_protrusion_extent;
+}
+
+bool MeasureFixture(const PointCloud& cloud, const Indices& cluster, const PlanarComponent& face,
+                    const RoomFrame& frame, const FixtureParams& p, Fixture& out) {
+    if (cluster.size() < 3) return false;
     const Eigen::Vector3f n = face.plane.head<3>();
     const Eigen::Vector3f u = PlaneU(face, frame), v = PlaneV(face, frame);
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
@@ -101,7 +127,7 @@ bool ClassifyFixture(const PointCloud& cloud, const Indices& cluster, const Plan
         b1 = std::max(b1, q.dot(e2));
     }
     const float length = a1 - a0, width = std::max(b1 - b0, 0.004f);
-    if (dmax - dmin > p.max_protrusion_extent || protrusion < p.min_protrusion) return false;
+    out.depth_extent = dmax - dmin;
     // RANSAC line and circle on the cluster: the handle's bar, the knob's rim.
     LineFitParams lp;
     lp.sac.distance_threshold = p.line_threshold;
@@ -127,6 +153,7 @@ bool ClassifyFixture(const PointCloud& cloud, const Indices& cluster, const Plan
     out.protrusion = protrusion;
     out.indices = cluster;
     const Eigen::Vector3f dir = (e1.x() * u + e1.y() * v).normalized();
+    out.direction = dir;
     if (length >= p.min_handle_length && length / width >= p.min_elongation) {
         out.type = FixtureType::kHandle;
         // The bar's direction: the line's, once it lies along the footprint (a line fitted to
@@ -150,90 +177,94 @@ bool ClassifyFixture(const PointCloud& cloud, const Indices& cluster, const Plan
     return false;
 }
 
-FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
-                             const RoomStructure& s, const FixtureParams& p,
-                             const std::vector<float>& ranges) {
-    p.Validate();
-    FixtureResult result;
-    if (cloud.empty()) return result;
-    if (!ranges.empty() && ranges.size() != cloud.size()) {
-        throw InvalidArgument(
-            fmt::format("fixtures: {} ranges for {} points", ranges.size(), cloud.size()));
+void CheckFixtureClassifier(const ml::Classifier& c) {
+    if (!c.fitted()) throw InvalidArgument("fixtures: the fixture classifier is not trained");
+    if (c.feature_names() != FixtureFeatureNames()) {
+        throw InvalidArgument(fmt::format(
+            "fixtures: the classifier was trained on {} columns (first '{}'), not on the {} "
+            "fixture features (first '{}')",
+            c.num_features(), c.feature_names().empty() ? "" : c.feature_names().front(),
+            FixtureFeatureNames().size(), FixtureFeatureNames().front()));
     }
-    // Each free point goes to the nearest face whose prism holds it.
-    std::vector<Indices> prism(s.components.size());
-    std::vector<int> faces;
-    for (std::size_t c = 0; c < s.components.size(); ++c) {
-        if (s.components[c].label == MapClass::kFace) faces.push_back(static_cast<int>(c));
-    }
-    if (faces.empty()) return result;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (!cloud.IsFinite(i)) continue;
-        // The orientation of the plane the point lies on; only planes of some size block (a flat
-        // handle's sides are planes too, but small ones).
-        int axis = i < s.plane_axis.size() ? s.plane_axis[i] : -1;
-        const int comp = i < s.point_component.size() ? s.point_component[i] : -1;
-        const bool blocking =
-            comp >= 0 && s.components[static_cast<std::size_t>(comp)].area >= p.min_blocking_area;
-        if (!blocking && axis >= 0 && comp >= 0) axis = -1;
-        const Eigen::Vector3f& x = cloud.points[i];
-        const float r = ranges.empty() ? (x - cloud.sensor_origin).norm() : ranges[i];
-        const float aligned_min = std::max(p.min_height, p.aligned_noise * r * r);
-        int best = -1;
-        float best_h = std::numeric_limits<float>::infinity();
-        bool on_surface = false;
-        for (const int f : faces) {
-            const PlanarComponent& c = s.components[static_cast<std::size_t>(f)];
-            // Points on planes of other orientations (a worktop, a side panel) are no fixtures.
-            if (blocking && axis != c.axis) continue;
-            const float h = c.plane.head<3>().dot(x) + c.plane.w();
-            if (h > p.max_height || h < -p.min_height || h >= best_h) continue;
-            const Eigen::Vector2f q = PlaneCoordinates(c, frame, x);
-            if ((q.array() < c.min.array() - p.face_margin).any() ||
-                (q.array() > c.max.array() + p.face_margin).any()) {
-                continue;
-            }
-            // A point on some face's surface (the edge of a door standing in front of the
-            // frame, where normals bend) is no fixture point.
-            if (h < p.min_height) {
-                if (c.area < p.min_blocking_area) continue;
-                on_surface = true;
-                break;
-            }
-            if (axis == c.axis && h < aligned_min) continue;
-            best = f;
-            best_h = h;
+    const auto& known = FixtureClassNames();
+    bool none = false, fixture = false;
+    for (const auto& name : c.class_names()) {
+        if (std::find(known.begin(), known.end(), name) == known.end()) {
+            throw InvalidArgument(fmt::format(
+                "fixtures: the classifier predicts '{}', not one of none, handle, knob", name));
         }
-        if (best >= 0 && !on_surface) {
-            prism[static_cast<std::size_t>(best)].push_back(static_cast<Index>(i));
+        none = none || name == "none";
+        fixture = fixture || name != "none";
+    }
+    if (!none || !fixture) {
+        throw InvalidArgument("fixtures: the classifier must predict none and handle or knob");
+    }
+}
+
+const char* FixtureByRules(const FixtureEvidence& e, bool shape_ok, const FixtureParams& p) {
+    if (e.border > 0.0f) return "image border";
+    if (e.local_protrusion < p.min_protrusion || e.depth_extent > p.max_protrusion_extent) {
+        return "low";
+    }
+    if (!shape_ok) return "shape";
+    if (e.sides < static_cast<float>(p.min_sides)) return "not in front of the face";
+    if (e.attached_share > p.max_attached_share) return "attached to another plane";
+    return "";
+}
+
+namespace {
+
+/// Pieces of one fixture (a handle's bar and its posts, split by a shadow) whose boxes nearly
+/// touch become one cluster.
+std::vector<Indices> MergeClose(const PointCloud& cloud, std::vector<Indices> merged, float gap) {
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (std::size_t a = 0; a < merged.size() && !changed; ++a) {
+            Eigen::AlignedBox3f ba;
+            for (const Index i : merged[a]) ba.extend(cloud.points[i]);
+            for (std::size_t b = a + 1; b < merged.size(); ++b) {
+                Eigen::AlignedBox3f bb;
+                for (const Index i : merged[b]) bb.extend(cloud.points[i]);
+                const Eigen::Vector3f d =
+                    (ba.min() - bb.max()).cwiseMax(bb.min() - ba.max()).cwiseMax(0.0f);
+                if (d.norm() <= gap) {
+                    merged[a].insert(merged[a].end(), merged[b].begin(), merged[b].end());
+                    std::sort(merged[a].begin(), merged[a].end());
+                    merged.erase(merged.begin() + static_cast<long>(b));
+                    changed = true;
+                    break;
+                }
+            }
         }
     }
-    // Cells holding points of axis-aligned planes, with the axes present (bit k for axis k).
-    std::unordered_map<std::uint64_t, std::uint8_t> plane_cells;
-    auto cell_key = [&](const Eigen::Vector3f& x) {
-        const Eigen::Vector3f q = frame.axes.transpose() * x / p.attach_cell;
-        auto c = [](float v) {
-            return static_cast<std::uint64_t>(std::floor(v) + (1 << 20)) & 0x1fffff;
-        };
-        return (c(q.x()) << 42) | (c(q.y()) << 21) | c(q.z());
-    };
-    for (const PlanarComponent& c : s.components) {
-        if (c.area < p.min_blocking_area) continue;
-        for (const Index i : c.indices) plane_cells[cell_key(cloud.points[i])] |= 1u << c.axis;
+    return merged;
+}
+
+/// Cells of the planes large enough to block, with the axes present (bit k for axis k): a
+/// cluster next to a plane of another orientation is an edge (a worktop's, a side panel's).
+class PlaneCells {
+  public:
+    PlaneCells(const PointCloud& cloud, const RoomFrame& frame, const RoomStructure& s,
+               const FixtureParams& p)
+        : cloud_(cloud), frame_(frame), cell_(p.attach_cell) {
+        for (const PlanarComponent& c : s.components) {
+            if (c.area < p.min_blocking_area) continue;
+            for (const Index i : c.indices) cells_[Key(cloud.points[i])] |= 1u << c.axis;
+        }
     }
-    auto attached_share = [&](const Indices& cluster, int axis) {
+    float AttachedShare(const Indices& cluster, int axis) const {
         std::size_t attached = 0;
-        const std::uint8_t others = static_cast<std::uint8_t>(7u & ~(1u << axis));
+        const auto others = static_cast<std::uint8_t>(7u & ~(1u << axis));
         for (const Index i : cluster) {
-            const Eigen::Vector3f q = frame.axes.transpose() * cloud.points[i] / p.attach_cell;
+            const Eigen::Vector3f q = frame_.axes.transpose() * cloud_.points[i] / cell_;
             bool found = false;
             for (int dx = -1; dx <= 1 && !found; ++dx) {
                 for (int dy = -1; dy <= 1 && !found; ++dy) {
                     for (int dz = -1; dz <= 1 && !found; ++dz) {
                         const Eigen::Vector3f x =
-                            frame.axes * ((q + Eigen::Vector3f(dx, dy, dz)) * p.attach_cell);
-                        const auto it = plane_cells.find(cell_key(x));
-                        found = it != plane_cells.end() && (it->second & others) != 0;
+                            frame_.axes * ((q + Eigen::Vector3f(dx, dy, dz)) * cell_);
+                        const auto it = cells_.find(Key(x));
+                        found = it != cells_.end() && (it->second & others) != 0;
                     }
                 }
             }
@@ -241,111 +272,214 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         }
         return static_cast<float>(attached) /
                static_cast<float>(std::max<std::size_t>(1, cluster.size()));
-    };
-    for (const int f : faces) {
-        const Indices& region = prism[static_cast<std::size_t>(f)];
-        if (region.size() < p.min_points) continue;
-        EuclideanClusteringParams cp;
-        cp.tolerance = p.cluster_tolerance;
-        cp.min_cluster_size = p.min_points;
-        cp.subset = region;
-        const ClusteringResult clusters = EuclideanClusteringGrid(cloud, cp);
-        const PlanarComponent& face = s.components[static_cast<std::size_t>(f)];
-        // Occupied cells of the face, to check that a fixture stands in front of it.
-        const float cell = p.footprint_reach / 3;
-        std::unordered_set<std::uint64_t> occupied;
-        auto key = [](std::int64_t a, std::int64_t b) {
+    }
+
+  private:
+    std::uint64_t Key(const Eigen::Vector3f& x) const {
+        const Eigen::Vector3f q = frame_.axes.transpose() * x / cell_;
+        auto c = [](float v) {
+            return static_cast<std::uint64_t>(std::floor(v) + (1 << 20)) & 0x1fffff;
+        };
+        return (c(q.x()) << 42) | (c(q.y()) << 21) | c(q.z());
+    }
+    const PointCloud& cloud_;
+    const RoomFrame& frame_;
+    float cell_;
+    std::unordered_map<std::uint64_t, std::uint8_t> cells_;
+};
+
+}  // namespace
+
+FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
+                             const RoomStructure& s, const FixtureParams& p,
+                             const std::vector<float>& ranges, const ml::Classifier* classifier) {
+    p.Validate();
+    if (classifier != nullptr) CheckFixtureClassifier(*classifier);
+    FixtureResult result;
+    if (cloud.empty()) return result;
+    if (!ranges.empty() && ranges.size() != cloud.size()) {
+        throw InvalidArgument(
+            fmt::format("fixtures: {} ranges for {} points", ranges.size(), cloud.size()));
+    }
+    result.point_face.assign(cloud.size(), -1);
+    result.point_residual.assign(cloud.size(), std::numeric_limits<float>::quiet_NaN());
+    std::vector<int> faces, face_slot(s.components.size(), -1);
+    for (std::size_t c = 0; c < s.components.size(); ++c) {
+        // Faces too small to block are no doors (a handle's bar can be one): their points are
+        // looked for in front of the larger faces.
+        if (s.components[c].label != MapClass::kFace ||
+            s.components[c].area < p.min_blocking_area) {
+            continue;
+        }
+        face_slot[c] = static_cast<int>(faces.size());
+        faces.push_back(static_cast<int>(c));
+    }
+    if (faces.empty()) return result;
+    const std::vector<float> look =
+        cloud.HasColors() || cloud.HasIntensity()
+            ? AppearanceValues(cloud, AppearanceCue::kAuto, 255.0f)
+            : std::vector<float>(cloud.size(), std::numeric_limits<float>::quiet_NaN());
+    // Every point on a face or in front of one is a sample of that face.
+    std::vector<FaceSamples> samples(faces.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (!cloud.IsFinite(i)) continue;
+        const Eigen::Vector3f& x = cloud.points[i];
+        const int comp = i < s.point_component.size() ? s.point_component[i] : -1;
+        int best = comp >= 0 ? face_slot[static_cast<std::size_t>(comp)] : -1;
+        if (best < 0) {
+            // The orientation of the plane the point lies on; only planes of some size block (a
+            // flat handle's sides are planes too, but small ones).
+            int axis = i < s.plane_axis.size() ? s.plane_axis[i] : -1;
+            const bool blocking = comp >= 0 && s.components[static_cast<std::size_t>(comp)].area >=
+                                                   p.min_blocking_area;
+            if (!blocking && axis >= 0 && comp >= 0) axis = -1;
+            float best_h = std::numeric_limits<float>::infinity();
+            for (std::size_t k = 0; k < faces.size(); ++k) {
+                const PlanarComponent& c = s.components[static_cast<std::size_t>(faces[k])];
+                // Points on planes of other orientations (a worktop, a side panel) are no fixtures.
+                if (blocking && axis != c.axis) continue;
+                const float h = c.plane.head<3>().dot(x) + c.plane.w();
+                if (h > p.max_height || h < -p.min_height || h >= best_h) continue;
+                const Eigen::Vector2f q = PlaneCoordinates(c, frame, x);
+                if ((q.array() < c.min.array() - p.face_margin).any() ||
+                    (q.array() > c.max.array() + p.face_margin).any()) {
+                    continue;
+                }
+                best = static_cast<int>(k);
+                best_h = h;
+                // On a large face's surface: that face's (the edge of a door standing in front of
+                // the frame, where normals bend).
+                if (h < p.min_height && c.area >= p.min_blocking_area) break;
+            }
+        }
+        if (best < 0) continue;
+        const PlanarComponent& c = s.components[static_cast<std::size_t>(faces[best])];
+        FaceSamples& fs = samples[static_cast<std::size_t>(best)];
+        const float r = ranges.empty() ? (x - cloud.sensor_origin).norm() : ranges[i];
+        fs.points.push_back(static_cast<Index>(i));
+        fs.q.push_back(PlaneCoordinates(c, frame, x));
+        fs.height.push_back(c.plane.head<3>().dot(x) + c.plane.w());
+        fs.appearance.push_back(look[i]);
+        fs.sigma.push_back(std::max(p.noise_floor, p.range_noise * r * r));
+        fs.range.push_back(r);
+    }
+    const PlaneCells plane_cells(cloud, frame, s, p);
+    std::vector<std::int32_t> sample_of(cloud.size(), -1);
+    for (std::size_t k = 0; k < faces.size(); ++k) {
+        FaceSamples& fs = samples[k];
+        if (fs.size() < p.min_points) continue;
+        const PlanarComponent& face = s.components[static_cast<std::size_t>(faces[k])];
+        ComputeFaceResiduals(fs, p.background_cell, p.background_radius, p.background_passes,
+                             p.min_residual);
+        // Heights above the background averaged per small cell: a handle one depth step out of
+        // its door stands out of the noise once a few of its points are averaged.
+        struct Cell {
+            float sum = 0.0f, sigma = 0.0f;
+            std::uint32_t n = 0;
+        };
+        std::unordered_map<std::uint64_t, Cell> cells;
+        auto key = [&](const Eigen::Vector2f& q) {
+            const auto a = static_cast<std::int64_t>(std::floor(q.x() / p.residual_cell));
+            const auto b = static_cast<std::int64_t>(std::floor(q.y() / p.residual_cell));
             return (static_cast<std::uint64_t>(a + (1 << 30)) << 32) ^
                    static_cast<std::uint64_t>(b + (1 << 30));
         };
-        for (const Index i : face.indices) {
-            const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-            occupied.insert(key(static_cast<std::int64_t>(std::floor(q.x() / cell)),
-                                static_cast<std::int64_t>(std::floor(q.y() / cell))));
+        for (std::size_t j = 0; j < fs.size(); ++j) {
+            Cell& c = cells[key(fs.q[j])];
+            c.sum += fs.residual[j];
+            c.sigma += fs.sigma[j];
+            ++c.n;
         }
-        auto occupied_near = [&](const Eigen::Vector2f& q, int reach) {
-            const auto cu = static_cast<std::int64_t>(std::floor(q.x() / cell));
-            const auto cv = static_cast<std::int64_t>(std::floor(q.y() / cell));
-            for (std::int64_t du = -reach; du <= reach; ++du) {
-                for (std::int64_t dv = -reach; dv <= reach; ++dv) {
-                    if (occupied.count(key(cu + du, cv + dv))) return true;
-                }
-            }
-            return false;
-        };
-        // The face lies behind the fixture and around it (a worktop's edge has the worktop
-        // above it, not the face).
-        auto in_front = [&](const Indices& cluster) {
-            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
-            Eigen::Vector2f hi = -lo;
-            for (const Index i : cluster) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                lo = lo.cwiseMin(q);
-                hi = hi.cwiseMax(q);
-            }
-            const Eigen::Vector2f mid = (lo + hi) / 2;
-            const float d = p.footprint_reach / 2;
-            // Three sides suffice: seen at a slant, a fixture's shadow hides the face on one.
-            const int sides =
-                occupied_near({lo.x() - d, mid.y()}, 1) + occupied_near({hi.x() + d, mid.y()}, 1) +
-                occupied_near({mid.x(), lo.y() - d}, 1) + occupied_near({mid.x(), hi.y() + d}, 1);
-            return occupied_near(mid, 3) && sides >= 3;
-        };
-        // Pieces of one fixture (a handle's bar and its posts, split by a shadow) whose boxes
-        // nearly touch become one cluster.
-        std::vector<Indices> merged = clusters.clusters;
-        for (bool changed = true; changed;) {
-            changed = false;
-            for (std::size_t a = 0; a < merged.size() && !changed; ++a) {
-                Eigen::AlignedBox3f ba;
-                for (const Index i : merged[a]) ba.extend(cloud.points[i]);
-                for (std::size_t b = a + 1; b < merged.size(); ++b) {
-                    Eigen::AlignedBox3f bb;
-                    for (const Index i : merged[b]) bb.extend(cloud.points[i]);
-                    const Eigen::Vector3f gap =
-                        (ba.min() - bb.max()).cwiseMax(bb.min() - ba.max()).cwiseMax(0.0f);
-                    if (gap.norm() <= p.merge_gap) {
-                        merged[a].insert(merged[a].end(), merged[b].begin(), merged[b].end());
-                        std::sort(merged[a].begin(), merged[a].end());
-                        merged.erase(merged.begin() + static_cast<long>(b));
-                        changed = true;
-                        break;
-                    }
-                }
+        Indices candidates;
+        for (std::size_t j = 0; j < fs.size(); ++j) {
+            if (fs.residual[j] <= 0.0f) continue;
+            const Cell& c = cells[key(fs.q[j])];
+            const float n = static_cast<float>(c.n);
+            const float threshold =
+                std::max(p.min_residual, p.residual_sigmas * c.sigma / n / std::sqrt(n));
+            // Its cell stands out on average, or the point itself clearly does (sparse scans).
+            if (c.sum / n >= threshold ||
+                fs.residual[j] >= std::max(p.min_residual, p.point_sigmas * fs.sigma[j])) {
+                candidates.push_back(fs.points[j]);
             }
         }
-        for (const Indices& cluster : merged) {
-            Eigen::AlignedBox3f box;
-            for (const Index i : cluster) box.extend(cloud.points[i]);
-            const char* reason = nullptr;
-            Fixture fx;
-            fx.face = f;
-            if (box.sizes().norm() > p.max_diameter) {
-                reason = "too large";
-                ++result.too_large;
-            }
-            if (reason == nullptr && cloud.IsOrganized() && p.border_px > 0) {
-                const auto b = static_cast<std::uint32_t>(p.border_px);
+        for (std::size_t j = 0; j < fs.size(); ++j) {
+            sample_of[fs.points[j]] = static_cast<std::int32_t>(j);
+        }
+        result.candidate_points.insert(result.candidate_points.end(), candidates.begin(),
+                                       candidates.end());
+        if (candidates.size() >= p.min_points) {
+            EuclideanClusteringParams cp;
+            cp.tolerance = p.cluster_tolerance;
+            cp.min_cluster_size = p.min_points;
+            cp.subset = std::move(candidates);
+            const std::vector<Indices> clusters =
+                MergeClose(cloud, EuclideanClusteringGrid(cloud, cp).clusters, p.merge_gap);
+            for (const Indices& cluster : clusters) {
+                Eigen::AlignedBox3f box;
+                for (const Index i : cluster) box.extend(cloud.points[i]);
+                if (box.sizes().norm() > p.max_diameter) {
+                    ++result.too_large;
+                    result.rejected.push_back({box.center(), cluster.size(), "too large"});
+                    continue;
+                }
+                FixtureCandidate cand;
+                cand.fixture.face = faces[k];
+                const bool shape_ok = MeasureFixture(cloud, cluster, face, frame, p, cand.fixture);
+                std::vector<std::uint32_t> members;
                 for (const Index i : cluster) {
-                    const std::uint32_t u = i % cloud.width, v = i / cloud.width;
-                    if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
-                        reason = "image border";
+                    members.push_back(static_cast<std::uint32_t>(sample_of[i]));
+                }
+                cand.evidence = MeasureFixtureEvidence(fs, members, cand.fixture, face, frame,
+                                                       s.floor_height, p);
+                if (cloud.IsOrganized() && p.border_px > 0) {
+                    const auto b = static_cast<std::uint32_t>(p.border_px);
+                    for (const Index i : cluster) {
+                        const std::uint32_t u = i % cloud.width, v = i / cloud.width;
+                        if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
+                            cand.evidence.border = 1.0f;
+                        }
                     }
                 }
+                cand.evidence.attached_share = plane_cells.AttachedShare(cluster, face.axis);
+                if (classifier != nullptr) {
+                    const std::vector<float> row = FixtureFeatureRow(cand.evidence);
+                    const ml::FeatureMatrix x = Eigen::Map<const ml::FeatureMatrix>(
+                        row.data(), 1, static_cast<Eigen::Index>(row.size()));
+                    const ml::FeatureMatrix proba = classifier->PredictProba(x);
+                    float handle = 0.0f, knob = 0.0f;
+                    for (std::size_t c = 0; c < classifier->num_classes(); ++c) {
+                        const auto& name = classifier->class_names()[c];
+                        (name == "handle" ? handle
+                         : name == "knob" ? knob
+                                          : cand.confidence) +=
+                            proba(0, static_cast<Eigen::Index>(c));
+                    }
+                    cand.confidence = handle + knob;
+                    cand.accepted = cand.confidence >= p.min_confidence;
+                    cand.fixture.type = handle >= knob ? FixtureType::kHandle : FixtureType::kKnob;
+                    if (cand.fixture.type == FixtureType::kKnob) {
+                        cand.fixture.direction = face.plane.head<3>();
+                    }
+                    cand.reason = cand.accepted ? "" : "classifier";
+                } else {
+                    cand.reason = FixtureByRules(cand.evidence, shape_ok, p);
+                    cand.accepted = cand.reason[0] == '\0';
+                    cand.confidence = cand.accepted ? 1.0f : 0.0f;
+                }
+                if (cand.accepted) {
+                    result.fixtures.push_back(cand.fixture);
+                } else {
+                    ++result.unclassified;
+                    result.rejected.push_back({box.center(), cluster.size(), cand.reason});
+                }
+                result.candidates.push_back(std::move(cand));
             }
-            if (reason == nullptr && !ClassifyFixture(cloud, cluster, face, frame, p, fx)) {
-                reason = "shape";
-            }
-            if (reason == nullptr && !in_front(cluster)) reason = "not in front of the face";
-            if (reason == nullptr && attached_share(cluster, face.axis) > p.max_attached_share) {
-                reason = "attached to another plane";
-            }
-            if (reason == nullptr) {
-                result.fixtures.push_back(std::move(fx));
-                continue;
-            }
-            if (std::string_view(reason) != "too large") ++result.unclassified;
-            result.rejected.push_back({box.center(), cluster.size(), reason});
+        }
+        for (std::size_t j = 0; j < fs.size(); ++j) {
+            sample_of[fs.points[j]] = -1;
+            result.point_face[fs.points[j]] = faces[k];
+            result.point_residual[fs.points[j]] = fs.residual[j];
         }
     }
     return result;

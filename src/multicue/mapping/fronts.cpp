@@ -86,7 +86,8 @@ float FootprintDistance2(const std::vector<Eigen::Vector2f>& footprint, const Ei
     return best;
 }
 
-/// Knobs in a row of at least three (a control panel): they open nothing on their own.
+}  // namespace
+
 std::vector<bool> PanelKnobs(const std::vector<Fixture>& fixtures) {
     std::vector<bool> panel(fixtures.size(), false);
     for (std::size_t i = 0; i < fixtures.size(); ++i) {
@@ -104,8 +105,6 @@ std::vector<bool> PanelKnobs(const std::vector<Fixture>& fixtures) {
     }
     return panel;
 }
-
-}  // namespace
 
 void FrontParams::Validate() const {
     auto positive = [](const char* name, float v) {

@@ -63,6 +63,10 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                                  const std::vector<Fixture>& fixtures,
                                  const FrontParams& params = {});
 
+/// Per fixture: true for a knob in a row of at least three knobs on one face (a control panel),
+/// which opens nothing on its own.
+std::vector<bool> PanelKnobs(const std::vector<Fixture>& fixtures);
+
 /// The appearance value of every point for a cue (NaN where undefined). Exposed for tests.
 std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
                                     float intensity_scale);

@@ -48,6 +48,8 @@ void MapKitchenParams::Validate() const {
     structure.Validate();
     fixtures.Validate();
     fronts.Validate();
+    image_edges.Validate();
+    outline.Validate();
     articulation.Validate();
     containers.Validate();
 }
@@ -58,7 +60,8 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         // Disparity noise and its quantisation grow with the square of the range.
         p.normal_half_window = 7;
         p.structure.range_noise = 0.004f;
-        p.fixtures.aligned_noise = 0.003f;
+        p.fixtures.noise_floor = 0.002f;
+        p.fixtures.range_noise = 0.0015f;
     }
     if (sensor == KitchenSensor::kLaser) {
         // Centimetre range noise and sparse rows: thicker planes, looser clusters.
@@ -69,10 +72,23 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.structure.min_component_points = 20;
         p.structure.min_plane_points = 40;
         p.fixtures.min_height = 0.02f;
+        p.fixtures.noise_floor = 0.01f;
+        p.fixtures.residual_sigmas = 2.0f;
+        p.fixtures.min_residual = 0.015f;
+        p.fixtures.residual_cell = 0.025f;
+        p.fixtures.background_cell = 0.05f;
+        p.fixtures.background_tolerance = 0.02f;
+        p.fixtures.surround_inner = 0.015f;
+        p.fixtures.surround_outer = 0.08f;
         p.fixtures.cluster_tolerance = 0.03f;
         p.fixtures.min_points = 5;
         p.fixtures.line_threshold = 0.015f;
         p.fixtures.circle_threshold = 0.01f;
+        p.outline.cell = 0.025f;
+        p.outline.recess = 0.015f;
+        p.outline.step = 0.03f;
+        p.outline.hole_reach = 2;
+        p.outline.margin = 0.03f;
         p.fronts.cue = AppearanceCue::kIntensity;
         p.fronts.cell_size = 0.04f;
         p.fronts.seed_max = 0.08f;
@@ -174,7 +190,8 @@ void LabelMapPoints(KitchenMap& map, std::size_t n, const std::vector<std::int32
 }
 
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& p,
-                            const ml::Classifier* classifier) {
+                            const ml::Classifier* classifier,
+                            const ml::Classifier* fixture_classifier) {
     p.Validate();
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
@@ -204,12 +221,52 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     if (!vertical) throw DataError("map kitchen: no vertical planes (walls or furniture faces)");
     stage("structure");
     // Handles and knobs in front of the faces.
-    FixtureResult fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges);
+    FixtureResult fixtures =
+        DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges, fixture_classifier);
     map.fixtures = std::move(fixtures.fixtures);
     r.rejected_fixtures = std::move(fixtures.rejected);
+    r.fixture_candidates = std::move(fixtures.candidates);
     stage("fixtures");
-    // Door and drawer fronts grown from the fixtures.
-    map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+    // Door and drawer fronts: regions grown from the fixtures and then out to their outlines,
+    // or rectangles between the outlines around the fixtures.
+    const bool outline = p.front_segmentation == FrontSegmentation::kOutline;
+    FrontEvidence evidence;
+    if (outline || p.extend_fronts) {
+        evidence.point_face = std::move(fixtures.point_face);
+        evidence.point_residual = std::move(fixtures.point_residual);
+        evidence.image_edge.assign(r.cloud.size(), 0);
+        // Scans without an image (unorganized) show the outlines by their appearance instead.
+        std::vector<float> look;
+        bool any_unorganized = false;
+        for (const auto& scan : scans) any_unorganized = any_unorganized || !scan.IsOrganized();
+        if (any_unorganized) {
+            try {
+                look = AppearanceValues(r.cloud, p.fronts.cue, p.fronts.intensity_scale);
+                evidence.appearance.assign(r.cloud.size(), std::numeric_limits<float>::quiet_NaN());
+            } catch (const DataError&) {
+                look.clear();  // no colours or intensity of the cue's kind: heights only
+            }
+        }
+        for (std::size_t k = 0; k < scans.size(); ++k) {
+            const std::vector<std::uint8_t> e = ImageEdges(scans[k], p.image_edges);
+            const auto at = static_cast<long>(r.scan_offsets[k]);
+            std::copy(e.begin(), e.end(), evidence.image_edge.begin() + at);
+            if (!look.empty() && !scans[k].IsOrganized()) {
+                std::copy(look.begin() + at, look.begin() + at + static_cast<long>(scans[k].size()),
+                          evidence.appearance.begin() + at);
+            }
+        }
+    }
+    if (outline) {
+        map.fronts =
+            FrontsFromEdges(r.cloud, map.frame, structure, map.fixtures, evidence, p.outline);
+    } else {
+        map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+        if (p.extend_fronts) {
+            ExtendFrontsToOutlines(r.cloud, map.frame, structure, map.fixtures, evidence,
+                                   map.fronts, p.outline);
+        }
+    }
     stage("fronts");
     // How each front opens, from its fixture.
     for (Front& f : map.fronts) {

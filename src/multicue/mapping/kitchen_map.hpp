@@ -13,6 +13,7 @@
 #include "multicue/mapping/articulation.hpp"
 #include "multicue/mapping/containers.hpp"
 #include "multicue/mapping/fixtures.hpp"
+#include "multicue/mapping/front_edges.hpp"
 #include "multicue/mapping/fronts.hpp"
 #include "multicue/mapping/room_axes.hpp"
 #include "multicue/mapping/room_structure.hpp"
@@ -27,6 +28,12 @@ enum class KitchenSensor {
     kLaser,   ///< tilting laser sweeps, centimetre noise, intensity
 };
 
+/// How fronts are segmented.
+enum class FrontSegmentation {
+    kOutline,        ///< rectangles between the fronts' outlines (front_edges.hpp)
+    kRegionGrowing,  ///< colour region growing from the fixtures (fronts.hpp)
+};
+
 struct MapKitchenParams {
     /// Organized scans: image-space normals with this half window [pixels]; others: k-d tree
     /// normals within normal_radius.
@@ -35,7 +42,13 @@ struct MapKitchenParams {
     RoomAxesParams axes;
     RoomStructureParams structure;
     FixtureParams fixtures;
-    FrontParams fronts;
+    FrontSegmentation front_segmentation = FrontSegmentation::kRegionGrowing;
+    ImageEdgeParams image_edges;  ///< outline evidence of organized scans
+    FrontEdgeParams outline;      ///< kOutline
+    FrontParams fronts;           ///< kRegionGrowing
+    /// kRegionGrowing: grown fronts are then extended to their outlines (ExtendFrontsToOutlines
+    /// with `outline`)
+    bool extend_fronts = true;
     ArticulationParams articulation;
     ContainerParams containers;
     int num_threads = 0;  ///< 0 = all cores
@@ -55,19 +68,23 @@ struct MapKitchenResult {
     PointCloud cloud;
     std::vector<std::size_t> scan_offsets;  ///< first point of each scan in `cloud`
     std::vector<float> ranges;  ///< per point of `cloud`: distance to its scan's sensor [m]
-    std::vector<RejectedCluster> rejected_fixtures;  ///< clusters that became no fixture
-    double time_ms = 0.0;                            ///< whole pipeline [ms]
+    std::vector<RejectedCluster> rejected_fixtures;    ///< clusters that became no fixture
+    std::vector<FixtureCandidate> fixture_candidates;  ///< every measured fixture candidate
+    double time_ms = 0.0;                              ///< whole pipeline [ms]
     /// Stage times in pipeline order: normals, axes, structure, fixtures, fronts, articulation,
     /// containers [ms]
     std::vector<std::pair<std::string, double>> timings;
 };
 
 /// Maps a kitchen from scans that share one frame (z up when they carry sensor positions, as
-/// `multicue simulate kitchens` writes them). `classifier` types the furniture (nullptr: rules).
-/// Throws InvalidArgument for bad parameters; DataError when there are no scans, no finite point,
-/// or no vertical plane to look for furniture on.
+/// `multicue simulate kitchens` writes them). `classifier` types the furniture, and
+/// `fixture_classifier` decides which fixture candidates are handles and knobs (nullptr: rules).
+/// Throws InvalidArgument for bad parameters or a fixture classifier trained on other features;
+/// DataError when there are no scans, no finite point, or no vertical plane to look for furniture
+/// on.
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& params,
-                            const ml::Classifier* classifier = nullptr);
+                            const ml::Classifier* classifier = nullptr,
+                            const ml::Classifier* fixture_classifier = nullptr);
 
 /// Merges scans into one cloud with normals (organized scans keep image-space normals): colours
 /// of scans without colours get alpha 0, intensities of scans without intensity NaN. `offsets`

@@ -65,6 +65,7 @@ struct Fixture {
     float length = 0.0f;                                   ///< extent along `direction` [m]
     float width = 0.0f;                ///< extent across it, in the face plane [m]
     float protrusion = 0.0f;           ///< largest distance from the face [m]
+    float depth_extent = 0.0f;         ///< extent of its points along the face normal [m]
     float line_inlier_ratio = 0.0f;    ///< share of points on the RANSAC line
     float circle_inlier_ratio = 0.0f;  ///< share of points on the RANSAC circle
     Indices indices;

@@ -1,0 +1,101 @@
+#pragma once
+/// \file Door and drawer fronts as rectangles between their outlines (thesis section 4.1.2; the
+/// gaps between cupboard doors of Marton et al. 2008). A front's outline is a gap: a line of
+/// colour or intensity edges in the camera image, of points lying below the face's local
+/// background, of height steps, or of missing points between points of the face. The face is
+/// gridded in its plane and every cell marked as outline or not; from each fixture the search
+/// walks outwards, left, right, down and up, until a line of cells parallel to that side is
+/// mostly outline (or the face ends), and the four lines bound the front. Fronts are axis-aligned
+/// rectangles on axis-aligned faces, so each side is one column or row of cells: evidence is
+/// summed along its whole length, and a thin, faint gap that no single point shows is found.
+
+#include <cstdint>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/mapping/room_structure.hpp"
+#include "multicue/mapping/semantic_map.hpp"
+
+namespace multicue::mapping {
+
+struct ImageEdgeParams {
+    float low = 20.0f;   ///< Canny hysteresis thresholds on the grey image [grey levels]
+    float high = 50.0f;  ///< [grey levels]
+    /// Intensity images are stretched from this lower to the upper quantile onto 0 .. 255 [-]
+    float stretch_quantile = 0.02f;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Per point of an organized scan: 1 where its grey image (colour, else intensity) has a Canny
+/// edge, 0 elsewhere; all 0 for unorganized scans or scans without colour and intensity. Invalid
+/// pixels are black, so the outline of a gap the sensor could not see is an edge too.
+std::vector<std::uint8_t> ImageEdges(const PointCloud& scan, const ImageEdgeParams& params = {});
+
+struct FrontEdgeParams {
+    float cell = 0.01f;     ///< grid cell in the face plane [m]
+    float recess = 0.006f;  ///< cells this far below the local background are gap [m]
+    float step = 0.012f;    ///< neighbouring cells whose heights differ this much are gap [m]
+    int hole_reach = 3;     ///< empty cells with face cells this near on both sides are gap [cells]
+    /// Neighbouring cells whose mean appearance (FrontEvidence::appearance) differs this much
+    /// are gap [grey levels or scaled intensity]
+    float appearance_step = 25.0f;
+    /// A side is found where the cells along it (one cell either side) are gap in this share of
+    /// the rows or columns that hold points [-]
+    float min_support = 0.45f;
+    float min_coverage = 0.3f;  ///< ... and points cover this share of its length [-]
+    float margin = 0.02f;       ///< sides lie at least this far beyond the fixture [m]
+    /// Gap and empty cells connected to a fixture within margin + shadow_factor * its protrusion
+    /// are its shadow and edges, no outline [-]
+    float shadow_factor = 2.0f;
+    float start_reach = 0.06f;  ///< first search: the fixture's extent grown by this [m]
+    int rounds = 3;             ///< alternating searches of the sides [rounds]
+    float face_end = 0.05f;     ///< this much without points ends the face [m]
+    float min_size = 0.08f;     ///< narrower or lower fronts are dropped [m]
+    /// Rectangles of two fixtures overlapping this much (IoU) are one front [-]
+    float same_front_iou = 0.6f;
+    std::size_t min_points = 30;  ///< fronts with fewer points are dropped [points]
+    /// ExtendFrontsToOutlines: a side moves at most this far out to reach its outline [m]
+    float max_extend = 0.3f;
+    /// ExtendFrontsToOutlines: a side's line is outline in this share of the rows or columns
+    /// that hold points (a stricter min_support: a grown front already ends near its outline) [-]
+    float extend_support = 1.0f;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// What the outline search reads per point of the mapped cloud (each vector empty or one entry
+/// per point): the face the point was measured against and its height above that face's local
+/// background (FixtureResult::point_face and point_residual), its image edge flag, and its
+/// appearance where no image edges are known.
+struct FrontEvidence {
+    std::vector<std::int32_t> point_face;
+    std::vector<float> point_residual;
+    std::vector<std::uint8_t> image_edge;
+    /// Grey level or scaled intensity of points whose scan gives no image edges (unorganized
+    /// scans); NaN elsewhere.
+    std::vector<float> appearance;
+};
+
+/// The fronts of the fixtures on the faces of `structure`: one rectangle per fixture (fixtures
+/// whose rectangles coincide share one front), the face's points inside it (fixture points
+/// excluded; a point inside two rectangles goes to the nearer fixture). Knobs in a row of three
+/// or more (a control panel) open nothing. Throws InvalidArgument for bad parameters or evidence
+/// of the wrong size.
+std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& frame,
+                                   const RoomStructure& structure,
+                                   const std::vector<Fixture>& fixtures,
+                                   const FrontEvidence& evidence,
+                                   const FrontEdgeParams& params = {});
+
+/// Grows the rectangle of each front (say, grown by SegmentFronts, which stops where the front's
+/// colour drifts) side by side outwards to its outline, at most params.max_extend, never into
+/// another front's rectangle; the face points in the grown part that belong to no front join it.
+/// A side already on an outline stays. Throws InvalidArgument for bad parameters or evidence of
+/// the wrong size.
+void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame,
+                            const RoomStructure& structure, const std::vector<Fixture>& fixtures,
+                            const FrontEvidence& evidence, std::vector<Front>& fronts,
+                            const FrontEdgeParams& params = {});
+
+}  // namespace multicue::mapping

@@ -1,0 +1,199 @@
+#include "multicue/training/kitchen_training.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
+#include "multicue/sim/raycaster.hpp"
+#include "multicue/sim/rng.hpp"
+
+namespace multicue::training {
+
+sim::KinectParams KitchenKinectParams() {
+    sim::KinectParams p;
+    p.shading = 0.3f;
+    return p;
+}
+
+sim::LaserParams KitchenLaserParams() {
+    sim::LaserParams p;
+    p.tilt_min_deg = -40.0f;  // up to the ceiling
+    p.tilt_max_deg = 60.0f;
+    return p;
+}
+
+std::vector<KitchenFrame> ScanKitchen(const sim::KitchenScene& kitchen, int views, int laser_views,
+                                      std::uint64_t seed) {
+    std::vector<KitchenFrame> out;
+    const sim::RayCaster caster(kitchen.scene);
+    std::uint64_t v = 0;
+    // The order and seeds of `simulate kitchens`: laser sweeps first, then the Kinect frames.
+    for (const auto& pose : sim::KitchenLaserPoses(kitchen, laser_views, seed)) {
+        KitchenFrame f{
+            sim::ScanLaser(caster, pose, KitchenLaserParams(), sim::SubSeed(seed, 100 + v++)), true,
+            pose};
+        sim::AddKitchenTruth(kitchen, f.cloud);
+        sim::ScanToWorld(f.cloud, pose);
+        out.push_back(std::move(f));
+    }
+    for (const auto& pose : sim::KitchenCameraPoses(kitchen, views, seed)) {
+        KitchenFrame f{
+            sim::ScanKinect(caster, pose, KitchenKinectParams(), sim::SubSeed(seed, 100 + v++)),
+            false, pose};
+        sim::AddKitchenTruth(kitchen, f.cloud);
+        sim::ScanToWorld(f.cloud, pose);
+        out.push_back(std::move(f));
+    }
+    return out;
+}
+
+std::vector<sim::KitchenModelEntry> SelectKitchenFold(
+    const std::vector<sim::KitchenModelEntry>& entries, int fold) {
+    if (fold != 0 && fold != 1) {
+        throw InvalidArgument(fmt::format("kitchen models: fold must be 0 or 1, got {}", fold));
+    }
+    auto annotation = [](const sim::KitchenModelEntry& e) {
+        return std::filesystem::path(e.id).filename().string();
+    };
+    std::map<std::string, std::vector<std::pair<std::uint64_t, std::string>>> by_kind;
+    std::map<std::string, int> kinds_of_id;
+    for (const auto& e : entries) {
+        by_kind[e.kind].emplace_back(sim::MeshNameHash(annotation(e)), annotation(e));
+        ++kinds_of_id[annotation(e)];
+    }
+    std::map<std::pair<std::string, std::string>, int> fold_of;
+    for (auto& [kind, ids] : by_kind) {
+        std::sort(ids.begin(), ids.end());
+        for (std::size_t r = 0; r < ids.size(); ++r) {
+            fold_of[{kind, ids[r].second}] = static_cast<int>(r % 2);
+        }
+    }
+    std::vector<sim::KitchenModelEntry> out;
+    for (const auto& e : entries) {
+        const int f = kinds_of_id[annotation(e)] > 1 ? 0 : fold_of.at({e.kind, annotation(e)});
+        if (f == fold) out.push_back(e);
+    }
+    return out;
+}
+
+void FixtureTrainingOptions::Validate() const {
+    if (kitchens < 1 || views < 1) {
+        throw InvalidArgument(fmt::format(
+            "train fixtures: kitchens and views must be >= 1, got {} and {}", kitchens, views));
+    }
+    if (!(match_distance > 0.0f) || !std::isfinite(match_distance)) {
+        throw InvalidArgument(
+            fmt::format("train fixtures: match_distance must be > 0, got {}", match_distance));
+    }
+    if (fold < -1 || fold > 1) {
+        throw InvalidArgument(fmt::format("train fixtures: fold must be -1, 0 or 1, got {}", fold));
+    }
+    if (num_threads < 0) {
+        throw InvalidArgument(
+            fmt::format("train fixtures: num_threads must be >= 0, got {}", num_threads));
+    }
+}
+
+std::vector<int> LabelFixtureCandidates(const PointCloud& scan,
+                                        const std::vector<mapping::FixtureCandidate>& candidates,
+                                        float match_distance) {
+    const ExtraField* field = scan.FindExtraField("semantic");
+    if (field == nullptr || field->data.size() != scan.size()) {
+        throw DataError("train fixtures: the scan has no ground-truth field 'semantic'");
+    }
+    const auto handle = static_cast<std::uint8_t>(sim::KitchenClass::kHandle);
+    const auto knob = static_cast<std::uint8_t>(sim::KitchenClass::kKnob);
+    std::vector<Index> truth;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+        const std::uint8_t c = field->data[i];
+        if ((c == handle || c == knob) && scan.IsFinite(i)) truth.push_back(static_cast<Index>(i));
+    }
+    std::vector<int> labels(candidates.size(), 0);
+    const float d2 = match_distance * match_distance;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const Eigen::Vector3f& c = candidates[k].fixture.center;
+        float best = d2;
+        for (const Index i : truth) {
+            const float d = (scan.points[i] - c).squaredNorm();
+            if (d <= best) {
+                best = d;
+                labels[k] = field->data[i] == handle ? 1 : 2;
+            }
+        }
+    }
+    return labels;
+}
+
+ml::Dataset EmptyFixtureDataset() {
+    ml::Dataset data = ml::Dataset::WithBlocks({{"fixture", mapping::FixtureFeatureNames()}});
+    for (const auto& name : mapping::FixtureClassNames()) data.ClassId(name);
+    return data;
+}
+
+void AppendFixtureRows(const PointCloud& scan,
+                       const std::vector<mapping::FixtureCandidate>& candidates,
+                       float match_distance, const std::string& source, ml::Dataset& data) {
+    const std::vector<int> labels = LabelFixtureCandidates(scan, candidates, match_distance);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const std::vector<float> row = mapping::FixtureFeatureRow(candidates[k].evidence);
+        data.AppendRow(row, mapping::FixtureClassNames()[static_cast<std::size_t>(labels[k])], -1,
+                       -1, source);
+    }
+}
+
+ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& library,
+                               sim::KitchenModelCache& cache, const FixtureTrainingOptions& o,
+                               Progress* progress) {
+    o.Validate();
+    auto models = sim::SelectKitchenSplit(library, o.split);
+    if (o.fold >= 0) models = SelectKitchenFold(models, o.fold);
+    ml::Dataset data = EmptyFixtureDataset();
+    const bool laser = o.sensor == mapping::KitchenSensor::kLaser;
+    mapping::MapKitchenParams params = mapping::KitchenParamsFor(o.sensor);
+    params.num_threads = o.num_threads;
+    for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
+        const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
+        const sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, {}, seed);
+        const auto frames = ScanKitchen(kitchen, laser ? 0 : o.views, laser ? o.views : 0, seed);
+        for (std::size_t f = 0; f < frames.size(); ++f) {
+            try {
+                const auto r = mapping::MapKitchen({frames[f].cloud}, params);
+                AppendFixtureRows(
+                    frames[f].cloud, r.fixture_candidates, o.match_distance,
+                    fmt::format("kitchen_{:04}_{}_{:02}", i, laser ? "laser" : "kinect", f), data);
+            } catch (const DataError& e) {
+                // A scan the map refuses (no vertical plane in view) has no candidates.
+                LogInfo("train fixtures: kitchen {} scan {}: {}", i, f, e.what());
+            }
+        }
+        if (progress != nullptr) progress->Advance();
+    }
+    return data;
+}
+
+std::unique_ptr<ml::Classifier> TrainFixtureClassifier(const ml::Dataset& rows,
+                                                       const std::string& spec,
+                                                       std::uint32_t seed) {
+    std::size_t present = 0;
+    std::vector<std::size_t> count(rows.num_classes(), 0);
+    for (const int l : rows.labels) {
+        if (l >= 0) ++count[static_cast<std::size_t>(l)];
+    }
+    for (const std::size_t c : count) present += c > 0;
+    if (present < 2) {
+        throw DataError(fmt::format(
+            "train fixtures: the {} candidate rows hold fewer than two classes", rows.rows()));
+    }
+    // Classes without rows (no knob in view) are left out: the model predicts the others.
+    std::unique_ptr<ml::Classifier> c = ml::CreateClassifier(spec);
+    c->seed = seed;
+    c->Fit(rows);
+    return c;
+}
+
+}  // namespace multicue::training

@@ -1,0 +1,98 @@
+#pragma once
+/// \file Training of the kitchen map's fixture classifier (thesis section 4.1.2) on simulated
+/// kitchens: kitchens built from one half of the kitchen models (the tune half by default, never
+/// the held-out test half), scanned as `multicue simulate kitchens` scans them, mapped by
+/// MapKitchen, and every fixture candidate in front of a furniture face labelled by the
+/// simulator's ground truth: "handle" or "knob" when it lies within match_distance of a true
+/// handle's or knob's points, else "none". The rows (FixtureFeatureNames columns) train any
+/// multicue classifier; `kitchen_eval --save-fixtures` saves one per sensor for `map kitchen
+/// --fixtures`.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/mapping/kitchen_map.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
+#include "multicue/sim/kitchen_library.hpp"
+#include "multicue/sim/kitchen_scene.hpp"
+#include "multicue/sim/sensors.hpp"
+
+namespace multicue::training {
+
+/// The simulated Kinect of kitchen scans (30 % shading) as `simulate kitchens` uses it.
+sim::KinectParams KitchenKinectParams();
+/// The simulated tilting laser of kitchen scans (tilt -40 .. 60 deg).
+sim::LaserParams KitchenLaserParams();
+
+/// One scan of a simulated kitchen in the world frame with its ground-truth fields
+/// (sim::AddKitchenTruth) and the sensor pose.
+struct KitchenFrame {
+    PointCloud cloud;
+    bool laser = false;
+    Eigen::Isometry3f T_world_sensor = Eigen::Isometry3f::Identity();
+};
+
+/// The scans of a kitchen as `simulate kitchens` makes them with seed `seed`: `laser_views`
+/// laser sweeps, then `views` Kinect frames (either may be 0).
+std::vector<KitchenFrame> ScanKitchen(const sim::KitchenScene& kitchen, int views, int laser_views,
+                                      std::uint64_t seed);
+
+/// One of two folds of `entries` (one half of the library, for validation on models the
+/// classifiers never saw while still never touching the other half): within each kind the
+/// models, ordered by the hash of their annotation id, alternate between fold 0 and fold 1; a
+/// model listed under two kinds is in fold 0. Throws InvalidArgument for a fold other than 0, 1.
+std::vector<sim::KitchenModelEntry> SelectKitchenFold(
+    const std::vector<sim::KitchenModelEntry>& entries, int fold);
+
+struct FixtureTrainingOptions {
+    int kitchens = 12;  ///< kitchens simulated
+    int views = 3;      ///< scans per kitchen of the chosen sensor
+    mapping::KitchenSensor sensor = mapping::KitchenSensor::kKinect;
+    sim::MeshSplit split = sim::MeshSplit::kTune;  ///< the models the kitchens are built from
+    int fold = -1;           ///< -1: the whole half; 0 or 1: that fold of it (SelectKitchenFold)
+    std::uint64_t seed = 7;  ///< kitchen i uses sim::SubSeed(seed, i)
+    /// A candidate whose centre lies within this of a true fixture's points is that fixture [m]
+    float match_distance = 0.03f;
+    int num_threads = 0;  ///< 0 = all cores (per scan)
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Class per candidate (index into mapping::FixtureClassNames: 0 none, 1 handle, 2 knob) from the
+/// `semantic` ground-truth field of `scan` (the cloud the candidates were found in). Throws
+/// DataError when the scan has no `semantic` field.
+std::vector<int> LabelFixtureCandidates(const PointCloud& scan,
+                                        const std::vector<mapping::FixtureCandidate>& candidates,
+                                        float match_distance);
+
+/// An empty dataset with the fixture columns (block "fixture") and classes none, handle, knob.
+ml::Dataset EmptyFixtureDataset();
+
+/// Appends one row per candidate of a mapped scan (its labels from LabelFixtureCandidates);
+/// `source` names the scan in Dataset::sources.
+void AppendFixtureRows(const PointCloud& scan,
+                       const std::vector<mapping::FixtureCandidate>& candidates,
+                       float match_distance, const std::string& source, ml::Dataset& data);
+
+/// Rows of every fixture candidate of simulated kitchens of `library`'s `options.split` half.
+/// Stops early (rows so far) when an interruption is requested. Throws InvalidArgument for bad
+/// options, DataError when the half lacks the models a kitchen needs.
+ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& library,
+                               sim::KitchenModelCache& cache, const FixtureTrainingOptions& options,
+                               Progress* progress = nullptr);
+
+/// A classifier of spec `spec` (ml::CreateClassifier) trained on fixture rows. Throws
+/// DataError when the rows hold fewer than two classes.
+std::unique_ptr<ml::Classifier> TrainFixtureClassifier(const ml::Dataset& rows,
+                                                       const std::string& spec,
+                                                       std::uint32_t seed = 1);
+
+}  // namespace multicue::training

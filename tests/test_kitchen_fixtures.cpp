@@ -1,0 +1,371 @@
+// Fixture evidence and fronts between outlines on small synthetic kitchens: the local background
+// of a face (closed form), one evidence row per candidate with the handle's measured shape, a
+// fixture classifier trained on synthetic rows deciding what is a fixture, fronts bounded by the
+// gaps around a door, image edges of an organized scan, and bad parameters.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "kitchen_test_data.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/mapping/fixture_evidence.hpp"
+#include "multicue/mapping/fixtures.hpp"
+#include "multicue/mapping/front_edges.hpp"
+#include "multicue/mapping/kitchen_map.hpp"
+#include "multicue/mapping/room_structure.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/sim/kitchen_scene.hpp"
+#include "multicue/training/kitchen_training.hpp"
+
+namespace multicue {
+namespace {
+
+using namespace mapping;
+
+/// Adds the ground-truth field `semantic` to the synthetic kitchen: its handle points (standing
+/// more than 1 cm out of the face y = 2.4, below the worktop) are handles, the rest none.
+void AddHandleTruth(PointCloud& c) {
+    ExtraField f;
+    f.name = "semantic";
+    f.type = 'U';
+    f.size = 1;
+    f.data.assign(c.size(), 0);
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const Eigen::Vector3f& p = c.points[i];
+        if (p.y() < 2.39f && p.y() > 2.3f && p.z() < 0.88f && p.x() > 0.3f && p.x() < 2.7f) {
+            f.data[i] = static_cast<std::uint8_t>(sim::KitchenClass::kHandle);
+        }
+    }
+    c.extra_fields.push_back(std::move(f));
+}
+
+TEST(FixtureEvidence, LocalBackgroundOfAFaceWithAProudDoor) {
+    // A face at height 0 with a door standing 2 cm proud (u 0.3 .. 0.9) and a 4 cm bump on it.
+    FaceSamples s;
+    for (int i = 0; i <= 120; ++i) {
+        for (int j = 0; j <= 60; ++j) {
+            const Eigen::Vector2f q(0.01f * static_cast<float>(i), 0.01f * static_cast<float>(j));
+            float h = q.x() >= 0.3f && q.x() <= 0.9f ? 0.02f : 0.0f;
+            const bool bump = std::abs(q.x() - 0.6f) < 0.015f && std::abs(q.y() - 0.3f) < 0.05f;
+            if (bump) h += 0.04f;
+            s.points.push_back(static_cast<Index>(s.q.size()));
+            s.q.push_back(q);
+            s.height.push_back(h);
+            s.appearance.push_back(100.0f);
+            s.sigma.push_back(0.002f);
+            s.range.push_back(1.5f);
+        }
+    }
+    ComputeFaceResiduals(s, 0.03f, 3, 2);
+    ASSERT_EQ(s.residual.size(), s.size());
+    for (std::size_t k = 0; k < s.size(); ++k) {
+        const Eigen::Vector2f& q = s.q[k];
+        const bool bump = std::abs(q.x() - 0.6f) < 0.015f && std::abs(q.y() - 0.3f) < 0.05f;
+        // Well inside the door or the frame the background is the surface itself; the bump
+        // stands 4 cm out of the door, not 6 cm out of the face plane.
+        if (bump) {
+            EXPECT_NEAR(s.residual[k], 0.04f, 0.005f) << q.transpose();
+        } else if (std::abs(q.x() - 0.3f) > 0.12f && std::abs(q.x() - 0.9f) > 0.12f) {
+            EXPECT_NEAR(s.residual[k], 0.0f, 1e-4f) << q.transpose();
+        }
+    }
+    EXPECT_THROW(ComputeFaceResiduals(s, 0.0f, 3), InvalidArgument);
+    EXPECT_THROW(ComputeFaceResiduals(s, 0.03f, -1), InvalidArgument);
+    FaceSamples empty;
+    EXPECT_NO_THROW(ComputeFaceResiduals(empty, 0.03f, 3));
+    EXPECT_TRUE(empty.residual.empty());
+}
+
+TEST(FixtureEvidence, OneRowPerCandidateDescribingTheHandle) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
+    const FixtureResult r = DetectFixtures(k.cloud, RoomFrame{}, s, {});
+    ASSERT_GE(r.candidates.size(), 2u);
+    EXPECT_EQ(r.point_face.size(), k.cloud.size());
+    EXPECT_EQ(r.point_residual.size(), k.cloud.size());
+    int door = 0, drawer = 0;
+    for (const FixtureCandidate& c : r.candidates) {
+        const std::vector<float> row = FixtureFeatureRow(c.evidence);
+        ASSERT_EQ(row.size(), FixtureFeatureNames().size());
+        for (const float x : row) EXPECT_TRUE(std::isfinite(x));
+        EXPECT_EQ(row[0], c.evidence.length);
+        if (!c.accepted) continue;
+        const FixtureEvidence& e = c.evidence;
+        const bool is_door = std::abs(c.fixture.center.x() - 1.03f) < 0.02f;
+        door += is_door;
+        drawer += !is_door;
+        // The bars: 16 and 20 cm long, 1.2 cm wide, 3.5 cm out of a flat front.
+        EXPECT_NEAR(e.length, is_door ? 0.16f : 0.2f, 0.015f);
+        EXPECT_LT(e.width, 0.03f);
+        EXPECT_GT(e.elongation, 4.0f);
+        EXPECT_NEAR(e.local_protrusion, 0.035f, 0.006f);
+        EXPECT_NEAR(e.plane_protrusion, 0.035f, 0.006f);
+        EXPECT_NEAR(e.verticality, is_door ? 1.0f : 0.0f, 0.05f);
+        EXPECT_EQ(e.sides, 4.0f);
+        EXPECT_EQ(e.border, 0.0f);
+        EXPECT_NEAR(e.height, c.fixture.center.z(), 0.02f);  // floor at z = 0
+        EXPECT_GT(e.protrusion_snr, 3.0f);
+        EXPECT_GT(e.range, 1.0f);
+    }
+    EXPECT_EQ(door, 1);
+    EXPECT_EQ(drawer, 1);
+}
+
+/// Rows of the synthetic kitchen's candidates (labelled by their truth) and of flat bumps
+/// labelled `flat_label`.
+ml::Dataset SyntheticRows(const FixtureResult& r, const PointCloud& scan,
+                          const std::string& handle_label, const std::string& flat_label) {
+    ml::Dataset data = training::EmptyFixtureDataset();
+    const std::vector<int> labels = training::LabelFixtureCandidates(scan, r.candidates, 0.03f);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> jitter(0.9f, 1.1f);
+    for (int copy = 0; copy < 20; ++copy) {
+        for (std::size_t k = 0; k < r.candidates.size(); ++k) {
+            FixtureEvidence e = r.candidates[k].evidence;
+            e.length *= jitter(rng);
+            e.local_protrusion *= jitter(rng);
+            const std::string label = labels[k] == 1 ? handle_label : "none";
+            data.AppendRow(FixtureFeatureRow(e), label, -1, -1, "synthetic");
+            // The same shape lying flat on the face: no fixture.
+            e.local_protrusion = e.plane_protrusion = e.median_residual = 0.004f * jitter(rng);
+            e.depth_extent = 0.005f;
+            e.protrusion_snr = 1.0f;
+            data.AppendRow(FixtureFeatureRow(e), flat_label, -1, -1, "synthetic");
+        }
+    }
+    return data;
+}
+
+TEST(FixtureClassifier, TrainedOnSyntheticRowsDecidesWhatIsAFixture) {
+    test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    AddHandleTruth(k.cloud);
+    const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
+    const FixtureResult rules = DetectFixtures(k.cloud, RoomFrame{}, s, {});
+    const std::vector<int> labels =
+        training::LabelFixtureCandidates(k.cloud, rules.candidates, 0.03f);
+    int handles = 0;
+    for (const int l : labels) handles += l == 1;
+    ASSERT_EQ(handles, 2);
+
+    const auto good = training::TrainFixtureClassifier(
+        SyntheticRows(rules, k.cloud, "handle", "none"), "rtrees:trees=20");
+    EXPECT_NO_THROW(CheckFixtureClassifier(*good));
+    const FixtureResult learned = DetectFixtures(k.cloud, RoomFrame{}, s, {}, {}, good.get());
+    ASSERT_EQ(learned.fixtures.size(), 2u);
+    for (const Fixture& f : learned.fixtures) EXPECT_EQ(f.type, FixtureType::kHandle);
+    for (const FixtureCandidate& c : learned.candidates) {
+        EXPECT_EQ(c.accepted, c.confidence >= FixtureParams{}.min_confidence);
+    }
+    // Taught that protruding bars are nothing and flat patches are handles, it finds none.
+    const auto wrong = training::TrainFixtureClassifier(
+        SyntheticRows(rules, k.cloud, "none", "handle"), "rtrees:trees=20");
+    EXPECT_TRUE(DetectFixtures(k.cloud, RoomFrame{}, s, {}, {}, wrong.get()).fixtures.empty());
+
+    // Rows of one class cannot train; a classifier of other columns is refused.
+    ml::Dataset one = training::EmptyFixtureDataset();
+    one.AppendRow(FixtureFeatureRow(FixtureEvidence{}), "none", -1, -1, "x");
+    one.AppendRow(FixtureFeatureRow(FixtureEvidence{}), "none", -1, -1, "x");
+    EXPECT_THROW(training::TrainFixtureClassifier(one, "rtrees:trees=5"), DataError);
+    ml::Dataset other = ml::Dataset::WithBlocks({{"other", {"a", "b"}}});
+    other.AppendRow(std::vector<float>{0.0f, 1.0f}, "none", -1, -1, "x");
+    other.AppendRow(std::vector<float>{1.0f, 0.0f}, "handle", -1, -1, "x");
+    auto foreign = ml::CreateClassifier("rtrees:trees=5");
+    foreign->Fit(other);
+    EXPECT_THROW(CheckFixtureClassifier(*foreign), InvalidArgument);
+    EXPECT_THROW(DetectFixtures(k.cloud, RoomFrame{}, s, {}, {}, foreign.get()), InvalidArgument);
+    // Labels need the ground truth.
+    const test::SyntheticKitchen bare = test::MakeSyntheticKitchen(1);
+    EXPECT_THROW(training::LabelFixtureCandidates(bare.cloud, rules.candidates, 0.03f), DataError);
+}
+
+/// A room (floor, back wall y = 3, left wall x = 0) with a cupboard face y = 2.4 (x 0.3 .. 1.6,
+/// z 0.1 .. 0.85) holding one door x 0.6 .. 1.1, z 0.15 .. 0.8 of the face's colour, set in a
+/// 1 cm gap that shows the carcass 2 cm behind, with a vertical handle near its right edge.
+PointCloud DoorInAGap() {
+    std::mt19937 rng(4);
+    PointCloud c;
+    const float step = 0.005f, y = 2.4f;
+    const Color white{230, 230, 230, 255};
+    const Eigen::Vector3f n = -Eigen::Vector3f::UnitY();
+    test::AddPatch(c, {0, 0, 0}, {3, 0, 0}, {0, 3, 0}, 0.02f, Eigen::Vector3f::UnitZ(),
+                   Color{120, 110, 100, 255}, 0.001f, rng);
+    test::AddPatch(c, {0, 3, 0}, {3, 0, 0}, {0, 0, 2.0f}, 0.02f, n, white, 0.001f, rng);
+    test::AddPatch(c, {0, 0, 0}, {0, 3, 0}, {0, 0, 2.0f}, 0.02f, Eigen::Vector3f::UnitX(), white,
+                   0.001f, rng);
+    // The face on a 5 mm grid: door, gap (carcass behind) or frame.
+    for (float x = 0.3f; x <= 1.6f; x += step) {
+        for (float z = 0.1f; z <= 0.85f; z += step) {
+            const bool door = x >= 0.6f && x <= 1.1f && z >= 0.15f && z <= 0.8f;
+            const bool gap = !door && x >= 0.59f && x <= 1.11f && z >= 0.14f && z <= 0.81f;
+            c.points.emplace_back(x, gap ? y + 0.02f : y, z);
+            c.normals.push_back(n);
+            c.colors.push_back(gap ? Color{40, 40, 40, 255} : white);
+        }
+    }
+    test::AddHandle(c, {1.04f, y, 0.5f}, 0.16f, rng, true);
+    c.width = static_cast<std::uint32_t>(c.size());
+    c.height = 1;
+    c.sensor_origin = Eigen::Vector3f(1.0f, 1.0f, 1.3f);
+    return c;
+}
+
+TEST(FrontsFromEdges, DoorBoundedByItsGap) {
+    const PointCloud c = DoorInAGap();
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    ASSERT_EQ(fx.fixtures.size(), 1u);
+    FrontEvidence ev;
+    ev.point_face = fx.point_face;
+    ev.point_residual = fx.point_residual;
+    const std::vector<Front> fronts = FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, ev, {});
+    ASSERT_EQ(fronts.size(), 1u);
+    const Front& f = fronts[0];
+    EXPECT_EQ(f.fixtures, std::vector<int>{0});
+    // Face coordinates: v is z; u runs along x (either sign).
+    const float x0 = std::min(f.min.x() * f.u_axis.x(), f.max.x() * f.u_axis.x());
+    const float x1 = std::max(f.min.x() * f.u_axis.x(), f.max.x() * f.u_axis.x());
+    EXPECT_NEAR(x0, 0.6f, 0.025f);
+    EXPECT_NEAR(x1, 1.1f, 0.025f);
+    EXPECT_NEAR(f.min.y(), 0.15f, 0.025f);
+    EXPECT_NEAR(f.max.y(), 0.8f, 0.025f);
+    // Its points are the door's (fixture points excluded).
+    for (const Index i : f.indices) {
+        EXPECT_GT(c.points[i].x(), 0.57f);
+        EXPECT_LT(c.points[i].x(), 1.13f);
+        EXPECT_GT(c.points[i].y(), 2.39f);
+    }
+    // Without a fixture there is no front; evidence of the wrong size and bad parameters throw.
+    EXPECT_TRUE(FrontsFromEdges(c, RoomFrame{}, s, {}, ev, {}).empty());
+    FrontEvidence bad = ev;
+    bad.point_residual.resize(3);
+    EXPECT_THROW(FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, bad, {}), InvalidArgument);
+    EXPECT_THROW(FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, ev, {.cell = 0.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, ev, {.min_support = 0.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, ev, {.rounds = 0}),
+                 InvalidArgument);
+}
+
+TEST(FrontsFromEdges, AGrownFrontExtendsToItsOutline) {
+    const PointCloud c = DoorInAGap();
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    ASSERT_EQ(fx.fixtures.size(), 1u);
+    FrontEvidence ev;
+    ev.point_face = fx.point_face;
+    ev.point_residual = fx.point_residual;
+    // A front grown over the door's middle only (x 0.8 .. 1.0, z 0.4 .. 0.6).
+    const PlanarComponent& face = s.components[static_cast<std::size_t>(fx.fixtures[0].face)];
+    Front part;
+    part.face = fx.fixtures[0].face;
+    part.fixtures = {0};
+    part.u_axis = PlaneU(face, RoomFrame{});
+    part.v_axis = PlaneV(face, RoomFrame{});
+    part.normal = face.plane.head<3>();
+    const Eigen::Vector2f a = PlaneCoordinates(face, RoomFrame{}, {0.8f, 2.4f, 0.4f});
+    const Eigen::Vector2f b = PlaneCoordinates(face, RoomFrame{}, {1.0f, 2.4f, 0.6f});
+    part.min = a.cwiseMin(b);
+    part.max = a.cwiseMax(b);
+    for (const Index i : face.indices) {
+        const Eigen::Vector2f q = PlaneCoordinates(face, RoomFrame{}, c.points[i]);
+        if ((q.array() >= part.min.array()).all() && (q.array() <= part.max.array()).all())
+            part.indices.push_back(i);
+    }
+    std::vector<Front> fronts = {part};
+    ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts);
+    ASSERT_EQ(fronts.size(), 1u);
+    const Front& f = fronts[0];
+    const float x0 = std::min(f.min.x() * f.u_axis.x(), f.max.x() * f.u_axis.x());
+    const float x1 = std::max(f.min.x() * f.u_axis.x(), f.max.x() * f.u_axis.x());
+    EXPECT_NEAR(x0, 0.6f, 0.025f);
+    EXPECT_NEAR(x1, 1.1f, 0.025f);
+    EXPECT_NEAR(f.min.y(), 0.15f, 0.025f);
+    EXPECT_NEAR(f.max.y(), 0.8f, 0.025f);
+    EXPECT_GT(f.indices.size(), 3 * part.indices.size());
+    EXPECT_TRUE(std::is_sorted(f.indices.begin(), f.indices.end()));
+    // A front already on its outline stays; a neighbour's rectangle stops the extension.
+    std::vector<Front> again = fronts;
+    ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, again);
+    EXPECT_TRUE(again[0].min.isApprox(f.min, 1e-5f));
+    EXPECT_TRUE(again[0].max.isApprox(f.max, 1e-5f));
+    Front neighbour = part;
+    neighbour.fixtures = {};
+    neighbour.indices.clear();
+    const Eigen::Vector2f na = PlaneCoordinates(face, RoomFrame{}, {0.6f, 2.4f, 0.15f});
+    const Eigen::Vector2f nb = PlaneCoordinates(face, RoomFrame{}, {1.1f, 2.4f, 0.3f});
+    neighbour.min = na.cwiseMin(nb);
+    neighbour.max = na.cwiseMax(nb);
+    std::vector<Front> pair = {part, neighbour};
+    ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, pair);
+    EXPECT_NEAR(pair[0].min.y(), 0.3f, 0.005f);
+    FrontEvidence bad = ev;
+    bad.point_face.resize(2);
+    EXPECT_THROW(ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, bad, fronts),
+                 InvalidArgument);
+    EXPECT_THROW(
+        ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts, {.max_extend = 0.0f}),
+        InvalidArgument);
+}
+
+TEST(ImageEdges, ColourStepOfAnOrganizedScan) {
+    PointCloud c;
+    c.width = 40;
+    c.height = 30;
+    for (int v = 0; v < 30; ++v) {
+        for (int u = 0; u < 40; ++u) {
+            c.points.emplace_back(0.01f * static_cast<float>(u), 0.01f * static_cast<float>(v), 1);
+            const std::uint8_t g = u < 20 ? 50 : 200;
+            c.colors.push_back(Color{g, g, g, 255});
+        }
+    }
+    const std::vector<std::uint8_t> e = ImageEdges(c);
+    ASSERT_EQ(e.size(), c.size());
+    for (int v = 2; v < 28; ++v) {
+        const auto row = static_cast<std::size_t>(v * 40);
+        EXPECT_TRUE(e[row + 19] || e[row + 20]) << v;
+        EXPECT_FALSE(e[row + 8]) << v;
+        EXPECT_FALSE(e[row + 32]) << v;
+    }
+    // Unorganized or without colour and intensity: no edges.
+    PointCloud flat = c;
+    flat.width = static_cast<std::uint32_t>(flat.size());
+    flat.height = 1;
+    for (const auto x : ImageEdges(flat)) EXPECT_EQ(x, 0);
+    PointCloud grey = c;
+    grey.colors.clear();
+    for (const auto x : ImageEdges(grey)) EXPECT_EQ(x, 0);
+    EXPECT_THROW(ImageEdges(c, {.low = 60.0f, .high = 50.0f}), InvalidArgument);
+    EXPECT_THROW(ImageEdges(c, {.stretch_quantile = 0.5f}), InvalidArgument);
+}
+
+TEST(FixtureParams, BadValuesNameTheField) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
+    for (const FixtureParams& p :
+         {FixtureParams{.background_cell = 0.0f}, FixtureParams{.background_radius = -1},
+          FixtureParams{.background_passes = 0}, FixtureParams{.min_confidence = 1.5f},
+          FixtureParams{.residual_sigmas = -1.0f}, FixtureParams{.surround_outer = 0.001f}}) {
+        EXPECT_THROW(p.Validate(), InvalidArgument);
+        EXPECT_THROW(DetectFixtures(k.cloud, RoomFrame{}, s, p), InvalidArgument);
+    }
+    EXPECT_THROW(DetectFixtures(k.cloud, RoomFrame{}, s, {}, std::vector<float>(5, 1.0f)),
+                 InvalidArgument);
+    MapKitchenParams m = KitchenParamsFor(KitchenSensor::kKinect);
+    m.outline.hole_reach = -1;
+    EXPECT_THROW(m.Validate(), InvalidArgument);
+    m = KitchenParamsFor(KitchenSensor::kLaser);
+    m.image_edges.high = -1.0f;
+    EXPECT_THROW(m.Validate(), InvalidArgument);
+    EXPECT_THROW(training::FixtureTrainingOptions{.kitchens = 0}.Validate(), InvalidArgument);
+    EXPECT_THROW(training::FixtureTrainingOptions{.match_distance = 0.0f}.Validate(),
+                 InvalidArgument);
+    EXPECT_THROW(training::FixtureTrainingOptions{.fold = 2}.Validate(), InvalidArgument);
+    EXPECT_THROW(training::SelectKitchenFold({}, 2), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace multicue
