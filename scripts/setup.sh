@@ -24,6 +24,8 @@ packages=(
     libyaml-cpp-dev
     # ROS 2 bags: zstd and lz4 compressed MCAP chunks.
     libzstd-dev liblz4-dev
+    # Occupancy maps (search module) of the registration's multi-view maps.
+    liboctomap-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest

@@ -1,5 +1,6 @@
 // `multicue perceive` (the main job), `multicue config` and `multicue demo`.
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -12,9 +13,12 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
+#include "manifest.hpp"
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
 #include "multicue/io/config.hpp"
 #include "multicue/io/pcd.hpp"
+#include "multicue/registration/incremental_map.hpp"
 #include "multicue/sim/mesh.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/scene_gen.hpp"
@@ -25,6 +29,7 @@
 #include "multicue/system/perceive_views.hpp"
 #include "multicue/training/part_graph_training.hpp"
 #include "perceive_bag.hpp"
+#include "registration_json.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -101,67 +106,67 @@ std::string Summary(const PerceiveResult& result, const std::filesystem::path& o
     return s;
 }
 
-/// One frame of a simulator manifest: its file and pose in the scene's world frame.
-struct ManifestFrame {
-    std::filesystem::path file;
-    Eigen::Isometry3f T_world_sensor = Eigen::Isometry3f::Identity();
+/// The poses of the frames: the manifest's when every frame has one that is not flagged noisy
+/// (and `register_frames` is off), else registered frame to map from the manifest's poses as
+/// rough guesses (section 5.3 with the robot's poses replaced by registration). Frames that
+/// could not be aligned keep their manifest pose, or, without one, are left out of the fusion
+/// (`fused[k]` false).
+struct ViewPoses {
+    std::vector<Eigen::Isometry3f> T_world_sensor;
+    std::vector<bool> fused;
+    bool registered = false;
+    std::vector<MapFrameResult> alignment;
 };
 
-/// The frames of scene `scene_id` (the first scene if negative) of a `multicue simulate scenes`
-/// manifest.json.
-std::vector<ManifestFrame> ReadManifestFrames(const std::filesystem::path& path, int scene_id) {
-    std::ifstream in(path);
-    if (!in) throw IoError(path.string() + ": cannot open the manifest");
-    nlohmann::json manifest;
-    try {
-        manifest = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw FormatError(path.string() + ": not a JSON manifest (" + e.what() + ")");
+ViewPoses FramePoses(const std::vector<ManifestFrame>& frames,
+                     const std::vector<PointCloud>& clouds, bool register_frames, int threads) {
+    ViewPoses v;
+    v.fused.assign(frames.size(), true);
+    const bool exact = std::all_of(frames.begin(), frames.end(), [](const ManifestFrame& f) {
+        return f.T_world_sensor && !f.pose_noisy;
+    });
+    if (exact && !register_frames) {
+        for (const auto& f : frames) v.T_world_sensor.push_back(*f.T_world_sensor);
+        return v;
     }
-    const auto where = path.string();
-    if (!manifest.is_object() || !manifest.contains("scenes") || !manifest["scenes"].is_array()) {
-        throw FormatError(where + ": no 'scenes' array (a manifest of `multicue simulate scenes`)");
+    v.registered = true;
+    MapParams params;
+    params.registration = SuggestRegistrationParams(clouds.front());
+    params.num_threads = threads;
+    std::vector<const PointCloud*> ptrs;
+    std::vector<std::optional<Eigen::Isometry3d>> odometry;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+        ptrs.push_back(&clouds[k]);
+        odometry.push_back(frames[k].T_world_sensor ? std::optional<Eigen::Isometry3d>(
+                                                          frames[k].T_world_sensor->cast<double>())
+                                                    : std::nullopt);
     }
-    const nlohmann::json* scene = nullptr;
-    for (const auto& s : manifest["scenes"]) {
-        if (scene_id < 0 || (s.contains("id") && s["id"] == scene_id)) {
-            scene = &s;
-            break;
+    v.alignment = AlignFrameSequence(ptrs, odometry, params);
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+        const auto& a = v.alignment[k];
+        if (a.in_map) {
+            v.T_world_sensor.push_back(a.T_world_sensor.cast<float>());
+        } else if (frames[k].T_world_sensor) {
+            LogWarning("perceive: {} could not be registered ({}); its manifest pose is used",
+                       frames[k].file.string(), a.registration.reason);
+            v.T_world_sensor.push_back(*frames[k].T_world_sensor);
+        } else {
+            LogWarning(
+                "perceive: {} could not be registered ({}) and has no pose; it is not "
+                "fused with the other frames",
+                frames[k].file.string(), a.registration.reason);
+            v.T_world_sensor.push_back(Eigen::Isometry3f::Identity());
+            v.fused[k] = false;
         }
     }
-    if (scene == nullptr) {
-        throw InvalidArgument(fmt::format("{}: no scene with id {}", where, scene_id));
-    }
-    std::vector<ManifestFrame> frames;
-    try {
-        for (const auto& f : scene->at("frames")) {
-            ManifestFrame frame;
-            frame.file = path.parent_path() / f.at("file").get<std::string>();
-            const auto& T = f.at("T_world_sensor");
-            if (!T.is_array() || T.size() != 4) throw FormatError("T_world_sensor is not 4x4");
-            for (int r = 0; r < 4; ++r) {
-                if (!T[r].is_array() || T[r].size() != 4) {
-                    throw FormatError("T_world_sensor is not 4x4");
-                }
-                for (int c = 0; c < 4; ++c)
-                    frame.T_world_sensor.matrix()(r, c) = T[r][c].get<float>();
-            }
-            frames.push_back(std::move(frame));
-        }
-    } catch (const nlohmann::json::exception& e) {
-        throw FormatError(fmt::format("{}: bad frame entry ({})", where, e.what()));
-    } catch (const FormatError& e) {
-        throw FormatError(fmt::format("{}: {}", where, e.what()));
-    }
-    if (frames.empty()) throw FormatError(where + ": the scene has no frames");
-    return frames;
+    return v;
 }
 
-/// Several registered frames: perceived one by one, categories fused in a voxel grid, outputs
-/// written per frame into OUT/<frame name>/.
+/// Several frames of one scene: perceived one by one, categories fused in a voxel grid over the
+/// frames with known poses, outputs written per frame into OUT/<frame name>/.
 void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
                       const std::filesystem::path& out, const PerceiveOptions& options,
-                      bool quiet) {
+                      bool register_frames, bool quiet) {
     const auto frames = ReadManifestFrames(manifest, scene_id);
     std::vector<PointCloud> clouds;
     std::vector<double> load_ms;
@@ -170,19 +175,38 @@ void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
         clouds.push_back(ReadNonEmptyCloud(f.file));
         load_ms.push_back(MsSince(start));
     }
+    const ViewPoses poses =
+        FramePoses(frames, clouds, register_frames, options.pipeline.num_threads);
     std::vector<PerceiveResult> results;
-    std::vector<const PointCloud*> cloud_ptrs;
-    std::vector<Eigen::Isometry3f> poses;
     for (std::size_t k = 0; k < frames.size(); ++k) {
         results.push_back(Perceive(clouds[k], options.pipeline, options.models));
-        cloud_ptrs.push_back(&clouds[k]);
-        poses.push_back(frames[k].T_world_sensor);
     }
-    FuseViewCategories(cloud_ptrs, poses, results, options.pipeline);
+    // Fusion over the frames with a pose (all of them unless registration failed without one).
+    std::vector<const PointCloud*> cloud_ptrs;
+    std::vector<Eigen::Isometry3f> fused_poses;
+    std::vector<PerceiveResult> fused_results;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+        if (!poses.fused[k]) continue;
+        cloud_ptrs.push_back(&clouds[k]);
+        fused_poses.push_back(poses.T_world_sensor[k]);
+        fused_results.push_back(std::move(results[k]));
+    }
+    FuseViewCategories(cloud_ptrs, fused_poses, fused_results, options.pipeline);
+    for (std::size_t k = 0, f = 0; k < frames.size(); ++k) {
+        if (poses.fused[k]) results[k] = std::move(fused_results[f++]);
+    }
     for (std::size_t k = 0; k < frames.size(); ++k) {
         const auto dir = out / frames[k].file.stem();
         auto json = PerceiveResultJson(frames[k].file.string(), results[k], {{"load", load_ms[k]}});
-        json["views"] = {{"frames", frames.size()}, {"voxel_size", ViewFusionParams{}.voxel_size}};
+        json["views"] = {{"frames", cloud_ptrs.size()},
+                         {"voxel_size", ViewFusionParams{}.voxel_size}};
+        if (poses.registered) {
+            const auto& a = poses.alignment[k];
+            json["views"]["poses"] = "registered";
+            json["views"]["fused"] = static_cast<bool>(poses.fused[k]);
+            json["views"]["T_world_sensor"] = TransformJson(poses.T_world_sensor[k].cast<double>());
+            json["views"]["registration"] = RegistrationJson(a.registration);
+        }
         const std::string report =
             options.report.enabled
                 ? PerceiveReportPage(clouds[k], results[k], json, options.report).Render()
@@ -193,6 +217,11 @@ void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
             std::printf("frame %zu of %zu: %s\n", k + 1, frames.size(), frames[k].file.c_str());
             std::fputs(Summary(results[k], dir, options.report).c_str(), stdout);
         }
+    }
+    if (!quiet && poses.registered) {
+        std::size_t aligned = 0;
+        for (const auto& a : poses.alignment) aligned += a.in_map;
+        std::printf("poses: registered (%zu of %zu frames aligned)\n", aligned, frames.size());
     }
 }
 
@@ -210,6 +239,7 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
     auto no_report = std::make_shared<bool>(false);
     auto manifest = std::make_shared<std::string>();
     auto scene = std::make_shared<int>(-1);
+    auto register_frames = std::make_shared<bool>(false);
     cmd->add_option("INPUT", *in, "point cloud (.pcd or .ply), organized or not");
     cmd->add_option("--manifest", *manifest,
                     "several registered frames instead of INPUT: a manifest.json of `multicue "
@@ -226,6 +256,9 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
                     "/camera/depth_registered/points");
     cmd->add_option("--max-messages", bag->max_messages,
                     "with --bag: perceive at most this many messages (0 = all)");
+    cmd->add_flag("--register", *register_frames,
+                  "with --manifest: register the frames (their poses are rough guesses); frames "
+                  "without a pose or flagged \"pose_noisy\" are registered without it");
     cmd->add_option("--out", *out,
                     "output folder: result.json, labels.pcd, models.ply, report.html")
         ->required();
@@ -244,10 +277,13 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
         if (manifest->empty() && *scene >= 0) {
             throw InvalidArgument("perceive: --scene needs --manifest");
         }
+        if (manifest->empty() && *register_frames) {
+            throw InvalidArgument("perceive: --register needs --manifest");
+        }
         PerceiveOptions options = LoadParams(*config, *up, global.threads);
         if (*no_report) options.report.enabled = false;
         if (!manifest->empty()) {
-            RunPerceiveViews(*manifest, *scene, *out, options, *quiet);
+            RunPerceiveViews(*manifest, *scene, *out, options, *register_frames, *quiet);
             return;
         }
         if (!bag->bag.empty()) {

@@ -29,5 +29,10 @@ void AddMlCommands(CLI::App& app, const GlobalOptions& global);
 void AddMeshCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset extract` (cmd_dataset_extract.cpp); call after AddMlCommands.
 void AddDatasetExtractCommand(CLI::App& app, const GlobalOptions& global);
+/// `register SOURCE TARGET` (cmd_register.cpp).
+void AddRegisterCommand(CLI::App& app, const GlobalOptions& global);
+/// `map SCANS... | --manifest M` (cmd_map.cpp). Returns the `map` command so that other map jobs
+/// attach subcommands to it (`map kitchen ...`); its own callback skips when one of them ran.
+CLI::App* AddMapCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -58,6 +58,8 @@ int main(int argc, char** argv) {
     multicue::cli::AddMeshCommand(app, global);
     multicue::cli::AddTrainCommand(app, global);
     multicue::cli::AddDatasetExtractCommand(app, global);
+    multicue::cli::AddRegisterCommand(app, global);
+    multicue::cli::AddMapCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));
