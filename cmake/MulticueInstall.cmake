@@ -77,7 +77,8 @@ else()
   # What the static libraries need from their private dependencies.
   set(MULTICUE_PC_LIBS_PRIVATE
       "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_features2d -lopencv_imgproc \
--lopencv_flann -lopencv_core -lsvm -loctomap -loctomath")
+-lopencv_flann -lopencv_core -lsvm -loctomap -loctomath \
+-lopencv_imgcodecs -lurdfdom_model -ltinyxml -lconsole_bridge")
   # MCAP chunk decompression in multicue::io (optional, see src/multicue/io/CMakeLists.txt).
   if(MULTICUE_ZSTD_LIBRARY)
     string(APPEND MULTICUE_PC_LIBS_PRIVATE " -lzstd")

@@ -26,6 +26,8 @@ packages=(
     libzstd-dev liblz4-dev
     # Occupancy maps (search module) of the registration's multi-view maps.
     liboctomap-dev
+    # URDF models (kitchen models and kitchen maps); check_urdf for the export tests.
+    liburdfdom-dev liburdfdom-tools
     libgtest-dev libgmock-dev libbenchmark-dev
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest

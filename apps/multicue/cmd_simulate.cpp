@@ -407,9 +407,10 @@ void AddSimulateCommand(CLI::App& app, const GlobalOptions& global) {
                                    "Simulated scans with ground truth: table-top scenes, turntable "
                                    "objects or furniture rooms");
     auto o = std::make_shared<SimulateOptions>();
-    cmd->add_option("MODE", o->mode, "scenes (table-top), objects (turntable) or rooms (furniture)")
-        ->required();
-    cmd->add_option("--out", o->out, "output folder: PCD files and manifest.json")->required();
+    // MODE and --out are checked in the callback: `simulate kitchens` (a subcommand) has neither.
+    cmd->add_option("MODE", o->mode,
+                    "scenes (table-top), objects (turntable) or rooms (furniture)");
+    cmd->add_option("--out", o->out, "output folder: PCD files and manifest.json");
     cmd->add_option("--seed", o->seed, "random seed; equal seeds give identical files")
         ->capture_default_str();
     cmd->add_option("--sensor", o->sensor, "kinect, laser or tof")->capture_default_str();
@@ -433,7 +434,10 @@ void AddSimulateCommand(CLI::App& app, const GlobalOptions& global) {
                     "objects mode: number of objects (procedural default 12; library: all)");
     cmd->add_flag("--strict", o->strict, "stop at the first bad mesh instead of skipping it");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress and no summary");
-    cmd->callback([o, &global] {
+    cmd->callback([o, cmd, &global] {
+        if (!cmd->get_subcommands().empty()) return;  // a subcommand did the work
+        if (o->mode.empty()) throw InvalidArgument("simulate: MODE is required");
+        if (o->out.empty()) throw InvalidArgument("simulate: --out is required");
         CheckOptions(*o);
         InstallInterruptHandler();
         Simulator(*o, global.threads).Run();

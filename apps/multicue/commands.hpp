@@ -22,6 +22,10 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global);
 void AddDbCommand(CLI::App& app, const GlobalOptions& global);
 void AddRunCommand(CLI::App& app, const GlobalOptions& global);
 void AddSimulateCommand(CLI::App& app, const GlobalOptions& global);
+/// `simulate kitchens` (cmd_simulate_kitchens.cpp), attached to the `simulate` command.
+void AddSimulateKitchensCommand(CLI::App& simulate, const GlobalOptions& global);
+/// `map kitchen` (cmd_map_kitchen.cpp), attached to the `map` command.
+void AddMapKitchenCommand(CLI::App& map_command, const GlobalOptions& global);
 void AddFeaturesCommand(CLI::App& app, const GlobalOptions& global);
 void AddTrainCommand(CLI::App& app, const GlobalOptions& global);
 /// `dataset`, `classifier` and `ensemble` (cmd_ml.cpp).

@@ -53,13 +53,16 @@ int main(int argc, char** argv) {
     multicue::cli::AddDbCommand(app, global);
     multicue::cli::AddRunCommand(app, global);
     multicue::cli::AddSimulateCommand(app, global);
+    multicue::cli::AddSimulateKitchensCommand(*app.get_subcommand("simulate"), global);
     multicue::cli::AddFeaturesCommand(app, global);
     multicue::cli::AddMlCommands(app, global);
     multicue::cli::AddMeshCommand(app, global);
     multicue::cli::AddTrainCommand(app, global);
     multicue::cli::AddDatasetExtractCommand(app, global);
     multicue::cli::AddRegisterCommand(app, global);
-    multicue::cli::AddMapCommand(app, global);
+    // `map`: maps built from several scans; `map kitchen` is the kitchen's semantic map.
+    auto* map_command = multicue::cli::AddMapCommand(app, global);
+    multicue::cli::AddMapKitchenCommand(*map_command, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));

@@ -76,6 +76,8 @@ struct AssimpCollector {
     }
 };
 
+}  // namespace
+
 std::vector<std::string> SplitCsvLine(const std::string& line) {
     std::vector<std::string> fields;
     std::string field;
@@ -104,8 +106,6 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
     return fields;
 }
 
-}  // namespace
-
 Eigen::AlignedBox3f PartMesh::Bounds() const {
     Eigen::AlignedBox3f box;
     for (const auto& v : mesh.vertices) box.extend(v);
@@ -117,7 +117,15 @@ void PartMesh::AppendParts(const PartMesh& other) {
     for (std::size_t i = 0; i < other.part_names.size(); ++i) {
         remap[i] = PartIndex(*this, other.part_names[i]);
     }
+    const bool reflectance = (vertex_reflectance.size() == mesh.vertices.size() || mesh.empty()) &&
+                             other.vertex_reflectance.size() == other.mesh.vertices.size();
     mesh.Append(other.mesh);
+    if (reflectance) {
+        vertex_reflectance.insert(vertex_reflectance.end(), other.vertex_reflectance.begin(),
+                                  other.vertex_reflectance.end());
+    } else {
+        vertex_reflectance.clear();
+    }
     for (auto p : other.triangle_parts) triangle_parts.push_back(remap.at(p));
 }
 
@@ -126,6 +134,10 @@ void PartMesh::Validate() const {
     if (triangle_parts.size() != mesh.triangles.size()) {
         throw DataError(fmt::format("mesh '{}': {} part indices for {} triangles", name,
                                     triangle_parts.size(), mesh.triangles.size()));
+    }
+    if (!vertex_reflectance.empty() && vertex_reflectance.size() != mesh.vertices.size()) {
+        throw DataError(fmt::format("mesh '{}': {} reflectances for {} vertices", name,
+                                    vertex_reflectance.size(), mesh.vertices.size()));
     }
     for (auto p : triangle_parts) {
         if (p >= part_names.size()) {

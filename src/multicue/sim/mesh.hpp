@@ -22,6 +22,9 @@ struct PartMesh {
     std::vector<std::string> part_names;        ///< at least one when the mesh has triangles
     std::vector<std::uint32_t> triangle_parts;  ///< one per triangle, index into part_names
     std::string name;                           ///< file name or generator name
+    /// Empty, or one laser reflectance in [0, 1] per vertex (the material's); without it the
+    /// laser's intensity comes from the surface colour (RayCaster::HitReflectance).
+    std::vector<float> vertex_reflectance;
 
     /// Axis-aligned bounds of the vertices (empty box for an empty mesh).
     Eigen::AlignedBox3f Bounds() const;
@@ -50,6 +53,9 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
 /// it rethrows instead.
 std::optional<PartMesh> TryLoadMesh(const std::filesystem::path& path, const MeshLoadParams& params,
                                     bool strict);
+
+/// The fields of one CSV line (commas separate, double quotes quote, "" is a quote; CR dropped).
+std::vector<std::string> SplitCsvLine(const std::string& line);
 
 /// Category names; the ground-truth `category` field of simulated clouds is an index into this
 /// list. 0..6 are the table-top categories of the perceive output contract (in its order),

@@ -241,6 +241,18 @@ Color RayCaster::HitColor(const RayHit& hit) const {
     return Color{mix(&Color::r), mix(&Color::g), mix(&Color::b), 255};
 }
 
+float RayCaster::HitReflectance(const RayHit& hit) const {
+    const PartMesh& mesh = *scene_.objects[hit.object].mesh;
+    if (mesh.vertex_reflectance.size() == mesh.mesh.vertices.size() && !mesh.mesh.empty()) {
+        const auto& tri = mesh.mesh.triangles[hit.triangle];
+        const auto& R = mesh.vertex_reflectance;
+        return std::clamp(
+            (1.0f - hit.u - hit.v) * R[tri[0]] + hit.u * R[tri[1]] + hit.v * R[tri[2]], 0.0f, 1.0f);
+    }
+    const Color c = HitColor(hit);
+    return 0.1f + 0.8f * (0.299f * c.r + 0.587f * c.g + 0.114f * c.b) / 255.0f;
+}
+
 std::uint32_t RayCaster::HitPart(const RayHit& hit) const {
     const auto& parts = scene_.objects[hit.object].mesh->triangle_parts;
     return hit.triangle < parts.size() ? parts[hit.triangle] : 0u;

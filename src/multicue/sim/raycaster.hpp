@@ -54,6 +54,9 @@ class RayCaster {
 
     /// Colour at a hit: the object's colour or its mesh's interpolated vertex colour.
     Color HitColor(const RayHit& hit) const;
+    /// Laser reflectance in [0, 1] at a hit: the mesh's interpolated vertex reflectance when it
+    /// has one, else 0.1 + 0.8 * the luminance of HitColor.
+    float HitReflectance(const RayHit& hit) const;
     /// Part index (into the hit object's PartMesh::part_names) of a hit.
     std::uint32_t HitPart(const RayHit& hit) const;
 

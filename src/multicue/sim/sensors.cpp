@@ -103,6 +103,9 @@ void CheckKinect(const KinectParams& p) {
             "color_noise >= 0 (got {}, {}, {}, {}, {})",
             p.baseline, p.disparity_step, p.axial_noise, p.lateral_noise_px, p.color_noise));
     }
+    if (!(p.shading >= 0.0f && p.shading <= 1.0f)) {
+        throw InvalidArgument(fmt::format("kinect: shading must be in [0, 1], got {}", p.shading));
+    }
 }
 
 /// The camera-frame ray through pixel (u, v), with z = 1 so that its parameter is the depth.
@@ -203,7 +206,15 @@ void KinectMeasurements(const RayCaster& caster, const std::vector<PixelHit>& px
                     z_noisy = static_cast<float>(fb / dq);
                     if (z_noisy < p.min_range || z_noisy > p.max_range) continue;
                     cloud.points[i] = KinectRay(p, u, v) * z_noisy;
-                    const Color c = caster.HitColor(h.hit);
+                    Color c = caster.HitColor(h.hit);
+                    if (p.shading > 0.0f) {
+                        const float cos_inc =
+                            std::abs(h.hit.normal.dot(KinectRay(p, u, v).normalized()));
+                        const float f = 1.0f - p.shading + p.shading * cos_inc;
+                        c = Color{static_cast<std::uint8_t>(c.r * f + 0.5f),
+                                  static_cast<std::uint8_t>(c.g * f + 0.5f),
+                                  static_cast<std::uint8_t>(c.b * f + 0.5f), 255};
+                    }
                     cloud.colors[i] =
                         Color{NoisyChannel(c.r, rng.FastGaussian() * p.color_noise),
                               NoisyChannel(c.g, rng.FastGaussian() * p.color_noise),
@@ -250,12 +261,13 @@ PointCloud ScanLaser(const RayCaster& caster, const Eigen::Isometry3f& T_world_h
                      const LaserParams& p, std::uint64_t seed) {
     if (!(p.fov_deg > 0.0f && p.fov_deg <= 360.0f) || !(p.beam_step_deg > 0.0f) ||
         !(p.tilt_step_deg > 0.0f) || !(p.tilt_max_deg >= p.tilt_min_deg) ||
-        !(p.range_noise >= 0.0f)) {
+        !(p.range_noise >= 0.0f) || !(p.intensity_noise >= 0.0f)) {
         throw InvalidArgument(fmt::format(
             "laser: need 0 < fov_deg <= 360, beam_step_deg > 0, tilt_step_deg > 0, tilt_min_deg "
-            "<= tilt_max_deg, range_noise >= 0 (got {}, {}, {}, {}..{}, {})",
+            "<= tilt_max_deg, range_noise >= 0, intensity_noise >= 0 (got {}, {}, {}, {}..{}, {}, "
+            "{})",
             p.fov_deg, p.beam_step_deg, p.tilt_step_deg, p.tilt_min_deg, p.tilt_max_deg,
-            p.range_noise));
+            p.range_noise, p.intensity_noise));
     }
     if (!(p.min_range >= 0.0f) || !(p.max_range > p.min_range) ||
         !(p.max_incidence_deg > 0.0f && p.max_incidence_deg <= 90.0f)) {
@@ -269,6 +281,7 @@ PointCloud ScanLaser(const RayCaster& caster, const Eigen::Isometry3f& T_world_h
     const std::size_t n = std::size_t{W} * H;
     PointCloud cloud;
     cloud.points.assign(n, Eigen::Vector3f::Constant(kNaN));
+    cloud.intensity.assign(n, 0.0f);
     cloud.width = W;
     cloud.height = H;
     Truth truth(n);
@@ -297,6 +310,11 @@ PointCloud ScanLaser(const RayCaster& caster, const Eigen::Isometry3f& T_world_h
                     const float r = hit.t + static_cast<float>(rng.Gaussian()) * p.range_noise;
                     if (r < p.min_range || r > p.max_range) continue;
                     cloud.points[i] = d_head * r;
+                    const float remission =
+                        caster.HitReflectance(hit) * std::abs(hit.normal.dot(d)) / d.norm();
+                    cloud.intensity[i] =
+                        std::max(0.0f, remission * (1.0f + static_cast<float>(rng.FastGaussian()) *
+                                                               p.intensity_noise));
                     truth.Set(i, caster, hit);
                 }
             }

@@ -39,13 +39,19 @@ struct KinectParams {
     float max_incidence_deg = 78.0f;  ///< no return beyond this angle of ray and normal [deg]
     bool projector_shadow = true;     ///< drop points the projector cannot see
     float color_noise = 3.0f;         ///< sigma of the colour noise per channel [0..255]
-    int num_threads = 0;              ///< 0 = all cores; output does not depend on it
+    /// Share of the colour that follows the light: colour * (1 - shading + shading * cos), cos
+    /// of the angle between the surface normal and the ray (a light at the camera). 0 = the
+    /// surface colours as they are [0..1]
+    float shading = 0.0f;
+    int num_threads = 0;  ///< 0 = all cores; output does not depend on it
 };
 
 /// Tilting 2D laser (Hokuyo UTM-30LX class) on a pan-tilt head (section 4.2.5).
 /// The cloud is organized by tilt step: row i = tilt step i, column j = beam j; NaN for no return.
 /// Points are in the head's base frame (x forward, y left, z up; the tilt axis through the
-/// origin), whose world pose is given to ScanLaser.
+/// origin), whose world pose is given to ScanLaser. `intensity` is the remission: the surface's
+/// reflectance (RayCaster::HitReflectance, per material) times the cosine of the incidence angle,
+/// with relative noise intensity_noise; 0 where there is no return.
 struct LaserParams {
     float fov_deg = 270.0f;           ///< angular field of one scan line [deg]
     float beam_step_deg = 0.25f;      ///< angle between beams [deg]
@@ -56,6 +62,7 @@ struct LaserParams {
     float min_range = 0.1f;           ///< [m]
     float max_range = 30.0f;          ///< [m]
     float max_incidence_deg = 85.0f;  ///< [deg]
+    float intensity_noise = 0.02f;    ///< relative sigma of the intensity [-]
     int num_threads = 0;
 };
 

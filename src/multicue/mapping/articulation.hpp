@@ -1,0 +1,81 @@
+#pragma once
+/// \file How doors and drawers open (thesis section 4.1.2).
+///
+/// From one scan, from the fixture: a horizontal handle on a low front is a drawer (prismatic,
+/// out of the face); a horizontal handle near the top of a tall front is a door hinged at its
+/// bottom edge (an oven, a dishwasher), near the bottom of a front above the worktop a door hinged
+/// at its top edge; a vertical handle (or a knob) near one side edge is a door hinged at the
+/// opposite edge. The hinge axis lies in the face plane along that edge, signed so that a
+/// positive angle swings the front out of the furniture.
+///
+/// From two scans of the same view, before and after the robot opened a front: the points in
+/// front of the closed front that were not there before are the moved front; a plane fitted to
+/// them that is parallel to the closed front means a prismatic joint (the distance is its travel),
+/// a tilted plane a revolute joint about the line where the two planes meet (the angle between
+/// them is the opening).
+
+#include <cstddef>
+#include <cstdint>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/mapping/semantic_map.hpp"
+#include "multicue/search/kdtree.hpp"
+
+namespace multicue::mapping {
+
+struct ArticulationParams {
+    float horizontal_handle_deg = 30.0f;  ///< a handle this close to horizontal is horizontal
+    float door_min_height = 0.45f;   ///< a front with a horizontal handle this tall is a door [m]
+    float top_share = 0.35f;         ///< "near the top": within this share of the height [-]
+    float flap_min_bottom = 1.2f;    ///< fronts above this height with a handle at the bottom
+                                     ///< are hinged at the top [m above the floor]
+    float revolute_upper = 1.5708f;  ///< upper limit given to revolute fronts from one scan [rad]
+    float prismatic_upper = 0.4f;    ///< upper limit given to drawers from one scan [m]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// The articulation of `front` from its fixtures' orientation and place. `floor_height` (NaN if
+/// unknown) is along frame up. Fronts without fixtures get JointType::kUnknown.
+Articulation ArticulationFromFixtures(const Front& front, const std::vector<Fixture>& fixtures,
+                                      const RoomFrame& frame, float floor_height,
+                                      const ArticulationParams& params = {});
+
+struct MotionParams {
+    float change_distance = 0.02f;   ///< opened-scan points this far from every closed-scan point
+                                     ///< are new [m]
+    float min_offset = 0.02f;        ///< new points at least this far in front of the face [m]
+    float reach = 1.2f;              ///< how far from the front the moved points may lie [m]
+    float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
+    std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
+    float parallel_deg = 8.0f;       ///< planes closer than this: prismatic [deg]
+    std::uint64_t seed = 1;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+struct MotionResult {
+    bool found = false;         ///< enough moved points on a plane
+    Articulation articulation;  ///< source "motion"; limits [0, observed opening]
+    float opening = 0.0f;       ///< observed angle [rad] or distance [m]
+    std::size_t moved_points = 0;
+    Indices moved;  ///< indices into `opened` of the moved front's points
+};
+
+/// The joint of `front` from a scan `closed` in which it is shut and a scan `opened` taken from
+/// the same place after it was opened (both in the same frame). Throws InvalidArgument for bad
+/// parameters; empty clouds give found = false.
+MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,
+                                    const Front& front, const MotionParams& params = {});
+/// The same with a k-d tree over the closed scan built once (for trying many fronts).
+MotionResult ArticulationFromMotion(const KdTree& closed, const PointCloud& opened,
+                                    const Front& front, const MotionParams& params = {});
+
+/// The front that moved between the map's cloud `closed` and a scan `opened` of the same scene
+/// with one front opened: the front with the most new points in the space it can sweep. Its
+/// articulation is replaced by ArticulationFromMotion's when that finds the motion. Returns the
+/// front's index, or -1 when no front moved. `map` must have been built from `closed`.
+int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
+                                     const PointCloud& opened, const MotionParams& params = {});
+
+}  // namespace multicue::mapping

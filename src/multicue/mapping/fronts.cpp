@@ -1,0 +1,398 @@
+#include "multicue/mapping/fronts.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <functional>
+#include <limits>
+#include <tuple>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+
+namespace multicue::mapping {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// Median and MAD of the values of `points` (skipping NaN).
+template <typename Ids>
+std::pair<float, float> MedianMad(const std::vector<float>& a, const Ids& points) {
+    std::vector<float> v;
+    v.reserve(points.size());
+    for (const auto i : points) {
+        if (!std::isnan(a[i])) v.push_back(a[i]);
+    }
+    if (v.empty()) return {kNaN, kNaN};
+    auto median = [](std::vector<float>& x) {
+        const auto mid = x.begin() + static_cast<long>(x.size() / 2);
+        std::nth_element(x.begin(), mid, x.end());
+        return *mid;
+    };
+    const float m = median(v);
+    for (auto& x : v) x = std::abs(x - m);
+    return {m, median(v)};
+}
+
+/// The model of a front: appearance and offset from the face, each as median and MAD.
+struct Model {
+    float a = 0.0f, a_mad = 0.0f;  ///< appearance
+    float h = 0.0f, h_mad = 0.0f;  ///< offset from the face plane [m]
+};
+
+using Cells = std::vector<std::uint32_t>;
+
+/// Cells reachable from `seeds` through 8-neighbours that fit the model and show no edge.
+Cells Grow(const std::vector<float>& a, const std::vector<float>& h, int nu, int nv,
+           const Cells& seeds, const Model& m, float alpha, float h_alpha, float local_alpha,
+           std::vector<std::uint32_t>& stamp, std::uint32_t round) {
+    auto fits = [&](std::uint32_t c) {
+        return !std::isnan(a[c]) && std::abs(a[c] - m.a) <= alpha &&
+               std::abs(h[c] - m.h) <= h_alpha;
+    };
+    Cells region;
+    std::deque<std::uint32_t> queue;
+    for (const std::uint32_t c : seeds) {
+        if (stamp[c] == round || !fits(c)) continue;
+        stamp[c] = round;
+        queue.push_back(c);
+    }
+    while (!queue.empty()) {
+        const std::uint32_t c = queue.front();
+        queue.pop_front();
+        region.push_back(c);
+        const int u = static_cast<int>(c % static_cast<std::uint32_t>(nu));
+        const int v = static_cast<int>(c / static_cast<std::uint32_t>(nu));
+        for (int dv = -1; dv <= 1; ++dv) {
+            for (int du = -1; du <= 1; ++du) {
+                const int uu = u + du, vv = v + dv;
+                if ((du == 0 && dv == 0) || uu < 0 || vv < 0 || uu >= nu || vv >= nv) continue;
+                const auto n = static_cast<std::uint32_t>(vv * nu + uu);
+                // The model, and no edge between the two cells.
+                if (stamp[n] == round || !fits(n) || std::abs(a[n] - a[c]) > local_alpha) continue;
+                stamp[n] = round;
+                queue.push_back(n);
+            }
+        }
+    }
+    return region;
+}
+
+/// Squared distance in face coordinates from q to the nearest footprint point.
+float FootprintDistance2(const std::vector<Eigen::Vector2f>& footprint, const Eigen::Vector2f& q) {
+    float best = std::numeric_limits<float>::infinity();
+    for (const auto& f : footprint) best = std::min(best, (f - q).squaredNorm());
+    return best;
+}
+
+/// Knobs in a row of at least three (a control panel): they open nothing on their own.
+std::vector<bool> PanelKnobs(const std::vector<Fixture>& fixtures) {
+    std::vector<bool> panel(fixtures.size(), false);
+    for (std::size_t i = 0; i < fixtures.size(); ++i) {
+        if (fixtures[i].type != FixtureType::kKnob) continue;
+        int near = 0;
+        for (std::size_t j = 0; j < fixtures.size(); ++j) {
+            if (j == i || fixtures[j].type != FixtureType::kKnob ||
+                fixtures[j].face != fixtures[i].face) {
+                continue;
+            }
+            const Eigen::Vector3f d = fixtures[j].center - fixtures[i].center;
+            near += d.norm() < 0.3f && std::abs(d.z()) < 0.04f;
+        }
+        panel[i] = near >= 2;
+    }
+    return panel;
+}
+
+}  // namespace
+
+void FrontParams::Validate() const {
+    auto positive = [](const char* name, float v) {
+        if (!(v > 0.0f) || !std::isfinite(v)) {
+            throw InvalidArgument(fmt::format("fronts: {} must be > 0, got {}", name, v));
+        }
+    };
+    positive("intensity_scale", intensity_scale);
+    positive("seed_max", seed_max);
+    positive("cell_size", cell_size);
+    if (!(min_fill >= 0.0f && min_fill <= 1.0f)) {
+        throw InvalidArgument(fmt::format("fronts: min_fill must be in [0, 1], got {}", min_fill));
+    }
+    positive("local_alpha", local_alpha);
+    positive("min_offset_alpha", min_offset_alpha);
+    positive("alpha_mads", alpha_mads);
+    positive("stable_change", stable_change);
+    if (!(seed_min >= 0.0f && seed_min < seed_max)) {
+        throw InvalidArgument(fmt::format("fronts: need 0 <= seed_min < seed_max, got {} and {}",
+                                          seed_min, seed_max));
+    }
+    if (!(min_alpha >= 0.0f)) {
+        throw InvalidArgument(fmt::format("fronts: min_alpha must be >= 0, got {}", min_alpha));
+    }
+    if (max_rounds < 1) {
+        throw InvalidArgument(fmt::format("fronts: max_rounds must be >= 1, got {}", max_rounds));
+    }
+    if (!(overlap_share > 0.0f && overlap_share <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("fronts: overlap_share must be in (0, 1], got {}", overlap_share));
+    }
+    if (!(rect_percentile >= 0.0f && rect_percentile < 0.5f)) {
+        throw InvalidArgument(
+            fmt::format("fronts: rect_percentile must be in [0, 0.5), got {}", rect_percentile));
+    }
+    if (min_points < 3) {
+        throw InvalidArgument(fmt::format("fronts: min_points must be >= 3, got {}", min_points));
+    }
+}
+
+std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
+                                    float intensity_scale) {
+    if (cue == AppearanceCue::kAuto) {
+        cue = cloud.HasColors() ? AppearanceCue::kColor : AppearanceCue::kIntensity;
+    }
+    std::vector<float> a(cloud.size(), kNaN);
+    if (cue == AppearanceCue::kColor) {
+        if (!cloud.HasColors())
+            throw DataError("fronts: the colour cue needs a cloud with colours");
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            const Color& c = cloud.colors[i];
+            // Alpha 0 marks points without a colour (a laser scan merged with camera frames).
+            a[i] = c.a == 0 ? kNaN : 0.299f * c.r + 0.587f * c.g + 0.114f * c.b;
+        }
+    } else {
+        if (!cloud.HasIntensity()) {
+            throw DataError("fronts: the intensity cue needs a cloud with intensity");
+        }
+        for (std::size_t i = 0; i < cloud.size(); ++i) a[i] = cloud.intensity[i] * intensity_scale;
+    }
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (!cloud.IsFinite(i) || !std::isfinite(a[i])) a[i] = kNaN;
+    }
+    return a;
+}
+
+std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame,
+                                 const RoomStructure& s, const std::vector<Fixture>& fixtures,
+                                 const FrontParams& p) {
+    p.Validate();
+    std::vector<Front> fronts;
+    if (cloud.empty() || fixtures.empty()) return fronts;
+    const std::vector<float> a_raw = AppearanceValues(cloud, p.cue, p.intensity_scale);
+    const std::vector<bool> panel = PanelKnobs(fixtures);
+    for (std::size_t f = 0; f < s.components.size(); ++f) {
+        const PlanarComponent& face = s.components[f];
+        std::vector<int> mine;
+        for (std::size_t x = 0; x < fixtures.size(); ++x) {
+            if (fixtures[x].face == static_cast<int>(f) && !panel[x]) {
+                mine.push_back(static_cast<int>(x));
+            }
+        }
+        if (mine.empty()) continue;
+        // The face as a grid of cells in its plane, each with the mean appearance and offset of
+        // its points: the region grows over cells, so neither the sensor's noise nor the depth
+        // camera's quantisation steps (centimetres at 2-3 m) cut a front into pieces.
+        const float cs = p.cell_size;
+        Eigen::Vector2f lo = face.min - Eigen::Vector2f::Constant(cs);
+        const auto nu = static_cast<int>(std::ceil((face.max.x() - lo.x()) / cs)) + 2;
+        const auto nv = static_cast<int>(std::ceil((face.max.y() - lo.y()) / cs)) + 2;
+        const std::size_t ncells = static_cast<std::size_t>(nu) * static_cast<std::size_t>(nv);
+        std::vector<double> sum_a(ncells, 0.0), sum_h(ncells, 0.0);
+        std::vector<std::uint32_t> n_a(ncells, 0), n_h(ncells, 0);
+        std::vector<std::uint32_t> cell_of(face.indices.size());
+        auto cell_at = [&](const Eigen::Vector2f& q) {
+            const int iu = std::clamp(static_cast<int>((q.x() - lo.x()) / cs), 0, nu - 1);
+            const int iv = std::clamp(static_cast<int>((q.y() - lo.y()) / cs), 0, nv - 1);
+            return static_cast<std::uint32_t>(iv * nu + iu);
+        };
+        for (std::size_t k = 0; k < face.indices.size(); ++k) {
+            const Index i = face.indices[k];
+            const std::uint32_t c = cell_at(PlaneCoordinates(face, frame, cloud.points[i]));
+            cell_of[k] = c;
+            sum_h[c] += face.plane.head<3>().dot(cloud.points[i]) + face.plane.w();
+            ++n_h[c];
+            if (!std::isnan(a_raw[i])) {
+                sum_a[c] += a_raw[i];
+                ++n_a[c];
+            }
+        }
+        std::vector<float> a(ncells, kNaN), h(ncells, kNaN);
+        for (std::size_t c = 0; c < ncells; ++c) {
+            if (n_a[c] > 0) a[c] = static_cast<float>(sum_a[c] / n_a[c]);
+            if (n_h[c] > 0) h[c] = static_cast<float>(sum_h[c] / n_h[c]);
+        }
+        auto centre = [&](std::uint32_t c) {
+            return Eigen::Vector2f(
+                lo.x() + (static_cast<float>(c % static_cast<std::uint32_t>(nu)) + 0.5f) * cs,
+                lo.y() + (static_cast<float>(c / static_cast<std::uint32_t>(nu)) + 0.5f) * cs);
+        };
+        std::vector<std::uint32_t> stamp(ncells, 0);
+        std::uint32_t round = 0;
+        std::vector<std::vector<Eigen::Vector2f>> footprints;
+        std::vector<Front> grown;
+        for (const int x : mine) {
+            const Fixture& fx = fixtures[static_cast<std::size_t>(x)];
+            std::vector<Eigen::Vector2f> fp;
+            for (const Index i : fx.indices) {
+                fp.push_back(PlaneCoordinates(face, frame, cloud.points[i]));
+            }
+            // Seeds: cells in a ring around the footprint.
+            Eigen::Vector2f flo = fp.front(), fhi = fp.front();
+            for (const auto& q : fp) {
+                flo = flo.cwiseMin(q);
+                fhi = fhi.cwiseMax(q);
+            }
+            Cells seeds;
+            const float lo2 = p.seed_min * p.seed_min, hi2 = p.seed_max * p.seed_max;
+            const std::uint32_t c0 = cell_at(flo - Eigen::Vector2f::Constant(p.seed_max));
+            const std::uint32_t c1 = cell_at(fhi + Eigen::Vector2f::Constant(p.seed_max));
+            const auto u0 = c0 % static_cast<std::uint32_t>(nu),
+                       v0 = c0 / static_cast<std::uint32_t>(nu);
+            const auto u1 = c1 % static_cast<std::uint32_t>(nu),
+                       v1 = c1 / static_cast<std::uint32_t>(nu);
+            for (std::uint32_t v = v0; v <= v1; ++v) {
+                for (std::uint32_t u = u0; u <= u1; ++u) {
+                    const std::uint32_t c = v * static_cast<std::uint32_t>(nu) + u;
+                    if (std::isnan(a[c])) continue;
+                    const float d2 = FootprintDistance2(fp, centre(c));
+                    if (d2 >= lo2 && d2 <= hi2) seeds.push_back(c);
+                }
+            }
+            Front front;
+            front.face = static_cast<int>(f);
+            front.fixtures = {x};
+            Model m;
+            std::tie(m.a, m.a_mad) = MedianMad(a, seeds);
+            std::tie(m.h, m.h_mad) = MedianMad(h, seeds);
+            if (seeds.empty() || std::isnan(m.a) || std::isnan(m.h)) continue;
+            Cells region;
+            for (int r = 0; r < p.max_rounds; ++r) {
+                const float alpha = std::max(p.alpha_mads * m.a_mad, p.min_alpha);
+                const float h_alpha = std::max(p.alpha_mads * m.h_mad, p.min_offset_alpha);
+                region =
+                    Grow(a, h, nu, nv, seeds, m, alpha, h_alpha, p.local_alpha, stamp, ++round);
+                front.model_iterations = r + 1;
+                Model next;
+                std::tie(next.a, next.a_mad) = MedianMad(a, region);
+                std::tie(next.h, next.h_mad) = MedianMad(h, region);
+                if (std::isnan(next.a)) break;
+                const bool stable = std::abs(next.a - m.a) < p.stable_change &&
+                                    std::abs(next.a_mad - m.a_mad) < p.stable_change;
+                m = next;
+                if (stable) break;
+            }
+            front.appearance_median = m.a;
+            front.appearance_mad = m.a_mad;
+            // The region's points: the face points in its cells.
+            std::vector<std::uint8_t> in(ncells, 0);
+            for (const std::uint32_t c : region) in[c] = 1;
+            for (std::size_t k = 0; k < face.indices.size(); ++k) {
+                if (in[cell_of[k]]) front.indices.push_back(face.indices[k]);
+            }
+            std::sort(front.indices.begin(), front.indices.end());
+            footprints.push_back(std::move(fp));
+            grown.push_back(std::move(front));
+        }
+        // Overlapping regions: marked, merged into one set and split by the nearest footprint.
+        const std::size_t g = grown.size();
+        std::vector<int> group(g);
+        for (std::size_t i = 0; i < g; ++i) group[i] = static_cast<int>(i);
+        std::function<int(int)> find = [&](int i) {
+            return group[static_cast<std::size_t>(i)] == i
+                       ? i
+                       : group[static_cast<std::size_t>(i)] =
+                             find(group[static_cast<std::size_t>(i)]);
+        };
+        for (std::size_t i = 0; i < g; ++i) {
+            for (std::size_t j = i + 1; j < g; ++j) {
+                Indices common;
+                std::set_intersection(grown[i].indices.begin(), grown[i].indices.end(),
+                                      grown[j].indices.begin(), grown[j].indices.end(),
+                                      std::back_inserter(common));
+                const std::size_t smaller = std::max<std::size_t>(
+                    1, std::min(grown[i].indices.size(), grown[j].indices.size()));
+                if (static_cast<float>(common.size()) >=
+                    p.overlap_share * static_cast<float>(smaller)) {
+                    grown[i].overlapping = grown[j].overlapping = true;
+                    group[static_cast<std::size_t>(find(static_cast<int>(i)))] =
+                        find(static_cast<int>(j));
+                }
+            }
+        }
+        for (std::size_t root = 0; root < g; ++root) {
+            if (find(static_cast<int>(root)) != static_cast<int>(root)) continue;
+            std::vector<std::size_t> members;
+            for (std::size_t i = 0; i < g; ++i) {
+                if (find(static_cast<int>(i)) == static_cast<int>(root)) members.push_back(i);
+            }
+            if (members.size() > 1) {
+                Indices all;
+                for (const std::size_t i : members) {
+                    all.insert(all.end(), grown[i].indices.begin(), grown[i].indices.end());
+                }
+                std::sort(all.begin(), all.end());
+                all.erase(std::unique(all.begin(), all.end()), all.end());
+                for (const std::size_t i : members) grown[i].indices.clear();
+                for (const Index pt : all) {
+                    const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[pt]);
+                    std::size_t best = members[0];
+                    float bd = std::numeric_limits<float>::infinity();
+                    for (const std::size_t i : members) {
+                        const float d = FootprintDistance2(footprints[i], q);
+                        if (d < bd) {
+                            bd = d;
+                            best = i;
+                        }
+                    }
+                    grown[best].indices.push_back(pt);
+                }
+            }
+        }
+        // Rectangles on the face plane.
+        const Eigen::Vector3f u = PlaneU(face, frame), v = PlaneV(face, frame);
+        for (Front& fr : grown) {
+            if (fr.indices.size() < p.min_points) continue;
+            std::vector<float> us, vs;
+            for (const Index i : fr.indices) {
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                us.push_back(q.x());
+                vs.push_back(q.y());
+            }
+            auto quantile = [](std::vector<float>& x, float q) {
+                const auto k = static_cast<long>(std::floor(q * static_cast<float>(x.size() - 1)));
+                std::nth_element(x.begin(), x.begin() + k, x.end());
+                return x[static_cast<std::size_t>(k)];
+            };
+            fr.min = {quantile(us, p.rect_percentile), quantile(vs, p.rect_percentile)};
+            fr.max = {quantile(us, 1.0f - p.rect_percentile),
+                      quantile(vs, 1.0f - p.rect_percentile)};
+            fr.u_axis = u;
+            fr.v_axis = v;
+            fr.normal = face.plane.head<3>();
+            // The rectangle stands for the front (thesis section 4.1.2: it still includes what
+            // shadows kept the region from reaching): the face points inside it, when the region
+            // fills most of it.
+            if (p.fill_rectangle) {
+                Indices inside;
+                for (const Index i : face.indices) {
+                    const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                    if ((q.array() >= fr.min.array()).all() &&
+                        (q.array() <= fr.max.array()).all()) {
+                        inside.push_back(i);
+                    }
+                }
+                if (static_cast<float>(fr.indices.size()) >=
+                    p.min_fill * static_cast<float>(inside.size())) {
+                    fr.indices = std::move(inside);
+                }
+            }
+            const Eigen::Vector2f c = (fr.min + fr.max) / 2;
+            // The point of the plane at (u, v) = c: u * c.x + v * c.y + n * (-d).
+            fr.center = u * c.x() + v * c.y() - fr.normal * face.plane.w();
+            fronts.push_back(std::move(fr));
+        }
+    }
+    return fronts;
+}
+
+}  // namespace multicue::mapping

@@ -1,0 +1,70 @@
+#pragma once
+/// \file Door and drawer fronts grown from fixtures (thesis section 4.1.2, Figure 4.4): points of
+/// the face around a fixture's footprint seed a model of the front's appearance, the median and
+/// the MAD (median absolute deviation) of its colour or intensity; the region grows over
+/// neighbouring face points within alpha = 2 MAD of the median, the model is re-estimated from the
+/// region, and growing repeats until median and MAD are stable. Regions of different fixtures that
+/// overlap are marked and split between them (each point to the nearest fixture), and every front
+/// gets a rectangular approximation on the face plane.
+
+#include <cstddef>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/mapping/room_structure.hpp"
+#include "multicue/mapping/semantic_map.hpp"
+
+namespace multicue::mapping {
+
+/// What the region growing compares.
+enum class AppearanceCue {
+    kAuto,       ///< colour when the cloud has colours, else intensity
+    kColor,      ///< grey level of the RGB colour [0, 255]
+    kIntensity,  ///< intensity times intensity_scale
+};
+
+struct FrontParams {
+    AppearanceCue cue = AppearanceCue::kAuto;
+    float intensity_scale = 255.0f;  ///< intensity -> appearance units [-]
+    float seed_min = 0.01f;  ///< seeds lie at least this far from the fixture's footprint [m]
+    float seed_max = 0.05f;  ///< and at most this far (the search radius) [m]
+    /// The face is gridded into cells of this size in its plane; the region grows over cells
+    /// holding the mean appearance and offset of their points [m]
+    float cell_size = 0.015f;
+    float alpha_mads = 2.0f;  ///< alpha = alpha_mads * MAD (the thesis' 2 MAD) [-]
+    float min_alpha = 40.0f;  ///< alpha is at least this [appearance units]
+    /// Neighbours joined in one step differ by at most this : the region stops
+    /// at the edges around a front even where light makes the front's colour drift
+    /// [appearance units]
+    float local_alpha = 3.0f;
+    /// The model also holds the points' offset from the face plane (median and MAD): a door
+    /// standing out of its frame ends where the offset changes. The offset's alpha is
+    /// alpha_mads * its MAD, at least this [m]
+    float min_offset_alpha = 0.03f;
+    int max_rounds = 8;             ///< model re-estimations at most [rounds]
+    float stable_change = 0.5f;     ///< stable when median and MAD move less [appearance units]
+    std::size_t min_points = 30;    ///< smaller regions are no fronts [points]
+    float overlap_share = 0.1f;     ///< regions sharing this share of the smaller overlap [-]
+    float rect_percentile = 0.01f;  ///< rectangle from these lower/upper quantiles of u, v [-]
+    /// A front's points become the face points inside its rectangle when its region fills at
+    /// least min_fill of them (shadows and noise left holes); otherwise the region stays
+    bool fill_rectangle = true;
+    float min_fill = 0.6f;  ///< [-]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Fronts for the fixtures (indices into `fixtures` kept in Front::fixtures). Knobs that belong to
+/// a row of three or more knobs (a control panel) grow no front of their own.
+/// Throws InvalidArgument for bad parameters, DataError when the cue needs colours or intensity
+/// the cloud lacks.
+std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame,
+                                 const RoomStructure& structure,
+                                 const std::vector<Fixture>& fixtures,
+                                 const FrontParams& params = {});
+
+/// The appearance value of every point for a cue (NaN where undefined). Exposed for tests.
+std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
+                                    float intensity_scale);
+
+}  // namespace multicue::mapping

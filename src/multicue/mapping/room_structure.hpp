@@ -1,0 +1,74 @@
+#pragma once
+/// \file Room structure from axis-aligned planes (thesis section 4.1.2): the points whose normal
+/// lies along one of the room's axes are histogrammed by their coordinate along it; each peak is
+/// a plane, split into connected components. Horizontal planes are the floor (lowest, large), the
+/// ceiling (highest, seen from below) and worktops or tables (at counter height; a worktop runs
+/// along a wall); vertical planes are walls when they reach the ceiling, or, with no ceiling in
+/// view, when nothing lies behind them; the remaining vertical components are the candidates for
+/// furniture faces.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/mapping/semantic_map.hpp"
+
+namespace multicue::mapping {
+
+struct RoomStructureParams {
+    float normal_angle_deg = 25.0f;    ///< a point's normal within this of an axis [deg]
+    float distance_threshold = 0.02f;  ///< plane half-thickness near the sensor [m]
+    /// The half-thickness grows with the range r of a point as range_noise * r^2 (a Kinect's
+    /// disparity noise and quantisation); 0 = constant [1/m]
+    float range_noise = 0.0f;
+    float max_distance_threshold = 0.06f;   ///< the half-thickness never exceeds this [m]
+    float bin_size = 0.005f;                ///< histogram bin along an axis [m]
+    std::size_t min_plane_points = 60;      ///< smaller peaks are no planes [points]
+    float component_tolerance = 0.05f;      ///< points of one plane closer than this connect [m]
+    std::size_t min_component_points = 40;  ///< smaller components are dropped [points]
+    float cell_size = 0.03f;                ///< occupancy cell for component areas [m]
+    float min_floor_area = 0.3f;            ///< floor and ceiling need this much [m^2]
+    /// With a sensor position: the floor lies at least this far below the sensor [m]
+    float min_floor_depth = 0.8f;
+    float min_room_height = 1.8f;         ///< the ceiling lies at least this above the floor [m]
+    float wall_ceiling_gap = 0.15f;       ///< a wall reaches this close to the ceiling [m]
+    float min_wall_area = 0.4f;           ///< a wall plane has this much area [m^2]
+    float max_behind_share = 0.003f;      ///< with no ceiling: share of points behind a wall [-]
+    float behind_margin = 0.06f;          ///< points this far behind a plane are behind it [m]
+    float min_counter_height = 0.3f;      ///< worktops and tables above the floor [m]
+    float max_counter_height = 1.3f;      ///< [m]
+    float min_counter_area = 0.04f;       ///< [m^2]
+    float worktop_wall_distance = 0.25f;  ///< a worktop's edge lies this close to a wall [m]
+    float min_face_area = 0.015f;         ///< furniture face candidates [m^2]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+struct RoomStructure {
+    std::vector<PlanarComponent> components;  ///< every kept component, labelled
+    float floor_height = 0.0f;                ///< along up [m]; NaN without a floor
+    float ceiling_height = 0.0f;              ///< NaN without a ceiling
+    /// Per point: index into `components`, -1 for points on no kept component.
+    std::vector<std::int32_t> point_component;
+    /// Per point: the axis (0, 1, 2) of the axis-aligned plane it lies on (kept component or
+    /// not), -1 for none.
+    std::vector<std::int8_t> plane_axis;
+};
+
+/// Planes, components and their classes. The cloud needs normals (one per point). `ranges` holds
+/// each point's distance to the sensor that saw it (empty: the distance to cloud.sensor_origin).
+/// Throws InvalidArgument for bad parameters or ranges of the wrong size, DataError for a cloud
+/// without normals. An empty cloud gives an empty structure (NaN heights).
+RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& frame,
+                                   const RoomStructureParams& params = {},
+                                   const std::vector<float>& ranges = {});
+
+/// Coordinates (u, v) of a point in a component's plane (see PlanarComponent).
+Eigen::Vector2f PlaneCoordinates(const PlanarComponent& c, const RoomFrame& frame,
+                                 const Eigen::Vector3f& p);
+/// World directions of a component's u and v axes.
+Eigen::Vector3f PlaneU(const PlanarComponent& c, const RoomFrame& frame);
+Eigen::Vector3f PlaneV(const PlanarComponent& c, const RoomFrame& frame);
+
+}  // namespace multicue::mapping

@@ -1,0 +1,300 @@
+// Articulated models and simulated kitchens: a PartNet-Mobility-like folder written by the test
+// (URDF, semantics.txt, OBJ parts with a material), forward kinematics, the front direction, the
+// kitchen library split; with the shared kitchen models: kitchens, ground truth, the simulate
+// kitchens and map kitchen commands.
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <numbers>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/io/point_cloud_io.hpp"
+#include "multicue/io/urdf.hpp"
+#include "multicue/sim/kitchen_scene.hpp"
+#include "multicue/sim/sensors.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+/// An axis-aligned box as an OBJ file with one material of diffuse colour `kd`.
+void WriteBoxObj(const std::filesystem::path& path, const Eigen::Vector3f& lo,
+                 const Eigen::Vector3f& hi, const std::string& kd) {
+    const std::string mtl = path.stem().string() + ".mtl";
+    std::ofstream(path.parent_path() / mtl) << "newmtl m\nKd " << kd << "\n";
+    std::ofstream o(path);
+    o << "mtllib " << mtl << "\nusemtl m\n";
+    for (int k = 0; k < 8; ++k) {
+        o << "v " << ((k & 1) ? hi.x() : lo.x()) << ' ' << ((k & 2) ? hi.y() : lo.y()) << ' '
+          << ((k & 4) ? hi.z() : lo.z()) << "\n";
+    }
+    o << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+}
+
+/// A cupboard in PartNet-Mobility's conventions (y up, front towards +z, a door hinged about
+/// the y axis at x = -0.4, a drawer sliding along +z, limits without effort), 0.8 x 1.6 x 1.
+void WriteCupboard(const std::filesystem::path& dir) {
+    std::filesystem::create_directories(dir / "textured_objs");
+    WriteBoxObj(dir / "textured_objs/body.obj", {-0.4f, -0.8f, -0.5f}, {0.4f, 0.8f, 0.45f},
+                "0.9 0.9 0.9");
+    // The door in its link frame (the joint at the hinge: the door extends along +x).
+    WriteBoxObj(dir / "textured_objs/door.obj", {0.0f, -0.8f, 0.45f}, {0.8f, 0.2f, 0.5f},
+                "0.4 0.2 0.1");
+    WriteBoxObj(dir / "textured_objs/handle.obj", {0.7f, -0.4f, 0.5f}, {0.72f, -0.1f, 0.55f},
+                "0.7 0.7 0.7");
+    WriteBoxObj(dir / "textured_objs/drawer.obj", {-0.4f, 0.25f, 0.45f}, {0.4f, 0.8f, 0.5f},
+                "0.2 0.3 0.6");
+    std::ofstream(dir / "semantics.txt")
+        << "link_0 hinge rotation_door\nlink_1 slider drawer\nlink_2 heavy furniture_body\n";
+    std::ofstream(dir / "mobility.urdf") << R"(<?xml version="1.0"?>
+<robot name="cupboard">
+  <link name="base"/>
+  <link name="link_0">
+    <visual name="cabinet_door_surface-1"><origin xyz="0 0 0"/><geometry><mesh filename="textured_objs/door.obj"/></geometry></visual>
+    <visual name="handle-2"><origin xyz="0 0 0"/><geometry><mesh filename="textured_objs/handle.obj"/></geometry></visual>
+  </link>
+  <joint name="joint_0" type="revolute"><origin xyz="-0.4 0 0"/><axis xyz="0 -1 0"/>
+    <child link="link_0"/><parent link="link_2"/><limit lower="0" upper="1.57"/></joint>
+  <link name="link_1">
+    <visual name="drawer_front-3"><origin xyz="0 0 0"/><geometry><mesh filename="textured_objs/drawer.obj"/></geometry></visual>
+  </link>
+  <joint name="joint_1" type="prismatic"><origin xyz="0 0 0"/><axis xyz="0 0 0.5"/>
+    <child link="link_1"/><parent link="link_2"/><limit lower="0" upper="0.4"/></joint>
+  <link name="link_2">
+    <visual name="body-4"><origin xyz="0 0 0"/><geometry><mesh filename="textured_objs/body.obj"/></geometry></visual>
+  </link>
+  <joint name="joint_2" type="fixed"><origin rpy="1.570796326794897 0 -1.570796326794897" xyz="0 0 0"/>
+    <child link="link_2"/><parent link="base"/></joint>
+</robot>)";
+}
+
+TEST(Articulated, LoadsThroughTheUrdfWithKinematicsAndFront) {
+    test::TempDir dir;
+    const auto folder = dir / "Cupboard" / "1";
+    WriteCupboard(folder);
+    const sim::ArticulatedModel m = sim::LoadArticulatedModel(folder, {.scale = 0.5f});
+    EXPECT_EQ(m.id, "Cupboard/1");
+    ASSERT_EQ(m.links.size(), 4u);
+    ASSERT_EQ(m.joints.size(), 3u);
+    // Model frame: z up, 0.8 m high after the scale, bottom at 0, front +x.
+    EXPECT_NEAR(m.bounds.sizes().z(), 0.8f, 1e-3f);
+    EXPECT_NEAR(m.bounds.min().z(), 0.0f, 1e-4f);
+    EXPECT_NEAR(m.bounds.sizes().y(), 0.4f, 1e-3f);  // width
+    const sim::ArticulatedLink& door = m.links[static_cast<std::size_t>(m.FindLink("link_0"))];
+    EXPECT_EQ(door.semantic, "rotation_door");
+    ASSERT_TRUE(door.mesh);
+    EXPECT_NE(std::find(door.mesh->part_names.begin(), door.mesh->part_names.end(), "handle"),
+              door.mesh->part_names.end());
+    // Colours from the material: the door is brown (Kd 0.4 0.2 0.1).
+    ASSERT_TRUE(door.mesh->mesh.HasVertexColors());
+    EXPECT_NEAR(door.mesh->mesh.vertex_colors[0].r, 102, 2);
+    EXPECT_NEAR(door.mesh->mesh.vertex_colors[0].b, 26, 2);
+    EXPECT_EQ(door.mesh->vertex_reflectance.size(), door.mesh->mesh.vertices.size());
+    // Prismatic axis normalised, limits scaled; revolute limits kept.
+    EXPECT_NEAR(m.joints[1].axis.norm(), 1.0f, 1e-6f);
+    EXPECT_NEAR(m.joints[1].upper, 0.2f, 1e-6f);
+    EXPECT_NEAR(m.joints[0].upper, 1.57f, 1e-6f);
+    // Opening: the drawer moves along +x (the front), by its travel.
+    auto q = m.ClosedState();
+    const auto closed = m.LinkPoses(q);
+    q[1] = m.joints[1].Opened(1.0f);
+    const auto open = m.LinkPoses(q);
+    const auto drawer = static_cast<std::size_t>(m.FindLink("link_1"));
+    const auto door_link = static_cast<std::size_t>(m.FindLink("link_0"));
+    const Eigen::Vector3f d = open[drawer].translation() - closed[drawer].translation();
+    EXPECT_NEAR(d.x(), 0.2f, 1e-4f);
+    EXPECT_NEAR(d.head<2>().tail<1>().norm() + std::abs(d.z()), 0.0f, 1e-4f);
+    // The door's free edge swings out of the front when opened a little.
+    q = m.ClosedState();
+    q[0] = 0.3f;
+    const Eigen::Vector3f edge(0.8f * 0.5f, 0.0f, 0.5f * 0.5f);  // link frame, scaled
+    const Eigen::Vector3f moved = m.LinkPoses(q)[door_link] * edge - closed[door_link] * edge;
+    EXPECT_GT(moved.x(), 0.02f);
+    EXPECT_THROW(m.LinkPoses({0.0f}), InvalidArgument);
+    EXPECT_THROW(sim::LoadArticulatedModel(folder, {.scale = -1.0f}), InvalidArgument);
+    EXPECT_THROW(sim::LoadArticulatedModel(dir / "none"), IoError);
+}
+
+TEST(Articulated, MissingPartMeshesAreSkippedOrRefused) {
+    test::TempDir dir;
+    const auto folder = dir / "Cupboard" / "2";
+    WriteCupboard(folder);
+    std::filesystem::remove(folder / "textured_objs/handle.obj");
+    EXPECT_THROW(sim::LoadArticulatedModel(folder, {.strict = true}), IoError);
+    const sim::ArticulatedModel m = sim::LoadArticulatedModel(folder);
+    const auto& parts = m.links[static_cast<std::size_t>(m.FindLink("link_0"))].mesh->part_names;
+    EXPECT_EQ(std::find(parts.begin(), parts.end(), "handle"), parts.end());
+    // An unreadable URDF is a clear error naming the file.
+    std::ofstream(folder / "mobility.urdf") << "<robot name=";
+    try {
+        sim::LoadArticulatedModel(folder);
+        FAIL() << "no exception";
+    } catch (const FormatError& e) {
+        EXPECT_NE(std::string(e.what()).find("mobility.urdf"), std::string::npos);
+    }
+}
+
+TEST(KitchenLibrary, SplitIsStableAndKeepsDuplicatesInTraining) {
+    std::vector<sim::KitchenModelEntry> lib;
+    for (int i = 0; i < 6; ++i)
+        lib.push_back({"", "CabinetLower/" + std::to_string(100 + i), "cupboard", 1.0f});
+    lib.push_back({"", "CabinetUpper/103", "wall_cupboard", 1.0f});
+    lib.push_back({"", "CabinetUpper/999", "wall_cupboard", 1.0f});
+    const auto a = sim::KitchenSplitOf(lib);
+    std::vector<sim::KitchenModelEntry> reversed(lib.rbegin(), lib.rend());
+    auto b = sim::KitchenSplitOf(reversed);
+    std::reverse(b.begin(), b.end());
+    EXPECT_EQ(a, b);  // independent of the order of labels.csv
+    int test_count = 0;
+    for (std::size_t i = 0; i < 6; ++i) test_count += a[i] == sim::MeshSplit::kTest;
+    EXPECT_GE(test_count, 2);
+    EXPECT_LE(test_count, 3);
+    // Model 103 is listed twice: never a test model.
+    EXPECT_EQ(a[3], sim::MeshSplit::kTune);
+    EXPECT_EQ(a[6], sim::MeshSplit::kTune);
+    EXPECT_EQ(sim::ContainerTypeOfKind("sink_cupboard"), "cupboard");
+    test::TempDir dir;
+    EXPECT_THROW(sim::ReadKitchenLibrary(dir.path()), IoError);
+}
+
+std::filesystem::path KitchenModels() { return test::SharedData("meshes/kitchen"); }
+
+TEST(KitchenScene, GroundTruthAndUrdfWithSharedModels) {
+    if (!std::filesystem::is_directory(KitchenModels())) GTEST_SKIP() << "no kitchen models";
+    const auto lib =
+        sim::SelectKitchenSplit(sim::ReadKitchenLibrary(KitchenModels()), sim::MeshSplit::kTune);
+    sim::KitchenModelCache cache;
+    sim::KitchenScene k = sim::MakeKitchenScene(lib, cache, {}, 3);
+    const sim::KitchenScene again = sim::MakeKitchenScene(lib, cache, {}, 3);
+    ASSERT_EQ(k.instances.size(), again.instances.size());
+    EXPECT_TRUE(k.instances[0].T_world_model.isApprox(again.instances[0].T_world_model));
+    EXPECT_GE(k.runs.size(), 2u);
+    ASSERT_FALSE(k.joints.empty());
+    // The URDF parses with urdfdom and holds every joint at its world axis.
+    const io::UrdfModel urdf =
+        io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)), "kitchen.urdf");
+    for (const auto& j : k.joints) EXPECT_NE(urdf.FindJoint(j.name), nullptr) << j.name;
+    // A Kinect view: its points carry the kitchen's classes, and fronts have joints.
+    sim::KinectParams kp;
+    kp.width = 320;
+    kp.height = 240;
+    kp.fx = kp.fy = 262.5f;
+    kp.cx = 159.5f;
+    kp.cy = 119.5f;
+    const auto pose = sim::KitchenCameraPoses(k, 1, 3).at(0);
+    PointCloud scan = sim::ScanKinect(sim::RayCaster(k.scene), pose, kp, 1);
+    sim::AddKitchenTruth(k, scan);
+    const ExtraField* sem = scan.FindExtraField("semantic");
+    const ExtraField* joint = scan.FindExtraField("joint");
+    ASSERT_NE(sem, nullptr);
+    ASSERT_NE(joint, nullptr);
+    std::size_t fronts = 0, fronts_with_joint = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+        const auto c = static_cast<sim::KitchenClass>(sem->data[i]);
+        if (c == sim::KitchenClass::kDoor || c == sim::KitchenClass::kDrawer) {
+            ++fronts;
+            std::uint16_t j = 0;
+            std::memcpy(&j, joint->data.data() + 2 * i, 2);
+            fronts_with_joint += j > 0;
+        }
+    }
+    EXPECT_GT(fronts, 1000u);
+    EXPECT_GT(fronts_with_joint, fronts * 9 / 10);
+    // Opening a joint moves its link.
+    const std::size_t j = 0;
+    const auto& inst = k.instances[static_cast<std::size_t>(k.joints[j].instance)];
+    const int child = inst.model->joints[static_cast<std::size_t>(k.joints[j].joint)].child;
+    const int object = inst.link_object[static_cast<std::size_t>(child)];
+    ASSERT_GE(object, 0);
+    const Eigen::Isometry3f before =
+        k.scene.objects[static_cast<std::size_t>(object)].T_world_object;
+    k.SetJoint(j, inst.model->joints[static_cast<std::size_t>(k.joints[j].joint)].Opened(0.5f));
+    EXPECT_FALSE(k.scene.objects[static_cast<std::size_t>(object)].T_world_object.isApprox(before));
+}
+
+TEST(KitchenCli, SimulateThenMapWithSharedModels) {
+    if (!std::filesystem::is_directory(KitchenModels())) GTEST_SKIP() << "no kitchen models";
+    test::TempDir dir;
+    const auto sim_dir = dir / "sim";
+    auto r = test::RunCli(
+        "simulate kitchens --kitchens 1 --views 1 --laser-views 0 --open-doors "
+        "--open-count 1 -q --out " +
+        sim_dir.string() + " --models " + KitchenModels().string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto manifest = nlohmann::json::parse(test::ReadTextFile(sim_dir / "manifest.json"));
+    EXPECT_TRUE(manifest["complete"].get<bool>());
+    const auto& kitchen = manifest["kitchens"][0];
+    EXPECT_NO_THROW(io::ReadUrdf(sim_dir / kitchen["urdf"].get<std::string>()));
+    const std::string frame = kitchen["frames"][0]["file"].get<std::string>();
+    const PointCloud scan = io::ReadPointCloud(sim_dir / frame);
+    EXPECT_TRUE(scan.HasSensorPosition());
+    EXPECT_NE(scan.FindExtraField("semantic"), nullptr);
+    const auto map_dir = dir / "map";
+    std::string opened;
+    if (!kitchen["opened"].empty()) {
+        opened =
+            " --opened " + (sim_dir / kitchen["opened"][0]["file"].get<std::string>()).string();
+    }
+    r = test::RunCli("map kitchen " + (sim_dir / frame).string() + opened + " -q --out " +
+                     map_dir.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    for (const char* f : {"map.json", "map.urdf", "map.owl", "labels.pcd", "report.html"}) {
+        EXPECT_TRUE(std::filesystem::is_regular_file(map_dir / f)) << f;
+    }
+    const io::UrdfModel urdf = io::ReadUrdf(map_dir / "map.urdf");
+    EXPECT_FALSE(urdf.joints.empty());
+    if (std::system("command -v check_urdf > /dev/null 2>&1") == 0) {
+        const int code = std::system(
+            ("check_urdf " + (map_dir / "map.urdf").string() + " > /dev/null 2>&1").c_str());
+        EXPECT_EQ(code, 0);
+    }
+    const PointCloud labels = io::ReadPointCloud(map_dir / "labels.pcd");
+    EXPECT_EQ(labels.size(), scan.size());
+    EXPECT_NE(labels.FindExtraField("semantic"), nullptr);
+}
+
+TEST(KitchenCli, BadInputWritesNothing) {
+    test::TempDir dir;
+    // An empty cloud.
+    {
+        std::ofstream(dir / "empty.pcd") << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n"
+                                            "TYPE F F F\nCOUNT 1 1 1\nWIDTH 0\nHEIGHT 1\nPOINTS 0\n"
+                                            "DATA ascii\n";
+    }
+    auto r = test::RunCli("map kitchen " + (dir / "empty.pcd").string() + " --out " +
+                          (dir / "a").string());
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "a"));
+    // A floor and nothing else: no vertical planes.
+    {
+        std::ofstream o(dir / "floor.pcd");
+        o << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+             "WIDTH 2601\nHEIGHT 1\nVIEWPOINT 1 1 1.4 1 0 0 0\nPOINTS 2601\nDATA ascii\n";
+        for (int i = 0; i <= 50; ++i) {
+            for (int j = 0; j <= 50; ++j) o << i * 0.04 << ' ' << j * 0.04 << " 0\n";
+        }
+    }
+    r = test::RunCli("map kitchen " + (dir / "floor.pcd").string() + " --out " +
+                     (dir / "b").string());
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("vertical"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "b"));
+    // Bad options: usage errors.
+    EXPECT_EQ(test::RunCli("map kitchen " + (dir / "floor.pcd").string() +
+                           " --sensor sonar --out " + (dir / "c").string())
+                  .code,
+              2);
+    EXPECT_EQ(test::RunCli("simulate kitchens --kitchens -1 --out " + (dir / "d").string()).code,
+              2);
+    EXPECT_EQ(test::RunCli("map kitchen --out " + (dir / "e").string()).code, 2);
+    EXPECT_FALSE(std::filesystem::exists(dir / "c"));
+}
+
+}  // namespace
+}  // namespace multicue

@@ -1,0 +1,384 @@
+// Kitchen mapping stages on small synthetic kitchens: room axes of a rotated room, structure,
+// handle vs knob, hinge side from the handle, articulation from a synthetic opened door and a
+// pulled-out drawer, export round trip, bad input.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+
+#include <tinyxml.h>
+
+#include "kitchen_test_data.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/io/urdf.hpp"
+#include "multicue/mapping/kitchen_map.hpp"
+#include "multicue/mapping/map_export.hpp"
+#include "test_util.hpp"
+
+namespace multicue {
+namespace {
+
+using namespace mapping;
+
+constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
+
+/// Smallest angle between v and any of the frame's axes (either sign) [deg].
+float AngleToFrame(const Eigen::Vector3f& v, const Eigen::Matrix3f& axes) {
+    return std::acos(std::min(1.0f, (axes.transpose() * v).cwiseAbs().maxCoeff())) / kDeg;
+}
+
+TEST(RoomAxes, RecoversTheAxesOfARotatedRoom) {
+    for (const float yaw : {0.0f, 23.0f, 67.0f, 141.0f}) {
+        test::SyntheticKitchen k = test::MakeSyntheticKitchen(3);
+        const Eigen::Matrix3f R = (Eigen::AngleAxisf(yaw * kDeg, Eigen::Vector3f::UnitZ()) *
+                                   Eigen::AngleAxisf(2.0f * kDeg, Eigen::Vector3f::UnitX()))
+                                      .toRotationMatrix();
+        test::RotateCloud(k.cloud, R);
+        // Noisy normals: 3 degrees of jitter.
+        std::mt19937 rng(5);
+        std::normal_distribution<float> g(0.0f, 0.05f);
+        for (auto& n : k.cloud.normals)
+            n = (n + Eigen::Vector3f(g(rng), g(rng), g(rng))).normalized();
+        const RoomAxesResult r = EstimateRoomAxes(k.cloud, {.up = Eigen::Vector3f::UnitZ()});
+        ASSERT_TRUE(r.found) << yaw;
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_LT(AngleToFrame(R.col(a), r.frame.axes), 1.0f) << "yaw " << yaw << " axis " << a;
+        }
+        EXPECT_GT(r.frame.Up().dot(R.col(2)), 0.99f);
+        EXPECT_NEAR(r.frame.axes.determinant(), 1.0f, 1e-4f);
+        EXPECT_GT(r.inliers, r.used / 2);
+    }
+}
+
+TEST(RoomAxes, DeterministicAndContracts) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(4);
+    const auto a = EstimateRoomAxes(k.cloud, {.seed = 9});
+    const auto b = EstimateRoomAxes(k.cloud, {.seed = 9});
+    EXPECT_TRUE(a.frame.axes.isApprox(b.frame.axes, 0.0f));
+    EXPECT_THROW(EstimateRoomAxes(k.cloud, {.angle_threshold_deg = 0.0f}), InvalidArgument);
+    EXPECT_THROW(EstimateRoomAxes(k.cloud, {.max_iterations = 0}), InvalidArgument);
+    EXPECT_THROW(EstimateRoomAxes(k.cloud, {.up = Eigen::Vector3f::Zero()}), InvalidArgument);
+    PointCloud no_normals = k.cloud;
+    no_normals.normals.clear();
+    EXPECT_THROW(EstimateRoomAxes(no_normals), DataError);
+    EXPECT_FALSE(EstimateRoomAxes(PointCloud()).found);
+}
+
+TEST(RoomStructure, FloorCeilingWallsWorktopAndFace) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
+    EXPECT_NEAR(s.floor_height, 0.0f, 0.01f);
+    EXPECT_NEAR(s.ceiling_height, 2.5f, 0.01f);
+    int walls = 0, faces = 0, worktops = 0;
+    for (const auto& c : s.components) {
+        walls += c.label == MapClass::kWall;
+        worktops += c.label == MapClass::kWorktop;
+        if (c.label == MapClass::kFace && c.axis == 1 && c.area > 0.5f) {
+            ++faces;
+            EXPECT_NEAR(-c.plane.w() * c.plane.y(), k.face_y, 0.01f);  // the plane y = 2.4
+            EXPECT_LT(c.plane.y(), 0.0f);                              // facing the sensor
+        }
+    }
+    EXPECT_EQ(walls, 2);
+    EXPECT_EQ(worktops, 1);
+    EXPECT_EQ(faces, 1);
+    EXPECT_THROW(SegmentRoomStructure(k.cloud, RoomFrame{}, {.distance_threshold = -1.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(SegmentRoomStructure(k.cloud, RoomFrame{}, {}, std::vector<float>(3, 1.0f)),
+                 InvalidArgument);
+}
+
+TEST(Fixtures, HandleVersusKnob) {
+    std::mt19937 rng(2);
+    PlanarComponent face;
+    face.axis = 1;
+    face.plane = Eigen::Vector4f(0, -1, 0, 2.4f);  // y = 2.4, facing -y
+    face.min = {-3.0f, 0.0f};
+    face.max = {3.0f, 1.0f};
+    PointCloud c;
+    test::AddHandle(c, {1.0f, 2.4f, 0.5f}, 0.2f, rng);
+    const auto handle_points = static_cast<Index>(c.size());
+    test::AddKnob(c, {1.5f, 2.4f, 0.5f}, rng);
+    Indices bar(handle_points), knob;
+    for (Index i = 0; i < handle_points; ++i) bar[i] = i;
+    for (Index i = handle_points; i < c.size(); ++i) knob.push_back(i);
+    Fixture f;
+    ASSERT_TRUE(ClassifyFixture(c, bar, face, RoomFrame{}, {}, f));
+    EXPECT_EQ(f.type, FixtureType::kHandle);
+    EXPECT_NEAR(f.length, 0.2f, 0.01f);
+    EXPECT_GT(std::abs(f.direction.x()), 0.99f);
+    EXPECT_NEAR(f.protrusion, 0.035f, 0.005f);
+    EXPECT_GT(f.line_inlier_ratio, 0.3f);
+    ASSERT_TRUE(ClassifyFixture(c, knob, face, RoomFrame{}, {}, f));
+    EXPECT_EQ(f.type, FixtureType::kKnob);
+    EXPECT_NEAR(f.center.x(), 1.5f, 0.01f);
+    // A long plank in front of the face is neither (too wide to be a handle's bar, too big for a
+    // knob).
+    PointCloud plank;
+    test::AddPatch(plank, {0, 2.35f, 0.2f}, {0.3f, 0, 0}, {0, 0, 0.25f}, 0.005f, {0, -1, 0},
+                   Color{}, 0.0f, rng);
+    Indices all(plank.size());
+    for (Index i = 0; i < plank.size(); ++i) all[i] = i;
+    EXPECT_FALSE(ClassifyFixture(plank, all, face, RoomFrame{}, {}, f));
+}
+
+TEST(Fixtures, FoundInFrontOfTheFaceOnly) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
+    const FixtureResult r = DetectFixtures(k.cloud, RoomFrame{}, s, {});
+    ASSERT_EQ(r.fixtures.size(), 2u);
+    for (const Fixture& f : r.fixtures) {
+        EXPECT_EQ(f.type, FixtureType::kHandle);
+        const bool door = std::abs(f.center.x() - 1.03f) < 0.02f;
+        const bool drawer = std::abs(f.center.x() - 1.65f) < 0.02f;
+        EXPECT_TRUE(door || drawer) << f.center.transpose();
+        EXPECT_GT(std::abs((door ? f.direction.z() : f.direction.x())), 0.98f);
+    }
+    EXPECT_THROW(DetectFixtures(k.cloud, RoomFrame{}, s, {.min_height = 0.2f}), InvalidArgument);
+}
+
+/// A front on the plane y = 2.4 facing -y, x 0.6 .. 1.1, z 0.15 .. 0.8 (face u = -x, v = z).
+Front DoorFront() {
+    PlanarComponent face;
+    face.axis = 1;
+    face.plane = Eigen::Vector4f(0, -1, 0, 2.4f);
+    Front f;
+    f.u_axis = PlaneU(face, RoomFrame{});
+    f.v_axis = PlaneV(face, RoomFrame{});
+    f.normal = -Eigen::Vector3f::UnitY();
+    const Eigen::Vector2f a(Eigen::Vector3f(0.6f, 2.4f, 0.15f).dot(f.u_axis), 0.15f);
+    const Eigen::Vector2f b(Eigen::Vector3f(1.1f, 2.4f, 0.8f).dot(f.u_axis), 0.8f);
+    f.min = a.cwiseMin(b);
+    f.max = a.cwiseMax(b);
+    f.center = Eigen::Vector3f(0.85f, 2.4f, 0.475f);
+    f.fixtures = {0};
+    return f;
+}
+
+Fixture HandleAt(const Eigen::Vector3f& c, bool vertical) {
+    Fixture h;
+    h.type = FixtureType::kHandle;
+    h.center = c;
+    h.direction = vertical ? Eigen::Vector3f::UnitZ() : Eigen::Vector3f::UnitX();
+    h.length = 0.15f;
+    return h;
+}
+
+/// Where a point of the front goes when the joint opens by a small amount.
+Eigen::Vector3f Opened(const Articulation& a, const Eigen::Vector3f& p, float amount) {
+    if (a.type == JointType::kPrismatic) return p + a.axis * amount;
+    return a.origin + Eigen::AngleAxisf(amount, a.axis) * (p - a.origin);
+}
+
+TEST(Articulation, HingeSideFromTheHandle) {
+    const Front f = DoorFront();
+    // Vertical handle near the right edge (x = 1.05): hinged at the left edge x = 0.6.
+    Articulation a =
+        ArticulationFromFixtures(f, {HandleAt({1.05f, 2.365f, 0.5f}, true)}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(a.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(a.axis.z()), 0.999f);
+    EXPECT_NEAR(a.origin.x(), 0.6f, 0.01f);
+    // Opening swings the free edge out of the furniture (towards -y).
+    EXPECT_LT(Opened(a, {1.1f, 2.4f, 0.5f}, 0.1f).y(), 2.39f);
+    // Near the left edge: hinged at the right edge.
+    a = ArticulationFromFixtures(f, {HandleAt({0.65f, 2.365f, 0.5f}, true)}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(a.type, JointType::kRevolute);
+    EXPECT_NEAR(a.origin.x(), 1.1f, 0.01f);
+    EXPECT_LT(Opened(a, {0.6f, 2.4f, 0.5f}, 0.1f).y(), 2.39f);
+    // Horizontal handle near the top of a tall front: hinged at the bottom (oven, dishwasher).
+    a = ArticulationFromFixtures(f, {HandleAt({0.85f, 2.365f, 0.75f}, false)}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(a.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(a.axis.x()), 0.999f);
+    EXPECT_NEAR(a.origin.z(), 0.15f, 0.01f);
+    EXPECT_LT(Opened(a, {0.85f, 2.4f, 0.8f}, 0.1f).y(), 2.39f);
+    // Horizontal handle on a low front: a drawer pulled out along the normal.
+    Front drawer = f;
+    drawer.min.y() = 0.6f;
+    drawer.center.z() = 0.7f;
+    a = ArticulationFromFixtures(drawer, {HandleAt({0.85f, 2.365f, 0.7f}, false)}, RoomFrame{},
+                                 0.0f);
+    ASSERT_EQ(a.type, JointType::kPrismatic);
+    EXPECT_TRUE(a.axis.isApprox(-Eigen::Vector3f::UnitY()));
+    // No fixture, no joint.
+    Front bare = f;
+    bare.fixtures.clear();
+    EXPECT_EQ(ArticulationFromFixtures(bare, {}, RoomFrame{}, 0.0f).type, JointType::kUnknown);
+    EXPECT_THROW(ArticulationFromFixtures(f, {}, RoomFrame{}, 0.0f, {.top_share = 2.0f}),
+                 InvalidArgument);
+}
+
+/// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
+/// pulled out by `pull`, with a fixed frame around it.
+PointCloud DoorScan(float angle, float pull) {
+    std::mt19937 rng(7);
+    PointCloud c;
+    test::AddPatch(c, {0.3f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    test::AddPatch(c, {1.1f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    PointCloud door;
+    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    // Opening: about the vertical line x = 0.6, y = 2.4, the free edge swinging towards -y.
+    const Eigen::Vector3f hinge(0.6f, 2.4f, 0.0f);
+    const Eigen::Matrix3f R =
+        Eigen::AngleAxisf(angle, -Eigen::Vector3f::UnitZ()).toRotationMatrix();
+    for (auto& p : door.points) {
+        p = hinge + R * (p - hinge) - Eigen::Vector3f(0, pull, 0);
+        c.points.push_back(p);
+    }
+    return c;
+}
+
+TEST(Articulation, FromASyntheticOpenedDoorAndDrawer) {
+    const Front f = DoorFront();
+    const PointCloud closed = DoorScan(0.0f, 0.0f);
+    for (const float deg : {30.0f, 60.0f, 100.0f}) {
+        const MotionResult m = ArticulationFromMotion(closed, DoorScan(deg * kDeg, 0.0f), f);
+        ASSERT_TRUE(m.found) << deg;
+        ASSERT_EQ(m.articulation.type, JointType::kRevolute) << deg;
+        const Eigen::Vector3f axis = m.articulation.axis;
+        EXPECT_LT(std::acos(std::min(1.0f, std::abs(axis.z()))) / kDeg, 2.0f) << deg;
+        // The hinge line passes x = 0.6, y = 2.4.
+        const Eigen::Vector3f o = m.articulation.origin;
+        const Eigen::Vector3f at_z = o + axis * ((0.5f - o.z()) / axis.z());
+        EXPECT_LT((at_z.head<2>() - Eigen::Vector2f(0.6f, 2.4f)).norm(), 0.02f) << deg;
+        EXPECT_NEAR(m.opening / kDeg, deg, 3.0f);
+        // A positive angle opens it.
+        EXPECT_LT(Opened(m.articulation, {1.1f, 2.4f, 0.5f}, 0.1f).y(), 2.39f) << deg;
+    }
+    const MotionResult d = ArticulationFromMotion(closed, DoorScan(0.0f, 0.3f), f);
+    ASSERT_TRUE(d.found);
+    EXPECT_EQ(d.articulation.type, JointType::kPrismatic);
+    EXPECT_NEAR(d.opening, 0.3f, 0.01f);
+    EXPECT_LT(d.articulation.axis.y(), -0.99f);
+    // Nothing moved: no motion.
+    EXPECT_FALSE(ArticulationFromMotion(closed, closed, f).found);
+    EXPECT_FALSE(ArticulationFromMotion(PointCloud(), closed, f).found);
+    EXPECT_THROW(ArticulationFromMotion(closed, closed, f, {.parallel_deg = 0.0f}),
+                 InvalidArgument);
+}
+
+MapKitchenResult MapSynthetic(int threads = 0) {
+    test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    MapKitchenParams p = KitchenParamsFor(KitchenSensor::kKinect);
+    p.structure.range_noise = 0.0f;  // noise-free synthetic data
+    p.num_threads = threads;
+    p.axes.up = Eigen::Vector3f::UnitZ();
+    PointCloud scan = k.cloud;
+    scan.normals.clear();  // MapKitchen estimates its own
+    return MapKitchen({scan}, p);
+}
+
+TEST(MapKitchen, SyntheticKitchenEndToEnd) {
+    const MapKitchenResult r = MapSynthetic();
+    const KitchenMap& m = r.map;
+    EXPECT_NEAR(m.floor_height, 0.0f, 0.02f);
+    EXPECT_NEAR(m.ceiling_height, 2.5f, 0.02f);
+    ASSERT_EQ(m.fronts.size(), 2u);
+    int revolute = 0, prismatic = 0;
+    for (const Front& f : m.fronts) {
+        revolute += f.articulation.type == JointType::kRevolute;
+        prismatic += f.articulation.type == JointType::kPrismatic;
+    }
+    EXPECT_EQ(revolute, 1);
+    EXPECT_EQ(prismatic, 1);
+    for (const Front& f : m.fronts) {
+        if (f.articulation.type != JointType::kRevolute) continue;
+        // The door: its rectangle, hinged at x = 0.6.
+        EXPECT_NEAR(f.max.y() - f.min.y(), 0.65f, 0.05f);
+        EXPECT_NEAR(f.max.x() - f.min.x(), 0.5f, 0.05f);
+        EXPECT_NEAR(f.articulation.origin.x(), 0.6f, 0.03f);
+    }
+    EXPECT_EQ(m.point_class.size(), r.cloud.size());
+    EXPECT_FALSE(m.furniture.empty());
+}
+
+TEST(MapKitchen, SerialEqualsParallel) {
+    const MapKitchenResult a = MapSynthetic(1), b = MapSynthetic(2);
+    EXPECT_EQ(a.map.point_class, b.map.point_class);
+    EXPECT_EQ(a.map.point_front, b.map.point_front);
+}
+
+TEST(MapKitchen, BadInputGivesClearErrors) {
+    const MapKitchenParams p = KitchenParamsFor(KitchenSensor::kKinect);
+    EXPECT_THROW(MapKitchen({}, p), DataError);
+    PointCloud nan_only;
+    nan_only.points.assign(10, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+    EXPECT_THROW(MapKitchen({nan_only}, p), DataError);
+    // A floor alone: no vertical planes to look for furniture on.
+    std::mt19937 rng(1);
+    PointCloud floor;
+    test::AddPatch(floor, {0, 0, 0}, {2, 0, 0}, {0, 2, 0}, 0.02f, {0, 0, 1}, Color{}, 0.001f, rng);
+    floor.normals.clear();
+    floor.colors.clear();
+    floor.sensor_origin = {1, 1, 1.4f};
+    floor.width = static_cast<std::uint32_t>(floor.size());
+    try {
+        MapKitchen({floor}, p);
+        FAIL() << "no exception";
+    } catch (const DataError& e) {
+        EXPECT_NE(std::string(e.what()).find("vertical"), std::string::npos) << e.what();
+    }
+    MapKitchenParams bad = p;
+    bad.fronts.alpha_mads = 0.0f;
+    EXPECT_THROW(MapKitchen({floor}, bad), InvalidArgument);
+}
+
+TEST(MapExport, UrdfRoundTripAndWellFormedOwl) {
+    const MapKitchenResult r = MapSynthetic();
+    const io::UrdfModel urdf = KitchenMapUrdf(r.map, "test_kitchen");
+    const io::UrdfModel back = io::ParseUrdf(io::UrdfToXml(urdf), "map.urdf");
+    ASSERT_EQ(back.joints.size(), urdf.joints.size());
+    std::size_t movable = 0;
+    for (std::size_t j = 0; j < urdf.joints.size(); ++j) {
+        EXPECT_EQ(back.joints[j].type, urdf.joints[j].type);
+        EXPECT_TRUE(back.joints[j].origin.isApprox(urdf.joints[j].origin, 1e-4));
+        if (urdf.joints[j].type == io::UrdfJointType::kFixed) continue;
+        ++movable;
+        EXPECT_TRUE(back.joints[j].axis.isApprox(urdf.joints[j].axis, 1e-6));
+        EXPECT_NEAR(back.joints[j].upper, urdf.joints[j].upper, 1e-6);
+    }
+    EXPECT_EQ(movable, r.map.fronts.size());
+    // The joints' axes in the world are those of the map's fronts.
+    std::map<std::string, Eigen::Isometry3d> pose{{back.root, Eigen::Isometry3d::Identity()}};
+    for (int pass = 0; pass < 4; ++pass) {
+        for (const auto& j : back.joints) {
+            if (pose.count(j.parent)) pose[j.child] = pose[j.parent] * j.origin;
+        }
+    }
+    for (std::size_t f = 0; f < r.map.fronts.size(); ++f) {
+        const io::UrdfJoint* j = back.FindJoint("front_" + std::to_string(f) + "_joint");
+        ASSERT_NE(j, nullptr);
+        const Eigen::Vector3d world = pose[j->child].linear() * j->axis;
+        EXPECT_TRUE(world.cast<float>().isApprox(r.map.fronts[f].articulation.axis, 1e-4f));
+    }
+    const std::string owl = KitchenMapOwl(r.map, "test_kitchen");
+    TiXmlDocument doc;
+    doc.Parse(owl.c_str());
+    ASSERT_FALSE(doc.Error()) << doc.ErrorDesc();
+    const TiXmlElement* rdf = doc.FirstChildElement("rdf:RDF");
+    ASSERT_NE(rdf, nullptr);
+    int individuals = 0, joints = 0;
+    for (const TiXmlElement* e = rdf->FirstChildElement("owl:NamedIndividual"); e;
+         e = e->NextSiblingElement("owl:NamedIndividual")) {
+        ++individuals;
+        const std::string type = e->FirstChildElement("rdf:type")->Attribute("rdf:resource");
+        joints += type.find("HingedJoint") != std::string::npos ||
+                  type.find("PrismaticJoint") != std::string::npos;
+    }
+    EXPECT_GT(individuals, 5);
+    EXPECT_EQ(joints, 2);
+    test::TempDir dir;
+    WriteKitchenMap(dir / "out", r.map, "test_kitchen");
+    for (const char* f : {"map.json", "map.urdf", "map.owl"}) {
+        EXPECT_TRUE(std::filesystem::is_regular_file(dir / "out" / f)) << f;
+    }
+    EXPECT_NO_THROW(io::ReadUrdf(dir / "out" / "map.urdf"));
+}
+
+}  // namespace
+}  // namespace multicue
