@@ -1,0 +1,265 @@
+#include "multicue/mapping/furniture_detection.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/filters/voxel_grid.hpp"
+
+namespace multicue {
+namespace {
+
+using Polygon = std::vector<Eigen::Vector2f>;
+
+double MsSince(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+float Cross(const Eigen::Vector2f& a, const Eigen::Vector2f& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+float Area(const Polygon& p) {
+    float a = 0.0f;
+    for (std::size_t i = 0; i < p.size(); ++i) a += Cross(p[i], p[(i + 1) % p.size()]);
+    return 0.5f * std::abs(a);
+}
+
+// Convex hull (counter-clockwise) by Andrew's monotone chain.
+Polygon Hull(std::vector<Eigen::Vector2f> pts) {
+    std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) {
+        return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y();
+    });
+    if (pts.size() < 3) return pts;
+    Polygon h(2 * pts.size());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        while (k >= 2 && Cross(h[k - 1] - h[k - 2], pts[i] - h[k - 2]) <= 0) --k;
+        h[k++] = pts[i];
+    }
+    for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+        while (k >= t && Cross(h[k - 1] - h[k - 2], pts[i] - h[k - 2]) <= 0) --k;
+        h[k++] = pts[i];
+    }
+    h.resize(k - 1);
+    return h;
+}
+
+// The fitted model's footprint in the world.
+Polygon Footprint(const FurnitureCad& cad, const Eigen::Isometry3f& T) {
+    std::vector<Eigen::Vector2f> pts;
+    const std::size_t step = std::max<std::size_t>(1, cad.cloud.size() / 2000);
+    for (std::size_t i = 0; i < cad.cloud.size(); i += step) pts.push_back((T * cad.cloud.points[i]).head<2>());
+    return Hull(std::move(pts));
+}
+
+// The points (world frame, with normals) of a hypothesis's supporting parts.
+PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis& h) {
+    PointCloud out;
+    for (const auto& [view, part] : h.parts) {
+        const FurnitureParts& v = scene.views[static_cast<std::size_t>(view)];
+        for (Index i : v.parts[static_cast<std::size_t>(part)].indices) {
+            out.points.push_back(v.cloud.points[i]);
+            out.normals.push_back(v.cloud.normals[i]);
+        }
+    }
+    out.width = static_cast<std::uint32_t>(out.points.size());
+    return out;
+}
+
+}  // namespace
+
+float ConvexIntersectionArea(const Polygon& a, const Polygon& b) {
+    if (a.size() < 3 || b.size() < 3) return 0.0f;
+    // Sutherland-Hodgman: clip a by every edge of b.
+    Polygon out = a;
+    for (std::size_t i = 0; i < b.size() && !out.empty(); ++i) {
+        const Eigen::Vector2f p = b[i], q = b[(i + 1) % b.size()];
+        auto inside = [&](const Eigen::Vector2f& x) { return Cross(q - p, x - p) >= 0.0f; };
+        Polygon in = std::move(out);
+        out.clear();
+        for (std::size_t k = 0; k < in.size(); ++k) {
+            const Eigen::Vector2f c = in[k], n = in[(k + 1) % in.size()];
+            const bool ci = inside(c), ni = inside(n);
+            if (ci) out.push_back(c);
+            if (ci != ni) {
+                const float t = Cross(q - p, c - p) / (Cross(q - p, c - p) - Cross(q - p, n - p));
+                out.push_back(c + t * (n - c));
+            }
+        }
+    }
+    return out.size() < 3 ? 0.0f : Area(out);
+}
+
+void FurnitureDetectionParams::Validate() const {
+    voting.Validate();
+    selection.Validate();
+    fit.Validate();
+    if (!(max_overlap > 0.0f && max_overlap <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("furniture detection: max_overlap must be in (0, 1], got {}", max_overlap));
+    }
+    if (num_threads < 0) {
+        throw InvalidArgument(
+            fmt::format("furniture detection: num_threads must be >= 0, got {}", num_threads));
+    }
+}
+
+FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
+                                     const FurnitureModel& model,
+                                     const FurnitureDetectionParams& params) {
+    params.Validate();
+    if (!model.trained()) throw InvalidArgument("furniture detection: the model is not trained");
+    for (const auto& v : views) {
+        if (v.scan == nullptr) throw InvalidArgument("furniture detection: a view without a scan");
+        if (!v.T_world_sensor.matrix().allFinite()) {
+            throw InvalidArgument("furniture detection: a view pose is not finite");
+        }
+    }
+    FurnitureScene scene;
+    FurniturePartParams pp = model.part_params();
+    pp.num_threads = params.num_threads;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        auto t = std::chrono::steady_clock::now();
+        scene.views.push_back(ExtractFurnitureParts(*views[v].scan, views[v].T_world_sensor, pp));
+        scene.parts_ms += MsSince(t);
+        t = std::chrono::steady_clock::now();
+        scene.votes.push_back(CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
+        scene.votes_ms += MsSince(t);
+        if (!params.verify || !params.free_space) continue;
+        // Occupancy from the whole scan (the floor too: rays to it free the space above it),
+        // thinned to the map's resolution.
+        t = std::chrono::steady_clock::now();
+        PointCloud world;
+        const float floor = scene.views.back().floor_height;
+        for (const auto& p : views[v].scan->points) {
+            if (p.allFinite()) world.points.push_back(views[v].T_world_sensor * p - Eigen::Vector3f(0, 0, floor));
+        }
+        world.width = static_cast<std::uint32_t>(world.points.size());
+        const auto res = static_cast<float>(params.fit.occupancy_resolution);
+        const PointCloud thin = VoxelGrid(world, {.leaf_size = res / 2, .num_threads = params.num_threads});
+        FurnitureFreeSpace fs(params.fit.occupancy_resolution);
+        fs.AddView(thin, scene.views.back().sensor_origin);
+        scene.free_space.push_back(std::move(fs));
+        scene.occupancy_ms += MsSince(t);
+    }
+    return scene;
+}
+
+FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std::vector<int>& subset,
+                                         const FurnitureModel& model,
+                                         const FurnitureFitContext* context,
+                                         const FurnitureDetectionParams& params) {
+    params.Validate();
+    if (params.verify && context == nullptr) {
+        throw InvalidArgument("furniture detection: verification needs a fit context");
+    }
+    if (params.verify && &context->model() != &model) {
+        throw InvalidArgument("furniture detection: the fit context belongs to another model");
+    }
+    std::vector<int> views = subset;
+    if (views.empty()) {
+        for (std::size_t v = 0; v < scene.views.size(); ++v) views.push_back(static_cast<int>(v));
+    }
+    for (int v : views) {
+        if (v < 0 || v >= static_cast<int>(scene.views.size())) {
+            throw InvalidArgument(fmt::format("furniture detection: no view {}", v));
+        }
+    }
+    FurnitureDetectionResult result;
+    if (views.empty()) return result;
+    auto t = std::chrono::steady_clock::now();
+    std::vector<FurnitureVote> votes;
+    for (int v : views) {
+        const auto& vv = scene.votes[static_cast<std::size_t>(v)];
+        votes.insert(votes.end(), vv.begin(), vv.end());
+    }
+    result.votes = votes.size();
+    const auto hyps = SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
+    result.selection_ms = MsSince(t);
+    std::vector<FurnitureDetection> all(hyps.size());
+    for (std::size_t i = 0; i < hyps.size(); ++i) {
+        all[i].cls = hyps[i].cls;
+        all[i].category = model.classes()[static_cast<std::size_t>(hyps[i].cls)].name;
+        all[i].hypothesis = hyps[i];
+        all[i].centre = hyps[i].centre;
+        all[i].score = hyps[i].normalized;
+        all[i].accepted = true;
+    }
+    if (params.verify) {
+        t = std::chrono::steady_clock::now();
+        // One free-space set of the chosen views.
+        std::vector<const FurnitureFreeSpace*> maps;
+        for (int v : views) {
+            if (static_cast<std::size_t>(v) < scene.free_space.size()) maps.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
+        }
+        ParallelFor(
+            all.size(), params.num_threads,
+            [&](std::size_t i) {
+                FurnitureDetection& d = all[i];
+                const PointCloud pts = SupportPoints(scene, d.hypothesis);
+                // The most restrictive view decides: a model in any view's free space goes.
+                d.fit = FitFurniture(pts, d.cls, d.hypothesis.centre, *context, nullptr);
+                float free_share = 0.0f;
+                if (d.fit.cad >= 0) {
+                    const auto& cloud = model.cads()[static_cast<std::size_t>(d.fit.cad)].cloud;
+                    const std::size_t step = std::max<std::size_t>(1, (cloud.size() + params.fit.max_model_checks - 1) / params.fit.max_model_checks);
+                    std::vector<Eigen::Vector3f> world;
+                    for (std::size_t k = 0; k < cloud.size(); k += step) world.push_back(d.fit.T_world_model * cloud.points[k]);
+                    for (const auto* m : maps) free_share = std::max(free_share, m->FreeShare(world));
+                }
+                d.fit.free_share = free_share;
+                if (d.fit.accepted && free_share > params.fit.max_free_share) {
+                    d.fit.accepted = false;
+                    d.fit.rejection = "free_space";
+                }
+                d.fitted = d.fit.cad >= 0;
+                if (d.fitted) d.centre = d.fit.T_world_model.translation().head<2>();
+                d.accepted = d.fit.accepted;
+                d.rejection = d.fit.rejection;
+            },
+            1);
+        // Fitted footprints that overlap: the stronger detection stays.
+        std::vector<Polygon> kept;
+        std::vector<int> kept_cls;
+        std::vector<std::size_t> order(all.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all[a].score > all[b].score; });
+        for (std::size_t i : order) {
+            FurnitureDetection& d = all[i];
+            if (!d.accepted) continue;
+            const Polygon f = Footprint(model.cads()[static_cast<std::size_t>(d.fit.cad)], d.fit.T_world_model);
+            const float area = Area(f);
+            for (std::size_t k = 0; k < kept.size() && d.accepted; ++k) {
+                if (!params.cross_class && kept_cls[k] != d.cls) continue;
+                const float inter = ConvexIntersectionArea(f, kept[k]);
+                if (inter > params.max_overlap * std::min(area, Area(kept[k]))) {
+                    d.accepted = false;
+                    d.rejection = "overlap";
+                }
+            }
+            if (d.accepted) {
+                kept.push_back(f);
+                kept_cls.push_back(d.cls);
+            }
+        }
+        result.fit_ms = MsSince(t);
+    }
+    for (auto& d : all) (d.accepted ? result.detections : result.rejected).push_back(std::move(d));
+    auto by_score = [](const FurnitureDetection& a, const FurnitureDetection& b) { return a.score > b.score; };
+    std::stable_sort(result.detections.begin(), result.detections.end(), by_score);
+    std::stable_sort(result.rejected.begin(), result.rejected.end(), by_score);
+    return result;
+}
+
+FurnitureDetectionResult DetectFurniture(const std::vector<FurnitureView>& views,
+                                         const FurnitureModel& model,
+                                         const FurnitureFitContext* context,
+                                         const FurnitureDetectionParams& params) {
+    const FurnitureScene scene = PrepareFurnitureScene(views, model, params);
+    return DetectFurniture(scene, {}, model, context, params);
+}
+
+}  // namespace multicue

@@ -1,0 +1,125 @@
+#pragma once
+/// \file Fitting and verifying CAD models of detected furniture (thesis section 4.2.4.3).
+///
+/// Upright RANSAC over (x, y, yaw): a random scan point of the hypothesis's parts is paired with
+/// model points at a similar height (a share of them, checked_share), each pair giving a pose:
+/// the yaw that turns the model point's normal onto the scan point's (a random yaw where the
+/// normals are nearly parallel to up: table tops, seats) and the translation that brings the two
+/// points together. A pose scores the scan points it covers (a model point within
+/// inlier_distance), counted on a share of the scan points and abandoned as soon as it cannot
+/// beat the best pose of any model so far. The iteration count adapts by Eq. (4.6) with
+/// p_good = covered / all scan points, over all models of the class together. The best pose is
+/// refined by ICP (registration module, point-to-plane) and projected back to upright.
+///
+/// Verification rejects a fit that covers less than min_coverage of the scan points, and one
+/// whose model lies in space a scan saw as free: a model point counts as in free space when its
+/// voxel and the voxel one step further along its ray are free in a view's occupancy map (one
+/// OctoMap per scan, search/occupancy_map.hpp; the second voxel keeps model points just in front
+/// of the measured surface from counting).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/recognition/furniture_model.hpp"
+#include "multicue/registration/icp.hpp"
+#include "multicue/search/occupancy_map.hpp"
+
+namespace multicue {
+
+struct FurnitureFitParams {
+    float inlier_distance = 0.03f;       ///< a scan point is covered within this of the model [m]
+    double success_probability = 0.99;   ///< p_success of Eq. (4.6), in (0, 1)
+    float height_tolerance = 0.02f;      ///< pairs of points at similar height: |dz| below [m]
+    /// Share of the candidate pairs and of the scan points checked per pose (thesis: about
+    /// half), in (0, 1]
+    float checked_share = 0.5f;
+    std::size_t max_scan_points = 1500;  ///< the parts' points thinned evenly to at most this
+    std::size_t max_candidates = 48;     ///< model points paired with one scan point at most
+    int max_iterations = 200;            ///< per model at most; Eq. (4.6) usually stops earlier
+    /// Normals whose horizontal component is below this are parallel to up: random yaw [-]
+    float min_horizontal_normal = 0.5f;
+    /// The model's centre stays this far from the hypothesis at most, in class widths [-], > 0
+    float max_offset = 1.0f;
+    bool refine = true;        ///< ICP refinement after the search
+    IcpParams icp{.correspondences = {.max_distance = 0.06f},
+                  .max_iterations = 30,
+                  .min_fitness = 0.1,
+                  .min_condition = 0.0,
+                  .num_threads = 1};
+    float min_coverage = 0.5f;             ///< reject below this share of covered scan points
+    float max_free_share = 0.1f;           ///< reject above this share of model points in free space
+    double occupancy_resolution = 0.05;    ///< voxel of the per-scan occupancy maps [m]
+    std::size_t max_model_checks = 3000;   ///< model points tested against free space at most
+    std::uint64_t seed = 1;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Per-model data built once for many fits: the models' points sorted by height, a grid of the
+/// voxels within inlier_distance of each model, k-d trees for ICP.
+class FurnitureFitContext {
+  public:
+    /// Throws InvalidArgument for bad parameters or a model without CAD models.
+    FurnitureFitContext(const FurnitureModel& model, const FurnitureFitParams& params);
+    ~FurnitureFitContext();
+    FurnitureFitContext(const FurnitureFitContext&) = delete;
+    FurnitureFitContext& operator=(const FurnitureFitContext&) = delete;
+
+    const FurnitureModel& model() const { return model_; }
+    const FurnitureFitParams& params() const { return params_; }
+    struct Cad;
+    const Cad& cad(std::size_t i) const { return *cads_[i]; }
+
+  private:
+    const FurnitureModel& model_;
+    FurnitureFitParams params_;
+    std::vector<std::unique_ptr<Cad>> cads_;
+};
+
+/// Occupancy maps of the views, for the free-space test.
+class FurnitureFreeSpace {
+  public:
+    explicit FurnitureFreeSpace(double resolution = 0.05);
+    /// Adds one view's map: its points (world frame; the floor included: rays to the floor free
+    /// the space above it) seen from `origin`.
+    void AddView(const PointCloud& world_points, const Eigen::Vector3f& origin);
+    std::size_t views() const { return maps_.size(); }
+    /// Share of `points` (world frame) in free space of any view; 0 without views.
+    float FreeShare(const std::vector<Eigen::Vector3f>& points) const;
+
+  private:
+    double resolution_;
+    std::vector<OccupancyMap> maps_;
+    std::vector<Eigen::Vector3f> origins_;
+};
+
+struct FurnitureFit {
+    int cad = -1;  ///< index into FurnitureModel::cads(); -1 when nothing was found
+    Eigen::Isometry3f T_world_model = Eigen::Isometry3f::Identity();  ///< upright
+    float yaw = 0.0f;                ///< [rad]
+    std::size_t scan_points = 0;     ///< the parts' points used
+    std::size_t covered = 0;         ///< of those, covered by the fitted model
+    float coverage = 0.0f;           ///< covered / scan_points
+    int iterations = 0;              ///< RANSAC iterations over all models
+    int models_tried = 0;
+    bool refined = false;            ///< ICP converged and was kept
+    float free_share = 0.0f;         ///< share of model points in observed free space
+    bool accepted = false;           ///< passed both checks
+    std::string rejection;           ///< "", "coverage", "free_space" or "no_fit"
+    double ms = 0.0;                 ///< wall time [ms]
+};
+
+/// Fits the CAD models of class `cls` to `points` (world frame, floor at z = 0, with normals
+/// facing the sensor) near `centre`, and verifies the best against `free_space` (may be null:
+/// no free-space test). Fewer than 10 points give no fit. Throws InvalidArgument for an unknown
+/// class or points without normals.
+FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
+                          const FurnitureFitContext& context, const FurnitureFreeSpace* free_space);
+
+}  // namespace multicue
