@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "driver_options.hpp"
+#include "furniture_eval_draw.hpp"
 #include "furniture_eval_metrics.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
@@ -51,12 +52,21 @@ struct Options {
     bool variants = true;
     bool single = true;
     int threads = 0;
+    int draw = 0;
     // Overrides of the detection settings, to tune on the validation rooms.
     std::vector<std::string> thresholds;
     float window_scale = 1.0f;
     float min_coverage = 0.5f;
     float max_free_share = 0.1f;
     float min_part_share = 0.1f;
+    std::string normalization = "per-class";
+    std::string frame = "part";
+    bool cross_class = false;
+    std::size_t words = 0;
+    int probe = 0;
+    std::size_t activations = 2;
+    float max_height_error = 0.25f;
+    float support_margin = 0.3f;
 };
 
 struct Variant {
@@ -99,8 +109,33 @@ eval::EvalFrame Frame(const FurnitureDetectionResult& det, std::vector<eval::Tru
         f.detections.push_back(item);
     };
     for (const auto& d : det.detections) add(d, true);
-    for (const auto& d : det.rejected) add(d, false);
     return f;
+}
+
+// Every hypothesis of a room with its nearest true piece of the same class and its fit.
+void ListRoom(int r, const training::ScannedFurnitureRoom& room, const FurnitureDetectionResult& det,
+              const FurnitureModel& model) {
+    std::fprintf(stderr, "room %d (%s):", r, sim::RoomTypeName(room.room.type));
+    for (const auto& f : room.room.furniture) std::fprintf(stderr, " %s", f.category.c_str());
+    std::fprintf(stderr, "\n");
+    for (const auto* list : {&det.detections, &det.rejected}) {
+        for (const auto& d : *list) {
+            float best = 1e9f, width = 0.0f, yaw = 0.0f;
+            for (const auto& f : room.room.furniture) {
+                if (f.category != d.category) continue;
+                const float dist = (f.T_world_object.translation().head<2>() - d.hypothesis.centre).norm();
+                if (dist < best) best = dist, width = f.width, yaw = f.yaw;
+            }
+            std::fprintf(stderr,
+                         "  %-9s score %5.2f at (%5.2f %5.2f) parts %2zu | truth %.2f m (w %.2f) | fit %s cov %.2f "
+                         "free %.2f yaw %6.1f/%6.1f %s %s\n",
+                         d.category.c_str(), d.score, d.hypothesis.centre.x(), d.hypothesis.centre.y(),
+                         d.hypothesis.parts.size(), best, width,
+                         d.fitted ? model.cads()[static_cast<std::size_t>(d.fit.cad)].id.c_str() : "-",
+                         d.fit.coverage, d.fit.free_share, d.fit.yaw * 57.3f, yaw * 57.3f,
+                         d.accepted ? "OK" : "--", d.rejection.c_str());
+        }
+    }
 }
 
 void SetThresholds(FurnitureModel& model, const std::vector<std::string>& pairs) {
@@ -113,6 +148,43 @@ void SetThresholds(FurnitureModel& model, const std::vector<std::string>& pairs)
     }
 }
 
+// Single fresh procedural pieces on the floor, one view each: per true class, the mean best
+// score of every class within half a width of the centre and how often the best is right.
+int Probe(const Options& o, const FurnitureModel& model, const training::FurnitureTrainingOptions& to,
+          FurnitureDetectionParams dp) {
+    dp.verify = false;
+    dp.selection.threshold_scale = 0.0f;
+    const std::size_t nc = model.classes().size();
+    for (std::size_t c = 0; c < nc; ++c) {
+        std::vector<double> best(nc, 0.0);
+        int right = 0;
+        for (int k = 0; k < o.probe; ++k) {
+            sim::StreamRng rng(9000 + static_cast<std::uint64_t>(k), c);
+            const auto piece = sim::MakeProceduralFurniture(model.classes()[c].name, rng);
+            const sim::Scene scene = sim::MakeFurnitureViewScene(piece, static_cast<float>(rng.Uniform(-3.1, 3.1)));
+            const sim::RayCaster caster(scene);
+            sim::FurnitureViewParams vp;
+            vp.views = 1;
+            const auto head = sim::FurnitureViewHeads(vp, 77 + static_cast<std::uint64_t>(k)).front();
+            Eigen::Isometry3f T;
+            const PointCloud scan = training::ScanFurniture(caster, head, {0, 0, 0.4f}, to, 5, T);
+            const auto det = DetectFurniture({{&scan, T}}, model, nullptr, dp);
+            std::vector<double> b(nc, 0.0);
+            for (const auto& d : det.detections) {
+                if (d.hypothesis.centre.norm() < FurnitureWidth(*piece.mesh) / 2) {
+                    b[static_cast<std::size_t>(d.cls)] = std::max<double>(b[static_cast<std::size_t>(d.cls)], d.score);
+                }
+            }
+            for (std::size_t j = 0; j < nc; ++j) best[j] += b[j] / o.probe;
+            if (std::max_element(b.begin(), b.end()) - b.begin() == static_cast<long>(c) && b[c] > 0) ++right;
+        }
+        std::printf("%-10s right %d/%d; mean best normalised score:", model.classes()[c].name.c_str(), right, o.probe);
+        for (std::size_t j = 0; j < nc; ++j) std::printf(" %s %.2f", model.classes()[j].name.c_str(), best[j]);
+        std::printf("\n");
+    }
+    return 0;
+}
+
 int Run(const Options& o) {
     InstallInterruptHandler();
     std::filesystem::create_directories(o.out);
@@ -121,6 +193,7 @@ int Run(const Options& o) {
     to.kitchen = o.kitchen;
     to.sensor = training::ParseFurnitureSensor(o.sensor);
     to.num_threads = o.threads;
+    to.parts.frame = ParseFurniturePartFrame(o.frame);
     FurnitureModel model;
     auto t0 = std::chrono::steady_clock::now();
     if (!o.retrain && std::filesystem::exists(o.model)) {
@@ -131,6 +204,12 @@ int Run(const Options& o) {
         if (!training::TrainFurnitureModel(pieces, to, model, &progress)) return 130;
         progress.Finish();
         model.Save(o.model);
+    }
+    if (o.words > 0 && o.words != model.num_words()) {  // another vocabulary size
+        FurnitureVocabularyParams wp = model.vocabulary_params();
+        wp.words = o.words;
+        wp.num_threads = o.threads;
+        model = FurnitureModel::Train(model.parts(), model.classes(), model.cads(), model.part_params(), wp);
     }
     SetThresholds(model, o.thresholds);
     const double train_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -145,11 +224,17 @@ int Run(const Options& o) {
     dp.selection.threshold_scale = o.floor_cut;
     dp.selection.window_scale = o.window_scale;
     dp.selection.min_part_share = o.min_part_share;
+    dp.voting.normalization = ParseFurnitureVoteNormalization(o.normalization);
+    dp.selection.cross_class = o.cross_class;
+    dp.voting.activations = o.activations;
+    dp.voting.max_height_error = o.max_height_error;
+    dp.support_margin = o.support_margin;
     dp.fit.min_coverage = o.min_coverage;
     dp.fit.max_free_share = o.max_free_share;
     dp.num_threads = o.threads;
     const FurnitureFitContext context(model, dp.fit);
 
+    if (o.probe > 0) return Probe(o, model, to, dp);
     // Rooms: held-out library pieces (test) or fresh procedural pieces (validation).
     const bool test = o.set == "test";
     std::vector<sim::FurniturePiece> library;
@@ -173,6 +258,7 @@ int Run(const Options& o) {
     double parts_ms = 0, votes_ms = 0, occ_ms = 0, sel_ms = 0, fit_ms = 0;
     std::size_t n_views = 0, n_sel = 0, n_fits = 0;
     std::vector<double> fit_times;
+    std::map<std::string, std::map<std::string, int>> fates;
     Progress progress("rooms", static_cast<std::size_t>(o.rooms));
     for (int r = 0; r < o.rooms && !InterruptRequested(); ++r) {
         sim::FurnitureRoomParams rp;
@@ -201,6 +287,26 @@ int Run(const Options& o) {
             }
             const auto det = DetectFurniture(scene, {}, *var.model, var.verify ? &context : nullptr, p);
             merged[var.name].push_back(Frame(det, VisibleTruth(room, all, model, o.min_visible), var.verify, group));
+            if (var.verify) {
+                // Why true hypotheses (right class, near a true piece) were rejected.
+                for (const auto* list : {&det.detections, &det.rejected}) {
+                    for (const auto& d : *list) {
+                        if (d.score < 0.3f) continue;
+                        for (const auto& f : room.room.furniture) {
+                            if (f.category != d.category ||
+                                (f.T_world_object.translation().head<2>() - d.hypothesis.centre).norm() >= f.width / 2) {
+                                continue;
+                            }
+                            ++fates[d.category][d.accepted ? "accepted" : d.rejection];
+                            break;
+                        }
+                    }
+                }
+            }
+            if (var.verify && r < o.draw) {
+                eval::DrawRoom(fmt::format("{}/room_{:02}.png", o.out, r), room, scene, det, model);
+                ListRoom(r, room, det, model);
+            }
             if (var.verify) {
                 sel_ms += det.selection_ms, fit_ms += det.fit_ms, ++n_sel;
                 for (const auto* list : {&det.detections, &det.rejected}) {
@@ -251,13 +357,22 @@ int Run(const Options& o) {
                             eval::Percentile(m.yaw_errors, 0.5f), eval::Percentile(m.yaw_errors, 0.9f),
                             m.yaw_errors.size());
             }
-            // Per class and per room type at the operating point.
+            // Per class and per room type at the operating point; average precision per class and
+            // the cut with the best F1 (as a threshold: cut times the class threshold).
+            double map = 0.0;
             for (std::size_t c = 0; c < model.classes().size(); ++c) {
                 eval::MatchCounts mc;
                 for (const auto& f : frames) mc.Add(eval::MatchFrame(f, 1.0f, static_cast<int>(c), table));
-                entry["classes"][model.classes()[c].name] = {{"precision", mc.Precision()}, {"recall", mc.Recall()},
-                                                             {"tp", mc.tp}, {"fp", mc.fp}, {"fn", mc.fn}};
+                float cut = 1.0f;
+                double f1 = 0.0;
+                const double ap = eval::AveragePrecision(frames, static_cast<int>(c), &cut, &f1);
+                map += ap / static_cast<double>(model.classes().size());
+                entry["classes"][model.classes()[c].name] = {
+                    {"precision", mc.Precision()}, {"recall", mc.Recall()}, {"tp", mc.tp}, {"fp", mc.fp},
+                    {"fn", mc.fn}, {"ap", ap}, {"best_f1", f1},
+                    {"best_f1_threshold", cut * model.classes()[c].threshold}};
             }
+            entry["map"] = map;
             for (const char* g : {"office", "seminar", "kitchen"}) {
                 eval::MatchCounts mg;
                 for (const auto& f : frames) {
@@ -273,14 +388,22 @@ int Run(const Options& o) {
         }
     }
     for (const auto& [name, entry] : report["results"].items()) {
-        std::string line = fmt::format("{:<24} per class:", name);
+        std::string line = fmt::format("{:<24} mAP {:.3f}; per class P/R, AP, best-F1 threshold:", name,
+                                       entry["map"].get<double>());
         for (const auto& [c, v] : entry["classes"].items()) {
-            line += fmt::format(" {} {:.2f}/{:.2f}", c, v["precision"].get<double>(), v["recall"].get<double>());
+            line += fmt::format(" {} {:.2f}/{:.2f} {:.2f} {:.2f}", c, v["precision"].get<double>(),
+                                v["recall"].get<double>(), v["ap"].get<double>(),
+                                v["best_f1_threshold"].get<double>());
         }
         line += "  per room type:";
         for (const auto& [g, v] : entry["room_types"].items()) {
             line += fmt::format(" {} {:.2f}/{:.2f}", g, v["precision"].get<double>(), v["recall"].get<double>());
         }
+        std::printf("%s\n", line.c_str());
+    }
+    for (const auto& [c, m] : fates) {
+        std::string line = "true hypotheses of " + c + ":";
+        for (const auto& [why, n] : m) line += fmt::format(" {} {}", why, n);
         std::printf("%s\n", line.c_str());
     }
     const double per_view = n_views ? 1.0 / n_views : 0.0;
@@ -332,6 +455,17 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--min-part-share", o.min_part_share, "support share of a part for the fit")
         ->capture_default_str();
+    app.add_option("--draw", o.draw, "bird's-eye PNGs and listings of the first N rooms");
+    app.add_option("--normalization", o.normalization, "per-class, per-word or balanced")->capture_default_str();
+    app.add_option("--frame", o.frame, "part frame of the shape vectors when training: bearing or part")
+        ->capture_default_str();
+    app.add_flag("--cross-class", o.cross_class, "hypotheses of different classes exclude each other");
+    app.add_option("--max-height-error", o.max_height_error, "vote height gate [m]")->capture_default_str();
+    app.add_option("--support-margin", o.support_margin, "fit support radius beyond half the class length [m]")
+        ->capture_default_str();
+    app.add_option("--words", o.words, "rebuild the vocabulary with this many words (0: the model's)");
+    app.add_option("--activations", o.activations, "words a part activates")->capture_default_str();
+    app.add_option("--probe", o.probe, "only: N single fresh procedural pieces per class, one view each");
     app.add_flag("!--no-variants", o.variants, "only the full method");
     app.add_flag("!--no-single", o.single, "merged views only");
     app.add_option("-j,--threads", o.threads, "threads (0 = all cores)")->capture_default_str();

@@ -95,6 +95,73 @@ inline MatchCounts MatchFrame(const EvalFrame& f, float cut, int only_cls = -1,
     return m;
 }
 
+/// Every detection of class `cls` in a frame, strongest first, with whether it matched a true
+/// object (greedy in score order, so the marks do not depend on any cut); `truth` receives the
+/// frame's true objects of the class.
+inline std::vector<std::pair<float, bool>> MarkDetections(const EvalFrame& f, int cls, std::size_t& truth) {
+    std::vector<const DetectionItem*> dets;
+    for (const auto& d : f.detections) {
+        if (d.cls == cls) dets.push_back(&d);
+    }
+    std::stable_sort(dets.begin(), dets.end(), [](auto* a, auto* b) { return a->score > b->score; });
+    std::vector<bool> used(f.truth.size(), false);
+    truth = 0;
+    for (const auto& g : f.truth) truth += g.cls == cls ? 1 : 0;
+    std::vector<std::pair<float, bool>> out;
+    for (const auto* d : dets) {
+        int best = -1;
+        float best_d = 1e9f;
+        for (std::size_t t = 0; t < f.truth.size(); ++t) {
+            const auto& g = f.truth[t];
+            if (used[t] || g.cls != cls) continue;
+            const float dist = (g.centre - d->centre).norm();
+            if (dist < g.width / 2 && dist < best_d) best = static_cast<int>(t), best_d = dist;
+        }
+        if (best >= 0) used[static_cast<std::size_t>(best)] = true;
+        out.push_back({d->score, best >= 0});
+    }
+    return out;
+}
+
+/// Average precision of class `cls` over the frames (area under the precision-recall curve,
+/// precision made monotone), and the score cut with the best F1 (`best_cut`, `best_f1`).
+inline double AveragePrecision(const std::vector<EvalFrame>& frames, int cls, float* best_cut = nullptr,
+                               double* best_f1 = nullptr) {
+    std::vector<std::pair<float, bool>> all;
+    std::size_t n_truth = 0;
+    for (const auto& f : frames) {
+        std::size_t t = 0;
+        const auto marks = MarkDetections(f, cls, t);
+        all.insert(all.end(), marks.begin(), marks.end());
+        n_truth += t;
+    }
+    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<double> prec, rec;
+    std::size_t tp = 0;
+    double f1_max = 0.0;
+    float cut = all.empty() ? 1.0f : all.front().first + 1.0f;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        tp += all[i].second ? 1 : 0;
+        const double p = static_cast<double>(tp) / static_cast<double>(i + 1);
+        const double r = n_truth ? static_cast<double>(tp) / static_cast<double>(n_truth) : 0.0;
+        prec.push_back(p);
+        rec.push_back(r);
+        const bool last_of_score = i + 1 == all.size() || all[i + 1].first < all[i].first;
+        const double f1 = p + r > 0 ? 2 * p * r / (p + r) : 0.0;
+        if (last_of_score && f1 > f1_max) f1_max = f1, cut = all[i].first;
+    }
+    if (best_cut) *best_cut = cut;
+    if (best_f1) *best_f1 = f1_max;
+    if (n_truth == 0) return 0.0;
+    for (std::size_t i = prec.size(); i-- > 1;) prec[i - 1] = std::max(prec[i - 1], prec[i]);
+    double ap = 0.0, last_r = 0.0;
+    for (std::size_t i = 0; i < prec.size(); ++i) {
+        ap += (rec[i] - last_r) * prec[i];
+        last_r = rec[i];
+    }
+    return ap;
+}
+
 struct CurvePoint {
     float cut = 0.0f;
     double precision = 1.0, recall = 0.0;

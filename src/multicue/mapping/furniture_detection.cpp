@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
@@ -55,18 +56,56 @@ Polygon Footprint(const FurnitureCad& cad, const Eigen::Isometry3f& T) {
     return Hull(std::move(pts));
 }
 
-// The points (world frame, with normals) of a hypothesis's supporting parts.
-PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis& h) {
+// The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
+// within `radius` of it.
+PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis& h, float radius) {
     PointCloud out;
     for (const auto& [view, part] : h.parts) {
         const FurnitureParts& v = scene.views[static_cast<std::size_t>(view)];
-        for (Index i : v.parts[static_cast<std::size_t>(part)].indices) {
+        const FurniturePart& fp = v.parts[static_cast<std::size_t>(part)];
+        if ((fp.centroid.head<2>() - h.centre).norm() > radius) continue;
+        for (Index i : fp.indices) {
             out.points.push_back(v.cloud.points[i]);
             out.normals.push_back(v.cloud.normals[i]);
         }
     }
     out.width = static_cast<std::uint32_t>(out.points.size());
     return out;
+}
+
+// The walls among a view's parts: upright planes reaching above max_top, long enough.
+std::vector<FurnitureWall> FindWalls(const FurnitureParts& v, float max_top, float min_length) {
+    std::vector<FurnitureWall> walls;
+    for (const auto& part : v.parts) {
+        if (part.top <= max_top || part.indices.size() < 20) continue;
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        for (Index i : part.indices) mean += v.cloud.points[i].head<2>().cast<double>();
+        mean /= static_cast<double>(part.indices.size());
+        Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+        for (Index i : part.indices) {
+            const Eigen::Vector2d q = v.cloud.points[i].head<2>().cast<double>() - mean;
+            cov += q * q.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+        Eigen::Vector2d n = eig.eigenvectors().col(0);
+        if (n.dot(v.sensor_origin.head<2>().cast<double>() - mean) < 0.0) n = -n;
+        const Eigen::Vector2d dir(-n.y(), n.x());
+        double lo = 1e9, hi = -1e9, spread = 0.0;
+        for (Index i : part.indices) {
+            const Eigen::Vector2d q = v.cloud.points[i].head<2>().cast<double>() - mean;
+            lo = std::min(lo, q.dot(dir));
+            hi = std::max(hi, q.dot(dir));
+            spread = std::max(spread, std::abs(q.dot(n)));
+        }
+        if (hi - lo < min_length || spread > 0.1) continue;  // short, or not one upright plane
+        FurnitureWall w;
+        w.point = mean.cast<float>();
+        w.normal = n.cast<float>();
+        w.lo = static_cast<float>(lo);
+        w.hi = static_cast<float>(hi);
+        walls.push_back(w);
+    }
+    return walls;
 }
 
 }  // namespace
@@ -97,6 +136,10 @@ void FurnitureDetectionParams::Validate() const {
     voting.Validate();
     selection.Validate();
     fit.Validate();
+    if (!(min_wall_length > 0.0f) || !std::isfinite(min_wall_length)) {
+        throw InvalidArgument(fmt::format("furniture detection: min_wall_length must be > 0, got {}",
+                                          min_wall_length));
+    }
     if (!(max_overlap > 0.0f && max_overlap <= 1.0f)) {
         throw InvalidArgument(
             fmt::format("furniture detection: max_overlap must be in (0, 1], got {}", max_overlap));
@@ -128,6 +171,10 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
         t = std::chrono::steady_clock::now();
         scene.votes.push_back(CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
         scene.votes_ms += MsSince(t);
+        scene.walls.push_back(params.walls ? FindWalls(scene.views.back(),
+                                                       model.max_object_height() + params.voting.height_margin,
+                                                       params.min_wall_length)
+                                           : std::vector<FurnitureWall>{});
         if (!params.verify || !params.free_space) continue;
         // Occupancy from the whole scan (the floor too: rays to it free the space above it),
         // thinned to the map's resolution.
@@ -179,6 +226,11 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
     result.votes = votes.size();
     const auto hyps = SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
     result.selection_ms = MsSince(t);
+    std::vector<const FurnitureWall*> walls;
+    for (int v : views) {
+        if (static_cast<std::size_t>(v) >= scene.walls.size()) continue;
+        for (const auto& w : scene.walls[static_cast<std::size_t>(v)]) walls.push_back(&w);
+    }
     std::vector<FurnitureDetection> all(hyps.size());
     for (std::size_t i = 0; i < hyps.size(); ++i) {
         all[i].cls = hyps[i].cls;
@@ -186,37 +238,30 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
         all[i].hypothesis = hyps[i];
         all[i].centre = hyps[i].centre;
         all[i].score = hyps[i].normalized;
-        all[i].accepted = true;
+        all[i].accepted = !BehindWalls(walls, hyps[i].centre, params.fit.wall_margin);
+        if (!all[i].accepted) all[i].rejection = "behind_wall";
     }
     if (params.verify) {
         t = std::chrono::steady_clock::now();
-        // One free-space set of the chosen views.
-        std::vector<const FurnitureFreeSpace*> maps;
+        // What the chosen views say about the space: their free space and walls.
+        FurnitureSpace space;
+        space.walls = walls;
         for (int v : views) {
-            if (static_cast<std::size_t>(v) < scene.free_space.size()) maps.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
+            if (static_cast<std::size_t>(v) < scene.free_space.size()) space.free.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
         }
         ParallelFor(
             all.size(), params.num_threads,
             [&](std::size_t i) {
                 FurnitureDetection& d = all[i];
-                const PointCloud pts = SupportPoints(scene, d.hypothesis);
-                // The most restrictive view decides: a model in any view's free space goes.
-                d.fit = FitFurniture(pts, d.cls, d.hypothesis.centre, *context, nullptr);
-                float free_share = 0.0f;
-                if (d.fit.cad >= 0) {
-                    const auto& cloud = model.cads()[static_cast<std::size_t>(d.fit.cad)].cloud;
-                    const std::size_t step = std::max<std::size_t>(1, (cloud.size() + params.fit.max_model_checks - 1) / params.fit.max_model_checks);
-                    std::vector<Eigen::Vector3f> world;
-                    for (std::size_t k = 0; k < cloud.size(); k += step) world.push_back(d.fit.T_world_model * cloud.points[k]);
-                    for (const auto* m : maps) free_share = std::max(free_share, m->FreeShare(world));
-                }
-                d.fit.free_share = free_share;
-                if (d.fit.accepted && free_share > params.fit.max_free_share) {
-                    d.fit.accepted = false;
-                    d.fit.rejection = "free_space";
-                }
+                if (!d.accepted) return;  // behind a wall
+                const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(d.cls)];
+                const PointCloud pts = SupportPoints(scene, d.hypothesis, cls.length / 2 + params.support_margin);
+                d.fit = FitFurniture(pts, d.cls, d.hypothesis.centre, *context, space);
                 d.fitted = d.fit.cad >= 0;
-                if (d.fitted) d.centre = d.fit.T_world_model.translation().head<2>();
+                if (d.fitted) {
+                    d.centre = d.fit.T_world_model.translation().head<2>();
+                    d.score *= std::max(0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
+                }
                 d.accepted = d.fit.accepted;
                 d.rejection = d.fit.rejection;
             },

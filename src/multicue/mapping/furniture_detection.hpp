@@ -43,6 +43,13 @@ struct FurnitureDetectionParams {
     /// smaller one are inconsistent: the weaker goes, (0, 1]
     float max_overlap = 0.3f;
     bool cross_class = true;  ///< apply max_overlap across classes too (one piece, one class)
+    /// Parts whose centre lies further from a hypothesis than half its class's length plus this
+    /// are left out of its fit [m], >= 0
+    float support_margin = 0.3f;
+    /// Reject hypotheses and fits behind the views' walls (margin and share: fit.wall_margin,
+    /// fit.max_behind_share)
+    bool walls = true;
+    float min_wall_length = 1.0f;  ///< upright planes this long (and taller than any piece) [m]
     int num_threads = 0;      ///< 0 = all cores; never changes the result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -53,6 +60,7 @@ struct FurnitureScene {
     std::vector<FurnitureParts> views;
     std::vector<std::vector<FurnitureVote>> votes;  ///< per view
     std::vector<FurnitureFreeSpace> free_space;     ///< per view; empty without the test
+    std::vector<std::vector<FurnitureWall>> walls;  ///< per view
     double parts_ms = 0.0;      ///< ExtractFurnitureParts over all views [ms]
     double votes_ms = 0.0;      ///< CastFurnitureVotes over all views [ms]
     double occupancy_ms = 0.0;  ///< occupancy maps [ms]
@@ -74,9 +82,13 @@ struct FurnitureDetection {
     FurnitureFit fit;
     /// Centre on the floor: the fitted model's when fitted, else the hypothesis's [m]
     Eigen::Vector2f centre = Eigen::Vector2f::Zero();
-    float score = 0.0f;     ///< hypothesis score / class threshold
+    /// The hypothesis's score over its class threshold; for a fitted detection (verify) times
+    /// 0.5 + coverage - free share, so that a piece explained well by a model that claims no
+    /// free space outranks one that is not (and wins where two overlap)
+    float score = 0.0f;
     bool accepted = false;
-    std::string rejection;  ///< "", "coverage", "free_space", "no_fit" or "overlap"
+    /// "", "coverage", "free_space", "no_fit", "behind_wall" or "overlap"
+    std::string rejection;
 };
 
 struct FurnitureDetectionResult {

@@ -89,7 +89,8 @@ void FurnitureFitParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture fit: checked_share must be in (0, 1], got {}", checked_share));
     }
-    if (max_scan_points < 10 || max_candidates < 1 || max_iterations < 1 || max_model_checks < 1) {
+    if (max_scan_points < 10 || max_candidates < 1 || max_iterations < 1 || max_model_checks < 1 ||
+        max_search_checks < 1) {
         throw InvalidArgument(
             "furniture fit: max_scan_points must be >= 10 and max_candidates, max_iterations and "
             "max_model_checks >= 1");
@@ -187,8 +188,51 @@ float FurnitureFreeSpace::FreeShare(const std::vector<Eigen::Vector3f>& points) 
     return static_cast<float>(free) / static_cast<float>(points.size());
 }
 
+bool FurnitureWall::Behind(const Eigen::Vector2f& x, float margin) const {
+    const Eigen::Vector2f q = x - point;
+    const Eigen::Vector2f dir(-normal.y(), normal.x());
+    const float t = q.dot(dir);
+    return q.dot(normal) < -margin && t >= lo - 0.3f && t <= hi + 0.3f;
+}
+
+bool BehindWalls(const std::vector<const FurnitureWall*>& walls, const Eigen::Vector2f& x,
+                 float margin) {
+    for (const auto* w : walls) {
+        if (w->Behind(x, margin)) return true;
+    }
+    return false;
+}
+
+namespace {
+
+// Shares of a posed model's points (at most max_checks of them) in the free space of any view
+// and behind any wall.
+struct Penalty {
+    float free = 0.0f;
+    float behind = 0.0f;
+    float Sum() const { return free + behind; }
+};
+
+Penalty ModelPenalty(const PointCloud& cloud, const Eigen::Isometry3f& T, std::size_t max_checks,
+                     const FurnitureSpace& space, float wall_margin) {
+    Penalty out;
+    if ((space.free.empty() && space.walls.empty()) || cloud.size() == 0) return out;
+    const std::size_t step = std::max<std::size_t>(1, (cloud.size() + max_checks - 1) / max_checks);
+    std::vector<Eigen::Vector3f> world;
+    for (std::size_t i = 0; i < cloud.size(); i += step) world.push_back(T * cloud.points[i]);
+    for (const auto* f : space.free) out.free = std::max(out.free, f->FreeShare(world));
+    if (!space.walls.empty()) {
+        std::size_t behind = 0;
+        for (const auto& p : world) behind += BehindWalls(space.walls, p.head<2>(), wall_margin) ? 1 : 0;
+        out.behind = static_cast<float>(behind) / static_cast<float>(world.size());
+    }
+    return out;
+}
+
+}  // namespace
+
 FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
-                          const FurnitureFitContext& context, const FurnitureFreeSpace* free_space) {
+                          const FurnitureFitContext& context, const FurnitureSpace& space) {
     const auto t0 = std::chrono::steady_clock::now();
     const FurnitureModel& model = context.model();
     const FurnitureFitParams& p = context.params();
@@ -221,19 +265,30 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
     std::vector<Eigen::Vector3f> checked;
     const std::size_t check_stride = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0f / p.checked_share)));
     for (std::size_t k = 0; k < s.size(); k += check_stride) checked.push_back(s[k]);
+    const float n_checked = static_cast<float>(checked.size());
+    const std::size_t slack = checked.size() / 20;  // poses within 5 % of the best coverage
     const float max_offset = p.max_offset * model.classes()[static_cast<std::size_t>(cls)].width;
     const float hmin = p.min_horizontal_normal;
-    std::size_t best = 0;
-    int best_cad = -1;
-    float best_yaw = 0.0f;
-    Eigen::Vector2f best_t = Eigen::Vector2f::Zero();
-    int required = p.max_iterations;
+    struct Pose {
+        int cad = -1;
+        std::size_t covered = 0;
+        float score = -2.0f;  ///< coverage share minus penalties
+        float yaw = 0.0f;
+        Eigen::Vector2f t = Eigen::Vector2f::Zero();
+    };
+    Pose best;
+    std::size_t global_covered = 0;
     for (std::size_t m = 0; m < model.cads().size(); ++m) {
         if (model.cads()[m].cls != cls) continue;
         const auto& cad = context.cad(m);
+        const auto& cloud = model.cads()[m].cloud;
         if (cad.points.empty()) continue;
         ++fit.models_tried;
-        for (int it = 0; it < std::min(required, p.max_iterations); ++it) {
+        std::size_t model_covered = 0;
+        // Eq. (4.6) with the best coverage of any model so far: later models stop early.
+        int required = RequiredIterations(static_cast<double>(global_covered) / n_checked,
+                                          p.success_probability, p.max_iterations);
+        for (int it = 0; it < required; ++it) {
             ++fit.iterations;
             const std::size_t si = rng.Next() % s.size();
             const Eigen::Vector3f& sp = s[si];
@@ -256,33 +311,41 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
                 const Eigen::Rotation2Df R(yaw);
                 const Eigen::Vector2f t = sp.head<2>() - R * cad.points[mi].head<2>();
                 if ((t - centre).norm() > max_offset) continue;
-                // Covered checked points, abandoned once it cannot beat the best so far.
+                // Covered checked points, abandoned once it cannot come near this model's best.
                 const Eigen::Rotation2Df Rinv(-yaw);
+                const std::size_t bar = model_covered > slack ? model_covered - slack : 0;
                 std::size_t covered = 0;
+                bool abandoned = false;
                 for (std::size_t k = 0; k < checked.size(); ++k) {
-                    if (covered + (checked.size() - k) <= best) break;
+                    if (covered + (checked.size() - k) < bar) {
+                        abandoned = true;
+                        break;
+                    }
                     const Eigen::Vector2f q = Rinv * (checked[k].head<2>() - t);
                     covered += cad.Covers(Eigen::Vector3f(q.x(), q.y(), checked[k].z())) ? 1 : 0;
                 }
-                if (covered > best) {
-                    best = covered;
-                    best_cad = static_cast<int>(m);
-                    best_yaw = yaw;
-                    best_t = t;
-                    required = RequiredIterations(static_cast<double>(best) / checked.size(),
-                                                  p.success_probability, p.max_iterations);
+                if (abandoned || covered < bar || covered == 0) continue;
+                const float score = static_cast<float>(covered) / n_checked -
+                                    ModelPenalty(cloud, UprightPose(yaw, t), p.max_search_checks, space, p.wall_margin).Sum();
+                if (covered > model_covered) {
+                    model_covered = covered;
+                    global_covered = std::max(global_covered, covered);
+                    required = std::min(required, RequiredIterations(static_cast<double>(global_covered) / n_checked,
+                                                                     p.success_probability, p.max_iterations));
                 }
+                if (score > best.score) best = {static_cast<int>(m), covered, score, yaw, t};
             }
         }
     }
-    if (best_cad < 0) {
+    if (best.cad < 0) {
         fit.ms = MsSince(t0);
         return fit;
     }
-    fit.cad = best_cad;
-    fit.yaw = best_yaw;
-    fit.T_world_model = UprightPose(best_yaw, best_t);
-    const auto& cad = context.cad(static_cast<std::size_t>(best_cad));
+    fit.cad = best.cad;
+    fit.yaw = best.yaw;
+    fit.T_world_model = UprightPose(best.yaw, best.t);
+    const auto& cad = context.cad(static_cast<std::size_t>(fit.cad));
+    const auto& target = model.cads()[static_cast<std::size_t>(fit.cad)].cloud;
     auto coverage = [&](const Eigen::Isometry3f& T) {
         const Eigen::Isometry3f inv = T.inverse();
         std::size_t n = 0;
@@ -295,7 +358,6 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         src.points = s;
         src.normals = sn;
         src.width = static_cast<std::uint32_t>(s.size());
-        const auto& target = model.cads()[static_cast<std::size_t>(best_cad)].cloud;
         const RegistrationResult r = RegisterIcp(src, target, cad.tree.get(), p.icp,
                                                  fit.T_world_model.inverse().cast<double>());
         if (r.T_target_source.matrix().allFinite()) {
@@ -312,17 +374,15 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         }
     }
     fit.coverage = static_cast<float>(fit.covered) / static_cast<float>(s.size());
-    if (free_space != nullptr && free_space->views() > 0) {
-        const auto& cloud = model.cads()[static_cast<std::size_t>(best_cad)].cloud;
-        const std::size_t step = std::max<std::size_t>(1, (cloud.size() + p.max_model_checks - 1) / p.max_model_checks);
-        std::vector<Eigen::Vector3f> world;
-        for (std::size_t i = 0; i < cloud.size(); i += step) world.push_back(fit.T_world_model * cloud.points[i]);
-        fit.free_share = free_space->FreeShare(world);
-    }
+    const Penalty pen = ModelPenalty(target, fit.T_world_model, p.max_model_checks, space, p.wall_margin);
+    fit.free_share = pen.free;
+    fit.behind_share = pen.behind;
     if (fit.coverage < p.min_coverage) {
         fit.rejection = "coverage";
     } else if (fit.free_share > p.max_free_share) {
         fit.rejection = "free_space";
+    } else if (fit.behind_share > p.max_behind_share) {
+        fit.rejection = "behind_wall";
     } else {
         fit.rejection.clear();
         fit.accepted = true;

@@ -32,6 +32,21 @@
 
 namespace multicue {
 
+/// A wall seen in a view: an upright plane reaching above every piece of furniture, long
+/// enough. Furniture stands on the room's side of it (the 2D floor map that section 4.2.5.2 asks
+/// for against detections inside walls).
+struct FurnitureWall {
+    Eigen::Vector2f point = Eigen::Vector2f::Zero();   ///< on the wall [m]
+    Eigen::Vector2f normal = Eigen::Vector2f::UnitX();  ///< towards the room (the sensor)
+    float lo = 0.0f, hi = 0.0f;  ///< extent along the wall (normal turned by +90 degrees) [m]
+    /// True when `x` lies behind the wall by more than `margin`, within its extent (+-0.3 m).
+    bool Behind(const Eigen::Vector2f& x, float margin) const;
+};
+
+/// True when `x` lies behind any of `walls` by more than `margin`.
+bool BehindWalls(const std::vector<const FurnitureWall*>& walls, const Eigen::Vector2f& x,
+                 float margin);
+
 struct FurnitureFitParams {
     float inlier_distance = 0.03f;       ///< a scan point is covered within this of the model [m]
     double success_probability = 0.99;   ///< p_success of Eq. (4.6), in (0, 1)
@@ -52,10 +67,15 @@ struct FurnitureFitParams {
                   .min_fitness = 0.1,
                   .min_condition = 0.0,
                   .num_threads = 1};
+    /// A point of a fitted model counts as behind a wall beyond this (CAD models are deeper or
+    /// shallower than the piece they explain) [m]
+    float wall_margin = 0.15f;
+    float max_behind_share = 0.1f;         ///< reject with more of the model behind a wall
     float min_coverage = 0.5f;             ///< reject below this share of covered scan points
     float max_free_share = 0.1f;           ///< reject above this share of model points in free space
     double occupancy_resolution = 0.05;    ///< voxel of the per-scan occupancy maps [m]
     std::size_t max_model_checks = 3000;   ///< model points tested against free space at most
+    std::size_t max_search_checks = 300;   ///< the same while searching poses
     std::uint64_t seed = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -99,6 +119,12 @@ class FurnitureFreeSpace {
     std::vector<Eigen::Vector3f> origins_;
 };
 
+/// What the scans say about the space around a fit: the views' free space and their walls.
+struct FurnitureSpace {
+    std::vector<const FurnitureFreeSpace*> free;
+    std::vector<const FurnitureWall*> walls;
+};
+
 struct FurnitureFit {
     int cad = -1;  ///< index into FurnitureModel::cads(); -1 when nothing was found
     Eigen::Isometry3f T_world_model = Eigen::Isometry3f::Identity();  ///< upright
@@ -110,16 +136,22 @@ struct FurnitureFit {
     int models_tried = 0;
     bool refined = false;            ///< ICP converged and was kept
     float free_share = 0.0f;         ///< share of model points in observed free space
+    float behind_share = 0.0f;       ///< share of model points behind a wall
     bool accepted = false;           ///< passed both checks
-    std::string rejection;           ///< "", "coverage", "free_space" or "no_fit"
+    std::string rejection;  ///< "", "coverage", "free_space", "behind_wall" or "no_fit"
     double ms = 0.0;                 ///< wall time [ms]
 };
 
 /// Fits the CAD models of class `cls` to `points` (world frame, floor at z = 0, with normals
-/// facing the sensor) near `centre`, and verifies the best against `free_space` (may be null:
-/// no free-space test). Fewer than 10 points give no fit. Throws InvalidArgument for an unknown
-/// class or points without normals.
+/// facing the sensor) near `centre`. A pose scores its coverage of the points minus the shares
+/// of the model in free space and behind walls (`space`; empty: coverage alone), so that the
+/// pose and the model chosen explain the scan without claiming space the scans saw empty or
+/// space outside the room; the penalties are computed for the poses that come within 5 % of the
+/// best coverage of their model. Every model gets its best pose, the iteration count of Eq. (4.6)
+/// computed from the best coverage of all models so far. The best is refined and verified.
+/// Fewer than 10 points give no fit. Throws InvalidArgument for an unknown class or points
+/// without normals.
 FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
-                          const FurnitureFitContext& context, const FurnitureFreeSpace* free_space);
+                          const FurnitureFitContext& context, const FurnitureSpace& space = {});
 
 }  // namespace multicue

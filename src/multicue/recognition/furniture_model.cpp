@@ -279,6 +279,7 @@ void PutPartParams(ml::ByteWriter& w, const FurniturePartParams& p) {
     w.Put<float>(p.stats.radius);
     w.Put<float>(p.stats.voxel_size);
     w.Put<float>(p.stats.boundary_angle);
+    w.Put<std::uint8_t>(static_cast<std::uint8_t>(p.frame));
 }
 
 FurniturePartParams GetPartParams(ml::ByteReader& r) {
@@ -299,6 +300,9 @@ FurniturePartParams GetPartParams(ml::ByteReader& r) {
     p.stats.radius = r.Get<float>();
     p.stats.voxel_size = r.Get<float>();
     p.stats.boundary_angle = r.Get<float>();
+    const auto frame = r.Get<std::uint8_t>();
+    if (frame > 1) r.Fail("bad part frame");
+    p.frame = static_cast<FurniturePartFrame>(frame);
     try {
         p.Validate();
     } catch (const InvalidArgument& e) {
@@ -335,6 +339,7 @@ void FurnitureModel::Save(const std::filesystem::path& path) const {
         w.Put<float>(p.offset.x());
         w.Put<float>(p.offset.y());
         w.Put<float>(p.offset.z());
+        w.Put<float>(p.centre_z);
         w.PutArray(p.features.data(), static_cast<std::size_t>(p.features.size()));
     }
     w.Put<std::uint64_t>(num_words());
@@ -398,12 +403,13 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
         p.offset.x() = r.Get<float>();
         p.offset.y() = r.Get<float>();
         p.offset.z() = r.Get<float>();
+        p.centre_z = r.Get<float>();
         const auto f = r.GetVector<float>(kPartStatsSize);
         if (f.size() != kPartStatsSize || p.cls < 0 || p.cls >= static_cast<int>(n_classes)) {
             r.Fail("bad training part");
         }
         p.features = Eigen::Map<const FeatureVector>(f.data(), kPartStatsSize);
-        if (!p.features.allFinite() || !p.offset.allFinite()) r.Fail("non-finite training part");
+        if (!p.features.allFinite() || !p.offset.allFinite() || !Finite(p.centre_z)) r.Fail("non-finite training part");
         m.parts_.push_back(std::move(p));
     }
     const auto k = r.Get<std::uint64_t>();

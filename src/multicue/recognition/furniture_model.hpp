@@ -75,7 +75,8 @@ struct FurnitureTrainingPart {
     int cls = 0;             ///< class index
     int piece = 0;           ///< training piece
     int view = 0;            ///< training view of the piece
-    Eigen::Vector3f offset = Eigen::Vector3f::Zero();  ///< d = p - s, bearing frame [m]
+    Eigen::Vector3f offset = Eigen::Vector3f::Zero();  ///< d = p - s, part frame [m]
+    float centre_z = 0.0f;  ///< height of p, the piece's centre, above the floor [m]
 };
 
 struct FurnitureVocabularyParams {

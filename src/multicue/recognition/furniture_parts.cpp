@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
@@ -23,7 +24,39 @@ double MsSince(std::chrono::steady_clock::time_point t) {
 
 bool Finite(float x) { return std::isfinite(x); }
 
+// The yaw of a part's frame (see FurniturePartFrame).
+float PartFrameYaw(const PointCloud& sub, const Eigen::Vector3f& centroid, float bearing) {
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& p : sub.points) {
+        const Eigen::Vector3d q = (p - centroid).cast<double>();
+        cov += q * q.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    const Eigen::Vector3d e = eig.eigenvalues().cwiseMax(0.0);  // ascending
+    const Eigen::Vector3d n = eig.eigenvectors().col(0), major = eig.eigenvectors().col(2);
+    const Eigen::Vector2d sight(std::cos(bearing), std::sin(bearing));
+    Eigen::Vector2d x = sight;
+    const bool planar = e[0] <= 0.1 * e[1];
+    if (planar && n.head<2>().norm() > 0.7) {
+        x = n.head<2>().normalized();  // upright plane: its normal
+    } else if (std::abs(n.z()) > 0.7 && e[2] >= 2.25 * e[1] && major.head<2>().norm() > 0.7) {
+        x = major.head<2>().normalized();  // lying and elongated: its long axis
+    }
+    if (x.dot(sight) < 0.0) x = -x;  // away from the sensor
+    return static_cast<float>(std::atan2(x.y(), x.x()));
+}
+
 }  // namespace
+
+const char* FurniturePartFrameName(FurniturePartFrame frame) {
+    return frame == FurniturePartFrame::kBearing ? "bearing" : "part";
+}
+
+FurniturePartFrame ParseFurniturePartFrame(std::string_view name) {
+    if (name == "bearing") return FurniturePartFrame::kBearing;
+    if (name == "part") return FurniturePartFrame::kPart;
+    throw InvalidArgument(fmt::format("part frame must be bearing or part, got '{}'", name));
+}
 
 void FurniturePartParams::Validate() const {
     if (!(voxel_size >= 0.0f) || !Finite(voxel_size)) {
@@ -206,6 +239,9 @@ FurnitureParts ExtractFurnitureParts(const PointCloud& scan, const Eigen::Isomet
             part.centroid = (sum / static_cast<double>(part.indices.size())).cast<float>();
             const Eigen::Vector2f d = (part.centroid - out.sensor_origin).head<2>();
             part.bearing = std::atan2(d.y(), d.x());
+            part.frame_yaw = params.frame == FurniturePartFrame::kPart
+                                 ? PartFrameYaw(sub, part.centroid, part.bearing)
+                                 : part.bearing;
             part.features = ComputePartStatistics(sub, stats);
             part.extent = part.features[15];
         },

@@ -9,6 +9,7 @@
 /// function, so the vocabulary and the scenes see the same parts.
 
 #include <cstddef>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -22,6 +23,18 @@
 
 namespace multicue {
 
+/// The frame a part's shape vectors are kept in (its x axis on the floor).
+enum class FurniturePartFrame {
+    kBearing,  ///< x along the sensor's line of sight to the part
+    /// x along the part's own axes where they are clear: the inward normal of an upright planar
+    /// part (a chair back, a cabinet door), the long axis of a lying elongated part (a table top,
+    /// a seat), turned away from the sensor; the line of sight otherwise (legs, blobs)
+    kPart,
+};
+/// "bearing", "part"; and back (InvalidArgument naming the choices).
+const char* FurniturePartFrameName(FurniturePartFrame frame);
+FurniturePartFrame ParseFurniturePartFrame(std::string_view name);
+
 struct FurniturePartParams {
     float voxel_size = 0.02f;     ///< thinning before everything else [m]; 0 = none
     float floor_margin = 0.03f;   ///< points below this height are floor [m], >= 0
@@ -34,6 +47,7 @@ struct FurniturePartParams {
     float smoothing_radius = 0.0f;
     RegionGrowingParams region_growing{.radius = 0.05f, .k = 30, .max_angle_deg = 40.0f};
     std::size_t min_part_points = 10;  ///< smaller parts are left out [points], >= 3
+    FurniturePartFrame frame = FurniturePartFrame::kPart;  ///< frame of the shape vectors
     PartStatsParams stats{.radius = 0.06f, .voxel_size = 0.02f, .num_threads = 1};
     int num_threads = 0;  ///< 0 = all cores; never changes the result
     /// Throws InvalidArgument naming the first out-of-range field.
@@ -44,9 +58,10 @@ struct FurniturePartParams {
 struct FurniturePart {
     Indices indices;                                   ///< into FurnitureParts::cloud
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  ///< l of Eq. (4.2), world frame [m]
-    /// Yaw of the horizontal direction from the sensor to the centroid [rad]: the part's shape
-    /// vectors are kept in this frame, the frame the sensor saw the part in.
+    /// Yaw of the horizontal direction from the sensor to the centroid [rad].
     float bearing = 0.0f;
+    /// Yaw of the part's frame (FurniturePartFrame) [rad]: its shape vectors are kept in it.
+    float frame_yaw = 0.0f;
     float top = 0.0f;      ///< highest point [m]
     float extent = 0.0f;   ///< longest extent (feature L_3) [m]
     FeatureVector features;  ///< the 24 values of part_stats.hpp

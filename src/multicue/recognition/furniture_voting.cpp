@@ -63,6 +63,23 @@ VoteGrid BuildGrid(const std::vector<const FurnitureVote*>& votes, float cell, f
 
 }  // namespace
 
+const char* FurnitureVoteNormalizationName(FurnitureVoteNormalization n) {
+    switch (n) {
+        case FurnitureVoteNormalization::kPerClass: return "per-class";
+        case FurnitureVoteNormalization::kPerWord: return "per-word";
+        case FurnitureVoteNormalization::kBalanced: return "balanced";
+    }
+    return "per-class";
+}
+
+FurnitureVoteNormalization ParseFurnitureVoteNormalization(std::string_view name) {
+    if (name == "per-class") return FurnitureVoteNormalization::kPerClass;
+    if (name == "per-word") return FurnitureVoteNormalization::kPerWord;
+    if (name == "balanced") return FurnitureVoteNormalization::kBalanced;
+    throw InvalidArgument(
+        fmt::format("vote normalization must be per-class, per-word or balanced, got '{}'", name));
+}
+
 void FurnitureVotingParams::Validate() const {
     if (activations < 1) throw InvalidArgument("furniture voting: activations must be >= 1");
     if (!(extent_margin > 0.0f) || !Finite(extent_margin)) {
@@ -70,6 +87,10 @@ void FurnitureVotingParams::Validate() const {
             fmt::format("furniture voting: extent_margin must be > 0, got {}", extent_margin));
     }
     if (!Finite(height_margin)) throw InvalidArgument("furniture voting: height_margin must be finite");
+    if (!(max_height_error >= 0.0f) || !Finite(max_height_error)) {
+        throw InvalidArgument(fmt::format("furniture voting: max_height_error must be >= 0, got {}",
+                                          max_height_error));
+    }
 }
 
 std::vector<FurnitureVote> CastFurnitureVotes(const FurnitureParts& parts,
@@ -78,6 +99,11 @@ std::vector<FurnitureVote> CastFurnitureVotes(const FurnitureParts& parts,
     params.Validate();
     if (!model.trained()) throw InvalidArgument("furniture voting: the model is not trained");
     std::vector<FurnitureVote> votes;
+    // Class shares of the training parts (balanced normalisation).
+    const std::size_t n_classes = model.classes().size();
+    std::vector<float> share(n_classes, 0.0f);
+    for (const auto& p : model.parts()) share[static_cast<std::size_t>(p.cls)] += 1.0f;
+    for (float& s : share) s = s / static_cast<float>(model.parts().size());
     const float max_extent = params.extent_margin * model.max_part_extent();
     const float max_top = model.max_object_height() + params.height_margin;
     for (std::size_t k = 0; k < parts.parts.size(); ++k) {
@@ -85,22 +111,43 @@ std::vector<FurnitureVote> CastFurnitureVotes(const FurnitureParts& parts,
         if (part.extent > max_extent || part.top > max_top) continue;
         if (!part.features.allFinite()) continue;
         const Eigen::Matrix3f R =
-            Eigen::AngleAxisf(part.bearing, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+            Eigen::AngleAxisf(part.frame_yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
         const auto act = model.Activate({part.features.data(), static_cast<std::size_t>(part.features.size())},
                                         params.activation, params.activations);
         for (const auto& [a, p] : act) {
             auto vote = [&](int element, float weight) {
                 const FurnitureTrainingPart& e = model.parts()[static_cast<std::size_t>(element)];
-                votes.push_back({part.centroid + R * e.offset, weight, e.cls, static_cast<int>(k), view});
+                const Eigen::Vector3f x = part.centroid + R * e.offset;
+                if (params.max_height_error > 0.0f &&
+                    std::abs(x.z() - e.centre_z) > params.max_height_error) {
+                    return;
+                }
+                votes.push_back({x, weight, e.cls, static_cast<int>(k), view});
             };
             if (params.activation == FurnitureActivation::kNearestPart) {
                 vote(a, p);
                 continue;
             }
             // Eq. (4.4): each element of class o in word A_i carries 1 / #(A_i, o).
-            for (int e : model.WordElements(a)) {
-                const int cls = model.parts()[static_cast<std::size_t>(e)].cls;
-                vote(e, p / model.WordClassCount(a, cls));
+            const auto& elements = model.WordElements(a);
+            float total = 0.0f;  // the word's weighted element count (per-word normalisations)
+            if (params.normalization != FurnitureVoteNormalization::kPerClass) {
+                for (std::size_t c = 0; c < n_classes; ++c) {
+                    const float n = model.WordClassCount(a, static_cast<int>(c));
+                    total += params.normalization == FurnitureVoteNormalization::kBalanced && n > 0.0f
+                                 ? n / share[c]
+                                 : n;
+                }
+            }
+            for (int e : elements) {
+                const auto cls = static_cast<std::size_t>(model.parts()[static_cast<std::size_t>(e)].cls);
+                switch (params.normalization) {
+                    case FurnitureVoteNormalization::kPerClass:
+                        vote(e, p / model.WordClassCount(a, static_cast<int>(cls)));
+                        break;
+                    case FurnitureVoteNormalization::kPerWord: vote(e, p / total); break;
+                    case FurnitureVoteNormalization::kBalanced: vote(e, p / (share[cls] * total)); break;
+                }
             }
         }
     }
@@ -224,7 +271,14 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
     for (auto& hyp : out) {
         const float w = model.classes()[static_cast<std::size_t>(hyp.cls)].width;
         bool ok = true;
-        for (const auto& k : consistent) ok = ok && (k.cls != hyp.cls || (k.centre - hyp.centre).norm() >= w);
+        for (const auto& k : consistent) {
+            if (k.cls == hyp.cls) {
+                ok = ok && (k.centre - hyp.centre).norm() >= w;
+            } else if (params.cross_class) {
+                const float wk = model.classes()[static_cast<std::size_t>(k.cls)].width;
+                ok = ok && (k.centre - hyp.centre).norm() >= (w + wk) / 2;
+            }
+        }
         if (ok) consistent.push_back(std::move(hyp));
     }
     return consistent;

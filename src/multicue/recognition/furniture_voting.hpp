@@ -8,6 +8,7 @@
 /// selection (section 4.2.5.3).
 
 #include <cstddef>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -27,13 +28,29 @@ struct FurnitureVote {
     int view = 0;                                 ///< view index
 };
 
+/// How an activated word's weight is shared among its elements (Eq. 4.4).
+enum class FurnitureVoteNormalization {
+    kPerClass,  ///< 1 / #(A_i, o): each class present in the word gets the whole weight (Eq. 4.4)
+    kPerWord,   ///< 1 / #(A_i): classes share it by their elements (Leibe et al. 2008)
+    kBalanced,  ///< per word, each class's elements weighted by 1 / its share of all training
+                ///< parts, so that classes with more training parts do not outvote the others
+};
+/// "per-class", "per-word", "balanced"; and back (InvalidArgument naming the choices).
+const char* FurnitureVoteNormalizationName(FurnitureVoteNormalization n);
+FurnitureVoteNormalization ParseFurnitureVoteNormalization(std::string_view name);
+
 struct FurnitureVotingParams {
     FurnitureActivation activation = FurnitureActivation::kWords;
     std::size_t activations = 2;  ///< words a part activates (section 4.2.5: two), >= 1
+    FurnitureVoteNormalization normalization = FurnitureVoteNormalization::kPerClass;
     /// Parts longer than this times the longest training part vote for nothing (walls) [-], > 0
     float extent_margin = 1.25f;
     /// Parts reaching higher than the tallest training piece plus this vote for nothing [m]
     float height_margin = 0.15f;
+    /// Votes whose centre lies further than this above or below the centre of the training
+    /// piece they come from are dropped (the part stands at another height than the training
+    /// part): the votes are 3D, only their selection is on the floor [m]; 0 = keep all
+    float max_height_error = 0.25f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -56,6 +73,8 @@ struct FurnitureSelectionParams {
     /// Drop same-class hypotheses whose footprints (discs of the class width) overlap a
     /// stronger one's (section 4.2.4.2)
     bool hull_consistency = true;
+    /// Apply the footprint test across classes too (by normalised score): one place, one piece
+    bool cross_class = false;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };

@@ -351,22 +351,32 @@ FurnitureRoom MakeFurnitureRoom(const FurnitureRoomParams& p, const FurnitureSou
         }
         if (rng.Uniform() < 0.4) free_spot(source.Random("chair", rng), 0.5f, 30);
     } else if (seminar) {
+        // Rows of identical tables (apart: joined tops would be one part) with the chairs
+        // behind them facing the front, and storage along the walls.
         const FurniturePiece table = source.Random("table", rng);
         const FurniturePiece chair = source.Random("chair", rng);
-        const Eigen::Vector3f ts = table.mesh->Bounds().sizes();
-        const int n = rng.UniformInt(1, 3);
-        const float yaw = (rng.Uniform() < 0.5 ? 0.0f : kPi / 2) + U(rng, -0.1f, 0.1f);
+        const Eigen::Vector3f ts = table.mesh->Bounds().sizes(), cs = chair.mesh->Bounds().sizes();
+        const float yaw = (rng.Uniform() < 0.5 ? 0.0f : kPi / 2) + U(rng, -0.08f, 0.08f);
         const Eigen::Rotation2Df R(yaw);
-        const Eigen::Vector2f centre(U(rng, -0.5f, 0.5f), U(rng, -0.3f, 0.3f));
-        int joined = 0;
-        for (int k = 0; k < n; ++k) {  // tables joined along their long side
-            const Eigen::Vector2f at =
-                centre + R * Eigen::Vector2f(0.0f, (static_cast<float>(k) - (n - 1) / 2.0f) * ts.y());
-            if (b.TryPlace(table, at, yaw, -0.002f)) ++joined;
+        const int rows = rng.UniformInt(2, 3), per_row = rng.UniformInt(1, 3);
+        const float row_pitch = ts.x() + cs.x() + U(rng, 0.5f, 0.9f);
+        const float gap_y = U(rng, 0.25f, 0.6f);
+        const Eigen::Vector2f centre(U(rng, -0.3f, 0.3f), U(rng, -0.3f, 0.3f));
+        for (int r = 0; r < rows; ++r) {
+            const float x = (static_cast<float>(r) - (rows - 1) / 2.0f) * row_pitch + cs.x() / 2;
+            for (int k = 0; k < per_row; ++k) {
+                const float y = (static_cast<float>(k) - (per_row - 1) / 2.0f) * (ts.y() + gap_y);
+                if (!b.TryPlace(table, centre + R * Eigen::Vector2f(x, y), yaw, gap)) continue;
+                const int chairs = std::max(1, std::min(3, static_cast<int>(ts.y() / (cs.y() + 0.15f))));
+                const float pitch = ts.y() / static_cast<float>(chairs);
+                for (int c = 0; c < chairs; ++c) {
+                    if (rng.Uniform() < 0.15) continue;  // an empty place
+                    const Eigen::Vector2f local(x - ts.x() / 2 - cs.x() / 2 - U(rng, 0.05f, 0.25f),
+                                                y - ts.y() / 2 + pitch * (static_cast<float>(c) + 0.5f));
+                    b.TryPlace(chair, centre + R * local, yaw + U(rng, -0.3f, 0.3f), gap);
+                }
+            }
         }
-        const Eigen::Vector3f block(ts.x(), ts.y() * static_cast<float>(std::max(joined, 1)), ts.z());
-        ChairsAround(b, chair, centre, yaw, block, rng.UniformInt(6, 14), rng.Uniform() < 0.5, gap,
-                     rng);
         const int storage = rng.UniformInt(0, 2);
         for (int k = 0; k < storage; ++k) {
             random_wall_spot(source.Random(rng.Uniform() < 0.5 ? "cabinet" : "sideboard", rng), 30);
@@ -379,8 +389,9 @@ FurnitureRoom MakeFurnitureRoom(const FurnitureRoomParams& p, const FurnitureSou
             const FurniturePiece c = source.Random("cabinet", rng);
             const float cw = c.mesh->Bounds().sizes().y();
             if (along + cw > b.WallLength(w) / 2 - 0.05f) break;
-            b.AgainstWall(c, w, along + cw / 2, -0.002f);
-            along += cw + U(rng, 0.0f, 0.02f);
+            // Apart: the fronts of cupboards in a closed row would be one part.
+            b.AgainstWall(c, w, along + cw / 2, gap);
+            along += cw + U(rng, 0.1f, 0.6f);
         }
         const FurniturePiece table = source.Random("table", rng);
         const FurniturePiece chair = source.Random("chair", rng);

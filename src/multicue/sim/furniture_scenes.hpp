@@ -58,8 +58,8 @@ class FurnitureSource {
 
 enum class RoomType {
     kOffice,   ///< desks with chairs, cabinets and sideboards along the walls
-    kSeminar,  ///< a long table of joined tables with rows of identical chairs
-    kKitchen,  ///< a row of cupboards, a dining table with chairs
+    kSeminar,  ///< rows of identical tables with identical chairs behind them
+    kKitchen,  ///< cupboards along a wall, a dining table with chairs
 };
 
 /// "office", "seminar", "kitchen"; and back (InvalidArgument naming the choices).

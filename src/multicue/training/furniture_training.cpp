@@ -180,8 +180,9 @@ std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePi
             tp.cls = cls;
             tp.piece = piece_index;
             tp.view = static_cast<int>(v);
+            tp.centre_z = centre.z();
             // d = p - s in the part's bearing frame (section 4.2.3.2).
-            tp.offset = Eigen::AngleAxisf(-part.bearing, Eigen::Vector3f::UnitZ()) * (centre - part.centroid);
+            tp.offset = Eigen::AngleAxisf(-part.frame_yaw, Eigen::Vector3f::UnitZ()) * (centre - part.centroid);
             if (tp.features.allFinite()) out.push_back(std::move(tp));
         }
     }
