@@ -64,6 +64,8 @@ struct Options {
     bool cross_class = false;
     std::size_t words = 0;
     int probe = 0;
+    int train_procedural = 8;
+    bool class_by_fit = true;
     std::size_t activations = 2;
     float max_height_error = 0.25f;
     float support_margin = 0.3f;
@@ -152,6 +154,24 @@ void SetThresholds(FurnitureModel& model, const std::vector<std::string>& pairs)
 // score of every class within half a width of the centre and how often the best is right.
 int Probe(const Options& o, const FurnitureModel& model, const training::FurnitureTrainingOptions& to,
           FurnitureDetectionParams dp) {
+    {  // Word purity: per class, the mean balanced share of its own class in its parts' words.
+        const std::size_t nc = model.classes().size();
+        std::vector<double> share(nc, 0.0), purity(nc, 0.0), count(nc, 0.0);
+        for (const auto& p : model.parts()) share[static_cast<std::size_t>(p.cls)] += 1.0;
+        for (std::size_t w = 0; w < model.num_words(); ++w) {
+            double total = 0.0;
+            for (std::size_t c = 0; c < nc; ++c) total += model.WordClassCount(static_cast<int>(w), static_cast<int>(c)) / share[c];
+            for (std::size_t c = 0; c < nc; ++c) {
+                const double n = model.WordClassCount(static_cast<int>(w), static_cast<int>(c));
+                purity[c] += n * (n / share[c]) / total;
+                count[c] += n;
+            }
+        }
+        for (std::size_t c = 0; c < nc; ++c) {
+            std::printf("%-10s training parts %6.0f, mean own-class share of their words %.2f\n",
+                        model.classes()[c].name.c_str(), count[c], purity[c] / count[c]);
+        }
+    }
     dp.verify = false;
     dp.selection.threshold_scale = 0.0f;
     const std::size_t nc = model.classes().size();
@@ -193,6 +213,7 @@ int Run(const Options& o) {
     to.kitchen = o.kitchen;
     to.sensor = training::ParseFurnitureSensor(o.sensor);
     to.num_threads = o.threads;
+    to.procedural_per_class = o.train_procedural;
     to.parts.frame = ParseFurniturePartFrame(o.frame);
     FurnitureModel model;
     auto t0 = std::chrono::steady_clock::now();
@@ -226,6 +247,7 @@ int Run(const Options& o) {
     dp.selection.min_part_share = o.min_part_share;
     dp.voting.normalization = ParseFurnitureVoteNormalization(o.normalization);
     dp.selection.cross_class = o.cross_class;
+    dp.class_by_fit = o.class_by_fit;
     dp.voting.activations = o.activations;
     dp.voting.max_height_error = o.max_height_error;
     dp.support_margin = o.support_margin;
@@ -301,6 +323,21 @@ int Run(const Options& o) {
                             break;
                         }
                     }
+                }
+            }
+            if (var.verify && o.draw < 0) {  // nearest hypothesis of the right class per piece
+                for (const auto& f : room.room.furniture) {
+                    float best = 1e9f, score = 0.0f;
+                    std::string fate;
+                    for (const auto* list : {&det.detections, &det.rejected}) {
+                        for (const auto& d : *list) {
+                            if (d.category != f.category) continue;
+                            const float dist = (f.T_world_object.translation().head<2>() - d.hypothesis.centre).norm();
+                            if (dist < best) best = dist, score = d.hypothesis.normalized, fate = d.accepted ? "ok" : d.rejection;
+                        }
+                    }
+                    std::fprintf(stderr, "NEAREST %-9s w %.2f l %.2f: %.2f m score %.2f %s\n", f.category.c_str(), f.width,
+                                 std::max(f.extent.x(), f.extent.y()), best, score, fate.c_str());
                 }
             }
             if (var.verify && r < o.draw) {
@@ -466,6 +503,9 @@ int main(int argc, char** argv) {
     app.add_option("--words", o.words, "rebuild the vocabulary with this many words (0: the model's)");
     app.add_option("--activations", o.activations, "words a part activates")->capture_default_str();
     app.add_option("--probe", o.probe, "only: N single fresh procedural pieces per class, one view each");
+    app.add_flag("!--no-class-by-fit", o.class_by_fit, "overlapping fits: the strongest votes win");
+    app.add_option("--train-procedural", o.train_procedural, "procedural training pieces per class")
+        ->capture_default_str();
     app.add_flag("!--no-variants", o.variants, "only the full method");
     app.add_flag("!--no-single", o.single, "merged views only");
     app.add_option("-j,--threads", o.threads, "threads (0 = all cores)")->capture_default_str();

@@ -266,29 +266,59 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
                 d.rejection = d.fit.rejection;
             },
             1);
-        // Fitted footprints that overlap: the stronger detection stays.
-        std::vector<Polygon> kept;
-        std::vector<int> kept_cls;
+        // Fitted footprints that overlap are one piece. Strongest first, each detection gathers
+        // the accepted ones overlapping it; with class_by_fit the one whose model explains the
+        // scan best (coverage minus free space and space behind walls) stays, with the group's
+        // best vote score, else the strongest stays.
+        std::vector<Polygon> feet(all.size());
+        std::vector<float> areas(all.size(), 0.0f), vote(all.size(), 0.0f);
+        for (std::size_t i = 0; i < all.size(); ++i) {
+            vote[i] = all[i].hypothesis.normalized;
+            if (!all[i].accepted) continue;
+            feet[i] = Footprint(model.cads()[static_cast<std::size_t>(all[i].fit.cad)], all[i].fit.T_world_model);
+            areas[i] = Area(feet[i]);
+        }
+        auto overlaps = [&](std::size_t i, std::size_t k) {
+            if (!params.cross_class && all[i].cls != all[k].cls) return false;
+            return ConvexIntersectionArea(feet[i], feet[k]) > params.max_overlap * std::min(areas[i], areas[k]);
+        };
+        auto quality = [&](const FurnitureDetection& d) {
+            return d.fit.coverage - d.fit.free_share - d.fit.behind_share;
+        };
         std::vector<std::size_t> order(all.size());
         for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
         std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all[a].score > all[b].score; });
+        std::vector<bool> done(all.size(), false);
+        std::vector<std::size_t> kept;
         for (std::size_t i : order) {
-            FurnitureDetection& d = all[i];
-            if (!d.accepted) continue;
-            const Polygon f = Footprint(model.cads()[static_cast<std::size_t>(d.fit.cad)], d.fit.T_world_model);
-            const float area = Area(f);
-            for (std::size_t k = 0; k < kept.size() && d.accepted; ++k) {
-                if (!params.cross_class && kept_cls[k] != d.cls) continue;
-                const float inter = ConvexIntersectionArea(f, kept[k]);
-                if (inter > params.max_overlap * std::min(area, Area(kept[k]))) {
-                    d.accepted = false;
-                    d.rejection = "overlap";
+            if (!all[i].accepted || done[i]) continue;
+            bool clash = false;
+            for (std::size_t k : kept) clash = clash || overlaps(i, k);
+            if (clash) {
+                all[i].accepted = false;
+                all[i].rejection = "overlap";
+                continue;
+            }
+            std::vector<std::size_t> group = {i};
+            for (std::size_t k : order) {
+                if (k != i && all[k].accepted && !done[k] && overlaps(i, k)) group.push_back(k);
+            }
+            std::size_t winner = i;
+            if (params.class_by_fit) {
+                for (std::size_t k : group) {
+                    if (quality(all[k]) > quality(all[winner])) winner = k;
                 }
+                float best_vote = 0.0f;
+                for (std::size_t k : group) best_vote = std::max(best_vote, vote[k]);
+                all[winner].score = best_vote * std::max(0.0f, 0.5f + quality(all[winner]));
             }
-            if (d.accepted) {
-                kept.push_back(f);
-                kept_cls.push_back(d.cls);
+            for (std::size_t k : group) {
+                done[k] = true;
+                if (k == winner) continue;
+                all[k].accepted = false;
+                all[k].rejection = "overlap";
             }
+            kept.push_back(winner);
         }
         result.fit_ms = MsSince(t);
     }

@@ -43,6 +43,9 @@ struct FurnitureDetectionParams {
     /// smaller one are inconsistent: the weaker goes, (0, 1]
     float max_overlap = 0.3f;
     bool cross_class = true;  ///< apply max_overlap across classes too (one piece, one class)
+    /// Of overlapping fitted detections, keep the one whose model explains the scan best rather
+    /// than the one with the strongest votes (the votes find the piece, the models name it)
+    bool class_by_fit = true;
     /// Parts whose centre lies further from a hypothesis than half its class's length plus this
     /// are left out of its fit [m], >= 0
     float support_margin = 0.3f;
