@@ -65,18 +65,18 @@ const std::optional<KitchenFrames>& Kitchen() {
         const auto lib =
             sim::SelectKitchenSplit(sim::ReadKitchenLibrary(models), sim::MeshSplit::kTest);
         sim::KitchenModelCache cache;
-        const sim::KitchenScene k = sim::MakeKitchenScene(lib, cache, {}, 7);
+        const sim::KitchenScene k = sim::MakeKitchenScene(lib, cache, {}, 3);
         const sim::RayCaster caster(k.scene);
         KitchenFrames f;
         sim::KinectParams kp;
         kp.shading = 0.3f;
-        const auto camera = sim::KitchenCameraPoses(k, 1, 7)[0];
+        const auto camera = sim::KitchenCameraPoses(k, 1, 3)[0];
         f.kinect = sim::ScanKinect(caster, camera, kp, 1);
         sim::ScanToWorld(f.kinect, camera);
         sim::LaserParams lp;
         lp.tilt_min_deg = -40.0f;
         lp.tilt_max_deg = 60.0f;
-        const auto head = sim::KitchenLaserPoses(k, 1, 7)[0];
+        const auto head = sim::KitchenLaserPoses(k, 1, 3)[0];
         f.laser = sim::ScanLaser(caster, head, lp, 1);
         sim::ScanToWorld(f.laser, head);
         return f;

@@ -34,6 +34,7 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include "driver_options.hpp"
 #include "heap_tracker.hpp"
 #include "multicue/io/pcd.hpp"
 #include "multicue/system/perceive.hpp"
@@ -62,17 +63,6 @@ struct Options {
     std::vector<std::string> configs = {"pipeline", "three_experts", "lccp"};
 };
 
-std::vector<std::string> SplitComma(const std::string& s) {
-    std::vector<std::string> parts;
-    std::size_t start = 0;
-    while (start <= s.size()) {
-        const std::size_t end = std::min(s.find(',', start), s.size());
-        if (end > start) parts.push_back(s.substr(start, end - start));
-        start = end + 1;
-    }
-    return parts;
-}
-
 // Takes this program's own flags out of argv (Google Benchmark rejects flags it does not know).
 Options ParseOwnFlags(int& argc, char** argv) {
     Options options;
@@ -90,7 +80,7 @@ Options ParseOwnFlags(int& argc, char** argv) {
             options.iterations = std::atoi(n->c_str());
             if (options.iterations < 1) throw std::invalid_argument("--iterations must be >= 1");
         } else if (auto c = value("--configs")) {
-            options.configs = SplitComma(*c);
+            options.configs = multicue::eval::SplitComma(*c);
         } else {
             argv[kept++] = argv[i];
         }
@@ -115,7 +105,7 @@ std::vector<std::string> Frames(const std::string& set) {
         range("test", 43, 48);
         range("test", 55, 59);
     }
-    if (frames.empty()) frames = SplitComma(set);
+    if (frames.empty()) frames = multicue::eval::SplitComma(set);
     return frames;
 }
 

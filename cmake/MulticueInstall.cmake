@@ -76,9 +76,9 @@ if(BUILD_SHARED_LIBS)
 else()
   # What the static libraries need from their private dependencies.
   set(MULTICUE_PC_LIBS_PRIVATE
-      "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_features2d -lopencv_imgproc \
--lopencv_flann -lopencv_core -lsvm -loctomap -loctomath \
--lopencv_imgcodecs -lurdfdom_model -ltinyxml -lconsole_bridge")
+      "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_features2d -lopencv_imgcodecs \
+-lopencv_imgproc -lopencv_flann -lopencv_core -lsvm -lurdfdom_model -ltinyxml -lconsole_bridge \
+-loctomap -loctomath")
   # MCAP chunk decompression in multicue::io (optional, see src/multicue/io/CMakeLists.txt).
   if(MULTICUE_ZSTD_LIBRARY)
     string(APPEND MULTICUE_PC_LIBS_PRIVATE " -lzstd")

@@ -9,6 +9,7 @@
 //
 //   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--views 3] [--seed 1]
 //                           [--sensor both|kinect|laser] [--split test] [--rules] [--json F]
+//                           [--save-containers MODEL]
 
 #include <algorithm>
 #include <array>
@@ -27,6 +28,7 @@
 
 #include "driver_options.hpp"
 #include "kitchen_truth.hpp"
+#include "multicue/core/exceptions.hpp"
 #include "multicue/mapping/kitchen_map.hpp"
 #include "multicue/ml/classifier.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
@@ -56,6 +58,7 @@ struct Options {
     bool rules = false;
     bool verbose = false;
     std::string json;
+    std::string save_containers;
 };
 
 /// Summary statistics of a list of values.
@@ -128,7 +131,8 @@ struct Scores {
     std::size_t handle_tp = 0, handle_fp = 0, handle_fn = 0;
     std::size_t knob_tp = 0, knob_fp = 0, knob_fn = 0;
     std::size_t any_tp = 0, any_fp = 0, any_fn = 0;
-    std::map<std::string, std::size_t> fp_on;  ///< class of the point under a false detection
+    std::map<std::string, std::size_t> fp_on;   ///< class of the point under a false detection
+    std::map<std::string, std::size_t> fn_why;  ///< why true fixtures were missed
     Stats front_iou_detectable, front_iou_all, front_iou_found;
     std::size_t joint_correct = 0, joint_total = 0;
     std::size_t sign_correct = 0;
@@ -136,9 +140,11 @@ struct Scores {
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
+    std::map<std::string, std::size_t> open_confusion;  ///< "true -> predicted"
     Stats open_angle, open_position;
     Stats time_ms;
     std::size_t frames = 0;
+    std::size_t failed = 0;  ///< frames the map refused (DataError)
 };
 
 int TypeIndex(const std::string& t) {
@@ -277,6 +283,30 @@ class Evaluator {
                 if (du[d] || map.fixtures[d].indices.empty()) continue;
                 const Index mid = map.fixtures[d].indices[map.fixtures[d].indices.size() / 2];
                 ++s.fp_on[sim::KitchenClassNames()[t.semantic[mid]]];
+            }
+            for (std::size_t g = 0; g < fixtures.size(); ++g) {
+                if (gu[g]) continue;
+                Eigen::Vector3f c = Eigen::Vector3f::Zero();
+                std::map<std::string, std::size_t> cls;
+                for (const Index i : fixtures[g].points) {
+                    c += f.cloud.points[i];
+                    ++cls[mapping::MapClassNames()[static_cast<std::size_t>(map.point_class[i])]];
+                }
+                c /= static_cast<float>(fixtures[g].points.size());
+                std::string why;
+                for (const auto& rj : r.rejected_fixtures) {
+                    if ((rj.center - c).norm() < 0.05f) why = rj.reason;
+                }
+                if (why.empty()) {
+                    std::size_t most = 0;
+                    for (const auto& [name, n] : cls) {
+                        if (n > most) {
+                            most = n;
+                            why = "no cluster, points labelled " + name;
+                        }
+                    }
+                }
+                ++s.fn_why[why];
             }
             s.any_tp += tp;
             s.any_fp += map.fixtures.size() - tp;
@@ -425,6 +455,8 @@ class Evaluator {
             const auto pt = motion.articulation.type;
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
+            ++s.open_confusion[std::string(revolute ? "revolute" : "prismatic") + " -> " +
+                               mapping::JointTypeName(pt)];
             s.open_correct += correct;
             if (!correct) continue;
             const Axis& gt = axes.at(kj.name);
@@ -452,13 +484,19 @@ class Evaluator {
                     sim::SubSeed(o_.seed ^ 0x7261696eull, static_cast<std::uint64_t>(i));
                 sim::KitchenScene k = sim::MakeKitchenScene(train_lib, cache, {}, seed);
                 for (const Frame& f : Frames(k, seed)) {
-                    CollectTraining(k, f, Map(f, nullptr), data);
+                    try {
+                        CollectTraining(k, f, Map(f, nullptr), data);
+                    } catch (const DataError& e) {
+                        std::fprintf(stderr, "training kitchen %d, %s frame: %s\n", i,
+                                     f.laser ? "laser" : "kinect", e.what());
+                    }
                 }
             }
             train_rows = data.rows();
             if (data.num_classes() >= 2) {
                 classifier = ml::CreateClassifier("rtrees:trees=100");
                 classifier->Fit(data);
+                if (!o_.save_containers.empty()) classifier->Save(o_.save_containers);
             }
             std::printf("container classifier: %zu training pieces from %d kitchens (%s half)\n",
                         train_rows, o_.train_kitchens,
@@ -473,8 +511,16 @@ class Evaluator {
                                                    fmt::format("kitchen_{}.urdf", i));
             const auto axes = UrdfJointAxes(gt);
             for (const Frame& f : Frames(k, seed)) {
-                const auto r = Map(f, classifier.get());
-                Score(k, axes, f, r, f.laser ? laser : kinect, seed ^ 0x5eedull);
+                Scores& s = f.laser ? laser : kinect;
+                try {
+                    const auto r = Map(f, classifier.get());
+                    Score(k, axes, f, r, s, seed ^ 0x5eedull);
+                } catch (const DataError& e) {
+                    // A frame the map refuses (nothing in range, no vertical plane) counts.
+                    ++s.failed;
+                    std::fprintf(stderr, "kitchen %d, %s frame: %s\n", i,
+                                 f.laser ? "laser" : "kinect", e.what());
+                }
             }
             if (o_.verbose) std::fprintf(stderr, "kitchen %d done\n", i);
         }
@@ -493,9 +539,11 @@ class Evaluator {
 
     nlohmann::json Report(const char* name, const Scores& s) const {
         auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
-        std::printf("\n== %s: %zu frames of %d kitchens (%s half) ==\n", name, s.frames,
-                    o_.kitchens, o_.split.c_str());
+        std::printf("\n== %s: %zu frames of %d kitchens (%s half), %zu refused ==\n", name,
+                    s.frames, o_.kitchens, o_.split.c_str(), s.failed);
         nlohmann::json j;
+        j["frames"] = s.frames;
+        j["refused_frames"] = s.failed;
         std::printf("point IoU (all frames pooled; worst frame):\n");
         for (std::size_t c = 0; c < 5; ++c) {
             const double iou = ratio(s.inter[c], s.uni[c]);
@@ -520,6 +568,9 @@ class Evaluator {
         pr("knob", s.knob_tp, s.knob_fp, s.knob_fn);
         pr("any", s.any_tp, s.any_fp, s.any_fn);
         if (o_.verbose) {
+            std::printf("  missed fixtures:");
+            for (const auto& [c, n] : s.fn_why) std::printf(" [%s] %zu", c.c_str(), n);
+            std::printf("\n");
             std::printf("  false detections on:");
             for (const auto& [c, n] : s.fp_on) std::printf(" %s %zu", c.c_str(), n);
             std::printf("\n");
@@ -576,7 +627,11 @@ class Evaluator {
             "angle mean %.2f median %.2f max %.2f deg; hinge position mean %.3f m\n",
             oacc, s.open_correct, s.open_total, s.open_missed, s.open_angle.Mean(),
             s.open_angle.Median(), s.open_angle.Max(), s.open_position.Mean());
+        std::printf("  opened pairs (true -> estimated):");
+        for (const auto& [c, n] : s.open_confusion) std::printf(" [%s] %zu", c.c_str(), n);
+        std::printf("\n");
         j["opened"] = {{"joint_type_accuracy", oacc},
+                       {"confusion", s.open_confusion},
                        {"pairs", s.open_total},
                        {"no_motion", s.open_missed},
                        {"axis_angle_deg", s.open_angle.Json()},
@@ -615,6 +670,8 @@ int main(int argc, char** argv) {
     app.add_flag("--rules", o.rules, "type containers by rules (no training)");
     app.add_flag("-v,--verbose", o.verbose, "progress on stderr");
     app.add_option("--json", o.json, "also write the figures as JSON");
+    app.add_option("--save-containers", o.save_containers,
+                   "also save the container classifier (for map kitchen --containers)");
     if (auto code = eval::ParseDriverOptions(app, "kitchen_eval", [&] {
             app.parse(argc, argv);
             if (o.sensor != "both" && o.sensor != "kinect" && o.sensor != "laser") {

@@ -79,17 +79,6 @@ bool WriteLabels(const fs::path& path, const Cloud& cloud,
                                         cloud.sensor_orientation_) == 0;
 }
 
-std::vector<std::string> SplitComma(const std::string& s) {
-    std::vector<std::string> parts;
-    std::size_t start = 0;
-    while (start <= s.size()) {
-        const std::size_t end = std::min(s.find(',', start), s.size());
-        if (end > start) parts.push_back(s.substr(start, end - start));
-        start = end + 1;
-    }
-    return parts;
-}
-
 // learn2 before learn10: prefix, then the trailing number.
 bool SceneLess(const std::string& a, const std::string& b) {
     auto split = [](const std::string& s) {
@@ -126,7 +115,7 @@ int main(int argc, char** argv) {
     const fs::path input_dir = input_arg;
     const fs::path out_dir = out_arg;
 
-    std::vector<std::string> scenes = SplitComma(scenes_arg);
+    std::vector<std::string> scenes = multicue::eval::SplitComma(scenes_arg);
     if (scenes.empty()) {
         std::error_code ec;
         for (const auto& entry : fs::directory_iterator(input_dir, ec)) {

@@ -74,8 +74,8 @@ int RunReal(const RegistrationEvalOptions& o) {
         const PointCloud t = PreprocessForRegistration(target, pre);
         const KdTree tt(t);
         const double fine = params.icp.correspondences.max_distance;
-        auto methods =
-            MakeMethods(ro, params, {"plane", "point-to-plane", "global"}, {fine}, false);
+        auto methods = MakeMethods(ro, params, {"symmetric", "plane", "point-to-plane", "global"},
+                                   {fine}, false);
         auto globals = MakeMethods(ro, params, {}, {fine}, true);
         methods.insert(methods.end(), globals.begin(), globals.end());
         const std::string name = pair.source + " -> " + pair.target;

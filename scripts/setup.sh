@@ -24,14 +24,16 @@ packages=(
     libyaml-cpp-dev
     # ROS 2 bags: zstd and lz4 compressed MCAP chunks.
     libzstd-dev liblz4-dev
-    # Occupancy maps (search module) of the registration's multi-view maps.
-    liboctomap-dev
     # URDF models (kitchen models and kitchen maps); check_urdf for the export tests.
     liburdfdom-dev liburdfdom-tools
+    # Occupancy maps (search module) of the registration's multi-view maps.
+    liboctomap-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     # The Python module (python/) and its tests.
     pybind11-dev python3-dev python3-numpy python3-pytest
     clang-format
+    # libFuzzer targets of fuzz/ (scripts/fuzz.sh, -DMULTICUE_BUILD_FUZZERS=ON).
+    clang-14 libclang-rt-14-dev
     # The report page's viewer is bundled from npm; its browser test drives Debian's Chromium.
     nodejs chromium chromium-driver
 )

@@ -104,6 +104,33 @@ TEST(Parallel, MoreThreadsThanCoresIsQuietAndGivesTheSameResult) {
     EXPECT_EQ(a, b);
 }
 
+// Loops nested in a parallel loop (objects in parallel, each with loops of its own) run in the
+// outer loop's threads, isolated: a thread-local buffer used around an inner loop is never taken
+// over by another outer task meanwhile, and the results are the serial ones.
+TEST(Parallel, NestedLoopsAgreeWithSerialOnesAndKeepTheirThreadLocals) {
+    constexpr std::size_t kOuter = 16, kInner = 20000;
+    std::vector<double> serial(kOuter * kInner), nested(kOuter * kInner);
+    auto run = [&](int threads, std::vector<double>& out, bool& intact) {
+        ParallelFor(
+            kOuter, threads,
+            [&](std::size_t o) {
+                thread_local std::size_t owner = 0;
+                owner = o;
+                ParallelFor(
+                    kInner, threads,
+                    [&](std::size_t i) { out[o * kInner + i] = std::sqrt(double(o * kInner + i)); },
+                    256);
+                if (owner != o) intact = false;
+            },
+            1);
+    };
+    bool intact = true;
+    run(1, serial, intact);
+    run(2, nested, intact);
+    EXPECT_EQ(serial, nested);
+    EXPECT_TRUE(intact);
+}
+
 TEST(Logging, LevelsAndSink) {
     std::vector<std::string> seen;
     SetLogSink([&](LogLevel, std::string_view m) { seen.emplace_back(m); });

@@ -72,6 +72,40 @@ TEST(KdTree, SubsetAndNearest) {
     EXPECT_THROW(KdTree(c, Indices{9}), InvalidArgument);
 }
 
+TEST(KdTree, NearestWithinMatchesBruteForce) {
+    const PointCloud c = test::RandomCloud(2000, 11);
+    const KdTree tree(c);
+    const PointCloud queries = test::RandomCloud(200, 12, 1.5f);
+    for (const float r : {0.02f, 0.05f, 0.2f}) {
+        for (const auto& q : queries.points) {
+            Index nearest = 0;
+            float d2 = std::numeric_limits<float>::infinity();
+            for (std::size_t k = 0; k < c.size(); ++k) {
+                const float dk = (c.points[k] - q).squaredNorm();
+                if (dk < d2) {
+                    d2 = dk;
+                    nearest = static_cast<Index>(k);
+                }
+            }
+            Index i = 0;
+            float found = 0.0f;
+            const bool ok = tree.SearchNearestWithin(q, r, i, found);
+            EXPECT_EQ(ok, d2 <= r * r);
+            if (ok) {
+                EXPECT_EQ(i, nearest);
+                EXPECT_EQ(found, d2);
+            }
+        }
+    }
+    // A point exactly at the radius is found.
+    Index i = 0;
+    float d2 = 0.0f;
+    EXPECT_TRUE(
+        tree.SearchNearestWithin(c.points[0] + Eigen::Vector3f(0.0f, 0.0f, 0.0f), 1e-6f, i, d2));
+    EXPECT_THROW(tree.SearchNearestWithin(c.points[0], 0.0f, i, d2), InvalidArgument);
+    EXPECT_FALSE(KdTree(PointCloud{}).SearchNearestWithin(c.points[0], 1.0f, i, d2));
+}
+
 TEST(KdTree, EmptyAndBadParameters) {
     const KdTree tree{PointCloud{}};
     Indices idx;

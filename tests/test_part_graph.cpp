@@ -165,6 +165,36 @@ TEST(PartGraph, AdjacencyFromDistance) {
     EXPECT_THROW(BuildPartGraph(c, parts), InvalidArgument);
 }
 
+// Oracle: parts are adjacent exactly when two of their points are closer than the distance
+// (random blobs of many parts, overlapping and not, checked against every pair of points).
+TEST(PartGraph, AdjacencyMatchesBruteForce) {
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<float> centre(0.0f, 0.3f);
+    std::normal_distribution<float> spread(0.0f, 0.01f);
+    PointCloud c;
+    std::vector<Indices> parts(25);
+    for (auto& part : parts) {
+        const Eigen::Vector3f m(centre(rng), centre(rng), centre(rng));
+        for (int k = 0; k < 60; ++k) {
+            part.push_back(static_cast<Index>(c.points.size()));
+            c.points.push_back(m + Eigen::Vector3f(spread(rng), spread(rng), spread(rng)));
+        }
+    }
+    c.SetUnorganized();
+    for (float d : {0.005f, 0.02f, 0.05f}) {
+        const PartGraph g = BuildPartGraph(c, parts, {.adjacency_distance = d});
+        for (std::uint32_t a = 0; a < parts.size(); ++a) {
+            for (std::uint32_t b = a + 1; b < parts.size(); ++b) {
+                bool near = false;
+                for (Index i : parts[a])
+                    for (Index j : parts[b])
+                        near = near || (c.points[i] - c.points[j]).squaredNorm() < d * d;
+                EXPECT_EQ(g.Adjacent(a, b), near) << "parts " << a << ", " << b << " at " << d;
+            }
+        }
+    }
+}
+
 TEST(PartGraph, DescriptorsAreAdditive) {
     std::vector<Indices> parts;
     const PointCloud c = ThreePatches(parts);

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/params.hpp"
 #include "multicue/registration/icp.hpp"
 #include "multicue/registration/preprocess.hpp"
+#include "multicue/registration/register.hpp"
 #include "multicue/registration/registration_result.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/scene_gen.hpp"
@@ -269,6 +271,57 @@ TEST(AlignmentQuality, CountsInliersAndRmse) {
     EXPECT_EQ(far.inliers, 0u);
     EXPECT_THROW(EvaluateAlignment(target, tree, Eigen::Isometry3d::Identity(), 0.0),
                  InvalidArgument);
+}
+
+}  // namespace
+}  // namespace multicue
+
+namespace multicue {
+namespace {
+
+TEST(RegisterPipeline, AutoWithAndWithoutAGuessAndAnyThreadCount) {
+    const auto T = test::MakeTransform(35.0, {0.2, -0.1, 0.05});
+    const PointCloud a = test::TableWithBoxes(0.001f, 1, 2500.0f);
+    const PointCloud b = test::Transformed(test::TableWithBoxes(0.001f, 2, 2500.0f), T);
+    RegistrationParams p = RegistrationParams::ForResolution(0.01f);
+    p.num_threads = 1;
+    const auto global = Register(a, b, p);  // auto without a guess: global
+    EXPECT_TRUE(global.converged) << global.reason;
+    EXPECT_LT(test::RotationErrorDeg(global.T_target_source, T), 0.3);
+    EXPECT_LT(test::TranslationError(global.T_target_source, T), 0.003);
+    p.num_threads = 2;
+    EXPECT_EQ(Register(a, b, p).T_target_source.matrix(), global.T_target_source.matrix());
+    const auto local = Register(a, b, p, test::MakeTransform(3.0, {0.02, 0, 0}) * T);
+    EXPECT_TRUE(local.converged) << local.reason;
+    EXPECT_LT(test::RotationErrorDeg(local.T_target_source, T), 0.3);
+    // Empty and NaN-only input: flagged, not thrown.
+    EXPECT_EQ(Register(PointCloud{}, b, p).status, RegistrationStatus::kEmptyInput);
+}
+
+TEST(RegisterPipeline, BadParametersNameTheirNode) {
+    EXPECT_THROW(RegistrationParams::ForResolution(0.0f), InvalidArgument);
+    EXPECT_THROW(ParseRegistrationMethod("teleport"), InvalidArgument);
+    RegistrationParams p = RegistrationParams::ForResolution(0.01f);
+    p.icp.max_iterations = 0;
+    try {
+        p.Validate();
+        FAIL() << "no exception";
+    } catch (const ParameterError& e) {
+        EXPECT_EQ(e.path(), "icp");
+    }
+    p = RegistrationParams::ForResolution(0.01f);
+    p.fpfh.ransac.p_success = 1.5;
+    EXPECT_THROW(p.Validate(), InvalidArgument);
+    p = RegistrationParams::ForResolution(0.01f);
+    p.free_space.max_violation = 0.0;
+    EXPECT_THROW(p.Validate(), InvalidArgument);
+    EXPECT_THROW(SuggestResolution(PointCloud{}), DataError);
+    // A table top at 1 cm spacing: about 1 cm (its diagonal / 300 is smaller).
+    PointCloud grid;
+    for (int i = 0; i < 100; ++i)
+        for (int j = 0; j < 60; ++j) grid.points.emplace_back(0.01f * i, 0.01f * j, 0.0f);
+    grid.SetUnorganized();
+    EXPECT_NEAR(SuggestResolution(grid), 0.01f, 1e-6f);
 }
 
 }  // namespace

@@ -84,8 +84,7 @@ TEST(Planes, MomentTermsEqualExplicitSums) {
     const Eigen::Vector3d center(0.7, 0.3, -0.2);
     Matrix6d H = Matrix6d::Zero();
     Vector6d g = Vector6d::Zero();
-    const double cost =
-        AddPlaneTerms(patches, patches, pairs, {0.5, 0.5, 0.5}, T, center, H, g);
+    const double cost = AddPlaneTerms(patches, patches, pairs, {0.5, 0.5, 0.5}, T, center, H, g);
     Matrix6d He = Matrix6d::Zero();
     Vector6d ge = Vector6d::Zero();
     double ce = 0.0;

@@ -17,6 +17,7 @@
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
 #include "multicue/system/report_page.hpp"
+#include "multicue/system/report_writer.hpp"
 #include "test_util.hpp"
 
 namespace multicue {
@@ -253,6 +254,37 @@ TEST(PerceiveReport, EmptySceneBadInputAndOutputs) {
     WritePerceiveReport(dir / "alone.html", s.cloud, s.result, "scene.pcd");
     EXPECT_TRUE(std::filesystem::exists(dir / "alone.html"));
     EXPECT_THROW(WritePerceiveReport("/dev/null/x.html", s.cloud, s.result), IoError);
+}
+
+// Pages written off the stream's path are the pages written in line, in every folder; a page
+// that cannot be written is reported by Finish (or the next Submit), and an earlier run's page
+// is removed before a folder's new files are written.
+TEST(PerceiveReport, WriterThreadWritesThePagesOfAStream) {
+    test::TempDir dir;
+    const auto& s = DemoScene();
+    const auto json = PerceiveResultJson("scene.pcd", s.result);
+    const std::string page = PerceiveReportPage(s.cloud, s.result, json).Render();
+    {
+        ReportWriter writer({}, 1);
+        for (int k = 0; k < 4; ++k) {
+            const auto frame = dir / ("frame" + std::to_string(k));
+            std::filesystem::create_directories(frame);
+            writer.Submit(frame, s.cloud, s.result, json);
+        }
+        writer.Finish();
+    }
+    for (int k = 0; k < 4; ++k) {
+        EXPECT_EQ(io::ReadFileBytes(dir / ("frame" + std::to_string(k)) / "report.html"), page);
+    }
+    RemoveStaleReport(dir / "frame0");
+    EXPECT_FALSE(std::filesystem::exists(dir / "frame0" / "report.html"));
+    RemoveStaleReport(dir / "frame0");  // nothing to remove is no error
+
+    ReportWriter failing({});
+    failing.Submit(dir / "missing" / "folder", s.cloud, s.result, json);
+    EXPECT_THROW(failing.Finish(), IoError);
+    failing.Finish();  // reported once
+    EXPECT_THROW(ReportWriter({}, 0), InvalidArgument);
 }
 
 TEST(PerceiveReport, ConfigSectionReadsAndRejectsUnknownKeys) {

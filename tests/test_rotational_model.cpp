@@ -238,10 +238,22 @@ TEST(RotationalModel, BadInputEmptyInputAndDeterminism) {
     PointCloud bare = cloud;
     bare.normals.clear();
     EXPECT_THROW(FitRotationalModel(bare, All(bare), none, no_plane), DataError);
+    RotationalFitParams bad_threads;
+    bad_threads.num_threads = -1;
+    EXPECT_THROW(FitRotationalModel(cloud, All(cloud), none, no_plane, bad_threads),
+                 InvalidArgument);
     const auto a = FitRotationalModel(cloud, All(cloud), none, no_plane);
     const auto b = FitRotationalModel(cloud, All(cloud), none, no_plane);
     EXPECT_EQ(a.axis, b.axis);
     EXPECT_EQ(a.radii, b.radii);
+    // The axis search and the refinement's starts in parallel: the same model.
+    RotationalFitParams two;
+    two.num_threads = 2;
+    const auto c = FitRotationalModel(cloud, All(cloud), none, no_plane, two);
+    EXPECT_EQ(a.axis, c.axis);
+    EXPECT_EQ(a.origin, c.origin);
+    EXPECT_EQ(a.radii, c.radii);
+    EXPECT_EQ(a.heights, c.heights);
 }
 
 }  // namespace

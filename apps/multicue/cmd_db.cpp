@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/file_utils.hpp"
+#include "multicue/io/json_text.hpp"
 #include "multicue/system/object_database.hpp"
 
 namespace multicue::cli {
@@ -117,12 +118,7 @@ void AddDbCommand(CLI::App& app, const GlobalOptions&) {
     imp->add_option("DB", *path, "database file (created when missing)")->required();
     imp->add_option("FILE", *file, "JSON export")->required();
     imp->callback([path, file] {
-        nlohmann::json data;
-        try {
-            data = nlohmann::json::parse(io::ReadFileBytes(*file));
-        } catch (const nlohmann::json::parse_error& e) {
-            throw FormatError(*file + ": malformed JSON (" + e.what() + ")");
-        }
+        const nlohmann::json data = io::ReadJsonFile(*file);
         auto database = ObjectDatabase::Open(*path, DatabaseMode::kCreateOrWrite);
         std::printf("%s: imported %zu objects\n", path->c_str(), database.Import(data));
     });

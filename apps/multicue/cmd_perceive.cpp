@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -26,6 +26,7 @@
 #include "multicue/system/perceive.hpp"
 #include "multicue/system/perceive_output.hpp"
 #include "multicue/system/perceive_report.hpp"
+#include "multicue/system/report_writer.hpp"
 #include "multicue/system/perceive_views.hpp"
 #include "multicue/training/part_graph_training.hpp"
 #include "perceive_bag.hpp"
@@ -69,11 +70,12 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
     return options;
 }
 
-/// Runs the pipeline on `cloud` and writes the outputs; returns the result for a summary.
-PerceiveResult RunPerceive(const PointCloud& cloud, const std::string& input_name,
+/// Runs the pipeline on `cloud` and writes the outputs; returns the result for a summary. The
+/// pipeline works in `cloud` itself (it gains normals), so a large cloud is not held twice.
+PerceiveResult RunPerceive(PointCloud& cloud, const std::string& input_name,
                            const std::filesystem::path& out, const PerceiveOptions& options,
                            double load_ms) {
-    const PerceiveResult result = Perceive(cloud, options.pipeline, options.models);
+    const PerceiveResult result = PerceiveInPlace(cloud, options.pipeline, options.models);
     const auto json = PerceiveResultJson(input_name, result, {{"load", load_ms}});
     const std::string report =
         options.report.enabled ? PerceiveReportPage(cloud, result, json, options.report).Render()
@@ -195,6 +197,9 @@ void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
     for (std::size_t k = 0, f = 0; k < frames.size(); ++k) {
         if (poses.fused[k]) results[k] = std::move(fused_results[f++]);
     }
+    // The pages are written by a thread of their own while the next frames' files are written.
+    std::optional<ReportWriter> reports;
+    if (options.report.enabled) reports.emplace(options.report);
     for (std::size_t k = 0; k < frames.size(); ++k) {
         const auto dir = out / frames[k].file.stem();
         auto json = PerceiveResultJson(frames[k].file.string(), results[k], {{"load", load_ms[k]}});
@@ -207,17 +212,16 @@ void RunPerceiveViews(const std::filesystem::path& manifest, int scene_id,
             json["views"]["T_world_sensor"] = TransformJson(poses.T_world_sensor[k].cast<double>());
             json["views"]["registration"] = RegistrationJson(a.registration);
         }
-        const std::string report =
-            options.report.enabled
-                ? PerceiveReportPage(clouds[k], results[k], json, options.report).Render()
-                : std::string();
+        RemoveStaleReport(dir);
         WritePerceiveOutputs(dir, json, PerceiveLabelsCloud(clouds[k], results[k]),
-                             PerceiveModelsMesh(results[k]), report);
+                             PerceiveModelsMesh(results[k]));
         if (!quiet) {
             std::printf("frame %zu of %zu: %s\n", k + 1, frames.size(), frames[k].file.c_str());
             std::fputs(Summary(results[k], dir, options.report).c_str(), stdout);
         }
+        if (reports) reports->Submit(dir, std::move(clouds[k]), std::move(results[k]), json);
     }
+    if (reports) reports->Finish();
     if (!quiet && poses.registered) {
         std::size_t aligned = 0;
         for (const auto& a : poses.alignment) aligned += a.in_map;
@@ -293,7 +297,7 @@ void AddPerceiveCommand(CLI::App& app, const GlobalOptions& global) {
             return;
         }
         const auto start = std::chrono::steady_clock::now();
-        const PointCloud cloud = ReadNonEmptyCloud(*in);
+        PointCloud cloud = ReadNonEmptyCloud(*in);
         const double load_ms = MsSince(start);
         const PerceiveResult result = RunPerceive(cloud, *in, *out, options, load_ms);
         if (!*quiet) std::fputs(Summary(result, *out, options.report).c_str(), stdout);
@@ -357,7 +361,7 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
         const std::uint64_t seed = sim::SubSeed(1, 3);
         const sim::Scene scene = sim::MakeTableScene(table, seed);
         const auto pose = sim::TableViewpoints(scene, 1, {}, seed).front();
-        const PointCloud cloud =
+        PointCloud cloud =
             sim::ScanKinect(scene, pose, sim::KinectParams{}, sim::SubSeed(seed, 100));
         std::error_code ec;
         std::filesystem::create_directories(dir, ec);

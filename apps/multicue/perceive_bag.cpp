@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <set>
 
 #include <fmt/format.h>
@@ -14,6 +15,7 @@
 #include "multicue/io/point_cloud2.hpp"
 #include "multicue/io/ros_messages.hpp"
 #include "multicue/system/perceive_output.hpp"
+#include "multicue/system/report_writer.hpp"
 #ifdef MULTICUE_HAVE_ROS1_BAG
 #include "multicue/io/ros1_bag.hpp"
 #endif
@@ -66,6 +68,7 @@ struct BagRun {
     const PerceiveModels& models;
     const io::BagTopic& topic;
     std::set<std::string> used_folders;
+    ReportWriter* reports = nullptr;  ///< writes the pages off the stream's path; none: no pages
 };
 
 /// Perceives one message into OUT/<stamp>/; its index.json entry, with "skipped" and the reason
@@ -81,7 +84,7 @@ nlohmann::ordered_json PerceiveMessage(BagRun& run, const io::BagMessage& messag
     try {
         const auto start = std::chrono::steady_clock::now();
         const io::PointCloud2Message msg = io::DecodePointCloud2(run.topic, message.data, source);
-        const PointCloud cloud = io::FromPointCloud2(msg, source);
+        PointCloud cloud = io::FromPointCloud2(msg, source);
         if (cloud.CountFinite() == 0) {
             throw DataError(fmt::format("{}: no finite point among {}", source, cloud.size()));
         }
@@ -92,17 +95,18 @@ nlohmann::ordered_json PerceiveMessage(BagRun& run, const io::BagMessage& messag
         entry["stamp"] = msg.stamp.ToString();
         entry["frame_id"] = msg.frame_id;
         entry["folder"] = folder;
-        const PerceiveResult result = Perceive(cloud, run.pipeline, run.models);
+        PerceiveResult result = Perceive(cloud, run.pipeline, run.models);
         auto json = PerceiveResultJson(source, result, {{"load", load_ms}});
         json["message"] = {{"bag", bag_name},          {"topic", run.options.topic},
                            {"index", index},           {"stamp", msg.stamp.ToString()},
                            {"frame_id", msg.frame_id}, {"log_time_ns", message.log_time_ns}};
-        const std::string page = run.report.enabled
-                                     ? PerceiveReportPage(cloud, result, json, run.report).Render()
-                                     : std::string();
-        WritePerceiveOutputs(run.options.out / folder, json, PerceiveLabelsCloud(cloud, result),
-                             PerceiveModelsMesh(result), page);
+        const fs::path dir = run.options.out / folder;
+        if (run.reports != nullptr) RemoveStaleReport(dir);
+        WritePerceiveOutputs(dir, json, PerceiveLabelsCloud(cloud, result),
+                             PerceiveModelsMesh(result));
         entry["objects"] = result.objects.size();
+        if (run.reports != nullptr)
+            run.reports->Submit(dir, std::move(cloud), std::move(result), std::move(json));
     } catch (const FormatError& e) {
         entry["skipped"] = e.what();
     } catch (const DataError& e) {
@@ -152,7 +156,10 @@ void RunPerceiveBag(const PerceiveBagOptions& options, const PerceiveParams& pip
         io::WriteFileAtomically(options.out / "index.json", [&](std::ostream& o) { o << text; });
     };
 
-    BagRun run{options, pipeline, report, models, *topic, {}};
+    // The pages are written by a thread of their own while the next messages are perceived.
+    std::optional<ReportWriter> reports;
+    if (report.enabled) reports.emplace(report);
+    BagRun run{options, pipeline, report, models, *topic, {}, reports ? &*reports : nullptr};
     io::BagMessage message;
     try {
         while (!InterruptRequested() &&
@@ -180,6 +187,7 @@ void RunPerceiveBag(const PerceiveBagOptions& options, const PerceiveParams& pip
         throw;
     }
     progress.Finish();
+    if (reports) reports->Finish();
     write_index(!InterruptRequested());
     if (!options.quiet) {
         std::printf(

@@ -10,7 +10,31 @@
 
 #include "multicue/core/exceptions.hpp"
 
+#if defined(MULTICUE_TSAN_ANNOTATIONS)
+#include <sanitizer/tsan_interface.h>
+#endif
+
 namespace multicue {
+
+namespace detail {
+// ThreadSanitizer sees no order between a TBB task and the thread that spawned or joined it, since
+// TBB's scheduler is not instrumented (Debian's build). In a ThreadSanitizer build
+// (MULTICUE_TSAN_ANNOTATIONS, cmake/MulticueSanitize.cmake) these calls state the order that
+// tbb::parallel_for guarantees: all before the loop happens before every task, every task before
+// all after it. Elsewhere they are empty.
+#if defined(MULTICUE_TSAN_ANNOTATIONS)
+inline char tsan_fork_token, tsan_join_token;
+inline void TsanFork() { __tsan_release(&tsan_fork_token); }
+inline void TsanTaskStart() { __tsan_acquire(&tsan_fork_token); }
+inline void TsanTaskEnd() { __tsan_release(&tsan_join_token); }
+inline void TsanJoin() { __tsan_acquire(&tsan_join_token); }
+#else
+inline void TsanFork() {}
+inline void TsanTaskStart() {}
+inline void TsanTaskEnd() {}
+inline void TsanJoin() {}
+#endif
+}  // namespace detail
 
 /// Number of threads `num_threads` stands for (0 = all cores). Throws on negative values.
 int ResolveThreadCount(int num_threads);
@@ -29,12 +53,27 @@ void ParallelForChunks(std::size_t n, int num_threads, Body&& body, std::size_t 
         body(std::size_t{0}, n);
         return;
     }
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        tbb::parallel_for(
-            tbb::blocked_range<std::size_t>(0, n, grain),
-            [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
-    });
+    auto loop = [&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              detail::TsanTaskStart();
+                              body(r.begin(), r.end());
+                              detail::TsanTaskEnd();
+                          });
+    };
+    detail::TsanFork();
+    // Nested in a parallel loop of at most `threads` threads (objects in parallel, each with
+    // loops of its own): the inner loop runs in that loop's arena, so that its threads help
+    // wherever work is left, and in isolation, so that a thread waiting for it takes no outer
+    // task that could reuse its thread-local buffers.
+    if (tbb::this_task_arena::current_thread_index() != tbb::task_arena::not_initialized &&
+        tbb::this_task_arena::max_concurrency() <= threads) {
+        tbb::this_task_arena::isolate(loop);
+    } else {
+        tbb::task_arena arena(threads);
+        arena.execute(loop);
+    }
+    detail::TsanJoin();
 }
 
 /// Calls body(i) for every i in [0, n).

@@ -5,6 +5,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/io/file_utils.hpp"
+#include "multicue/io/json_text.hpp"
 
 namespace multicue::io {
 
@@ -93,12 +94,10 @@ ConfigSection ConfigSection::Parse(const std::string& text, const std::string& s
     auto state = std::make_shared<State>();
     state->source = source;
     try {
-        state->root = nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/true);
-    } catch (const nlohmann::json::parse_error& e) {
-        std::string what = e.what();
-        const auto pos = what.find("parse error");
-        throw InvalidArgument(fmt::format("{}: malformed JSON: {}", source,
-                                          pos == std::string::npos ? what : what.substr(pos)));
+        state->root = ParseJsonText(text, source, {.allow_comments = true});
+    } catch (const FormatError& e) {
+        // A parameter file is an argument: a bad one is a usage error (exit code 2).
+        throw InvalidArgument(e.what());
     }
     if (!state->root.is_object()) {
         throw InvalidArgument(fmt::format("{}: expected a JSON object at the top level", source));
@@ -140,9 +139,12 @@ void ConfigSection::TypeError(const std::string& key, const char* expected) cons
 
 void ConfigSection::Get(const std::string& key, Eigen::Vector3f& value, const std::string& help) {
     if (const nlohmann::json* j = Lookup(key)) {
-        if (!j->is_array() || j->size() != 3 || !(*j)[0].is_number() || !(*j)[1].is_number() ||
-            !(*j)[2].is_number()) {
-            TypeError(key, "an array of three numbers");
+        const auto is_float = [](const nlohmann::json& x) {
+            return x.is_number() && std::abs(x.get<double>()) <= std::numeric_limits<float>::max();
+        };
+        if (!j->is_array() || j->size() != 3 || !is_float((*j)[0]) || !is_float((*j)[1]) ||
+            !is_float((*j)[2])) {
+            TypeError(key, "an array of three finite numbers");
         }
         value = Eigen::Vector3f((*j)[0].get<float>(), (*j)[1].get<float>(), (*j)[2].get<float>());
     } else {

@@ -3,7 +3,10 @@
 /// of the file must be consumed; an unknown key is an error naming its full path, so a typo never
 /// silently leaves a default in place.
 
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -17,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "multicue/core/params.hpp"
+#include "multicue/io/json_text.hpp"
 
 namespace multicue::io {
 
@@ -110,10 +114,17 @@ void ConfigSection::Get(const std::string& key, T& value, const std::string& hel
         } else if constexpr (std::is_integral_v<T>) {
             if (!j->is_number_integer()) TypeError(key, "an integer");
             if constexpr (std::is_unsigned_v<T>) {
-                if (j->get<long long>() < 0) TypeError(key, "a non-negative integer");
+                if (!j->is_number_unsigned() && j->get<std::int64_t>() < 0) {
+                    TypeError(key, "a non-negative integer");
+                }
             }
+            // A value beyond the type would be cut to another, wrong value.
+            if (!JsonIntegerFits<T>(*j)) TypeError(key, "an integer of a smaller magnitude");
         } else if constexpr (std::is_floating_point_v<T>) {
             if (!j->is_number()) TypeError(key, "a number");
+            if (!(std::abs(j->get<double>()) <= std::numeric_limits<T>::max())) {
+                TypeError(key, "a finite number of a smaller magnitude");
+            }
         } else if constexpr (std::is_same_v<T, std::string>) {
             if (!j->is_string()) TypeError(key, "a string");
         }

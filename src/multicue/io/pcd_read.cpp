@@ -438,9 +438,14 @@ std::vector<Byte> ParseAscii(std::string_view data, const PcdHeader& h, const st
         values_with_padding += f.count;
         if (f.target != Target::kPadding) values += f.count;
     }
-    // Records grow line by line; the reservation is bounded by what the file can hold (each
-    // value takes at least one character and a separator), so an absurd POINTS cannot exhaust
-    // memory before the data runs out.
+    // A point takes at least two bytes (a value and a line end): a header that claims more points
+    // than the data could ever hold is refused before anything is read. A count that is merely
+    // too large is found line by line below, with the line where the data end.
+    if (const std::size_t most = (data.size() + 1) / 2; n > most) {
+        throw FormatError(fmt::format(
+            "{}: DATA section truncated: {} points claimed, {} bytes of data hold at most {}", file,
+            n, data.size(), most));
+    }
     std::vector<Byte> records;
     records.reserve(std::min(n, data.size() / (2 * values) + 1) * h.packed_size);
     std::vector<std::string_view> tokens;
@@ -551,6 +556,7 @@ PointCloud Decode(const PcdHeader& h, const std::vector<FieldSource>& sources,
         };
         const auto coordinate = [&](std::vector<Eigen::Vector3f>& v, int k) {
             v.resize(n);
+            if (n == 0) return;  // data() may be null: no offset from it
             to_floats(reinterpret_cast<Byte*>(v.data()) + k * sizeof(float),
                       sizeof(Eigen::Vector3f));
         };

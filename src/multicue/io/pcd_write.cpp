@@ -158,13 +158,25 @@ void WritePcd(const std::filesystem::path& path, const PointCloud& cloud,
     if (options.encoding == PcdEncoding::kAscii) {
         body = AsciiBody(fields, n);
     } else if (options.encoding == PcdEncoding::kBinary) {
-        body.resize(n * point_size);
-        std::size_t offset = 0;
-        for (const auto& f : fields) {
-            CopyStrided(f.src, f.stride, reinterpret_cast<Byte*>(body.data()) + offset, point_size,
-                        f.Bytes(), n);
-            offset += f.Bytes();
-        }
+        // Records are written in blocks, not assembled whole: a file of 10 million points would
+        // otherwise hold its size in memory a second time beside the cloud.
+        WriteFileAtomically(path, [&](std::ostream& out) {
+            out.write(header.data(), static_cast<std::streamsize>(header.size()));
+            constexpr std::size_t kBlock = 1 << 16;  // points per block
+            std::vector<Byte> block(std::min(n, kBlock) * point_size);
+            for (std::size_t first = 0; first < n && out; first += kBlock) {
+                const std::size_t count = std::min(kBlock, n - first);
+                std::size_t offset = 0;
+                for (const auto& f : fields) {
+                    CopyStrided(f.src + first * f.stride, f.stride, block.data() + offset,
+                                point_size, f.Bytes(), count);
+                    offset += f.Bytes();
+                }
+                out.write(reinterpret_cast<const char*>(block.data()),
+                          static_cast<std::streamsize>(count * point_size));
+            }
+        });
+        return;
     } else {
         // Field by field (all x, then all y, ...) compresses far better than whole records.
         const std::size_t size = n * point_size;

@@ -153,50 +153,99 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     pp.viewpoint = f.center + f.normal * 2.0f;
     const PlaneFit fit = FitPlane(opened, moved, pp);
     if (!fit.found || fit.inliers.size() < p.min_points) return out;
-    out.found = true;
-    out.moved = fit.inliers;
-    Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-    for (const Index i : fit.inliers) centroid += opened.points[i];
-    centroid /= static_cast<float>(fit.inliers.size());
-    Eigen::Vector3f nb = fit.plane.head<3>();
+    // A drawer shows its sides and bottom too, and the largest plane may be one of them: the
+    // hypotheses "the front slid along its normal" (the best plane parallel to the closed front)
+    // and "the front turned about the line where the planes meet" are each scored by the moved
+    // points on the front's rectangle moved that way, and the better one wins.
+    PlaneFitParams parallel = pp;
+    parallel.axis = f.normal;
+    parallel.axis_mode = PlaneAxisMode::kParallel;
+    parallel.max_angle = p.parallel_deg * kDegToRad;
+    const PlaneFit fit_parallel = FitPlane(opened, moved, parallel);
+    auto centroid_of = [&](const Indices& idx) {
+        Eigen::Vector3f c = Eigen::Vector3f::Zero();
+        for (const Index i : idx) c += opened.points[i];
+        return Eigen::Vector3f(c / static_cast<float>(std::max<std::size_t>(1, idx.size())));
+    };
+    // Moved points on the closed front's rectangle carried by T (a small margin around it).
+    auto support = [&](const Eigen::Isometry3f& T) {
+        const Eigen::Vector3f c = T * f.center;
+        const Eigen::Vector3f u = T.linear() * f.u_axis, v = T.linear() * f.v_axis,
+                              n = T.linear() * f.normal;
+        const float hu = (f.max.x() - f.min.x()) / 2 + 0.03f,
+                    hv = (f.max.y() - f.min.y()) / 2 + 0.03f;
+        std::size_t count = 0;
+        for (const Index i : moved) {
+            const Eigen::Vector3f d = opened.points[i] - c;
+            count += std::abs(d.dot(n)) <= p.plane_threshold && std::abs(d.dot(u)) <= hu &&
+                     std::abs(d.dot(v)) <= hv;
+        }
+        return count;
+    };
+    // The prismatic hypothesis.
+    Articulation slide;
+    float travel = 0.0f;
+    std::size_t slide_support = 0;
+    Indices slide_inliers;
     const float cos_par = std::cos(p.parallel_deg * kDegToRad);
-    Articulation& a = out.articulation;
-    a.source = "motion";
-    if (std::abs(nb.dot(f.normal)) >= cos_par) {
-        a.type = JointType::kPrismatic;
-        a.axis = f.normal;
-        a.origin = f.center;
-        out.opening = std::max(0.0f, f.normal.dot(centroid) + plane_d);
-        a.lower = 0.0f;
-        a.upper = out.opening;
-        return out;
+    const PlaneFit& pf =
+        std::abs(fit.plane.head<3>().dot(f.normal)) >= cos_par ? fit : fit_parallel;
+    if (pf.found && pf.inliers.size() >= p.min_points) {
+        travel = std::max(0.0f, f.normal.dot(centroid_of(pf.inliers)) + plane_d);
+        slide.type = JointType::kPrismatic;
+        slide.axis = f.normal;
+        slide.origin = f.center;
+        slide.upper = travel;
+        slide.source = "motion";
+        Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+        T.translation() = f.normal * travel;
+        slide_support = support(T);
+        slide_inliers = pf.inliers;
     }
-    // Revolute about the line where the closed front's plane meets the moved front's plane.
-    Eigen::Vector3f dir = f.normal.cross(nb);
-    dir.normalize();
-    const float db = fit.plane.w();
-    // A point on both planes: solve [n_a; n_b; dir] x = [-d_a; -d_b; dir . c].
-    Eigen::Matrix3f M;
-    M.row(0) = f.normal.transpose();
-    M.row(1) = nb.transpose();
-    M.row(2) = dir.transpose();
-    const Eigen::Vector3f rhs(-plane_d, -db, dir.dot(f.center));
-    const Eigen::Vector3f point = M.colPivHouseholderQr().solve(rhs);
-    // The sign: rotating the closed front's centre about the axis brings it towards the moved
-    // front's centre.
-    const Eigen::Vector3f ra = f.center - point, rb = centroid - point;
-    if (ra.cross(rb).dot(dir) < 0) dir = -dir;
-    if (nb.dot(f.normal) < 0) nb = -nb;
-    a.type = JointType::kRevolute;
-    a.axis = dir;
-    a.origin = point;
-    // Opening angle: between the closed front's in-plane direction away from the axis and the
-    // moved front's (more than 90 degrees when the door swung past the perpendicular).
-    const Eigen::Vector3f ea = (ra - ra.dot(dir) * dir).normalized();
-    const Eigen::Vector3f eb = (rb - rb.dot(dir) * dir).normalized();
-    out.opening = std::acos(std::clamp(ea.dot(eb), -1.0f, 1.0f));
-    a.lower = 0.0f;
-    a.upper = out.opening;
+    // The revolute hypothesis, from the best plane when it is tilted.
+    Articulation hinge;
+    float angle = 0.0f;
+    std::size_t hinge_support = 0;
+    Eigen::Vector3f nb = fit.plane.head<3>();
+    if (std::abs(nb.dot(f.normal)) < cos_par) {
+        const Eigen::Vector3f centroid = centroid_of(fit.inliers);
+        Eigen::Vector3f dir = f.normal.cross(nb).normalized();
+        // A point on both planes: solve [n_a; n_b; dir] x = [-d_a; -d_b; dir . c].
+        Eigen::Matrix3f M;
+        M.row(0) = f.normal.transpose();
+        M.row(1) = nb.transpose();
+        M.row(2) = dir.transpose();
+        const Eigen::Vector3f rhs(-plane_d, -fit.plane.w(), dir.dot(f.center));
+        const Eigen::Vector3f point = M.colPivHouseholderQr().solve(rhs);
+        // The sign: rotating the closed front's centre about the axis brings it towards the
+        // moved front's centre.
+        const Eigen::Vector3f ra = f.center - point, rb = centroid - point;
+        if (ra.cross(rb).dot(dir) < 0) dir = -dir;
+        // The opening: between the closed front's in-plane direction away from the axis and
+        // the moved front's (more than 90 degrees when the door swung past the perpendicular).
+        const Eigen::Vector3f ea = (ra - ra.dot(dir) * dir).normalized();
+        const Eigen::Vector3f eb = (rb - rb.dot(dir) * dir).normalized();
+        angle = std::acos(std::clamp(ea.dot(eb), -1.0f, 1.0f));
+        hinge.type = JointType::kRevolute;
+        hinge.axis = dir;
+        hinge.origin = point;
+        hinge.upper = angle;
+        hinge.source = "motion";
+        const Eigen::Isometry3f T = Eigen::Translation3f(point) * Eigen::AngleAxisf(angle, dir) *
+                                    Eigen::Translation3f(-point);
+        hinge_support = support(T);
+    }
+    if (slide.type == JointType::kUnknown && hinge.type == JointType::kUnknown) return out;
+    out.found = true;
+    if (hinge.type != JointType::kUnknown && hinge_support >= slide_support) {
+        out.articulation = hinge;
+        out.opening = angle;
+        out.moved = fit.inliers;
+    } else {
+        out.articulation = slide;
+        out.opening = travel;
+        out.moved = slide_inliers;
+    }
     return out;
 }
 

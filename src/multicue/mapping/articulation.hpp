@@ -9,10 +9,12 @@
 /// positive angle swings the front out of the furniture.
 ///
 /// From two scans of the same view, before and after the robot opened a front: the points in
-/// front of the closed front that were not there before are the moved front; a plane fitted to
-/// them that is parallel to the closed front means a prismatic joint (the distance is its travel),
-/// a tilted plane a revolute joint about the line where the two planes meet (the angle between
-/// them is the opening).
+/// front of the closed front that were not there before are the moved front. The best plane
+/// through them, and the best plane parallel to the closed front, give two hypotheses: a
+/// prismatic joint (the parallel plane's distance is the travel) and a revolute joint about the
+/// line where the closed front's plane meets a tilted plane (the angle between them is the
+/// opening). The hypothesis under which more moved points lie on the front's rectangle, moved
+/// that way, wins (a drawer's sides and bottom can outnumber its front in the best plane).
 
 #include <cstddef>
 #include <cstdint>

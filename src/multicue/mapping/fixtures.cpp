@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string_view>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -316,37 +317,35 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         for (const Indices& cluster : merged) {
             Eigen::AlignedBox3f box;
             for (const Index i : cluster) box.extend(cloud.points[i]);
-            if (box.sizes().norm() > p.max_diameter) {
-                ++result.too_large;
-                continue;
-            }
+            const char* reason = nullptr;
             Fixture fx;
             fx.face = f;
-            bool at_border = false;
-            if (cloud.IsOrganized() && p.border_px > 0) {
+            if (box.sizes().norm() > p.max_diameter) {
+                reason = "too large";
+                ++result.too_large;
+            }
+            if (reason == nullptr && cloud.IsOrganized() && p.border_px > 0) {
                 const auto b = static_cast<std::uint32_t>(p.border_px);
                 for (const Index i : cluster) {
                     const std::uint32_t u = i % cloud.width, v = i / cloud.width;
-                    at_border = at_border || u < b || v < b || u + b >= cloud.width ||
-                                v + b >= cloud.height;
+                    if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
+                        reason = "image border";
+                    }
                 }
             }
-            const bool classified =
-                !at_border && ClassifyFixture(cloud, cluster, face, frame, p, fx);
-            const bool front = classified && in_front(cluster);
-            const float attached = front ? attached_share(cluster, face.axis) : 0.0f;
-            if (GetLogLevel() <= LogLevel::kDebug) {
-                LogDebug(
-                    "fixture candidate on face {}: {} points at ({:.2f}, {:.2f}, {:.2f}), "
-                    "classified {}, in front {}, attached {:.2f}",
-                    f, cluster.size(), fx.center.x(), fx.center.y(), fx.center.z(), classified,
-                    front, attached);
+            if (reason == nullptr && !ClassifyFixture(cloud, cluster, face, frame, p, fx)) {
+                reason = "shape";
             }
-            if (classified && front && attached <= p.max_attached_share) {
+            if (reason == nullptr && !in_front(cluster)) reason = "not in front of the face";
+            if (reason == nullptr && attached_share(cluster, face.axis) > p.max_attached_share) {
+                reason = "attached to another plane";
+            }
+            if (reason == nullptr) {
                 result.fixtures.push_back(std::move(fx));
-            } else {
-                ++result.unclassified;
+                continue;
             }
+            if (std::string_view(reason) != "too large") ++result.unclassified;
+            result.rejected.push_back({box.center(), cluster.size(), reason});
         }
     }
     return result;

@@ -52,10 +52,20 @@ struct FixtureParams {
     void Validate() const;
 };
 
+/// A cluster in front of a face that did not become a fixture, and why.
+struct RejectedCluster {
+    Eigen::Vector3f center = Eigen::Vector3f::Zero();  ///< of its bounding box [m]
+    std::size_t points = 0;
+    /// "too large", "image border", "shape", "not in front of the face", "attached to another
+    /// plane"
+    const char* reason = "";
+};
+
 struct FixtureResult {
-    std::vector<Fixture> fixtures;  ///< handles and knobs, ordered by face then position
-    std::size_t too_large = 0;      ///< clusters rejected as too big to grasp
-    std::size_t unclassified = 0;   ///< neither elongated enough nor small enough
+    std::vector<Fixture> fixtures;          ///< handles and knobs, ordered by face then position
+    std::vector<RejectedCluster> rejected;  ///< the clusters dropped
+    std::size_t too_large = 0;              ///< clusters rejected as too big to grasp
+    std::size_t unclassified = 0;           ///< rejected for any other reason
 };
 
 /// Fixtures in front of the furniture faces (components labelled kFace) of `structure`.

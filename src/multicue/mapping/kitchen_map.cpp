@@ -204,7 +204,9 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     if (!vertical) throw DataError("map kitchen: no vertical planes (walls or furniture faces)");
     stage("structure");
     // Handles and knobs in front of the faces.
-    map.fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges).fixtures;
+    FixtureResult fixtures = DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges);
+    map.fixtures = std::move(fixtures.fixtures);
+    r.rejected_fixtures = std::move(fixtures.rejected);
     stage("fixtures");
     // Door and drawer fronts grown from the fixtures.
     map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);

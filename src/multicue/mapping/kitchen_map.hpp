@@ -55,7 +55,8 @@ struct MapKitchenResult {
     PointCloud cloud;
     std::vector<std::size_t> scan_offsets;  ///< first point of each scan in `cloud`
     std::vector<float> ranges;  ///< per point of `cloud`: distance to its scan's sensor [m]
-    double time_ms = 0.0;       ///< whole pipeline [ms]
+    std::vector<RejectedCluster> rejected_fixtures;  ///< clusters that became no fixture
+    double time_ms = 0.0;                            ///< whole pipeline [ms]
     /// Stage times in pipeline order: normals, axes, structure, fixtures, fronts, articulation,
     /// containers [ms]
     std::vector<std::pair<std::string, double>> timings;

@@ -117,7 +117,10 @@ void BoostClassifier::ReadModel(ByteReader& r) {
     if (n != num_classes()) r.Fail("boost model count differs from the class count");
     auto fresh = std::make_unique<Models>();
     for (std::uint64_t c = 0; c < n; ++c) {
-        fresh->per_class.push_back(detail::ModelFromString<cv::ml::Boost>(r.GetString(), r.what()));
+        fresh->per_class.push_back(detail::ModelFromString<cv::ml::Boost>(
+            r.GetString(), r.what(), [&](const cv::FileNode& m) {
+                return detail::TreesProblem(m, num_features(), num_classes());
+            }));
     }
     models_ = std::move(fresh);
 }

@@ -107,7 +107,10 @@ void MlpClassifier::WriteModel(ByteWriter& w) const {
 }
 
 void MlpClassifier::ReadModel(ByteReader& r) {
-    model_->net = detail::ModelFromString<cv::ml::ANN_MLP>(r.GetString(), r.what());
+    model_->net = detail::ModelFromString<cv::ml::ANN_MLP>(
+        r.GetString(), r.what(), [&](const cv::FileNode& m) {
+            return detail::MlpProblem(m, num_features(), num_classes());
+        });
     const cv::Mat layers = model_->net->getLayerSizes();
     if (layers.total() < 2 || layers.at<int>(0) != static_cast<int>(num_features()) ||
         layers.at<int>(static_cast<int>(layers.total()) - 1) != static_cast<int>(num_classes())) {
@@ -181,7 +184,10 @@ void RTreesClassifier::WriteModel(ByteWriter& w) const {
 }
 
 void RTreesClassifier::ReadModel(ByteReader& r) {
-    model_->forest = detail::ModelFromString<cv::ml::RTrees>(r.GetString(), r.what());
+    model_->forest = detail::ModelFromString<cv::ml::RTrees>(
+        r.GetString(), r.what(), [&](const cv::FileNode& m) {
+            return detail::TreesProblem(m, num_features(), num_classes());
+        });
 }
 
 }  // namespace multicue::ml

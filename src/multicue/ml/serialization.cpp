@@ -3,10 +3,15 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <system_error>
 
+#include <signal.h>
 #include <unistd.h>
 
 namespace multicue::ml {
@@ -137,21 +142,52 @@ std::string ReadBytes(const std::filesystem::path& path) {
     return std::move(ss).str();
 }
 
+namespace {
+
+// Removes the temporary files of `name` in `dir` left by killed writers (their process is gone);
+// as io::WriteFileAtomically does for its own.
+void RemoveStaleTemporaries(const std::filesystem::path& dir, const std::string& name) {
+    const std::string prefix = "." + name + ".tmp-";
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string file = it->path().filename().string();
+        if (file.rfind(prefix, 0) != 0) continue;
+        const long pid = std::strtol(file.c_str() + prefix.size(), nullptr, 10);
+        if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+            std::error_code remove_ec;
+            std::filesystem::remove(it->path(), remove_ec);
+        }
+    }
+}
+
+}  // namespace
+
 void WriteBytesAtomically(const std::filesystem::path& path, std::string_view bytes) {
     static std::atomic<unsigned> counter{0};
     auto dir = path.parent_path();
     if (dir.empty()) dir = ".";
-    const auto tmp = dir / (path.filename().string() + ".tmp" + std::to_string(::getpid()) + "." +
-                            std::to_string(counter++));
+    // Hidden and named like io::WriteFileAtomically's, so a file left by a killed process is
+    // recognisable as one.
+    RemoveStaleTemporaries(dir, path.filename().string());
+    std::string name = ".";
+    name.append(path.filename().string());
+    name.append(".tmp-").append(std::to_string(::getpid()));
+    name.append("-").append(std::to_string(counter++));
+    const auto tmp = dir / name;
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(path.string() + ": cannot open for writing");
-        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        out.flush();
         if (!out) {
+            throw IoError(path.string() + ": cannot open for writing: " + std::strerror(errno));
+        }
+        errno = 0;
+        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        out.close();
+        if (!out) {
+            // errno of the failed write: ENOSPC (disk full), EFBIG (ulimit -f), EIO, ...
+            const std::string why = errno != 0 ? std::strerror(errno) : "stream error";
             std::error_code ec;
             std::filesystem::remove(tmp, ec);
-            throw IoError(path.string() + ": write failed");
+            throw IoError(path.string() + ": write failed: " + why);
         }
     }
     std::error_code ec;

@@ -3,6 +3,8 @@
 #include <libsvm/svm.h>
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
@@ -12,6 +14,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/ml/serialization.hpp"
+#include "multicue/ml/svm_model_text.hpp"
 
 namespace multicue::ml {
 
@@ -67,10 +70,15 @@ std::filesystem::path TempModelPath() {
 // libsvm reads and writes models only through files: go through a private temporary file.
 std::string ModelToText(const svm_model* model) {
     const auto path = TempModelPath();
+    errno = 0;
     const int rc = svm_save_model(path.c_str(), model);
+    const int error = errno;
     std::string text;
     try {
-        if (rc != 0) throw IoError("libsvm could not write its model to " + path.string());
+        if (rc != 0) {
+            throw IoError("libsvm could not write its model to " + path.string() + ": " +
+                          (error != 0 ? std::strerror(error) : "unknown error"));
+        }
         text = ReadBytes(path);
     } catch (...) {
         std::error_code ec;
@@ -277,6 +285,10 @@ void SvmClassifier::ReadModel(ByteReader& r) {
     num_classes_ = r.Get<std::int32_t>();
     model_text_ = r.GetString();
     if (num_classes_ != static_cast<int>(num_classes())) r.Fail("bad SVM class count");
+    if (const std::string problem = SvmModelTextProblem(model_text_, num_features(), num_classes());
+        !problem.empty()) {
+        r.Fail("bad embedded libsvm model: " + problem);
+    }
     std::lock_guard<std::mutex> lock(LibsvmMutex());
     svm_model* m = ModelFromText(model_text_);
     if (m == nullptr) r.Fail("libsvm cannot read the embedded model");

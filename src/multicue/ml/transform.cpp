@@ -163,7 +163,10 @@ FeatureTransform LoadTransform(const std::filesystem::path& path) {
     const auto rows = r.Get<std::uint64_t>();
     const auto comp = r.GetVector<float>();
     const auto d = static_cast<std::uint64_t>(t.offset.size());
-    if (rows * d != comp.size()) r.Fail("bad PCA component matrix size");
+    // rows * d could wrap around (or be 0 with any rows when d is 0): compare by division.
+    if (d == 0 ? rows != 0 || !comp.empty() : comp.size() % d != 0 || rows != comp.size() / d) {
+        r.Fail("bad PCA component matrix size");
+    }
     t.components = Eigen::Map<const Eigen::MatrixXf>(comp.data(), static_cast<Eigen::Index>(rows),
                                                      static_cast<Eigen::Index>(d));
     t.variances = GetVectorXf(r);
@@ -172,6 +175,10 @@ FeatureTransform LoadTransform(const std::filesystem::path& path) {
     if (t.input_names.size() != d) r.Fail("column names do not match the transform size");
     if (t.kind != TransformKind::kPca && static_cast<std::uint64_t>(t.scale.size()) != d) {
         r.Fail("scale vector does not match the transform size");
+    }
+    if (t.kind == TransformKind::kPca &&
+        (rows == 0 || static_cast<std::uint64_t>(t.variances.size()) != rows)) {
+        r.Fail("PCA components and variances do not match");
     }
     return t;
 }

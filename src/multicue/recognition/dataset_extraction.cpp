@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <set>
 #include <unordered_set>
@@ -13,6 +12,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/filters/voxel_grid.hpp"
+#include "multicue/io/json_text.hpp"
 #include "multicue/io/point_cloud_io.hpp"
 #include "multicue/search/kdtree.hpp"
 #include "multicue/surface/normals.hpp"
@@ -49,10 +49,18 @@ T Get(const json& j, const char* key, const fs::path& manifest) {
     if (!j.is_object() || !j.contains(key)) {
         throw FormatError(fmt::format("{}: missing \"{}\"", manifest.string(), key));
     }
+    const json& value = j.at(key);
+    const auto wrong_type = [&] {
+        return FormatError(fmt::format("{}: \"{}\" has the wrong type", manifest.string(), key));
+    };
+    if constexpr (std::is_integral_v<T>) {
+        // get<T>() would cut a value beyond T (or a fraction) to another value.
+        if (!io::JsonIntegerFits<T>(value)) throw wrong_type();
+    }
     try {
-        return j.at(key).get<T>();
+        return value.get<T>();
     } catch (const json::exception&) {
-        throw FormatError(fmt::format("{}: \"{}\" has the wrong type", manifest.string(), key));
+        throw wrong_type();
     }
 }
 
@@ -187,14 +195,7 @@ void ExtractFrame(const ExtractionInput& input, const DatasetExtractionParams& p
 }  // namespace
 
 std::vector<ExtractionInput> ManifestInputs(const fs::path& manifest) {
-    std::ifstream in(manifest);
-    if (!in) throw IoError(fmt::format("cannot open manifest {}", manifest.string()));
-    json m;
-    try {
-        m = json::parse(in);
-    } catch (const json::exception& e) {
-        throw FormatError(fmt::format("{}: not JSON ({})", manifest.string(), e.what()));
-    }
+    const json m = io::ReadJsonFile(manifest);
     const std::string format = Get<std::string>(m, "format", manifest);
     if (format.rfind("multicue.sim/", 0) != 0) {
         throw FormatError(
@@ -225,6 +226,9 @@ std::vector<ExtractionInput> ManifestInputs(const fs::path& manifest) {
             objects.push_back({label, category + "/" + kind, group});
         }
         const json frames = Get<json>(scene, "frames", manifest);
+        if (!frames.is_array()) {
+            throw FormatError(fmt::format("{}: \"frames\" is not a list", manifest.string()));
+        }
         for (std::size_t v = 0; v < frames.size(); ++v) {
             ExtractionInput input;
             input.source = Get<std::string>(frames[v], "file", manifest);
@@ -235,7 +239,8 @@ std::vector<ExtractionInput> ManifestInputs(const fs::path& manifest) {
                 // Row 2 of the rotation = world z expressed in the sensor frame.
                 Eigen::Vector3f up;
                 for (int c = 0; c < 3; ++c) {
-                    if (!T[2].is_array() || T[2].size() < 3 || !T[2][c].is_number()) {
+                    if (!T[2].is_array() || T[2].size() < 3 || !T[2][c].is_number() ||
+                        !(std::abs(T[2][c].get<double>()) <= 1e30)) {
                         throw FormatError(fmt::format("{}: malformed T_world_sensor of {}",
                                                       manifest.string(), input.source));
                     }

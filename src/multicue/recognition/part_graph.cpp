@@ -39,6 +39,12 @@ struct CellEntry {
     std::uint32_t point;
 };
 
+// The entries [begin, end) of a cell that belong to one part.
+struct PartRun {
+    std::uint32_t part;
+    std::uint32_t begin, end;
+};
+
 }  // namespace
 
 PartGraph BuildPartGraph(const PointCloud& cloud, const std::vector<Indices>& parts,
@@ -63,6 +69,28 @@ PartGraph BuildPartGraph(const PointCloud& cloud, const std::vector<Indices>& pa
         }
     }
     const float d2 = d * d;
+    // Each cell's entries come in runs of one part (parts were added in order): only runs of two
+    // different parts not yet joined compare their points, and stop at the first pair within d.
+    std::unordered_map<std::uint64_t, std::vector<PartRun>> runs;
+    for (const auto& [key, entries] : cells) {
+        auto& r = runs[key];
+        for (std::size_t k = 0; k < entries.size(); ++k) {
+            if (k == 0 || entries[k].part != entries[k - 1].part) {
+                r.push_back({entries[k].part, static_cast<std::uint32_t>(k), 0});
+            }
+            r.back().end = static_cast<std::uint32_t>(k + 1);
+        }
+    }
+    auto near = [&](const std::vector<CellEntry>& here, const PartRun& a,
+                    const std::vector<CellEntry>& there, const PartRun& b) {
+        for (std::uint32_t i = a.begin; i < a.end; ++i) {
+            const Eigen::Vector3f& p = cloud.points[here[i].point];
+            for (std::uint32_t j = b.begin; j < b.end; ++j) {
+                if ((p - cloud.points[there[j].point]).squaredNorm() < d2) return true;
+            }
+        }
+        return false;
+    };
     // Deterministic order of cells.
     std::vector<std::uint64_t> keys;
     keys.reserve(cells.size());
@@ -70,20 +98,19 @@ PartGraph BuildPartGraph(const PointCloud& cloud, const std::vector<Indices>& pa
     std::sort(keys.begin(), keys.end());
     for (std::uint64_t key : keys) {
         const auto& here = cells[key];
+        const auto& here_runs = runs[key];
         const Eigen::Vector3i c = coords[key];
         for (int dx = -1; dx <= 1; ++dx) {
             for (int dy = -1; dy <= 1; ++dy) {
                 for (int dz = -1; dz <= 1; ++dz) {
-                    const auto it = cells.find(CellKey(c + Eigen::Vector3i(dx, dy, dz)));
+                    const std::uint64_t other = CellKey(c + Eigen::Vector3i(dx, dy, dz));
+                    const auto it = cells.find(other);
                     if (it == cells.end()) continue;
                     const auto& there = it->second;
-                    for (const CellEntry& a : here) {
-                        for (const CellEntry& b : there) {
+                    for (const PartRun& a : here_runs) {
+                        for (const PartRun& b : runs[other]) {
                             if (b.part <= a.part || graph.Adjacent(a.part, b.part)) continue;
-                            if ((cloud.points[a.point] - cloud.points[b.point]).squaredNorm() <
-                                d2) {
-                                graph.AddEdge(a.part, b.part);
-                            }
+                            if (near(here, a, there, b)) graph.AddEdge(a.part, b.part);
                         }
                     }
                 }

@@ -257,7 +257,7 @@ ShapeGuidance GuideFits(const PointCloud& cloud, const PerceivedObject& object,
     ShapeGuidance g;
     if (!params.guided_fits || !cloud.HasNormals()) return g;
     RsdParams rp = params.guided_rsd;
-    rp.num_threads = 1;
+    rp.num_threads = params.num_threads;  // nested in the loop over objects: its threads help
     g.rsd = RsdMinRadii(cloud, object.indices, rp);
     if (object.part_probabilities.size() != object.parts.size() || object.parts.empty()) return g;
     g.box_prior.assign(cloud.size(), 0.0f);
@@ -295,7 +295,7 @@ float FitPrimitive(const PointCloud& cloud, const PerceivedObject& object,
     float inlier_ratio = 0.0f;
     if (c == Category::kCylinder || c == Category::kPlate) {
         CylinderModelParams p = params.cylinder;
-        p.sac.num_threads = 1;
+        p.sac.num_threads = params.num_threads;
         CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p, guidance.Round());
         if (cyl.found) {
             model.mesh = CylinderMesh(cyl);
@@ -317,8 +317,9 @@ float FitPrimitive(const PointCloud& cloud, const PerceivedObject& object,
     if (params.rotational.enabled && upright_possible && cloud.HasNormals() &&
         (c == Category::kCylinder || c == Category::kOther || c == Category::kSphere) &&
         inlier_ratio < params.min_inlier_ratio) {
-        RotationalModel rot =
-            FitRotationalModel(cloud, object.indices, up, plane, params.rotational);
+        RotationalFitParams rp = params.rotational;
+        rp.num_threads = params.num_threads;
+        RotationalModel rot = FitRotationalModel(cloud, object.indices, up, plane, rp);
         if (rot.found && rot.inlier_ratio > inlier_ratio) {
             model.box.reset();
             model.cylinder.reset();

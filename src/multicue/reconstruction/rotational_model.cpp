@@ -413,6 +413,7 @@ void CheckParams(const RotationalFitParams& p) {
     if (!(p.profile_tolerance > 0.0f))
         bad(fmt::format("profile_tolerance must be > 0, got {}", p.profile_tolerance));
     if (!(p.min_radius >= 0.0f)) bad(fmt::format("min_radius must be >= 0, got {}", p.min_radius));
+    if (p.num_threads < 0) bad(fmt::format("num_threads must be >= 0, got {}", p.num_threads));
 }
 
 float Median(std::vector<float>& v) {
@@ -491,11 +492,12 @@ AxisSearch MakeAxisSearch(const Eigen::Vector3f& up, const RotationalFitParams& 
 /// to rank them); the indices of the best `refine_candidates`, ties broken by index.
 std::vector<std::size_t> BestCoarseDirections(const std::vector<Sample>& samples,
                                               const std::vector<Eigen::Vector3d>& directions,
-                                              const AxisSearch& search, int refine_candidates) {
+                                              const AxisSearch& search, int refine_candidates,
+                                              int num_threads) {
     const std::size_t coarse_stride = std::max<std::size_t>(1, samples.size() / 300);
     std::vector<double> costs(directions.size());
     ParallelFor(
-        directions.size(), 0,
+        directions.size(), num_threads,
         [&](std::size_t d) {
             costs[d] = EvaluateDirection(samples, coarse_stride, directions[d], search.t,
                                          search.sin_parallel)
@@ -548,12 +550,12 @@ AxisFit SearchNormalLineAxis(const std::vector<Sample>& samples, const AxisSearc
     // grid_directions cover the hemisphere; a cap around up gets the same density (its share of
     // the hemisphere's area, 1 - cos(max_tilt)), at least 100 directions.
     const double share = 1.0 - std::cos(search.max_tilt);
-    const int count = std::max(
-        std::min(100, params.grid_directions),
-        static_cast<int>(std::ceil(share * static_cast<double>(params.grid_directions))));
+    const int count =
+        std::max(std::min(100, params.grid_directions),
+                 static_cast<int>(std::ceil(share * static_cast<double>(params.grid_directions))));
     const auto directions = CapDirections(search.pole, search.max_tilt, count);
-    const std::vector<std::size_t> candidates =
-        BestCoarseDirections(samples, directions, search, params.refine_candidates);
+    const std::vector<std::size_t> candidates = BestCoarseDirections(
+        samples, directions, search, params.refine_candidates, params.num_threads);
     const double spacing =
         std::sqrt(2.0 * kPi * (1.0 - std::cos(search.max_tilt)) / directions.size());
     AxisFit best;
@@ -687,21 +689,32 @@ std::vector<ScoredStart> RefinementStarts(const std::vector<Sample>& samples,
 }
 
 /// Nelder-Mead from each of the first `refined` starts (twice, the second with finer steps); the
-/// result of lowest cost.
+/// result of lowest cost (the first of equal ones). The starts run in parallel, each on its own
+/// copy of the cost (it keeps scratch buffers); the result does not depend on the thread count.
 Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredStart>& starts,
-                             std::size_t refined, const Eigen::Vector4d& scale, double tolerance) {
+                             std::size_t refined, const Eigen::Vector4d& scale, double tolerance,
+                             int num_threads) {
+    std::vector<Eigen::Vector4d> ends(refined);
+    std::vector<double> end_costs(refined);
+    ParallelFor(
+        refined, num_threads,
+        [&](std::size_t k) {
+            const ContourCost own = cost;
+            Eigen::Vector4d y = starts[k].second;
+            for (int restart = 0; restart < 2; ++restart) {
+                y = NelderMead<4>(own, y, restart == 0 ? scale : Eigen::Vector4d(0.25 * scale),
+                                  tolerance, 400);
+            }
+            ends[k] = y;
+            end_costs[k] = own(y);
+        },
+        1);
     Eigen::Vector4d x = starts.front().second;
     double x_cost = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < refined; ++k) {
-        Eigen::Vector4d y = starts[k].second;
-        for (int restart = 0; restart < 2; ++restart) {
-            y = NelderMead<4>(cost, y, restart == 0 ? scale : Eigen::Vector4d(0.25 * scale),
-                              tolerance, 400);
-        }
-        const double y_cost = cost(y);
-        if (y_cost < x_cost) {
-            x = y;
-            x_cost = y_cost;
+        if (end_costs[k] < x_cost) {
+            x = ends[k];
+            x_cost = end_costs[k];
         }
     }
     return x;
@@ -721,7 +734,7 @@ void RefineAxisByContour(const std::vector<Sample>& samples, const AxisSearch& s
     const double tolerance = 1e-4 * params.profile_tolerance * params.profile_tolerance;
     std::size_t refined = 0;
     const std::vector<ScoredStart> starts = RefinementStarts(samples, cost, search, refined);
-    Eigen::Vector4d x = BestOfStarts(cost, starts, refined, scale, tolerance);
+    Eigen::Vector4d x = BestOfStarts(cost, starts, refined, scale, tolerance, params.num_threads);
     cost.DropEndLevel();
     for (int restart = 0; restart < 2; ++restart) {
         x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);

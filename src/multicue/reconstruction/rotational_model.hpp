@@ -63,6 +63,7 @@ struct RotationalFitParams {
     float cap_weight = 1.0f;         ///< weight of the caps' height-over-radius spread [-]; >= 0
     float inlier_threshold = 0.01f;  ///< radial distance to the contour of an inlier [m]; > 0
     float min_radius = 0.003f;       ///< contour radii below this are raised to it [m]
+    int num_threads = 1;  ///< threads of the coarse axis search (0 = all cores); same result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A

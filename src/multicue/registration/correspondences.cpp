@@ -166,7 +166,7 @@ void CorrespondenceSearcher::Find(const PointCloud& source, const Indices& subse
                 } else {
                     Index j = 0;
                     float d2 = 0.0f;
-                    if (tree_->SearchNearest(p, j, d2) && d2 <= gate2) {
+                    if (tree_->SearchNearestWithin(p, gate, j, d2)) {
                         best = j;
                         best_d2 = d2;
                     }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <optional>
 #include <vector>
 
@@ -29,8 +30,8 @@ struct DepthWeights {
 
     double operator()(const Eigen::Vector3f& p_source, const Eigen::Vector3f& q_target) const {
         if (k <= 0.0) return 1.0;
-        return DepthNoiseWeight((p_source - source_origin).norm(), (q_target - target_origin).norm(),
-                                k, s0);
+        return DepthNoiseWeight((p_source - source_origin).norm(),
+                                (q_target - target_origin).norm(), k, s0);
     }
 };
 
@@ -239,8 +240,7 @@ double RobustWeight(RobustKernelType type, double r, double k) {
     return 1.0;
 }
 
-double DepthNoiseWeight(double d_source, double d_target, double depth_noise,
-                        double noise_floor) {
+double DepthNoiseWeight(double d_source, double d_target, double depth_noise, double noise_floor) {
     if (depth_noise <= 0.0) return 1.0;
     const double ss = depth_noise * d_source * d_source;
     const double st = depth_noise * d_target * d_target;
@@ -343,9 +343,12 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
     bool settled = false;
     bool too_few = false;
     int it = 0;
+    const Indices coarse =
+        params.coarse_source_points > 0 ? EvenSubset(subset, params.coarse_source_points) : subset;
     while (it < params.max_iterations) {
         ++it;
-        searcher.Find(source, subset, T, gate, corr, params.num_threads);
+        searcher.Find(source, gate > final_gate ? coarse : subset, T, gate, corr,
+                      params.num_threads);
         if (corr.size() < params.min_correspondences) {
             too_few = true;
             break;
@@ -361,12 +364,22 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
             const Eigen::Vector3d center = Centroid(source, corr, T);
             NormalSystem s = PlaneSystem(params.method, source, target, corr, T, center,
                                          params.kernel, scale, depth, params.num_threads);
-            if (extra_terms) s.cost += extra_terms(T, center, s.H, s.g);
+            if (extra_terms) {
+                const double sampling = gate > final_gate ? static_cast<double>(coarse.size()) /
+                                                                static_cast<double>(subset.size())
+                                                          : 1.0;
+                s.cost += extra_terms(T, center, sampling, s.H, s.g);
+            }
             // A tiny Levenberg term keeps the solve defined in unconstrained directions; the
             // constraint analysis below reports them.
             s.H.diagonal().array() += 1e-9 * std::max(s.H.trace(), 1e-12);
-            const Vector6d x = s.H.ldlt().solve(-s.g);
+            Vector6d x = s.H.ldlt().solve(-s.g);
             if (!x.allFinite()) break;
+            // Trust region: no step moves farther than the gate or turns more than 10 degrees;
+            // beyond them the linearisation and the pairs are not to be trusted.
+            const double step = std::max(x.tail<3>().norm() / gate,
+                                         x.head<3>().norm() / (10.0 * std::numbers::pi / 180.0));
+            if (step > 1.0) x /= step;
             Eigen::Isometry3d to_center = Eigen::Isometry3d::Identity();
             to_center.translation() = center;
             delta = to_center * TwistToTransform(x) * to_center.inverse();

@@ -83,6 +83,10 @@ struct IcpParams {
     float noise_floor = 0.003f;  ///< s0 of depth_noise [m]; > 0
     /// Source points used (evenly strided over the finite ones); 0 = all [points]
     std::size_t max_source_points = 0;
+    /// While the gate is still wider than its final value, only this many source points (evenly
+    /// strided) are paired: the coarse iterations need the shape, not every point [points];
+    /// 0 = all
+    std::size_t coarse_source_points = 5000;
     std::size_t min_correspondences = 20;  ///< fewer pairs stop the loop [pairs]
     double min_fitness = 0.2;  ///< share of source points with a partner for success [-]
     /// Smallest acceptable condition of the scaled information matrix, in [0, 1): below it the
@@ -100,9 +104,12 @@ struct IcpParams {
 /// correspondences of plane_registration.hpp): given the current estimate, add J^T W J to H and
 /// J^T W r to g, J the derivative of the residuals with respect to the twist (rotation about
 /// `center`, in the target frame, then translation) applied on the left of the estimate, and
-/// return their cost sum r^T W r. Called from one thread.
-using ExtraTerms = std::function<double(const Eigen::Isometry3d& T_target_source,
-                                        const Eigen::Vector3d& center, Matrix6d& H, Vector6d& g)>;
+/// return their cost sum r^T W r. `sampling` is the share of the usable source points paired in
+/// this iteration (below 1 in the coarse iterations): terms that stand for source points scale
+/// with it to keep their balance with the point pairs. Called from one thread.
+using ExtraTerms =
+    std::function<double(const Eigen::Isometry3d& T_target_source, const Eigen::Vector3d& center,
+                         double sampling, Matrix6d& H, Vector6d& g)>;
 
 /// Registers `source` to `target` from `T_init` (source -> target). `target_tree` must index
 /// `target` (it may be null when the projective path applies, see CorrespondenceSearcher).

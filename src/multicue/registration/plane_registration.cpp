@@ -35,7 +35,7 @@ double OverlapScore(const PointCloud& source, const Indices& subset, const KdTre
     Index j = 0;
     float d2 = 0.0f;
     for (Index i : subset) {
-        if (tree.SearchNearest(Tf * source.points[i], j, d2) && d2 <= limit) ++hits;
+        if (tree.SearchNearestWithin(Tf * source.points[i], distance, j, d2) && d2 <= limit) ++hits;
     }
     return subset.empty() ? 0.0 : static_cast<double>(hits) / static_cast<double>(subset.size());
 }
@@ -69,23 +69,30 @@ RegistrationResult RegisterPointsAndPlanes(const PointCloud& source, const Point
     std::size_t matched = 0;
     ExtraTerms planes;
     if (params.plane_weight > 0.0 && !source_patches.empty() && !target_patches.empty()) {
-        planes = [&](const Eigen::Isometry3d& T, const Eigen::Vector3d& center, Matrix6d& H,
-                     Vector6d& g) {
+        planes = [&](const Eigen::Isometry3d& T, const Eigen::Vector3d& center, double sampling,
+                     Matrix6d& H, Vector6d& g) {
             const auto pairs = MatchPlanes(source_patches, target_patches, T, params.matching);
             matched = pairs.size();
             // The depth-noise weights of the point pairs, at the patches' centroids: a far,
             // coarsely quantised floor must not outweigh the objects through its planes either.
             std::vector<double> weights;
             for (const auto& pair : pairs) {
-                const double ds = (source_patches[pair.source].centroid -
-                                   source.sensor_origin.cast<double>())
-                                      .norm();
-                const double dt = (target_patches[pair.target].centroid -
-                                   target.sensor_origin.cast<double>())
-                                      .norm();
-                weights.push_back(params.plane_weight *
-                                  DepthNoiseWeight(ds, dt, params.icp.depth_noise,
-                                                   params.icp.noise_floor));
+                const double ds =
+                    (source_patches[pair.source].centroid - source.sensor_origin.cast<double>())
+                        .norm();
+                const double dt =
+                    (target_patches[pair.target].centroid - target.sensor_origin.cast<double>())
+                        .norm();
+                // A pair whose planes are still apart weighs less (Tukey on the offset of the
+                // patch's centroid, scale max_offset): a pairing made at a wrong pose fades
+                // instead of pulling.
+                const PlanarPatch& tp = target_patches[pair.target];
+                const double offset =
+                    tp.normal.dot(T * source_patches[pair.source].centroid) + tp.d;
+                weights.push_back(
+                    params.plane_weight * sampling *
+                    RobustWeight(RobustKernelType::kTukey, offset, params.matching.max_offset) *
+                    DepthNoiseWeight(ds, dt, params.icp.depth_noise, params.icp.noise_floor));
             }
             return AddPlaneTerms(source_patches, target_patches, pairs, weights, T, center, H, g);
         };

@@ -72,9 +72,9 @@ void PlaneExtractionParams::Validate() const {
     }
     if (!(min_extent >= 0.0f) || !std::isfinite(min_extent) || !(depth_noise >= 0.0f) ||
         !std::isfinite(depth_noise)) {
-        throw InvalidArgument(fmt::format(
-            "plane extraction min_extent and depth_noise must be >= 0, got {} and {}", min_extent,
-            depth_noise));
+        throw InvalidArgument(
+            fmt::format("plane extraction min_extent and depth_noise must be >= 0, got {} and {}",
+                        min_extent, depth_noise));
     }
     if (max_planes < 1) {
         throw InvalidArgument(
@@ -200,8 +200,8 @@ double AddPlaneTerms(const std::vector<PlanarPatch>& source, const std::vector<P
                      const Eigen::Isometry3d& T_target_source, const Eigen::Vector3d& center,
                      Matrix6d& H, Vector6d& g) {
     if (weights.size() != pairs.size()) {
-        throw InvalidArgument(fmt::format("plane terms: {} pairs but {} weights", pairs.size(),
-                                          weights.size()));
+        throw InvalidArgument(
+            fmt::format("plane terms: {} pairs but {} weights", pairs.size(), weights.size()));
     }
     double cost = 0.0;
     const Eigen::Matrix3d R = T_target_source.linear();

@@ -42,10 +42,10 @@ struct PlanarPatch {
 PlanarPatch TransformPatch(const PlanarPatch& patch, const Eigen::Isometry3d& T);
 
 struct PlaneExtractionParams {
-    float radius = 0.03f;           ///< region growing neighbourhood [m]; > 0
-    float max_angle_deg = 12.0f;    ///< normal deviation from the region's seed [deg], (0, 90]
-    std::size_t min_points = 60;    ///< smaller patches are dropped [points]; >= 3
-    float max_rmse = 0.01f;         ///< patches less flat than this are dropped [m]; > 0
+    float radius = 0.03f;         ///< region growing neighbourhood [m]; > 0
+    float max_angle_deg = 12.0f;  ///< normal deviation from the region's seed [deg], (0, 90]
+    std::size_t min_points = 60;  ///< smaller patches are dropped [points]; >= 3
+    float max_rmse = 0.01f;       ///< patches less flat than this are dropped [m]; > 0
     /// Patches narrower than this (RMS spread along their shorter in-plane axis) are dropped:
     /// a depth camera's far quantisation terraces are perfectly flat strips, not planes [m]
     float min_extent = 0.03f;

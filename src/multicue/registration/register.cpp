@@ -74,7 +74,7 @@ RegistrationParams RegistrationParams::ForResolution(float r) {
     p.planes.radius = 3.0f * r;
     p.planes.max_rmse = r;
     p.planes.merge_distance = 1.5f * r;
-    p.planes.min_extent = 3.0f * r;
+    p.planes.min_extent = 2.0f * r;
     p.point_plane.matching.max_offset = 2.0f * r;
     p.point_plane.matching.centroid_slack = 15.0f * r;
     p.plane_global.score_distance = 2.0f * r;
@@ -85,6 +85,7 @@ RegistrationParams RegistrationParams::ForResolution(float r) {
     p.fpfh.ransac.min_edge = 2.0f * r;
     p.fpfh.pruning.absolute = 2.0f * r;
     p.free_space.tolerance = 3.0f * r;
+    p.free_space.max_gap = 10.0f * r;
     return p;
 }
 

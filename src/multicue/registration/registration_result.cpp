@@ -102,7 +102,9 @@ AlignmentQuality EvaluateAlignment(const PointCloud& source, const KdTree& targe
     ParallelFor(finite.size(), num_threads, [&](std::size_t k) {
         Index j = 0;
         float dist2 = 0.0f;
-        if (target_tree.SearchNearest(T * source.points[finite[k]], j, dist2) && dist2 <= limit2) {
+        if (target_tree.SearchNearestWithin(T * source.points[finite[k]],
+                                            static_cast<float>(max_distance), j, dist2) &&
+            dist2 <= limit2) {
             d2[k] = dist2;
         }
     });

@@ -18,6 +18,9 @@ void FreeSpaceParams::Validate() const {
             fmt::format("free-space depth_noise must be >= 0, got {}", depth_noise));
     }
     if (max_points < 1) throw InvalidArgument("free-space max_points must be >= 1");
+    if (!(max_gap >= 0.0f) || !std::isfinite(max_gap)) {
+        throw InvalidArgument(fmt::format("free-space max_gap must be >= 0, got {}", max_gap));
+    }
     if (!(max_violation > 0.0 && max_violation <= 1.0)) {
         throw InvalidArgument(
             fmt::format("free-space max_violation must be in (0, 1], got {}", max_violation));
@@ -49,7 +52,8 @@ FreeSpaceCheck CheckFreeSpace(const PointCloud& source, const PointCloud& frame,
         if (!q.allFinite()) continue;  // no return: nothing is known along this ray
         ++check.checked;
         const float sigma = params.depth_noise * q.z() * q.z();
-        if (p.z() < q.z() - params.tolerance - 3.0f * sigma) ++check.violations;
+        const float gap = q.z() - p.z() - params.tolerance - 3.0f * sigma;
+        if (gap > 0.0f && (params.max_gap <= 0.0f || gap <= params.max_gap)) ++check.violations;
     }
     check.ratio = check.checked == 0
                       ? 0.0

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <utility>
 
 #include <fmt/format.h>
@@ -110,6 +111,26 @@ void SelectMedian(Item* first, Item* nth, Item* last, int axis) {
     std::sort(first, last, [axis](const Item& x, const Item& y) { return x.p[axis] < y.p[axis]; });
 }
 
+// The nodes a build makes for n points: a node splits at the median until it holds at most
+// leaf_size points. Counted level by level (the nodes of one level have at most two sizes), so
+// that the node array is allocated once at its size.
+std::size_t NodeCount(std::size_t n, std::size_t leaf_size) {
+    std::map<std::size_t, std::size_t> level{{n, 1}};  // node size -> nodes of that size
+    std::size_t total = 0;
+    while (!level.empty()) {
+        std::map<std::size_t, std::size_t> next;
+        for (const auto& [size, count] : level) {
+            total += count;
+            if (size > leaf_size) {
+                next[size / 2] += count;
+                next[size - size / 2] += count;
+            }
+        }
+        level.swap(next);
+    }
+    return total;
+}
+
 // Median splits halve the points, so a tree of at most 2^31 points is at most 32 levels deep;
 // a traversal stack holds at most one entry per level (plus one).
 constexpr std::size_t kMaxDepth = 64;
@@ -130,10 +151,16 @@ struct KdTree::Impl {
                 fmt::format("a k-d tree holds at most 2^31 points, got {}", items.size()));
         }
         if (!items.empty()) {
-            // Leaves hold more than leaf_size / 2 points, so there are fewer than 4n / leaf_size +
-            // 2 nodes.
-            nodes.reserve(4 * items.size() / static_cast<std::size_t>(leaf_size) + 2);
+            nodes.reserve(NodeCount(items.size(), static_cast<std::size_t>(leaf_size)));
             BuildNode(items, 0, items.size(), static_cast<std::size_t>(leaf_size));
+            const float reach =
+                std::max(nodes[0].min.cwiseAbs().maxCoeff(), nodes[0].max.cwiseAbs().maxCoeff());
+            if (reach > KdTree::kMaxCoordinate) {
+                throw DataError(fmt::format(
+                    "a point lies {:.3g} m from the origin: a k-d tree searches points within "
+                    "{:.0e} m of it, where squared distances stay finite (wrong units?)",
+                    reach, KdTree::kMaxCoordinate));
+            }
         }
         points.resize(items.size());
         cloud_index.resize(items.size());
@@ -332,6 +359,26 @@ bool KdTree::SearchNearest(const Eigen::Vector3f& query, Index& index,
     float d = 0.0f;
     KnnSet set(1, std::numeric_limits<float>::infinity(), &i, &d);
     impl_->Knn(query, set);
+    index = impl_->cloud_index[i];
+    squared_distance = d;
+    return true;
+}
+
+bool KdTree::SearchNearestWithin(const Eigen::Vector3f& query, float max_distance, Index& index,
+                                 float& squared_distance) const {
+    if (!(max_distance > 0.0f) || !std::isfinite(max_distance)) {
+        throw InvalidArgument(
+            fmt::format("nearest search max_distance must be > 0, got {}", max_distance));
+    }
+    if (empty()) return false;
+    Index i = 0;
+    float d = 0.0f;
+    // The set keeps points strictly below its bound: one step above r^2 keeps distance == r.
+    KnnSet set(1,
+               std::nextafter(max_distance * max_distance, std::numeric_limits<float>::infinity()),
+               &i, &d);
+    impl_->Knn(query, set);
+    if (set.size() == 0) return false;
     index = impl_->cloud_index[i];
     squared_distance = d;
     return true;

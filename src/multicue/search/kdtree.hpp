@@ -36,8 +36,13 @@ class KdTree {
         bool IsLeaf() const { return second_child == 0; }
     };
 
+    /// Largest coordinate magnitude a tree accepts [m]: squared distances between points within
+    /// it stay finite in single precision.
+    static constexpr float kMaxCoordinate = 1e18f;
+
     /// Indexes the finite points of `cloud` (NaN points are left out). The tree keeps its own
-    /// copy of the coordinates, so the cloud may change or go away afterwards.
+    /// copy of the coordinates, so the cloud may change or go away afterwards. Throws DataError
+    /// when a coordinate exceeds kMaxCoordinate.
     explicit KdTree(const PointCloud& cloud, const KdTreeParams& params = {});
     /// Indexes the given points of `cloud` only (non-finite ones are still left out).
     KdTree(const PointCloud& cloud, const Indices& subset, const KdTreeParams& params = {});
@@ -66,6 +71,13 @@ class KdTree {
 
     /// Original cloud index of the single nearest point (or false if the tree is empty).
     bool SearchNearest(const Eigen::Vector3f& query, Index& index, float& squared_distance) const;
+
+    /// The nearest indexed point within `max_distance` of `query` (distance <= max_distance), or
+    /// false when there is none. The search never leaves that ball, so queries far from every
+    /// point (the parts of one scan that another does not overlap) cost little. Throws
+    /// InvalidArgument if max_distance is not > 0 and finite.
+    bool SearchNearestWithin(const Eigen::Vector3f& query, float max_distance, Index& index,
+                             float& squared_distance) const;
 
     /// The nodes, root first (empty for an empty tree).
     const std::vector<Node>& Nodes() const;

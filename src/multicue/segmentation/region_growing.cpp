@@ -1,9 +1,11 @@
 #include "multicue/segmentation/region_growing.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <utility>
 
 #include <fmt/format.h>
@@ -51,14 +53,15 @@ void CheckFields(const PointCloud& cloud) {
 class Neighborhoods {
   public:
     virtual ~Neighborhoods() = default;
-    /// Neighbours of point q (q included), nearest first; see indices() and squared_distances().
+    /// Neighbours of point q (q included), nearest first; see indices() and squared_distances(),
+    /// valid until the next search.
     virtual void Search(Index q) = 0;
-    const Indices& indices() const { return indices_; }
-    const std::vector<float>& squared_distances() const { return squared_distances_; }
+    std::span<const Index> indices() const { return indices_; }
+    std::span<const float> squared_distances() const { return squared_distances_; }
 
   protected:
-    Indices indices_;
-    std::vector<float> squared_distances_;
+    std::span<const Index> indices_;
+    std::span<const float> squared_distances_;
 };
 
 // From a k-d tree. Checks that the tree indexes the query point and belongs to this cloud.
@@ -72,20 +75,20 @@ class TreeNeighborhoods final : public Neighborhoods {
         const Eigen::Vector3f& p = cloud_.points[q];
         bool self_may_be_left_out = false;
         if (k_ > 0) {
-            tree_.SearchKnn(p, k_, indices_, squared_distances_);
+            tree_.SearchKnn(p, k_, found_, found_d2_);
             // With k or more copies of q, the k nearest may all be copies other than q itself.
-            self_may_be_left_out = indices_.size() == static_cast<std::size_t>(k_) &&
-                                   squared_distances_.back() == 0.0f;
+            self_may_be_left_out = found_.size() == static_cast<std::size_t>(k_) &&
+                                   found_d2_.back() == 0.0f;
             const float radius_sq = radius_ * radius_;
             std::size_t keep = 0;
-            while (keep < squared_distances_.size() && squared_distances_[keep] < radius_sq) ++keep;
-            indices_.resize(keep);
-            squared_distances_.resize(keep);
+            while (keep < found_d2_.size() && found_d2_[keep] < radius_sq) ++keep;
+            found_.resize(keep);
+            found_d2_.resize(keep);
         } else {
-            tree_.SearchRadius(p, radius_, indices_, squared_distances_);
+            tree_.SearchRadius(p, radius_, found_, found_d2_);
         }
         bool found_self = self_may_be_left_out;
-        for (Index j : indices_) {
+        for (Index j : found_) {
             if (j >= cloud_.size()) {
                 throw InvalidArgument(
                     fmt::format("the k-d tree holds point {}, but the cloud has only {} points", j,
@@ -97,6 +100,8 @@ class TreeNeighborhoods final : public Neighborhoods {
             throw InvalidArgument(
                 fmt::format("point {} is to be segmented but the k-d tree does not index it", q));
         }
+        indices_ = found_;
+        squared_distances_ = found_d2_;
     }
 
   private:
@@ -104,6 +109,8 @@ class TreeNeighborhoods final : public Neighborhoods {
     const KdTree& tree_;
     float radius_;
     int k_;
+    Indices found_;
+    std::vector<float> found_d2_;
 };
 
 // From a table of precomputed neighbourhoods (rows of the points to segment).
@@ -115,11 +122,8 @@ class TableNeighborhoods final : public Neighborhoods {
         const std::uint32_t row = table_.row_of[q];
         const std::size_t begin = row * table_.stride;
         const std::size_t n = table_.count[row];
-        indices_.assign(table_.neighbours.begin() + static_cast<std::ptrdiff_t>(begin),
-                        table_.neighbours.begin() + static_cast<std::ptrdiff_t>(begin + n));
-        squared_distances_.assign(
-            table_.squared_distances.begin() + static_cast<std::ptrdiff_t>(begin),
-            table_.squared_distances.begin() + static_cast<std::ptrdiff_t>(begin + n));
+        indices_ = std::span<const Index>(table_.neighbours.data() + begin, n);
+        squared_distances_ = std::span<const float>(table_.squared_distances.data() + begin, n);
     }
 
   private:
@@ -164,11 +168,17 @@ Indices SeedOrder(const PointCloud& cloud, const std::vector<std::uint8_t>& acti
     for (std::size_t i = 0; i < n; ++i) {
         if (active[i] != 0) order.push_back(static_cast<Index>(i));
     }
-    std::sort(order.begin(), order.end(), [&](Index a, Index b) {
-        const float ca = cloud.curvature[a];
-        const float cb = cloud.curvature[b];
-        return ca != cb ? ca < cb : a < b;
-    });
+    // Sorted as 64-bit keys (curvature bits made order-preserving, then the index): no
+    // indirection in the comparisons.
+    std::vector<std::uint64_t> keys(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        const float c = cloud.curvature[order[k]] + 0.0f;  // -0 sorts as 0
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(c);
+        const std::uint32_t key = (bits & 0x80000000u) != 0 ? ~bits : bits | 0x80000000u;
+        keys[k] = (std::uint64_t{key} << 32) | order[k];
+    }
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<Index>(keys[k]);
     return order;
 }
 
@@ -228,8 +238,8 @@ void MergeIntoLargeParts(const std::vector<std::uint8_t>& is_large, Neighborhood
             std::int32_t best_part = kNoPart;
             for (Index q : parts[static_cast<std::size_t>(s)]) {
                 neighborhoods.Search(q);
-                const Indices& nb = neighborhoods.indices();
-                const std::vector<float>& sq = neighborhoods.squared_distances();
+                const std::span<const Index> nb = neighborhoods.indices();
+                const std::span<const float> sq = neighborhoods.squared_distances();
                 for (std::size_t m = 0; m < nb.size(); ++m) {
                     const std::int32_t t = part_of[nb[m]];
                     if (t == kNoPart || is_large[static_cast<std::size_t>(t)] == 0) continue;
@@ -350,17 +360,27 @@ void GrowAndMerge(const PointCloud& cloud, const std::vector<std::uint8_t>& acti
 
 }  // namespace
 
+namespace {
+
+// What every entry point starts with: the checks, the points to segment marked in `active`, every
+// part id kNoPart. False when there is nothing to segment.
+bool StartGrowing(const PointCloud& cloud, const RegionGrowingParams& params,
+                  std::vector<std::uint8_t>& active, RegionGrowingResult& result) {
+    CheckParams(params);
+    if (cloud.size() == 0) return false;
+    CheckFields(cloud);
+    result.num_points = MarkPoints(cloud, params.subset, active);
+    result.part_ids.assign(cloud.size(), kNoPart);
+    return result.num_points > 0;
+}
+
+}  // namespace
+
 RegionGrowingResult RegionGrowing(const PointCloud& cloud, const KdTree& tree,
                                   const RegionGrowingParams& params) {
-    CheckParams(params);
     RegionGrowingResult result;
-    const std::size_t n = cloud.size();
-    if (n == 0) return result;
-    CheckFields(cloud);
     std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(cloud, params.subset, active);
-    result.part_ids.assign(n, kNoPart);
-    if (result.num_points == 0) return result;
+    if (!StartGrowing(cloud, params, active, result)) return result;
     TreeNeighborhoods neighborhoods(cloud, tree, params);
     GrowAndMerge(cloud, active, params, neighborhoods, result);
     return result;
@@ -460,19 +480,14 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
 
 RegionGrowingResult RegionGrowing(const PointCloud& cloud, const NeighbourTable& table,
                                   const RegionGrowingParams& params) {
-    CheckParams(params);
     RegionGrowingResult result;
+    std::vector<std::uint8_t> active;
+    if (!StartGrowing(cloud, params, active, result)) return result;
     const std::size_t n = cloud.size();
-    if (n == 0) return result;
-    CheckFields(cloud);
     if (table.row_of.size() != n) {
         throw InvalidArgument(fmt::format("the neighbour table is for a cloud of {} points, not {}",
                                           table.row_of.size(), n));
     }
-    std::vector<std::uint8_t> active;
-    result.num_points = MarkPoints(cloud, params.subset, active);
-    result.part_ids.assign(n, kNoPart);
-    if (result.num_points == 0) return result;
     for (std::size_t i = 0; i < n; ++i) {
         if (active[i] != 0 && table.row_of[i] == NeighbourTable::kNoRow) {
             throw InvalidArgument(fmt::format(

@@ -301,24 +301,41 @@ void CheckModel(const SacModel& model) {
     }
 }
 
-// Scores the valid ones of the first n hypotheses, in parallel in the arena when there is one
-// (each score depends on its hypothesis alone, so the order of evaluation does not matter).
-void ScoreBatch(const Evaluator& evaluator, SacMethod method, std::optional<tbb::task_arena>& arena,
+// Where the hypotheses are scored in parallel: nowhere (serially), in an arena of their own, or
+// in the arena of an enclosing parallel loop (objects fitted in parallel), isolated from its
+// other tasks.
+struct ScoringThreads {
+    bool parallel = false;
+    std::optional<tbb::task_arena> arena;
+};
+
+// Scores the valid ones of the first n hypotheses (each score depends on its hypothesis alone,
+// so the order of evaluation does not matter).
+void ScoreBatch(const Evaluator& evaluator, SacMethod method, ScoringThreads& threads,
                 std::size_t n, const std::vector<SacCoefficients>& hypotheses,
                 const std::vector<char>& valid, double bound, std::vector<Score>& scores) {
     auto score = [&](std::size_t j) {
         if (valid[j] != 0) scores[j] = evaluator.Evaluate(hypotheses[j], method, bound);
     };
-    if (arena && n > 1) {
-        arena->execute([&] {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
-                              [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
-                              });
-        });
-    } else {
+    auto loop = [&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              detail::TsanTaskStart();
+                              for (std::size_t j = r.begin(); j < r.end(); ++j) score(j);
+                              detail::TsanTaskEnd();
+                          });
+    };
+    if (!threads.parallel || n < 2) {
         for (std::size_t j = 0; j < n; ++j) score(j);
+        return;
     }
+    detail::TsanFork();
+    if (threads.arena) {
+        threads.arena->execute(loop);
+    } else {
+        tbb::this_task_arena::isolate(loop);
+    }
+    detail::TsanJoin();
 }
 
 // The best hypothesis of the sampling loop and the loop's count of iterations, with the number
@@ -340,12 +357,14 @@ Consensus SearchHypotheses(const PointCloud& cloud, const SacModel& model, const
     const auto k = static_cast<std::size_t>(model.sample_size);
     double total_mass = 0.0;  // sampling weight of all usable points
     for (float w : sample_w) total_mass += double{w};
-    const int threads = ResolveThreadCount(params.num_threads);
-    std::optional<tbb::task_arena> arena;
-    if (threads > 1 && points.size() >= kMinPointsForThreads) {
-        arena.emplace(ArenaThreadCount(threads));
-    }
-    const std::size_t batch = arena ? 2 * static_cast<std::size_t>(threads) : 1;
+    const int threads = ArenaThreadCount(params.num_threads);
+    ScoringThreads scoring;
+    scoring.parallel = threads > 1 && points.size() >= kMinPointsForThreads;
+    const bool nested =
+        tbb::this_task_arena::current_thread_index() != tbb::task_arena::not_initialized &&
+        tbb::this_task_arena::max_concurrency() <= threads;
+    if (scoring.parallel && !nested) scoring.arena.emplace(threads);
+    const std::size_t batch = scoring.parallel ? 2 * static_cast<std::size_t>(threads) : 1;
 
     std::mt19937_64 rng(params.seed);
     std::vector<std::size_t> positions(k);
@@ -365,9 +384,8 @@ Consensus SearchHypotheses(const PointCloud& cloud, const SacModel& model, const
             valid[j] = model.fit_sample(cloud, sample, hypotheses[j]) ? 1 : 0;
         }
         // Hypotheses of the batch costlier than the best before it are left unfinished.
-        const double bound =
-            c.have_best ? c.best.cost : std::numeric_limits<double>::infinity();
-        ScoreBatch(evaluator, params.method, arena, n, hypotheses, valid, bound, scores);
+        const double bound = c.have_best ? c.best.cost : std::numeric_limits<double>::infinity();
+        ScoreBatch(evaluator, params.method, scoring, n, hypotheses, valid, bound, scores);
         // Decide in drawing order, exactly as the serial loop does; samples drawn past its stop
         // are discarded.
         for (std::size_t j = 0; j < n; ++j) {

@@ -70,13 +70,18 @@ Indices LargestPatch(const PointCloud& cloud, const Indices& inliers, float tole
 
 // The table of an organized frame: the same largest patch without clustering every point. The
 // plane's pixels are first joined into pieces through neighbouring pixels (8-connected, within
-// the tolerance); two pieces belong to one patch when points of them lie within the tolerance,
-// and for pieces of one plane the nearest points of two pieces lie on their borders, so only the
-// border pixels (a 4-neighbour off the plane or outside the image) are clustered in 3D. Gives the
-// patch and its border pixels, whose convex hull is the patch's.
+// the tolerance), row by row as runs of consecutive pixels; two pieces belong to one patch when
+// points of them lie within the tolerance, and for pieces of one plane the nearest points of two
+// pieces lie on their borders, so only the border pixels (a 4-neighbour off the plane or outside
+// the image) are clustered in 3D. Gives the patch and its border pixels, whose convex hull is the
+// patch's.
 struct Patch {
     Indices points;  // ascending
     Indices border;  // ascending
+};
+
+struct PixelRun {
+    std::uint32_t v, u0, u1;  // row, first and last column (inclusive)
 };
 
 Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, float tolerance) {
@@ -84,49 +89,101 @@ Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, fl
     std::vector<std::uint8_t> in(cloud.size(), 0);
     for (Index i : on_plane) in[i] = 1;
     const float tol_sq = tolerance * tolerance;
-    detail::DisjointSets pieces(cloud.size());
-    Indices border;
+    auto near = [&](std::size_t i, std::size_t j) {
+        return (cloud.points[i] - cloud.points[j]).squaredNorm() <= tol_sq;
+    };
+    // Runs of plane pixels along each row, cut where two neighbours are too far apart.
+    std::vector<PixelRun> runs;
+    std::vector<std::size_t> row_start(h + 1, 0);
     for (std::size_t v = 0; v < h; ++v) {
+        row_start[v] = runs.size();
+        const std::size_t row = v * w;
         for (std::size_t u = 0; u < w; ++u) {
-            const std::size_t i = v * w + u;
-            if (in[i] == 0) continue;
-            const Eigen::Vector3f& p = cloud.points[i];
-            auto link = [&](std::size_t j) {
-                if (in[j] != 0 && (cloud.points[j] - p).squaredNorm() <= tol_sq)
-                    pieces.Unite(static_cast<Index>(i), static_cast<Index>(j));
-            };
-            if (u + 1 < w) link(i + 1);
-            if (v + 1 < h) {
-                link(i + w);
-                if (u + 1 < w) link(i + w + 1);
-                if (u > 0) link(i + w - 1);
+            if (in[row + u] == 0) continue;
+            if (u > 0 && in[row + u - 1] != 0 && near(row + u - 1, row + u)) {
+                runs.back().u1 = static_cast<std::uint32_t>(u);
+            } else {
+                runs.push_back({static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(u),
+                                static_cast<std::uint32_t>(u)});
             }
-            const bool inner = u > 0 && v > 0 && u + 1 < w && v + 1 < h && in[i - 1] != 0 &&
-                               in[i + 1] != 0 && in[i - w] != 0 && in[i + w] != 0;
-            if (!inner) border.push_back(static_cast<Index>(i));
         }
     }
-    const ClusteringResult linked =
-        EuclideanClusteringGrid(cloud, {.tolerance = tolerance, .subset = border});
-    for (const Indices& c : linked.clusters)
-        for (Index i : c) pieces.Unite(c.front(), i);
+    row_start[h] = runs.size();
+    // Runs of neighbouring rows touching diagonally or straight, with a pair of pixels within the
+    // tolerance, are one piece.
+    detail::DisjointSets pieces(runs.size());
+    for (std::size_t v = 0; v + 1 < h; ++v) {
+        std::size_t b = row_start[v + 1];
+        for (std::size_t a = row_start[v]; a < row_start[v + 1]; ++a) {
+            const PixelRun& ra = runs[a];
+            while (b < row_start[v + 2] && runs[b].u1 + 1 < ra.u0) ++b;
+            for (std::size_t c = b; c < row_start[v + 2] && runs[c].u0 <= ra.u1 + 1; ++c) {
+                const PixelRun& rb = runs[c];
+                if (pieces.Find(static_cast<Index>(a)) == pieces.Find(static_cast<Index>(c)))
+                    continue;
+                bool linked = false;
+                const std::uint32_t lo = std::max(ra.u0, rb.u0 > 0 ? rb.u0 - 1 : 0);
+                const std::uint32_t hi = std::min(ra.u1, rb.u1 + 1);
+                for (std::uint32_t u = lo; u <= hi && !linked; ++u) {
+                    const std::size_t i = v * w + u;
+                    for (std::uint32_t x = u > rb.u0 ? u - 1 : rb.u0; x <= std::min(u + 1, rb.u1);
+                         ++x) {
+                        if (near(i, (v + 1) * w + x)) {
+                            linked = true;
+                            break;
+                        }
+                    }
+                }
+                if (linked) pieces.Unite(static_cast<Index>(a), static_cast<Index>(c));
+            }
+        }
+    }
+    // Border pixels and their runs.
+    Indices border;
+    std::vector<std::uint32_t> border_run;
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+        const PixelRun& run = runs[r];
+        const std::size_t row = std::size_t{run.v} * w;
+        for (std::uint32_t u = run.u0; u <= run.u1; ++u) {
+            const std::size_t i = row + u;
+            const bool inner = u > run.u0 && u < run.u1 && run.v > 0 && run.v + 1 < h &&
+                               in[i - w] != 0 && in[i + w] != 0;
+            if (inner) continue;
+            border.push_back(static_cast<Index>(i));
+            border_run.push_back(static_cast<std::uint32_t>(r));
+        }
+    }
+    const ClusteringResult linked = EuclideanClusteringGrid(
+        cloud, {.tolerance = tolerance, .subset = border, .compute_labels = true});
+    // Border pixels of one 3D cluster join their pieces.
+    std::vector<std::int64_t> first_run(linked.clusters.size(), -1);
+    for (std::size_t k = 0; k < border.size(); ++k) {
+        const std::int32_t c = linked.labels[border[k]];
+        if (c < 0) continue;
+        auto& f = first_run[static_cast<std::size_t>(c)];
+        if (f < 0) {
+            f = border_run[k];
+        } else {
+            pieces.Unite(static_cast<Index>(f), static_cast<Index>(border_run[k]));
+        }
+    }
     // The patch with the most points; ties: the one with the lowest pixel.
-    std::vector<Index> root(on_plane.size());
-    std::vector<std::size_t> count(cloud.size(), 0);
-    for (std::size_t k = 0; k < on_plane.size(); ++k) {
-        root[k] = pieces.Find(on_plane[k]);
-        ++count[root[k]];
-    }
-    Index best = on_plane.front();
-    for (std::size_t k = 0; k < on_plane.size(); ++k) {
-        if (count[root[k]] > count[best]) best = root[k];
-    }
+    std::vector<std::size_t> count(runs.size(), 0);
+    for (std::size_t r = 0; r < runs.size(); ++r)
+        count[pieces.Find(static_cast<Index>(r))] += runs[r].u1 - runs[r].u0 + 1;
+    Index best = 0;
+    for (std::size_t r = 0; r < runs.size(); ++r)
+        if (count[r] > count[best]) best = static_cast<Index>(r);
     Patch patch;
     patch.points.reserve(count[best]);
-    for (std::size_t k = 0; k < on_plane.size(); ++k)
-        if (root[k] == best) patch.points.push_back(on_plane[k]);
-    for (Index i : border)
-        if (pieces.Find(i) == best) patch.border.push_back(i);
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+        if (pieces.Find(static_cast<Index>(r)) != best) continue;
+        const std::size_t row = std::size_t{runs[r].v} * w;
+        for (std::uint32_t u = runs[r].u0; u <= runs[r].u1; ++u)
+            patch.points.push_back(static_cast<Index>(row + u));
+    }
+    for (std::size_t k = 0; k < border.size(); ++k)
+        if (pieces.Find(border_run[k]) == best) patch.border.push_back(border[k]);
     return patch;
 }
 

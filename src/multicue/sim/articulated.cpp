@@ -323,8 +323,8 @@ ArticulatedModel LoadArticulatedModel(const std::filesystem::path& folder,
     }
     model.root = std::max(0, model.FindLink(urdf.root));
     if (missing > 0) {
-        LogWarning("{}: {} visuals name missing part meshes; the model is loaded without them",
-                   folder.string(), missing);
+        LogInfo("{}: {} visuals name missing part meshes; the model is loaded without them",
+                folder.string(), missing);
     }
 
     // The front: the mean horizontal way the door and drawer centroids move when opened a little.

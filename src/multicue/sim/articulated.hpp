@@ -83,7 +83,7 @@ struct ArticulatedLoadParams {
     /// their colour from them: the simulator wants the colour of a surface, not its grain [px].
     std::uint32_t texture_size = 16;
     /// Refuse a model whose URDF names a missing part mesh; false loads it without those parts
-    /// (with a warning): one PartNet-Mobility microwave lacks the meshes of its buttons.
+    /// (logged at info level): one PartNet-Mobility microwave lacks its buttons' meshes.
     bool strict = false;
 };
 

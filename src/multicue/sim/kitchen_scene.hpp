@@ -144,12 +144,13 @@ void ScanToWorld(PointCloud& scan, const Eigen::Isometry3f& T_world_sensor);
 /// naming the library files (`scale` = the model's scale), its base fixed at its pose.
 io::UrdfModel KitchenGroundTruthUrdf(const KitchenScene& kitchen);
 
-/// Sensor poses of a kitchen: the laser head in the room, 1.4 m high, facing the middle run;
-/// `count` head positions spread over the free floor (the first in the room's centre).
+/// Sensor poses of a kitchen: the laser head in the room, 1.4 m high, facing the back run;
+/// `count` head positions spread over the free floor (the first in the room's centre), always at
+/// least 0.3 m clear of the units (taken as 0.85 m deep or deeper).
 std::vector<Eigen::Isometry3f> KitchenLaserPoses(const KitchenScene& kitchen, int count,
                                                  std::uint64_t seed);
-/// Kinect poses (optical frames, LookAt) looking at the runs from about 2 m, 1.5 m high:
-/// `count` views spread over the runs in turn.
+/// Kinect poses (optical frames, LookAt) looking at the runs from 2.0-2.8 m, 1.4-1.6 m high,
+/// `count` views spread over the runs in turn, clear of the units like the laser's.
 std::vector<Eigen::Isometry3f> KitchenCameraPoses(const KitchenScene& kitchen, int count,
                                                   std::uint64_t seed);
 

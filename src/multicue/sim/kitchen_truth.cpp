@@ -211,6 +211,11 @@ std::vector<Eigen::Isometry3f> KitchenLaserPoses(const KitchenScene& kitchen, in
             p.y() += static_cast<float>(rng.Uniform(-0.2, 0.1)) * s.y();
             yaw += static_cast<float>(rng.Uniform(-0.5, 0.5));
         }
+        for (const KitchenScene::Run& run : kitchen.runs) {
+            const float clear = std::max(run.depth, 0.85f) + 0.3f;
+            const float d = run.normal.dot(p - run.origin);
+            if (d < clear) p += run.normal * (clear - d);
+        }
         Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
         T.linear() = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
         T.translation() = p;
@@ -244,6 +249,14 @@ std::vector<Eigen::Isometry3f> KitchenCameraPoses(const KitchenScene& kitchen, i
         const float dist =
             std::min(2.8f, depth - 0.95f) + static_cast<float>(rng.Uniform(-0.15, 0.0));
         Eigen::Vector3f eye = on_wall + n * dist;
+        // Out of every run's units (tall ones up to about 0.85 m deep) and the walls.
+        for (const KitchenScene::Run& other : kitchen.runs) {
+            const float clear = std::max(other.depth, 0.85f) + 0.3f;
+            const float d = other.normal.dot(eye - other.origin);
+            if (d < clear) eye += other.normal * (clear - d);
+        }
+        eye.x() = std::clamp(eye.x(), 0.3f, s.x() - 0.3f);
+        eye.y() = std::clamp(eye.y(), 0.3f, s.y() - 0.3f);
         eye.z() = 1.5f + static_cast<float>(rng.Uniform(-0.1, 0.1));
         Eigen::Vector3f target = on_wall + n * 0.5f;
         target.z() = 0.95f;

@@ -156,8 +156,12 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
     }
     Assimp::Importer importer;
     // No vertex joining: OBJ/PLY files already share vertices, and joining would merge parts.
-    const aiScene* scene = importer.ReadFile(
-        path.string(), aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_FindInvalidData);
+    // The importers take face indices and counts from the file as they are: the scene is
+    // validated (indices within the vertices, counts matching arrays) before any other step
+    // reads it, and refused when broken.
+    const aiScene* scene =
+        importer.ReadFile(path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                             aiProcess_SortByPType | aiProcess_FindInvalidData);
     if (scene == nullptr || scene->mRootNode == nullptr) {
         throw FormatError(
             fmt::format("{}: cannot read mesh: {}", path.string(), importer.GetErrorString()));

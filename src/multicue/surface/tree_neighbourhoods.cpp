@@ -19,6 +19,8 @@ constexpr float kMargin = 1.0f + 1e-4f;
 constexpr float kGuessShare = 0.3f;
 // Largest bucket that SelectNearest ranks by counting rather than partitioning.
 constexpr std::size_t kMaxRankTies = 24;
+// Candidates beyond which the first query of a leaf takes its bound from an ordinary search.
+constexpr std::size_t kMaxCandidates = 4096;
 // Size of the groups of leaves that share one tree traversal [points].
 constexpr Index kGroupPoints = 192;
 
@@ -228,6 +230,21 @@ const std::vector<KnnBatch::Neighbourhood>& KnnBatch::Group(const TreeGroups& gr
     for (Index t = group.begin; t < group.end; ++t) {
         spread = std::max(spread, (points_[t] - f).norm());
     }
+    if (rf == 0.0f && spread == 0.0f) {
+        // Every point of the group coincides with f, which has k copies: the k nearest of each are
+        // copies of itself at distance 0, and their moments are the same whichever copies they
+        // are. Searching them leaf by leaf would narrow every leaf of the copies down from every
+        // other: quadratic in the copies (a cloud of one point, invalid pixels written as 0 0 0).
+        for (Index t = group.begin; t < group.end; ++t) {
+            Neighbourhood& out = out_.emplace_back();
+            out.position = t;
+            for (std::size_t j = 0; j < k_; ++j) out.moments.Add(Eigen::Vector3f::Zero());
+        }
+        const KdTree::Node& last = nodes_[groups.leaves[groups.first_leaf[g + 1] - 1]];
+        prev_begin_ = last.begin;
+        prev_kth_.assign(last.end - last.begin, 0.0f);
+        return out_;
+    }
     FindLeavesNear(group.min, group.max, std::min(Square(rf + spread) * kMargin, cap2_));
     for (std::size_t l = groups.first_leaf[g]; l < groups.first_leaf[g + 1]; ++l) {
         Leaf(groups.leaves[l], f, rf);
@@ -260,13 +277,25 @@ void KnnBatch::Leaf(Index leaf_id, const Eigen::Vector3f& f, float rf) {
         const std::size_t next = NextPending();
         const Index t = pending_[next];
         const std::size_t j = t - leaf.begin;
-        const float bound = std::min(Square(bound_[j]) * kMargin, cap2_);
+        float bound = std::min(Square(bound_[j]) * kMargin, cap2_);
         if (first) {
-            NarrowLeaves(points_[t], points_[t], bound);
+            std::size_t capacity = NarrowLeaves(points_[t], points_[t], bound);
+            if (capacity > std::max<std::size_t>(kMaxCandidates, 64 * k_)) {
+                // Far from every point done so far (a sparse region, a group that spans a gap):
+                // the bound would take in a large part of the cloud, in time and in scratch
+                // memory. An ordinary search gives the query its own k-th distance, which bounds
+                // the same k nearest.
+                tree_.SearchKnn(points_[t], static_cast<int>(k_), idx_, d2_);
+                if (idx_.size() == k_) {
+                    bound = std::min(bound, d2_.back() * kMargin);
+                    capacity = NarrowLeaves(points_[t], points_[t], bound);
+                }
+            }
+            Reserve(capacity);
         } else if (pending_.size() + 1 == size) {
             float reach = 0.0f;
             for (Index other : pending_) reach = std::max(reach, bound_[other - leaf.begin]);
-            NarrowLeaves(leaf.min, leaf.max, std::min(Square(reach) * kMargin, cap2_));
+            Reserve(NarrowLeaves(leaf.min, leaf.max, std::min(Square(reach) * kMargin, cap2_)));
         }
         first = false;
         Done(next, Query(t, bound, Square(guess_[j]) * kMargin));
@@ -331,19 +360,39 @@ void KnnBatch::FindLeavesNear(const Eigen::Vector3f& lo, const Eigen::Vector3f& 
     std::array<Index, 64> stack;
     std::size_t top = 0;
     stack[top++] = 0;
-    std::size_t capacity = 1;  // one spare slot for the branch-free append in Collect
     while (top > 0) {
         const Index id = stack[--top];
         const KdTree::Node& node = nodes_[id];
         if (BoxGapSquared(node.min, node.max, lo, hi) > r2) continue;
         if (node.IsLeaf()) {
             group_leaves_.push_back(id);
-            capacity += node.end - node.begin;
             continue;
         }
         stack[top++] = node.second_child;
         stack[top++] = id + 1;
     }
+}
+
+// The group's leaves within sqrt(r2) of the box [lo, hi], into leaves_ (branch-free append);
+// returns how many candidates they can give (Reserve).
+std::size_t KnnBatch::NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2) {
+    leaves_.resize(group_leaves_.size());
+    std::size_t n = 0;
+    std::size_t capacity = 1;  // one spare slot for the branch-free append in Collect
+    for (Index id : group_leaves_) {
+        const KdTree::Node& node = nodes_[id];
+        leaves_[n] = id;
+        const bool near = BoxGapSquared(node.min, node.max, lo, hi) <= r2;
+        n += near ? 1 : 0;
+        capacity += near ? node.end - node.begin : 0;
+    }
+    leaves_.resize(n);
+    return capacity;
+}
+
+// Candidate buffers for `capacity` candidates: sized for the leaves a query looks at, not for all
+// the group's, which in sparse regions can hold most of the cloud (once per thread).
+void KnnBatch::Reserve(std::size_t capacity) {
     if (dist_.size() < capacity) {
         dist_.resize(capacity);
         pos_.resize(capacity);
@@ -352,21 +401,13 @@ void KnnBatch::FindLeavesNear(const Eigen::Vector3f& lo, const Eigen::Vector3f& 
     }
 }
 
-// The group's leaves within sqrt(r2) of the box [lo, hi], into leaves_ (branch-free append).
-void KnnBatch::NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2) {
-    leaves_.resize(group_leaves_.size());
-    std::size_t n = 0;
-    for (Index id : group_leaves_) {
-        const KdTree::Node& node = nodes_[id];
-        leaves_[n] = id;
-        n += BoxGapSquared(node.min, node.max, lo, hi) <= r2 ? 1 : 0;
-    }
-    leaves_.resize(n);
-}
-
-// Candidates within `bound` (squared) of q, in tree order (branch-free append).
+// Candidates within `bound` (squared) of q, in tree order (branch-free append). Once k of them
+// coincide with q, no later candidate can rank before them (the order is by distance, then tree
+// position): the collection stops there, so that a point repeated many times (a sensor writing
+// invalid pixels as 0 0 0, a cloud of one point) costs k candidates per query instead of all
+// the copies.
 std::size_t KnnBatch::Collect(const Eigen::Vector3f& q, float bound) {
-    std::size_t count = 0;
+    std::size_t count = 0, same = 0;
     for (Index id : leaves_) {
         const KdTree::Node& node = nodes_[id];
         if (BoxGapSquared(node.min, node.max, q, q) > bound) continue;
@@ -375,7 +416,9 @@ std::size_t KnnBatch::Collect(const Eigen::Vector3f& q, float bound) {
             dist_[count] = d;
             pos_[count] = i;
             count += d <= bound ? 1 : 0;
+            same += d == 0.0f ? 1 : 0;
         }
+        if (same >= k_) break;
     }
     return count;
 }
@@ -399,9 +442,15 @@ std::size_t KnnBatch::SelectNearest(std::size_t count, float bound, float& kth2)
         top = 0.0f;
         for (std::size_t j = 0; j < count; ++j) top = std::max(top, dist_[j]);
     }
-    const float scale = top > 0.0f ? kBuckets / top : 0.0f;
+    // Squared distances of points beyond about 1.8e19 m overflow to infinity: such candidates go
+    // to the top bucket (d * scale is NaN or at least kBuckets there), never past the histogram.
+    const float scale = top > 0.0f && std::isfinite(top) ? kBuckets / top : 0.0f;
+    const auto bucket_of = [scale](float d) {
+        const float b = d * scale;
+        return b < static_cast<float>(kBuckets) ? static_cast<int>(b) : kBuckets;
+    };
     std::array<std::uint32_t, kBuckets + 1> histogram{};
-    for (std::size_t j = 0; j < count; ++j) ++histogram[static_cast<int>(dist_[j] * scale)];
+    for (std::size_t j = 0; j < count; ++j) ++histogram[bucket_of(dist_[j])];
     // The bucket of the k-th, scanning down from the top (the k-th lies in the upper half when
     // the bound was tight).
     int bucket = kBuckets;
@@ -410,7 +459,7 @@ std::size_t KnnBatch::SelectNearest(std::size_t count, float bound, float& kth2)
     std::size_t ties = 0;
     for (std::size_t j = 0; j < count; ++j) {
         ties_[ties] = CandidateKey(dist_[j], pos_[j]);
-        ties += static_cast<int>(dist_[j] * scale) == bucket ? 1 : 0;
+        ties += bucket_of(dist_[j]) == bucket ? 1 : 0;
     }
     // The k-th is the (k - below)-th smallest key of its bucket. Shells of equal distance on the
     // sensor's pixel grid often fill a bucket with a few points; ranking them by counting costs

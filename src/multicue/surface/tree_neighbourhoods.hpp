@@ -82,7 +82,8 @@ class KnnBatch {
     void Done(std::size_t i, float kth);
     float Query(Index t, float bound, float guess);
     void FindLeavesNear(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2);
-    void NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2);
+    std::size_t NarrowLeaves(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float r2);
+    void Reserve(std::size_t capacity);
     std::size_t Collect(const Eigen::Vector3f& q, float bound);
     std::size_t KeepAll(std::size_t count, float& kth2);
     std::size_t SelectNearest(std::size_t count, float bound, float& kth2);

@@ -52,7 +52,18 @@ constexpr const char* kMigrationV1ToV2 = R"sql(
 ALTER TABLE views ADD COLUMN category_probabilities TEXT NOT NULL DEFAULT '{}';
 )sql";
 
-std::string Describe(sqlite3* db) { return db != nullptr ? sqlite3_errmsg(db) : "out of memory"; }
+// SQLite's message, with the system's reason when the operating system refused (a full disk, a
+// file size limit, no permission).
+std::string Describe(sqlite3* db) {
+    if (db == nullptr) return "out of memory";
+    std::string text = sqlite3_errmsg(db);
+    if (const int e = sqlite3_system_errno(db); e != 0) {
+        text += " (";
+        text += std::strerror(e);
+        text += ")";
+    }
+    return text;
+}
 
 class Statement {
   public:
@@ -226,7 +237,12 @@ struct ObjectDatabase::Impl {
     void Exec(const char* sql) const {
         char* message = nullptr;
         if (sqlite3_exec(db, sql, nullptr, nullptr, &message) != SQLITE_OK) {
-            const std::string text = message != nullptr ? message : Describe(db);
+            std::string text = message != nullptr ? message : Describe(db);
+            if (const int e = sqlite3_system_errno(db); message != nullptr && e != 0) {
+                text += " (";
+                text += std::strerror(e);
+                text += ")";
+            }
             sqlite3_free(message);
             throw IoError("object database " + path.string() + ": " + text);
         }
@@ -275,8 +291,11 @@ ObjectDatabase ObjectDatabase::Open(const std::filesystem::path& path, DatabaseM
     int version = 0;
     try {
         version = impl->UserVersion();
-    } catch (const IoError&) {
-        throw IoError("object database " + path.string() + " is not an SQLite database");
+    } catch (const IoError& e) {
+        if ((sqlite3_errcode(impl->db) & 0xff) == SQLITE_NOTADB) {
+            throw IoError("object database " + path.string() + " is not an SQLite database");
+        }
+        throw;
     }
     if (!impl->read_only) {
         impl->Exec("PRAGMA journal_mode=WAL");

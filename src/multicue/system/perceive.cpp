@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <optional>
 
 #include <fmt/format.h>
@@ -106,13 +107,13 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result) {
 
 namespace {
 
-// The stages on one frame (parameters checked already).
-PerceiveResult PerceiveFrame(const PointCloud& input, const PerceiveParams& params,
+// The stages on one frame (parameters checked already), in `cloud` itself: the normals stage
+// adds normals and curvature to it when it has none.
+PerceiveResult PerceiveFrame(PointCloud& cloud, const PerceiveParams& params,
                              const PerceiveModels& models) {
     PerceiveResult result;
-    result.points = input.size();
+    result.points = cloud.size();
     StageTimer timer(result.timings_ms);
-    PointCloud cloud = input;
     const std::size_t min_points = params.clustering.min_points;
 
     // The table and the points above it (section 2.4), their normals, object hypotheses.
@@ -156,6 +157,33 @@ PerceiveResult PerceiveFrame(const PointCloud& input, const PerceiveParams& para
     return result;
 }
 
+// Makes the points farther than kMaxPerceiveRange from the sensor frame's origin invalid (NaN).
+// Such points are no measurement of a table top (a corrupt pixel, a value in the wrong units);
+// beyond about 1e18 m squared distances would not even be finite, and the voxel grids of the
+// stages would leave the 32-bit range much sooner.
+void MakeFarPointsInvalid(PointCloud& cloud) {
+    const auto far = [](const Eigen::Vector3f& p) {
+        return p.allFinite() && p.cwiseAbs().maxCoeff() > kMaxPerceiveRange;
+    };
+    const std::size_t n =
+        static_cast<std::size_t>(std::count_if(cloud.points.begin(), cloud.points.end(), far));
+    if (n == 0) return;
+    const std::size_t finite = cloud.CountFinite();
+    if (n == finite) {
+        throw DataError(fmt::format(
+            "no valid points: all {} finite points lie farther than {:.0e} m from the sensor "
+            "(wrong units?)",
+            finite, kMaxPerceiveRange));
+    }
+    LogWarning(
+        "perceive: {} of {} points lie farther than {:.0e} m from the sensor and are left "
+        "out as invalid",
+        n, finite, kMaxPerceiveRange);
+    for (auto& p : cloud.points) {
+        if (far(p)) p = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    }
+}
+
 // Point indices of the recovered grid mapped to the input's, ascending.
 void ToInput(Indices& indices, const ImageGrid& grid) {
     for (Index& i : indices) i = grid.input_of[i];
@@ -164,10 +192,17 @@ void ToInput(Indices& indices, const ImageGrid& grid) {
 
 }  // namespace
 
-PerceiveResult Perceive(const PointCloud& input, const PerceiveParams& given,
+PerceiveResult Perceive(const PointCloud& cloud, const PerceiveParams& params,
                         const PerceiveModels& models) {
+    PointCloud frame = cloud;
+    return PerceiveInPlace(frame, params, models);
+}
+
+PerceiveResult PerceiveInPlace(PointCloud& input, const PerceiveParams& given,
+                               const PerceiveModels& models) {
     const PerceiveParams params = ApplyThreadCount(given);
     CheckInputs(input, params, models);
+    MakeFarPointsInvalid(input);
     PerceiveResult result;
     const auto start = std::chrono::steady_clock::now();
     std::optional<ImageGrid> grid;

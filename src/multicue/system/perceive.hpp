@@ -30,6 +30,10 @@
 
 namespace multicue {
 
+/// Points farther than this from the sensor frame's origin in any coordinate are left out of
+/// perceive as invalid, like NaN points (a warning names how many) [m].
+inline constexpr float kMaxPerceiveRange = 1e5f;
+
 /// Every parameter of the pipeline, one node per configuration section.
 struct PerceiveParams {
     int num_threads = 0;  ///< "threads": 0 = all cores; set in every stage (ApplyThreadCount)
@@ -99,9 +103,16 @@ struct PerceiveResult {
 void LabelPoints(const PointCloud& cloud, PerceiveResult& result);
 
 /// Runs the pipeline. Parameters (and that the categoriser has its model) are checked before any
-/// work: InvalidArgument. The cloud must hold at least one finite point (DataError otherwise);
-/// normals are computed unless it has them.
+/// work: InvalidArgument. The cloud must hold at least one finite point within
+/// kMaxPerceiveRange (DataError otherwise; points beyond it are left out as invalid); normals are
+/// computed unless it has them.
 PerceiveResult Perceive(const PointCloud& cloud, const PerceiveParams& params,
                         const PerceiveModels& models = {});
+
+/// Perceive without a working copy of the cloud (for large clouds: the copy is the size of the
+/// input): normals and curvature are added to `cloud` when it has none, and points beyond
+/// kMaxPerceiveRange become NaN. Same result as Perceive.
+PerceiveResult PerceiveInPlace(PointCloud& cloud, const PerceiveParams& params,
+                               const PerceiveModels& models = {});
 
 }  // namespace multicue

@@ -1,11 +1,16 @@
 #include "multicue/system/perceive_output.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include "multicue/core/exceptions.hpp"
@@ -215,6 +220,18 @@ void WritePerceiveOutputs(const std::filesystem::path& dir, const nlohmann::orde
         throw IoError(fmt::format("{}: cannot create output folder{}", dir.string(),
                                   ec ? ": " + ec.message() : ""));
     }
+    // Staging folders of writers that were killed (their process is gone) are removed.
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        constexpr std::string_view kPrefix = ".multicue-staging-";
+        if (name.rfind(kPrefix, 0) != 0) continue;
+        const long pid = std::strtol(name.c_str() + kPrefix.size(), nullptr, 10);
+        if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+            std::error_code remove_ec;
+            std::filesystem::remove_all(it->path(), remove_ec);
+        }
+    }
+    ec.clear();
     const auto staging = dir / fmt::format(".multicue-staging-{}", static_cast<long>(::getpid()));
     std::filesystem::remove_all(staging, ec);
     if (!std::filesystem::create_directory(staging, ec)) {

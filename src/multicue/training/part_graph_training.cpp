@@ -32,15 +32,9 @@ std::vector<Indices> DecomposeObject(PointCloud& scan, const Indices& object,
     np.mask.assign(scan.size(), 0);
     for (Index i : object) np.mask[i] = 1;
     SetNormals(scan, EstimateNormalsOrganized(scan, np));
+    const KdTree tree(scan, object);
     RegionGrowingParams rg = perceive.parts.region_growing;
     rg.subset = object;
-    // The neighbours perceive's SegmentParts takes on an organized frame.
-    if (scan.IsOrganized() && perceive.parts.organized_half_window > 0) {
-        return RegionGrowingOrganized(
-                   scan, rg, {.half_window = perceive.parts.organized_half_window, .mask = np.mask})
-            .parts;
-    }
-    const KdTree tree(scan, object);
     return RegionGrowing(scan, tree, rg).parts;
 }
 

@@ -95,10 +95,9 @@ bool TrainPartGraphModel(PartGraphModel& model, const PartGraphTrainingOptions& 
 /// The default model: procedural objects only, `multicue train` defaults.
 PartGraphModel TrainDefaultPartGraphModel(Progress* progress = nullptr);
 
-/// Revision of the default model's training settings (2: 40 table scenes; 3: parts grown in
-/// pixel windows on organized scans); part of the cache name, so that a cached model of older
-/// defaults is not read.
-inline constexpr int kDefaultTrainingRevision = 3;
+/// Revision of the default model's training settings (2: 40 table scenes); part of the cache
+/// name, so that a cached model of older defaults is not read.
+inline constexpr int kDefaultTrainingRevision = 2;
 
 /// Where the default model is cached: $XDG_CACHE_HOME/multicue (else ~/.cache/multicue, else the
 /// system temp folder) / part-graph-default-v<model format version>.<training revision>.mcpg.

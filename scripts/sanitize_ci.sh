@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# The sanitizer job (docs/hardening.md#sanitizers). Two scopes:
+#
+#   scripts/sanitize_ci.sh [asan|tsan ...]          the CI scope: the readers' tests under
+#                                                   AddressSanitizer + UndefinedBehaviorSanitizer
+#                                                   (`asan`, which .ci/run runs after the README's
+#                                                   test command) and the thread pool's and the
+#                                                   normals' tests under ThreadSanitizer (`tsan`)
+#   scripts/sanitize_ci.sh --full [asan|tsan ...]   every unit test under ASan + UBSan and the
+#                                                   tests of all parallel stages (normals, perceive,
+#                                                   training, simulation, executive) under TSan;
+#                                                   about an hour cold on two cores
+#
+# Builds: build-asan/ (-DMULTICUE_SANITIZE=address,undefined) and build-tsan/
+# (-DMULTICUE_SANITIZE=thread), -O1 -g1 with g++, without benchmarks, accuracy drivers,
+# examples, the Python module, the PCL/Open3D tests and the report viewer; ccache makes a second
+# run cheap. Tests that need the shared scans are skipped (MULTICUE_SHARED_DATA_DIR points
+# nowhere) to keep the time bounded. Any sanitizer report fails the job.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+full=0
+if [[ "${1:-}" == "--full" ]]; then
+    full=1
+    shift
+fi
+stages=("$@")
+if [[ ${#stages[@]} -eq 0 ]]; then stages=(asan tsan); fi
+
+# The CI scope: the readers (PCD, PLY, OBJ, configuration, PointCloud2, ROS bags, URDF) and the
+# core, search and normals code under ASan + UBSan; the parallel loops of core and the normals
+# under TSan.
+ci_asan_tests=(test_core test_pcd test_config test_ply_obj test_point_cloud2 test_ros_bags test_urdf
+               test_search test_normals)
+ci_tsan_tests=(test_core test_normals)
+
+common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+        -DMULTICUE_BUILD_BENCH=OFF -DMULTICUE_BUILD_EVAL=OFF -DMULTICUE_BUILD_EXAMPLES=OFF
+        -DMULTICUE_BUILD_PYTHON=OFF -DMULTICUE_INSTALL=OFF -DMULTICUE_PCL_TESTS=OFF
+        -DMULTICUE_OPEN3D_TESTS=OFF -DMULTICUE_REPORT_VIEWER=OFF
+        -DMULTICUE_SHARED_DATA_DIR="$PWD/build-no-shared-data")
+
+supp="$PWD/scripts/sanitizers"
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0"
+export LSAN_OPTIONS="suppressions=$supp/lsan.supp"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
+
+seconds() { date +%s; }
+
+for stage in "${stages[@]}"; do
+    start=$(seconds)
+    case "$stage" in
+        asan)
+            cmake -S . -B build-asan "${common[@]}" -DMULTICUE_SANITIZE=address,undefined
+            if [[ $full -eq 1 ]]; then
+                cmake --build build-asan -j2
+                built=$(seconds)
+                # The browser test drives Chromium over the CLI (minutes under ASan, and Chromium
+                # is not ours); the documentation checks do not run multicue code.
+                ctest --test-dir build-asan --output-on-failure -j2 -E '^(report_browser|docs_)'
+            else
+                cmake --build build-asan -j2 --target "${ci_asan_tests[@]}"
+                built=$(seconds)
+                for t in "${ci_asan_tests[@]}"; do
+                    echo "sanitize_ci.sh: $t under AddressSanitizer + UndefinedBehaviorSanitizer"
+                    "build-asan/tests/$t" --gtest_brief=1
+                done
+            fi
+            ;;
+        tsan)
+            tests=("${ci_tsan_tests[@]}")
+            if [[ $full -eq 1 ]]; then
+                tests=(test_core test_normals test_perceive test_perceive_stages
+                       test_part_graph_training test_sim test_executive)
+            fi
+            cmake -S . -B build-tsan "${common[@]}" -DMULTICUE_SANITIZE=thread
+            cmake --build build-tsan -j2 --target "${tests[@]}"
+            built=$(seconds)
+            for t in "${tests[@]}"; do
+                echo "sanitize_ci.sh: $t under ThreadSanitizer"
+                "build-tsan/tests/$t" --gtest_brief=1
+            done
+            ;;
+        *)
+            echo "sanitize_ci.sh: unknown stage '$stage' (asan, tsan)" >&2
+            exit 2
+            ;;
+    esac
+    end=$(seconds)
+    echo "sanitize_ci.sh: $stage: build $((built - start)) s, tests $((end - built)) s"
+done
