@@ -57,7 +57,7 @@ struct Options {
     std::vector<std::string> thresholds;
     float window_scale = 1.0f;
     float min_coverage = 0.5f;
-    float max_free_share = 0.1f;
+    float max_free_share = 0.4f;
     float min_part_share = 0.1f;
     std::string normalization = "per-class";
     std::string frame = "part";

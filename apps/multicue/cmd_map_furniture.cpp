@@ -36,7 +36,7 @@ struct MapFurnitureOptions {
     std::string kitchen = MULTICUE_KITCHEN_LIBRARY_DIR;
     float threshold_scale = 1.0f;
     float min_coverage = 0.5f;
-    float max_free_share = 0.1f;
+    float max_free_share = 0.4f;
     bool verify = true;
     bool free_space = true;
     bool quiet = false;

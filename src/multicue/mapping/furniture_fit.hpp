@@ -72,7 +72,9 @@ struct FurnitureFitParams {
     float wall_margin = 0.15f;
     float max_behind_share = 0.1f;         ///< reject with more of the model behind a wall
     float min_coverage = 0.5f;             ///< reject below this share of covered scan points
-    float max_free_share = 0.1f;           ///< reject above this share of model points in free space
+    /// Reject above this share of model points in free space (0.4 chosen on validation rooms: a
+    /// CAD model of another piece of the class sticks out of the scanned one)
+    float max_free_share = 0.4f;
     double occupancy_resolution = 0.05;    ///< voxel of the per-scan occupancy maps [m]
     std::size_t max_model_checks = 3000;   ///< model points tested against free space at most
     std::size_t max_search_checks = 300;   ///< the same while searching poses
