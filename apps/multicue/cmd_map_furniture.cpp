@@ -79,6 +79,13 @@ FurnitureModel LoadOrTrain(const MapFurnitureOptions& o, int threads) {
     return model;
 }
 
+/// Yaw in degrees within (-180, 180].
+float YawDeg(float yaw) {
+    float d =
+        std::remainder(yaw, 2.0f * static_cast<float>(M_PI)) * 180.0f / static_cast<float>(M_PI);
+    return d <= -180.0f ? d + 360.0f : d;
+}
+
 nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& model) {
     nlohmann::json j;
     j["class"] = d.category;
@@ -99,10 +106,10 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     }
     j["cad_model"] = cad.id;
     j["pose"] = pose;
-    j["yaw_deg"] = d.fit.yaw * 180.0f / static_cast<float>(M_PI);
+    j["yaw_deg"] = YawDeg(d.fit.yaw);
     j["box"] = {{"centre", {box_centre.x(), box_centre.y(), box_centre.z()}},
                 {"size", {hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z()}},
-                {"yaw_deg", d.fit.yaw * 180.0f / static_cast<float>(M_PI)}};
+                {"yaw_deg", YawDeg(d.fit.yaw)}};
     j["coverage"] = d.fit.coverage;
     j["free_share"] = d.fit.free_share;
     j["behind_wall_share"] = d.fit.behind_share;
@@ -162,8 +169,7 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
             (dir / "detections.json").string().c_str());
         for (const auto& d : r.detections) {
             std::printf("  %-9s at (%6.2f, %6.2f) yaw %4.0f deg score %.2f\n", d.category.c_str(),
-                        d.centre.x(), d.centre.y(), d.fit.yaw * 180.0f / static_cast<float>(M_PI),
-                        d.score);
+                        d.centre.x(), d.centre.y(), YawDeg(d.fit.yaw), d.score);
         }
     }
 }
