@@ -1,7 +1,7 @@
 // Furniture detection by part configurations on small simulated scenes: a CAD model fitted to a
-// noisy scan of its piece at a known pose, a planted chair found by the votes (the same for any
-// thread count), free space against a closed-form case, the model file round trip, bad
-// parameters and empty input.
+// noisy scan of its piece at a known pose (and rejected where a scan saw only floor), a planted
+// chair found by the votes (the same for any thread count), free space against a closed-form case,
+// the model file round trip, bad parameters and empty input.
 
 #include <gtest/gtest.h>
 
@@ -82,7 +82,7 @@ float AngleDiff(float a, float b) {
     return std::min(d, 2.0f * kPi - d);
 }
 
-TEST(FurnitureFit, RecoversTheKnownPoseOfATrainingPieceFromANoisyScan) {
+TEST(FurnitureFit, RecoversTheKnownPoseOfATrainingPieceAndRejectsItInFreeSpace) {
     std::vector<sim::FurniturePiece> pieces;
     const FurnitureModel model = TrainSmallModel(&pieces);
     // The first procedural chair: asymmetric (back), so its yaw is unique.
@@ -120,6 +120,22 @@ TEST(FurnitureFit, RecoversTheKnownPoseOfATrainingPieceFromANoisyScan) {
     EXPECT_LT(AngleDiff(fit.yaw, yaw), 5.0f * kPi / 180.0f) << "yaw " << fit.yaw;
     // Upright: the model's z stays the world's z.
     EXPECT_GT(fit.T_world_model.linear()(2, 2), 0.999f);
+
+    // The same points where a scan saw only the floor: the model stands in free space.
+    PointCloud floor;
+    for (float x = -1.5f; x <= 1.5f; x += 0.02f) {
+        for (float y = -1.5f; y <= 1.5f; y += 0.02f)
+            floor.points.emplace_back(shift.x() + x, shift.y() + y, 0.0f);
+    }
+    floor.width = static_cast<std::uint32_t>(floor.points.size());
+    FurnitureFreeSpace empty_room(fp.occupancy_resolution);
+    empty_room.AddView(floor, shift + Eigen::Vector3f(2.0f, 0.3f, 1.5f));
+    FurnitureSpace space;
+    space.free.push_back(&empty_room);
+    const FurnitureFit in_free =
+        FitFurniture(points, cls, shift.head<2>() + Eigen::Vector2f(0.1f, 0.1f), context, space);
+    EXPECT_FALSE(in_free.accepted);
+    EXPECT_GT(in_free.free_share, fp.max_free_share);
 }
 
 TEST(FurnitureDetection, VotesFindAPlantedChairForAnyThreadCount) {
