@@ -199,7 +199,7 @@ void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global) 
                     "multiplies the class thresholds of the votes (lower: more hypotheses)")
         ->capture_default_str();
     cmd->add_option("--min-coverage", o->min_coverage,
-                    "share of a hypothesis's points a fitted model must cover, (0, 1]")
+                    "share of a hypothesis's points a fitted model must cover, [0, 1]")
         ->capture_default_str();
     cmd->add_option("--max-free-share", o->max_free_share,
                     "share of a fitted model allowed in space the scans saw empty, [0, 1]")
