@@ -168,8 +168,10 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
             scans.size(), r.detections.size(), r.rejected.size(),
             (dir / "detections.json").string().c_str());
         for (const auto& d : r.detections) {
-            std::printf("  %-9s at (%6.2f, %6.2f) yaw %4.0f deg score %.2f\n", d.category.c_str(),
-                        d.centre.x(), d.centre.y(), YawDeg(d.fit.yaw), d.score);
+            const std::string yaw =
+                d.fitted ? fmt::format("yaw {:4.0f} deg", YawDeg(d.fit.yaw)) : "(not fitted)";
+            std::printf("  %-9s at (%6.2f, %6.2f) %s score %.2f\n", d.category.c_str(),
+                        d.centre.x(), d.centre.y(), yaw.c_str(), d.score);
         }
     }
 }
