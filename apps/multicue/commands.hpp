@@ -38,5 +38,9 @@ void AddRegisterCommand(CLI::App& app, const GlobalOptions& global);
 /// `map SCANS... | --manifest M` (cmd_map.cpp). Returns the `map` command so that other map jobs
 /// attach subcommands to it (`map kitchen ...`); its own callback skips when one of them ran.
 CLI::App* AddMapCommand(CLI::App& app, const GlobalOptions& global);
+/// `simulate furniture` (cmd_simulate_furniture.cpp), attached to the `simulate` command.
+void AddSimulateFurnitureCommand(CLI::App& simulate, const GlobalOptions& global);
+/// `map furniture` (cmd_map_furniture.cpp), attached to the `map` command.
+void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global);
 
 }  // namespace multicue::cli

@@ -1,0 +1,219 @@
+// `multicue map furniture SCANS... --model MODEL --out DIR`: tables, chairs, cabinets and
+// sideboards in scans of a room, found by part configurations (Hough votes of a part vocabulary)
+// and verified by fitting CAD models against the scans' free space (thesis section 4.2,
+// docs/furniture.md). Scans share one z-up world frame with the floor at z = 0 and carry their
+// sensor pose (as `multicue simulate furniture` writes them). Writes detections.json (class, pose,
+// oriented box, CAD model, score, and the rejected hypotheses with their reasons) and models.ply
+// (the fitted CAD meshes). A missing model file is trained from the furniture library first.
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/io/file_utils.hpp"
+#include "multicue/io/ply.hpp"
+#include "multicue/mapping/furniture_detection.hpp"
+#include "multicue/training/furniture_training.hpp"
+
+namespace multicue::cli {
+namespace {
+
+struct MapFurnitureOptions {
+    std::vector<std::string> scans;
+    std::string model;
+    std::string out;
+    std::string furniture = MULTICUE_FURNITURE_MODELS_DIR;
+    std::string kitchen = MULTICUE_KITCHEN_LIBRARY_DIR;
+    float threshold_scale = 1.0f;
+    float min_coverage = 0.5f;
+    float max_free_share = 0.4f;
+    bool verify = true;
+    bool free_space = true;
+    bool quiet = false;
+};
+
+/// The scan in its sensor frame and the sensor's pose in the world (from the file's header).
+FurnitureView SensorView(const std::string& path, PointCloud& scan) {
+    if (!scan.HasSensorPosition()) {
+        throw DataError(fmt::format(
+            "{}: no sensor pose in the file (PCD VIEWPOINT or PLY obj_info); map furniture needs "
+            "it for the free-space test",
+            path));
+    }
+    Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+    T.linear() = scan.sensor_orientation.normalized().toRotationMatrix();
+    T.translation() = scan.sensor_origin;
+    const Eigen::Isometry3f inv = T.inverse();
+    for (auto& p : scan.points) p = inv * p;
+    for (auto& n : scan.normals) n = inv.linear() * n;
+    scan.sensor_origin = Eigen::Vector3f::Zero();  // now the frame's origin
+    scan.sensor_orientation = Eigen::Quaternionf::Identity();
+    return {&scan, T};
+}
+
+FurnitureModel LoadOrTrain(const MapFurnitureOptions& o, int threads) {
+    if (std::filesystem::exists(o.model)) return FurnitureModel::Load(o.model);
+    training::FurnitureTrainingOptions to;
+    to.furniture = o.furniture;
+    to.kitchen = o.kitchen;
+    to.num_threads = threads;
+    to.Validate();
+    const auto pieces = training::FurnitureTrainingPieces(to);
+    FurnitureModel model;
+    Progress progress("training", pieces.size());
+    if (!training::TrainFurnitureModel(pieces, to, model, &progress)) {
+        throw Error("map furniture: training interrupted, no model written");
+    }
+    progress.Finish();
+    model.Save(o.model);
+    return model;
+}
+
+/// Yaw in degrees within (-180, 180].
+float YawDeg(float yaw) {
+    float d =
+        std::remainder(yaw, 2.0f * static_cast<float>(M_PI)) * 180.0f / static_cast<float>(M_PI);
+    return d <= -180.0f ? d + 360.0f : d;
+}
+
+nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& model) {
+    nlohmann::json j;
+    j["class"] = d.category;
+    j["score"] = d.score;
+    j["votes"] = d.hypothesis.normalized;
+    j["centre"] = {d.centre.x(), d.centre.y()};
+    if (!d.rejection.empty()) j["rejection"] = d.rejection;
+    if (!d.fitted || d.fit.cad < 0) return j;
+    const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
+    const Eigen::Isometry3f& T = d.fit.T_world_model;
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
+    for (const auto& p : cad.cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    if (cad.cloud.points.empty()) lo = hi = Eigen::Vector3f::Zero();
+    const Eigen::Vector3f box_centre = T * (0.5f * (lo + hi));
+    nlohmann::json pose = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r) {
+        pose.push_back({T.matrix()(r, 0), T.matrix()(r, 1), T.matrix()(r, 2), T.matrix()(r, 3)});
+    }
+    j["cad_model"] = cad.id;
+    j["pose"] = pose;
+    j["yaw_deg"] = YawDeg(d.fit.yaw);
+    j["box"] = {{"centre", {box_centre.x(), box_centre.y(), box_centre.z()}},
+                {"size", {hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z()}},
+                {"yaw_deg", YawDeg(d.fit.yaw)}};
+    j["coverage"] = d.fit.coverage;
+    j["free_share"] = d.fit.free_share;
+    j["behind_wall_share"] = d.fit.behind_share;
+    return j;
+}
+
+void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
+    FurnitureDetectionParams params;
+    params.selection.threshold_scale = o.threshold_scale;
+    params.fit.min_coverage = o.min_coverage;
+    params.fit.max_free_share = o.max_free_share;
+    params.verify = o.verify;
+    params.free_space = o.free_space;
+    params.num_threads = global.threads;
+    params.Validate();  // before reading or training anything
+    for (const auto& s : o.scans) CheckDistinctPaths(s, o.out);
+    CheckDistinctPaths(o.model, o.out);
+    std::vector<PointCloud> scans;
+    scans.reserve(o.scans.size());
+    for (const auto& s : o.scans) scans.push_back(ReadNonEmptyCloud(s));
+    std::vector<FurnitureView> views;
+    for (std::size_t i = 0; i < scans.size(); ++i)
+        views.push_back(SensorView(o.scans[i], scans[i]));
+    InstallInterruptHandler();
+    const FurnitureModel model = LoadOrTrain(o, global.threads);
+    const auto context =
+        o.verify ? std::make_unique<FurnitureFitContext>(model, params.fit) : nullptr;
+    const FurnitureDetectionResult r = DetectFurniture(views, model, context.get(), params);
+
+    // Build the outputs in memory, then write each file atomically.
+    nlohmann::json doc;
+    doc["scans"] = o.scans;
+    doc["model"] = o.model;
+    doc["verified"] = o.verify;
+    doc["detections"] = nlohmann::json::array();
+    doc["rejected"] = nlohmann::json::array();
+    TriangleMesh fitted;
+    for (const auto& d : r.detections) {
+        doc["detections"].push_back(DetectionJson(d, model));
+        if (!d.fitted || d.fit.cad < 0) continue;
+        const TriangleMesh& m = model.cads()[static_cast<std::size_t>(d.fit.cad)].mesh;
+        const auto base = static_cast<std::uint32_t>(fitted.vertices.size());
+        for (const auto& v : m.vertices) fitted.vertices.push_back(d.fit.T_world_model * v);
+        for (const auto& t : m.triangles) fitted.triangles.push_back(t.array() + base);
+    }
+    for (const auto& d : r.rejected) doc["rejected"].push_back(DetectionJson(d, model));
+    doc["timing_ms"] = {{"selection", r.selection_ms}, {"fitting", r.fit_ms}};
+    const std::filesystem::path dir = o.out;
+    std::filesystem::create_directories(dir);
+    const std::string text = doc.dump(2) + "\n";
+    io::WriteFileAtomically(dir / "detections.json", [&](std::ostream& s) { s << text; });
+    if (!fitted.triangles.empty()) io::WritePlyMesh(dir / "models.ply", fitted);
+    if (!o.quiet) {
+        std::printf(
+            "multicue map furniture: %zu scans, %zu detections (%zu hypotheses rejected) -> %s\n",
+            scans.size(), r.detections.size(), r.rejected.size(),
+            (dir / "detections.json").string().c_str());
+        for (const auto& d : r.detections) {
+            const std::string yaw =
+                d.fitted ? fmt::format("yaw {:4.0f} deg", YawDeg(d.fit.yaw)) : "(not fitted)";
+            std::printf("  %-9s at (%6.2f, %6.2f) %s score %.2f\n", d.category.c_str(),
+                        d.centre.x(), d.centre.y(), yaw.c_str(), d.score);
+        }
+    }
+}
+
+}  // namespace
+
+void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global) {
+    auto* cmd = map_command.add_subcommand(
+        "furniture",
+        "Tables, chairs, cabinets and sideboards in scans of a room: part votes, CAD models "
+        "fitted and verified against free space (detections.json, models.ply)");
+    auto o = std::make_shared<MapFurnitureOptions>();
+    cmd->add_option("SCANS", o->scans,
+                    "PCD or PLY scans in one world frame (z up, floor at z = 0) with sensor poses")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--model", o->model,
+                    "furniture model (.mcfm); trained from --furniture and --kitchen and written "
+                    "here when missing")
+        ->required();
+    cmd->add_option("--out", o->out, "output folder: detections.json, models.ply")->required();
+    cmd->add_option("--furniture", o->furniture, "furniture library (labels.csv) for training")
+        ->capture_default_str();
+    cmd->add_option("--kitchen", o->kitchen, "kitchen library for training (tables, cupboards)")
+        ->capture_default_str();
+    cmd->add_option("--threshold-scale", o->threshold_scale,
+                    "multiplies the class thresholds of the votes (lower: more hypotheses)")
+        ->capture_default_str();
+    cmd->add_option("--min-coverage", o->min_coverage,
+                    "share of a hypothesis's points a fitted model must cover, [0, 1]")
+        ->capture_default_str();
+    cmd->add_option("--max-free-share", o->max_free_share,
+                    "share of a fitted model allowed in space the scans saw empty, [0, 1]")
+        ->capture_default_str();
+    cmd->add_flag(
+        "--no-verify", [o](std::int64_t) { o->verify = false; },
+        "hypotheses of the votes without CAD fitting");
+    cmd->add_flag(
+        "--no-free-space", [o](std::int64_t) { o->free_space = false; },
+        "fit without the free-space test");
+    cmd->add_flag("-q,--quiet", o->quiet, "no summary");
+    cmd->callback([o, &global] { Run(*o, global); });
+}
+
+}  // namespace multicue::cli

@@ -1,0 +1,340 @@
+#include "multicue/mapping/furniture_detection.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/filters/voxel_grid.hpp"
+
+namespace multicue {
+namespace {
+
+using Polygon = std::vector<Eigen::Vector2f>;
+
+double MsSince(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+float Cross(const Eigen::Vector2f& a, const Eigen::Vector2f& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+float Area(const Polygon& p) {
+    float a = 0.0f;
+    for (std::size_t i = 0; i < p.size(); ++i) a += Cross(p[i], p[(i + 1) % p.size()]);
+    return 0.5f * std::abs(a);
+}
+
+// Convex hull (counter-clockwise) by Andrew's monotone chain.
+Polygon Hull(std::vector<Eigen::Vector2f> pts) {
+    std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) {
+        return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y();
+    });
+    if (pts.size() < 3) return pts;
+    Polygon h(2 * pts.size());
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        while (k >= 2 && Cross(h[k - 1] - h[k - 2], pts[i] - h[k - 2]) <= 0) --k;
+        h[k++] = pts[i];
+    }
+    for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+        while (k >= t && Cross(h[k - 1] - h[k - 2], pts[i] - h[k - 2]) <= 0) --k;
+        h[k++] = pts[i];
+    }
+    h.resize(k - 1);
+    return h;
+}
+
+// The fitted model's footprint in the world.
+Polygon Footprint(const FurnitureCad& cad, const Eigen::Isometry3f& T) {
+    std::vector<Eigen::Vector2f> pts;
+    const std::size_t step = std::max<std::size_t>(1, cad.cloud.size() / 2000);
+    for (std::size_t i = 0; i < cad.cloud.size(); i += step) pts.push_back((T * cad.cloud.points[i]).head<2>());
+    return Hull(std::move(pts));
+}
+
+// The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
+// within `radius` of it.
+PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis& h, float radius) {
+    PointCloud out;
+    for (const auto& [view, part] : h.parts) {
+        const FurnitureParts& v = scene.views[static_cast<std::size_t>(view)];
+        const FurniturePart& fp = v.parts[static_cast<std::size_t>(part)];
+        if ((fp.centroid.head<2>() - h.centre).norm() > radius) continue;
+        for (Index i : fp.indices) {
+            out.points.push_back(v.cloud.points[i]);
+            out.normals.push_back(v.cloud.normals[i]);
+        }
+    }
+    out.width = static_cast<std::uint32_t>(out.points.size());
+    return out;
+}
+
+// The walls among a view's parts: upright planes reaching above max_top, long enough.
+std::vector<FurnitureWall> FindWalls(const FurnitureParts& v, float max_top, float min_length) {
+    std::vector<FurnitureWall> walls;
+    for (const auto& part : v.parts) {
+        if (part.top <= max_top || part.indices.size() < 20) continue;
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        for (Index i : part.indices) mean += v.cloud.points[i].head<2>().cast<double>();
+        mean /= static_cast<double>(part.indices.size());
+        Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+        for (Index i : part.indices) {
+            const Eigen::Vector2d q = v.cloud.points[i].head<2>().cast<double>() - mean;
+            cov += q * q.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+        Eigen::Vector2d n = eig.eigenvectors().col(0);
+        if (n.dot(v.sensor_origin.head<2>().cast<double>() - mean) < 0.0) n = -n;
+        const Eigen::Vector2d dir(-n.y(), n.x());
+        double lo = 1e9, hi = -1e9, spread = 0.0;
+        for (Index i : part.indices) {
+            const Eigen::Vector2d q = v.cloud.points[i].head<2>().cast<double>() - mean;
+            lo = std::min(lo, q.dot(dir));
+            hi = std::max(hi, q.dot(dir));
+            spread = std::max(spread, std::abs(q.dot(n)));
+        }
+        if (hi - lo < min_length || spread > 0.1) continue;  // short, or not one upright plane
+        FurnitureWall w;
+        w.point = mean.cast<float>();
+        w.normal = n.cast<float>();
+        w.lo = static_cast<float>(lo);
+        w.hi = static_cast<float>(hi);
+        walls.push_back(w);
+    }
+    return walls;
+}
+
+}  // namespace
+
+float ConvexIntersectionArea(const Polygon& a, const Polygon& b) {
+    if (a.size() < 3 || b.size() < 3) return 0.0f;
+    // Sutherland-Hodgman: clip a by every edge of b.
+    Polygon out = a;
+    for (std::size_t i = 0; i < b.size() && !out.empty(); ++i) {
+        const Eigen::Vector2f p = b[i], q = b[(i + 1) % b.size()];
+        auto inside = [&](const Eigen::Vector2f& x) { return Cross(q - p, x - p) >= 0.0f; };
+        Polygon in = std::move(out);
+        out.clear();
+        for (std::size_t k = 0; k < in.size(); ++k) {
+            const Eigen::Vector2f c = in[k], n = in[(k + 1) % in.size()];
+            const bool ci = inside(c), ni = inside(n);
+            if (ci) out.push_back(c);
+            if (ci != ni) {
+                const float t = Cross(q - p, c - p) / (Cross(q - p, c - p) - Cross(q - p, n - p));
+                out.push_back(c + t * (n - c));
+            }
+        }
+    }
+    return out.size() < 3 ? 0.0f : Area(out);
+}
+
+void FurnitureDetectionParams::Validate() const {
+    voting.Validate();
+    selection.Validate();
+    fit.Validate();
+    if (!(min_wall_length > 0.0f) || !std::isfinite(min_wall_length)) {
+        throw InvalidArgument(fmt::format("furniture detection: min_wall_length must be > 0, got {}",
+                                          min_wall_length));
+    }
+    if (!(max_overlap > 0.0f && max_overlap <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("furniture detection: max_overlap must be in (0, 1], got {}", max_overlap));
+    }
+    if (num_threads < 0) {
+        throw InvalidArgument(
+            fmt::format("furniture detection: num_threads must be >= 0, got {}", num_threads));
+    }
+}
+
+FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
+                                     const FurnitureModel& model,
+                                     const FurnitureDetectionParams& params) {
+    params.Validate();
+    if (!model.trained()) throw InvalidArgument("furniture detection: the model is not trained");
+    for (const auto& v : views) {
+        if (v.scan == nullptr) throw InvalidArgument("furniture detection: a view without a scan");
+        if (!v.T_world_sensor.matrix().allFinite()) {
+            throw InvalidArgument("furniture detection: a view pose is not finite");
+        }
+    }
+    FurnitureScene scene;
+    FurniturePartParams pp = model.part_params();
+    pp.num_threads = params.num_threads;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        auto t = std::chrono::steady_clock::now();
+        scene.views.push_back(ExtractFurnitureParts(*views[v].scan, views[v].T_world_sensor, pp));
+        scene.parts_ms += MsSince(t);
+        t = std::chrono::steady_clock::now();
+        scene.votes.push_back(CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
+        scene.votes_ms += MsSince(t);
+        scene.walls.push_back(params.walls ? FindWalls(scene.views.back(),
+                                                       model.max_object_height() + params.voting.height_margin,
+                                                       params.min_wall_length)
+                                           : std::vector<FurnitureWall>{});
+        if (!params.verify || !params.free_space) continue;
+        // Occupancy from the whole scan (the floor too: rays to it free the space above it),
+        // thinned to the map's resolution.
+        t = std::chrono::steady_clock::now();
+        PointCloud world;
+        const float floor = scene.views.back().floor_height;
+        for (const auto& p : views[v].scan->points) {
+            if (p.allFinite()) world.points.push_back(views[v].T_world_sensor * p - Eigen::Vector3f(0, 0, floor));
+        }
+        world.width = static_cast<std::uint32_t>(world.points.size());
+        const auto res = static_cast<float>(params.fit.occupancy_resolution);
+        const PointCloud thin = VoxelGrid(world, {.leaf_size = res / 2, .num_threads = params.num_threads});
+        FurnitureFreeSpace fs(params.fit.occupancy_resolution);
+        fs.AddView(thin, scene.views.back().sensor_origin);
+        scene.free_space.push_back(std::move(fs));
+        scene.occupancy_ms += MsSince(t);
+    }
+    return scene;
+}
+
+FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std::vector<int>& subset,
+                                         const FurnitureModel& model,
+                                         const FurnitureFitContext* context,
+                                         const FurnitureDetectionParams& params) {
+    params.Validate();
+    if (params.verify && context == nullptr) {
+        throw InvalidArgument("furniture detection: verification needs a fit context");
+    }
+    if (params.verify && &context->model() != &model) {
+        throw InvalidArgument("furniture detection: the fit context belongs to another model");
+    }
+    std::vector<int> views = subset;
+    if (views.empty()) {
+        for (std::size_t v = 0; v < scene.views.size(); ++v) views.push_back(static_cast<int>(v));
+    }
+    for (int v : views) {
+        if (v < 0 || v >= static_cast<int>(scene.views.size())) {
+            throw InvalidArgument(fmt::format("furniture detection: no view {}", v));
+        }
+    }
+    FurnitureDetectionResult result;
+    if (views.empty()) return result;
+    auto t = std::chrono::steady_clock::now();
+    std::vector<FurnitureVote> votes;
+    for (int v : views) {
+        const auto& vv = scene.votes[static_cast<std::size_t>(v)];
+        votes.insert(votes.end(), vv.begin(), vv.end());
+    }
+    result.votes = votes.size();
+    const auto hyps = SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
+    result.selection_ms = MsSince(t);
+    std::vector<const FurnitureWall*> walls;
+    for (int v : views) {
+        if (static_cast<std::size_t>(v) >= scene.walls.size()) continue;
+        for (const auto& w : scene.walls[static_cast<std::size_t>(v)]) walls.push_back(&w);
+    }
+    std::vector<FurnitureDetection> all(hyps.size());
+    for (std::size_t i = 0; i < hyps.size(); ++i) {
+        all[i].cls = hyps[i].cls;
+        all[i].category = model.classes()[static_cast<std::size_t>(hyps[i].cls)].name;
+        all[i].hypothesis = hyps[i];
+        all[i].centre = hyps[i].centre;
+        all[i].score = hyps[i].normalized;
+        all[i].accepted = !BehindWalls(walls, hyps[i].centre, params.fit.wall_margin);
+        if (!all[i].accepted) all[i].rejection = "behind_wall";
+    }
+    if (params.verify) {
+        t = std::chrono::steady_clock::now();
+        // What the chosen views say about the space: their free space and walls.
+        FurnitureSpace space;
+        space.walls = walls;
+        for (int v : views) {
+            if (static_cast<std::size_t>(v) < scene.free_space.size()) space.free.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
+        }
+        ParallelFor(
+            all.size(), params.num_threads,
+            [&](std::size_t i) {
+                FurnitureDetection& d = all[i];
+                if (!d.accepted) return;  // behind a wall
+                const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(d.cls)];
+                const PointCloud pts = SupportPoints(scene, d.hypothesis, cls.length / 2 + params.support_margin);
+                d.fit = FitFurniture(pts, d.cls, d.hypothesis.centre, *context, space);
+                d.fitted = d.fit.cad >= 0;
+                if (d.fitted) {
+                    d.centre = d.fit.T_world_model.translation().head<2>();
+                    d.score *= std::max(0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
+                }
+                d.accepted = d.fit.accepted;
+                d.rejection = d.fit.rejection;
+            },
+            1);
+        // Fitted footprints that overlap are one piece. Strongest first, each detection gathers
+        // the accepted ones overlapping it; with class_by_fit the one whose model explains the
+        // scan best (coverage minus free space and space behind walls) stays, with the group's
+        // best vote score, else the strongest stays.
+        std::vector<Polygon> feet(all.size());
+        std::vector<float> areas(all.size(), 0.0f), vote(all.size(), 0.0f);
+        for (std::size_t i = 0; i < all.size(); ++i) {
+            vote[i] = all[i].hypothesis.normalized;
+            if (!all[i].accepted) continue;
+            feet[i] = Footprint(model.cads()[static_cast<std::size_t>(all[i].fit.cad)], all[i].fit.T_world_model);
+            areas[i] = Area(feet[i]);
+        }
+        auto overlaps = [&](std::size_t i, std::size_t k) {
+            if (!params.cross_class && all[i].cls != all[k].cls) return false;
+            return ConvexIntersectionArea(feet[i], feet[k]) > params.max_overlap * std::min(areas[i], areas[k]);
+        };
+        auto quality = [&](const FurnitureDetection& d) {
+            return d.fit.coverage - d.fit.free_share - d.fit.behind_share;
+        };
+        std::vector<std::size_t> order(all.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all[a].score > all[b].score; });
+        std::vector<bool> done(all.size(), false);
+        std::vector<std::size_t> kept;
+        for (std::size_t i : order) {
+            if (!all[i].accepted || done[i]) continue;
+            bool clash = false;
+            for (std::size_t k : kept) clash = clash || overlaps(i, k);
+            if (clash) {
+                all[i].accepted = false;
+                all[i].rejection = "overlap";
+                continue;
+            }
+            std::vector<std::size_t> group = {i};
+            for (std::size_t k : order) {
+                if (k != i && all[k].accepted && !done[k] && overlaps(i, k)) group.push_back(k);
+            }
+            std::size_t winner = i;
+            if (params.class_by_fit) {
+                for (std::size_t k : group) {
+                    if (quality(all[k]) > quality(all[winner])) winner = k;
+                }
+                float best_vote = 0.0f;
+                for (std::size_t k : group) best_vote = std::max(best_vote, vote[k]);
+                all[winner].score = best_vote * std::max(0.0f, 0.5f + quality(all[winner]));
+            }
+            for (std::size_t k : group) {
+                done[k] = true;
+                if (k == winner) continue;
+                all[k].accepted = false;
+                all[k].rejection = "overlap";
+            }
+            kept.push_back(winner);
+        }
+        result.fit_ms = MsSince(t);
+    }
+    for (auto& d : all) (d.accepted ? result.detections : result.rejected).push_back(std::move(d));
+    auto by_score = [](const FurnitureDetection& a, const FurnitureDetection& b) { return a.score > b.score; };
+    std::stable_sort(result.detections.begin(), result.detections.end(), by_score);
+    std::stable_sort(result.rejected.begin(), result.rejected.end(), by_score);
+    return result;
+}
+
+FurnitureDetectionResult DetectFurniture(const std::vector<FurnitureView>& views,
+                                         const FurnitureModel& model,
+                                         const FurnitureFitContext* context,
+                                         const FurnitureDetectionParams& params) {
+    const FurnitureScene scene = PrepareFurnitureScene(views, model, params);
+    return DetectFurniture(scene, {}, model, context, params);
+}
+
+}  // namespace multicue

@@ -1,0 +1,122 @@
+#pragma once
+/// \file Furniture detection by part configurations (thesis section 4.2): the pipeline over one
+/// or more registered scans.
+///
+///   parts      per view: world frame, floor cut, normals, region growing, 24 features (4.2.1)
+///   votes      per view: word activations and Hough votes (Eqs. 4.1-4.4)
+///   selection  the votes of all views merged (4.2.5.3), maxima in class-width windows,
+///              class thresholds, overlapping same-class hypotheses reduced (4.2.4.2)
+///   fitting    per hypothesis: upright RANSAC over the class's CAD models, ICP (4.2.4.3)
+///   verify     coverage >= 50 %, not in the free space of any scan; fitted footprints that
+///              overlap keep the stronger detection
+///
+/// PrepareFurnitureScene does the per-view work once, so that the selection and the fitting can
+/// run on any subset of the views (single views against merged views) and with other settings.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/mapping/furniture_fit.hpp"
+#include "multicue/recognition/furniture_model.hpp"
+#include "multicue/recognition/furniture_parts.hpp"
+#include "multicue/recognition/furniture_voting.hpp"
+
+namespace multicue {
+
+/// One scan and its pose in a z-up world frame whose floor lies at z = 0 (unless the part
+/// parameters estimate the floor).
+struct FurnitureView {
+    const PointCloud* scan = nullptr;
+    Eigen::Isometry3f T_world_sensor = Eigen::Isometry3f::Identity();
+};
+
+struct FurnitureDetectionParams {
+    FurnitureVotingParams voting{};
+    FurnitureSelectionParams selection{};
+    FurnitureFitParams fit{};
+    bool verify = true;      ///< fit and verify CAD models; off: hypotheses are detections
+    bool free_space = true;  ///< with verify: the free-space test (one occupancy map per scan)
+    /// Fitted footprints of two accepted detections that overlap by more than this share of the
+    /// smaller one are inconsistent: the weaker goes, (0, 1]
+    float max_overlap = 0.3f;
+    bool cross_class = true;  ///< apply max_overlap across classes too (one piece, one class)
+    /// Of overlapping fitted detections, keep the one whose model explains the scan best rather
+    /// than the one with the strongest votes (the votes find the piece, the models name it)
+    bool class_by_fit = true;
+    /// Parts whose centre lies further from a hypothesis than half its class's length plus this
+    /// are left out of its fit [m], >= 0
+    float support_margin = 0.3f;
+    /// Reject hypotheses and fits behind the views' walls (margin and share: fit.wall_margin,
+    /// fit.max_behind_share)
+    bool walls = true;
+    float min_wall_length = 1.0f;  ///< upright planes this long (and taller than any piece) [m]
+    int num_threads = 0;      ///< 0 = all cores; never changes the result
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// The views after the per-view work: their parts and, when wanted, occupancy maps.
+struct FurnitureScene {
+    std::vector<FurnitureParts> views;
+    std::vector<std::vector<FurnitureVote>> votes;  ///< per view
+    std::vector<FurnitureFreeSpace> free_space;     ///< per view; empty without the test
+    std::vector<std::vector<FurnitureWall>> walls;  ///< per view
+    double parts_ms = 0.0;      ///< ExtractFurnitureParts over all views [ms]
+    double votes_ms = 0.0;      ///< CastFurnitureVotes over all views [ms]
+    double occupancy_ms = 0.0;  ///< occupancy maps [ms]
+};
+
+/// Parts, votes and (with verify and free_space) occupancy maps of every view. The part
+/// parameters are the model's (the training views went through the same ones). Throws
+/// InvalidArgument for bad parameters, a null scan or a non-finite pose.
+FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
+                                     const FurnitureModel& model,
+                                     const FurnitureDetectionParams& params);
+
+/// One detection (or a rejected hypothesis).
+struct FurnitureDetection {
+    int cls = 0;
+    std::string category;
+    FurnitureHypothesis hypothesis;  ///< from the vote space
+    bool fitted = false;             ///< a CAD model was fitted
+    FurnitureFit fit;
+    /// Centre on the floor: the fitted model's when fitted, else the hypothesis's [m]
+    Eigen::Vector2f centre = Eigen::Vector2f::Zero();
+    /// The hypothesis's score over its class threshold; for a fitted detection (verify) times
+    /// 0.5 + coverage - free share, so that a piece explained well by a model that claims no
+    /// free space outranks one that is not (and wins where two overlap)
+    float score = 0.0f;
+    bool accepted = false;
+    /// "", "coverage", "free_space", "no_fit", "behind_wall" or "overlap"
+    std::string rejection;
+};
+
+struct FurnitureDetectionResult {
+    std::vector<FurnitureDetection> detections;  ///< accepted, strongest first
+    std::vector<FurnitureDetection> rejected;    ///< rejected hypotheses, strongest first
+    std::size_t votes = 0;
+    double selection_ms = 0.0;  ///< merging and selection [ms]
+    double fit_ms = 0.0;        ///< fitting and verification of all hypotheses [ms]
+};
+
+/// Detections from the views `subset` of `scene` (empty: all, merged). `context` is needed with
+/// verify (InvalidArgument without it) and must belong to `model`.
+FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std::vector<int>& subset,
+                                         const FurnitureModel& model,
+                                         const FurnitureFitContext* context,
+                                         const FurnitureDetectionParams& params);
+
+/// PrepareFurnitureScene and DetectFurniture over all views.
+FurnitureDetectionResult DetectFurniture(const std::vector<FurnitureView>& views,
+                                         const FurnitureModel& model,
+                                         const FurnitureFitContext* context,
+                                         const FurnitureDetectionParams& params);
+
+/// Area of the intersection of two convex polygons (counter-clockwise) [m^2].
+float ConvexIntersectionArea(const std::vector<Eigen::Vector2f>& a,
+                             const std::vector<Eigen::Vector2f>& b);
+
+}  // namespace multicue

@@ -1,0 +1,159 @@
+#pragma once
+/// \file Fitting and verifying CAD models of detected furniture (thesis section 4.2.4.3).
+///
+/// Upright RANSAC over (x, y, yaw): a random scan point of the hypothesis's parts is paired with
+/// model points at a similar height (a share of them, checked_share), each pair giving a pose:
+/// the yaw that turns the model point's normal onto the scan point's (a random yaw where the
+/// normals are nearly parallel to up: table tops, seats) and the translation that brings the two
+/// points together. A pose scores the scan points it covers (a model point within
+/// inlier_distance), counted on a share of the scan points and abandoned as soon as it cannot
+/// beat the best pose of any model so far. The iteration count adapts by Eq. (4.6) with
+/// p_good = covered / all scan points, over all models of the class together. The best pose is
+/// refined by ICP (registration module, point-to-plane) and projected back to upright.
+///
+/// Verification rejects a fit that covers less than min_coverage of the scan points, and one
+/// whose model lies in space a scan saw as free: a model point counts as in free space when its
+/// voxel and the voxel one step further along its ray are free in a view's occupancy map (one
+/// OctoMap per scan, search/occupancy_map.hpp; the second voxel keeps model points just in front
+/// of the measured surface from counting).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "multicue/core/point_cloud.hpp"
+#include "multicue/recognition/furniture_model.hpp"
+#include "multicue/registration/icp.hpp"
+#include "multicue/search/occupancy_map.hpp"
+
+namespace multicue {
+
+/// A wall seen in a view: an upright plane reaching above every piece of furniture, long
+/// enough. Furniture stands on the room's side of it (the 2D floor map that section 4.2.5.2 asks
+/// for against detections inside walls).
+struct FurnitureWall {
+    Eigen::Vector2f point = Eigen::Vector2f::Zero();   ///< on the wall [m]
+    Eigen::Vector2f normal = Eigen::Vector2f::UnitX();  ///< towards the room (the sensor)
+    float lo = 0.0f, hi = 0.0f;  ///< extent along the wall (normal turned by +90 degrees) [m]
+    /// True when `x` lies behind the wall by more than `margin`, within its extent (+-0.3 m).
+    bool Behind(const Eigen::Vector2f& x, float margin) const;
+};
+
+/// True when `x` lies behind any of `walls` by more than `margin`.
+bool BehindWalls(const std::vector<const FurnitureWall*>& walls, const Eigen::Vector2f& x,
+                 float margin);
+
+struct FurnitureFitParams {
+    float inlier_distance = 0.03f;       ///< a scan point is covered within this of the model [m]
+    double success_probability = 0.99;   ///< p_success of Eq. (4.6), in (0, 1)
+    float height_tolerance = 0.02f;      ///< pairs of points at similar height: |dz| below [m]
+    /// Share of the candidate pairs and of the scan points checked per pose (thesis: about
+    /// half), in (0, 1]
+    float checked_share = 0.5f;
+    std::size_t max_scan_points = 1500;  ///< the parts' points thinned evenly to at most this
+    std::size_t max_candidates = 48;     ///< model points paired with one scan point at most
+    int max_iterations = 200;            ///< per model at most; Eq. (4.6) usually stops earlier
+    /// Normals whose horizontal component is below this are parallel to up: random yaw [-]
+    float min_horizontal_normal = 0.5f;
+    /// The model's centre stays this far from the hypothesis at most, in class widths [-], > 0
+    float max_offset = 1.0f;
+    bool refine = true;        ///< ICP refinement after the search
+    IcpParams icp{.correspondences = {.max_distance = 0.06f},
+                  .max_iterations = 30,
+                  .min_fitness = 0.1,
+                  .min_condition = 0.0,
+                  .num_threads = 1};
+    /// A point of a fitted model counts as behind a wall beyond this (CAD models are deeper or
+    /// shallower than the piece they explain) [m]
+    float wall_margin = 0.15f;
+    float max_behind_share = 0.1f;         ///< reject with more of the model behind a wall
+    float min_coverage = 0.5f;             ///< reject below this share of covered scan points
+    /// Reject above this share of model points in free space (0.4 chosen on validation rooms: a
+    /// CAD model of another piece of the class sticks out of the scanned one)
+    float max_free_share = 0.4f;
+    double occupancy_resolution = 0.05;    ///< voxel of the per-scan occupancy maps [m]
+    std::size_t max_model_checks = 3000;   ///< model points tested against free space at most
+    std::size_t max_search_checks = 300;   ///< the same while searching poses
+    std::uint64_t seed = 1;
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Per-model data built once for many fits: the models' points sorted by height, a grid of the
+/// voxels within inlier_distance of each model, k-d trees for ICP.
+class FurnitureFitContext {
+  public:
+    /// Throws InvalidArgument for bad parameters or a model without CAD models.
+    FurnitureFitContext(const FurnitureModel& model, const FurnitureFitParams& params);
+    ~FurnitureFitContext();
+    FurnitureFitContext(const FurnitureFitContext&) = delete;
+    FurnitureFitContext& operator=(const FurnitureFitContext&) = delete;
+
+    const FurnitureModel& model() const { return model_; }
+    const FurnitureFitParams& params() const { return params_; }
+    struct Cad;
+    const Cad& cad(std::size_t i) const { return *cads_[i]; }
+
+  private:
+    const FurnitureModel& model_;
+    FurnitureFitParams params_;
+    std::vector<std::unique_ptr<Cad>> cads_;
+};
+
+/// Occupancy maps of the views, for the free-space test.
+class FurnitureFreeSpace {
+  public:
+    explicit FurnitureFreeSpace(double resolution = 0.05);
+    /// Adds one view's map: its points (world frame; the floor included: rays to the floor free
+    /// the space above it) seen from `origin`.
+    void AddView(const PointCloud& world_points, const Eigen::Vector3f& origin);
+    std::size_t views() const { return maps_.size(); }
+    /// Share of `points` (world frame) in free space of any view; 0 without views.
+    float FreeShare(const std::vector<Eigen::Vector3f>& points) const;
+
+  private:
+    double resolution_;
+    std::vector<OccupancyMap> maps_;
+    std::vector<Eigen::Vector3f> origins_;
+};
+
+/// What the scans say about the space around a fit: the views' free space and their walls.
+struct FurnitureSpace {
+    std::vector<const FurnitureFreeSpace*> free;
+    std::vector<const FurnitureWall*> walls;
+};
+
+struct FurnitureFit {
+    int cad = -1;  ///< index into FurnitureModel::cads(); -1 when nothing was found
+    Eigen::Isometry3f T_world_model = Eigen::Isometry3f::Identity();  ///< upright
+    float yaw = 0.0f;                ///< [rad]
+    std::size_t scan_points = 0;     ///< the parts' points used
+    std::size_t covered = 0;         ///< of those, covered by the fitted model
+    float coverage = 0.0f;           ///< covered / scan_points
+    int iterations = 0;              ///< RANSAC iterations over all models
+    int models_tried = 0;
+    bool refined = false;            ///< ICP converged and was kept
+    float free_share = 0.0f;         ///< share of model points in observed free space
+    float behind_share = 0.0f;       ///< share of model points behind a wall
+    bool accepted = false;           ///< passed both checks
+    std::string rejection;  ///< "", "coverage", "free_space", "behind_wall" or "no_fit"
+    double ms = 0.0;                 ///< wall time [ms]
+};
+
+/// Fits the CAD models of class `cls` to `points` (world frame, floor at z = 0, with normals
+/// facing the sensor) near `centre`. A pose scores its coverage of the points minus the shares
+/// of the model in free space and behind walls (`space`; empty: coverage alone), so that the
+/// pose and the model chosen explain the scan without claiming space the scans saw empty or
+/// space outside the room; the penalties are computed for the poses that come within 5 % of the
+/// best coverage of their model. Every model gets its best pose, the iteration count of Eq. (4.6)
+/// computed from the best coverage of all models so far. The best is refined and verified.
+/// Fewer than 10 points give no fit. Throws InvalidArgument for an unknown class or points
+/// without normals.
+FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
+                          const FurnitureFitContext& context, const FurnitureSpace& space = {});
+
+}  // namespace multicue

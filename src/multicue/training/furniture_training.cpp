@@ -1,0 +1,275 @@
+#include "multicue/training/furniture_training.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
+#include "multicue/filters/voxel_grid.hpp"
+#include "multicue/sim/raycaster.hpp"
+#include "multicue/sim/rng.hpp"
+
+namespace multicue::training {
+namespace {
+
+constexpr float kPi = std::numbers::pi_v<float>;
+
+float Median(std::vector<float> v) {
+    if (v.empty()) return 0.0f;
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+}  // namespace
+
+const char* FurnitureSensorName(FurnitureSensor sensor) {
+    return sensor == FurnitureSensor::kLaser ? "laser" : "kinect";
+}
+
+FurnitureSensor ParseFurnitureSensor(const std::string& name) {
+    if (name == "laser") return FurnitureSensor::kLaser;
+    if (name == "kinect") return FurnitureSensor::kKinect;
+    throw InvalidArgument(fmt::format("sensor must be laser or kinect, got '{}'", name));
+}
+
+const std::map<std::string, float>& DefaultFurnitureThresholds() {
+    // The thesis's working points (tables 1.0, chairs 0.6, sideboards 1.4; section 4.2.5.1);
+    // cabinets as tables.
+    static const std::map<std::string, float> t = {
+        {"table", 1.0f}, {"chair", 0.6f}, {"cabinet", 1.0f}, {"sideboard", 1.4f}};
+    return t;
+}
+
+void FurnitureTrainingOptions::Validate() const {
+    if (furniture.empty() && kitchen.empty() && procedural_per_class <= 0) {
+        throw InvalidArgument("furniture training: no library folder and no procedural pieces");
+    }
+    if (procedural_per_class < 0) {
+        throw InvalidArgument(fmt::format("furniture training: procedural_per_class must be >= 0, got {}",
+                                          procedural_per_class));
+    }
+    views.Validate();
+    parts.Validate();
+    vocabulary.Validate();
+    if (!(cad_spacing > 0.0f) || !std::isfinite(cad_spacing)) {
+        throw InvalidArgument(fmt::format("furniture training: cad_spacing must be > 0, got {}", cad_spacing));
+    }
+    for (const auto& [name, t] : thresholds) {
+        if (!(t >= 0.0f) || !std::isfinite(t)) {
+            throw InvalidArgument(fmt::format("furniture training: threshold of {} must be >= 0, got {}", name, t));
+        }
+    }
+    if (num_threads < 0) throw InvalidArgument("furniture training: num_threads must be >= 0");
+}
+
+std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTrainingOptions& o) {
+    o.Validate();
+    std::vector<sim::FurniturePiece> pieces;
+    if (!o.furniture.empty() || !o.kitchen.empty()) {
+        const auto library = sim::SelectFurnitureSplit(sim::ReadFurnitureLibrary(o.furniture, o.kitchen), o.split);
+        for (const auto& e : library) {
+            try {
+                pieces.push_back(sim::LoadFurniturePiece(e));
+            } catch (const Error& err) {
+                LogWarning("furniture training: skipping {}: {}", e.id, err.what());
+            }
+        }
+    }
+    for (const auto& category : sim::FurnitureCategories()) {
+        for (int k = 0; k < o.procedural_per_class; ++k) {
+            sim::StreamRng rng(sim::SubSeed(o.seed, 7000 + static_cast<std::uint64_t>(k)),
+                               std::hash<std::string>{}(category) & 0xffff);
+            sim::FurniturePiece p = sim::MakeProceduralFurniture(category, rng);
+            p.id = fmt::format("procedural/{}/train{}", category, k);
+            pieces.push_back(std::move(p));
+        }
+    }
+    return pieces;
+}
+
+PointCloud FurnitureCadCloud(const sim::PartMesh& mesh, float spacing) {
+    if (!(spacing > 0.0f)) throw InvalidArgument("CAD cloud: spacing must be > 0");
+    sim::Scene scene;
+    sim::SceneObject o;
+    o.mesh = std::make_shared<const sim::PartMesh>(mesh);
+    o.label = sim::ObjectLabel(1);
+    scene.objects.push_back(o);
+    const sim::RayCaster caster(scene);
+    const Eigen::AlignedBox3f box = mesh.Bounds();
+    const Eigen::Vector3f c = box.center();
+    const float r = 0.5f * box.sizes().norm() + 0.1f;
+    const float step = spacing / 2;
+    PointCloud hits;
+    // Parallel rays from 40 directions: 32 around and above the horizon, 8 from straight above
+    // and steeply above (the floor hides the underside, as it hides it from the robot).
+    std::vector<Eigen::Vector3f> dirs;
+    for (int e = 0; e < 4; ++e) {
+        const float el = (-5.0f + 20.0f * static_cast<float>(e)) * kPi / 180.0f;
+        for (int a = 0; a < 8; ++a) {
+            const float az = 2 * kPi * (static_cast<float>(a) + 0.5f * static_cast<float>(e % 2)) / 8;
+            dirs.emplace_back(-std::cos(el) * std::cos(az), -std::cos(el) * std::sin(az), -std::sin(el));
+        }
+    }
+    for (int a = 0; a < 8; ++a) {
+        const float el = (a == 0 ? 89.0f : 65.0f) * kPi / 180.0f;
+        const float az = 2 * kPi * static_cast<float>(a) / 7;
+        dirs.emplace_back(-std::cos(el) * std::cos(az), -std::cos(el) * std::sin(az), -std::sin(el));
+    }
+    for (const auto& d : dirs) {
+        const Eigen::Vector3f u = d.unitOrthogonal(), v = d.cross(u);
+        const int n = static_cast<int>(std::ceil(2 * r / step));
+        for (int i = 0; i <= n; ++i) {
+            for (int j = 0; j <= n; ++j) {
+                const Eigen::Vector3f origin = c - r * d + (-r + step * i) * u + (-r + step * j) * v;
+                const sim::RayHit h = caster.Intersect(origin, d);
+                if (!h.Valid()) continue;
+                hits.points.push_back(origin + h.t * d);
+                hits.normals.push_back(h.normal);
+            }
+        }
+    }
+    hits.width = static_cast<std::uint32_t>(hits.points.size());
+    PointCloud out = VoxelGrid(hits, {.leaf_size = spacing, .num_threads = 1});
+    PointCloud clean;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        if (!out.normals[i].allFinite()) continue;
+        clean.points.push_back(out.points[i]);
+        clean.normals.push_back(out.normals[i]);
+    }
+    clean.width = static_cast<std::uint32_t>(clean.points.size());
+    return clean;
+}
+
+PointCloud ScanFurniture(const sim::RayCaster& caster, const Eigen::Isometry3f& head,
+                         const Eigen::Vector3f& target, const FurnitureTrainingOptions& o,
+                         std::uint64_t seed, Eigen::Isometry3f& T_world_sensor) {
+    if (o.sensor == FurnitureSensor::kLaser) {
+        T_world_sensor = head;
+        return sim::ScanLaser(caster, head, o.laser, seed);
+    }
+    T_world_sensor = sim::CameraAtHead(head, target);
+    return sim::ScanKinect(caster, T_world_sensor, o.kinect, seed);
+}
+
+std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePiece& piece,
+                                                          int cls, int piece_index,
+                                                          const FurnitureTrainingOptions& o) {
+    const sim::Scene scene = sim::MakeFurnitureViewScene(piece);
+    const sim::RayCaster caster(scene);
+    const float h = piece.mesh->Bounds().sizes().z();
+    const Eigen::Vector3f centre(0.0f, 0.0f, h / 2);  // p: the object's centre
+    const std::uint64_t seed = sim::SubSeed(o.seed, std::hash<std::string>{}(piece.id));
+    const auto heads = sim::FurnitureViewHeads(o.views, seed);
+    FurniturePartParams pp = o.parts;
+    pp.num_threads = 1;
+    std::vector<FurnitureTrainingPart> out;
+    for (std::size_t v = 0; v < heads.size(); ++v) {
+        Eigen::Isometry3f T;
+        FurnitureTrainingOptions so = o;
+        so.laser.num_threads = so.kinect.num_threads = 1;
+        const PointCloud scan = ScanFurniture(caster, heads[v], centre, so, sim::SubSeed(seed, 100 + v), T);
+        const FurnitureParts parts = ExtractFurnitureParts(scan, T, pp);
+        for (const auto& part : parts.parts) {
+            FurnitureTrainingPart tp;
+            tp.features = part.features;
+            tp.cls = cls;
+            tp.piece = piece_index;
+            tp.view = static_cast<int>(v);
+            tp.centre_z = centre.z();
+            // d = p - s in the part's bearing frame (section 4.2.3.2).
+            tp.offset = Eigen::AngleAxisf(-part.frame_yaw, Eigen::Vector3f::UnitZ()) * (centre - part.centroid);
+            if (tp.features.allFinite()) out.push_back(std::move(tp));
+        }
+    }
+    return out;
+}
+
+ScannedFurnitureRoom SimulateFurnitureRoom(const sim::FurnitureRoomParams& params,
+                                           const sim::FurnitureSource& source, int heads,
+                                           const FurnitureTrainingOptions& o, std::uint64_t seed) {
+    ScannedFurnitureRoom out;
+    out.room = sim::MakeFurnitureRoom(params, source, seed);
+    const sim::RayCaster caster(out.room.scene);
+    const auto poses = sim::RoomHeadPoses(out.room, heads, o.views.sensor_height, seed);
+    FurnitureTrainingOptions so = o;
+    so.laser.fov_deg = sim::LaserParams{}.fov_deg;
+    for (std::size_t v = 0; v < poses.size(); ++v) {
+        Eigen::Isometry3f T;
+        const Eigen::Vector3f target(0.0f, 0.0f, 0.6f);
+        out.scans.push_back(ScanFurniture(caster, poses[v], target, so, sim::SubSeed(seed, 500 + v), T));
+        out.T_world_sensor.push_back(T);
+    }
+    return out;
+}
+
+bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
+                         const FurnitureTrainingOptions& o, FurnitureModel& out,
+                         Progress* progress) {
+    o.Validate();
+    if (pieces.empty()) throw InvalidArgument("furniture training: no training pieces");
+    std::vector<FurnitureClass> classes;
+    std::vector<int> piece_class(pieces.size(), -1);
+    for (const auto& name : sim::FurnitureCategories()) {
+        std::vector<float> w, l, h;
+        for (std::size_t i = 0; i < pieces.size(); ++i) {
+            if (pieces[i].category != name) continue;
+            const Eigen::Vector3f s = pieces[i].mesh->Bounds().sizes();
+            w.push_back(std::min(s.x(), s.y()));
+            l.push_back(std::max(s.x(), s.y()));
+            h.push_back(s.z());
+            piece_class[i] = static_cast<int>(classes.size());
+        }
+        if (w.empty()) continue;
+        FurnitureClass c;
+        c.name = name;
+        c.width = Median(w);
+        c.length = Median(l);
+        c.height = Median(h);
+        const auto t = o.thresholds.find(name);
+        c.threshold = t != o.thresholds.end() ? t->second : 1.0f;
+        classes.push_back(c);
+    }
+    std::vector<std::vector<FurnitureTrainingPart>> parts(pieces.size());
+    std::vector<FurnitureCad> cads(pieces.size());
+    std::atomic<bool> stopped{false};
+    ParallelFor(
+        pieces.size(), o.num_threads,
+        [&](std::size_t i) {
+            if (InterruptRequested()) {
+                stopped = true;
+                return;
+            }
+            if (piece_class[i] < 0) return;
+            parts[i] = FurnitureTrainingParts(pieces[i], piece_class[i], static_cast<int>(i), o);
+            FurnitureCad& cad = cads[i];
+            cad.id = pieces[i].id;
+            cad.cls = piece_class[i];
+            cad.cloud = FurnitureCadCloud(*pieces[i].mesh, o.cad_spacing);
+            cad.mesh = pieces[i].mesh->mesh;
+            cad.mesh.vertex_colors.clear();
+            cad.mesh.vertex_normals.clear();
+            cad.mesh.vertex_labels.clear();
+            cad.extent = pieces[i].mesh->Bounds().sizes();
+            if (progress) progress->Advance();
+        },
+        1);
+    if (stopped || InterruptRequested()) return false;
+    std::vector<FurnitureTrainingPart> all;
+    for (auto& p : parts) all.insert(all.end(), std::make_move_iterator(p.begin()), std::make_move_iterator(p.end()));
+    if (all.empty()) throw DataError("furniture training: the training views gave no parts");
+    std::vector<FurnitureCad> kept;
+    for (std::size_t i = 0; i < cads.size(); ++i) {
+        if (piece_class[i] >= 0 && !cads[i].cloud.points.empty()) kept.push_back(std::move(cads[i]));
+    }
+    FurnitureVocabularyParams vp = o.vocabulary;
+    vp.num_threads = o.num_threads;
+    out = FurnitureModel::Train(std::move(all), std::move(classes), std::move(kept), o.parts, vp);
+    return true;
+}
+
+}  // namespace multicue::training

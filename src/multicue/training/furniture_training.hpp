@@ -1,0 +1,93 @@
+#pragma once
+/// \file Training of the furniture model (thesis section 4.2.2): every training piece (a half of
+/// the furniture library and procedural furniture) stands on the floor and is scanned from
+/// sensor positions around it (16 by default, 1.5-3 m away, the head 1.5 m high); the views are
+/// cut into parts exactly as scenes are (recognition/furniture_parts.hpp), and the parts with
+/// their shape vectors build the vocabulary. Every piece also becomes a CAD model for fitting:
+/// points on its outer surface, found by casting parallel rays at it from 40 directions.
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "multicue/core/progress.hpp"
+#include "multicue/recognition/furniture_model.hpp"
+#include "multicue/sim/furniture_models.hpp"
+#include "multicue/sim/furniture_scenes.hpp"
+#include "multicue/sim/sensors.hpp"
+
+namespace multicue::training {
+
+/// The simulated sensor of training views and rooms.
+enum class FurnitureSensor {
+    kLaser,   ///< tilting laser on a pan-tilt head (section 4.2.5)
+    kKinect,  ///< RGB-D camera at the head, looking at the piece
+};
+/// "laser", "kinect"; and back (InvalidArgument naming the choices).
+const char* FurnitureSensorName(FurnitureSensor sensor);
+FurnitureSensor ParseFurnitureSensor(const std::string& name);
+
+/// Class thresholds of V(o, x) used unless told otherwise (docs/furniture.md says where they
+/// come from).
+const std::map<std::string, float>& DefaultFurnitureThresholds();
+
+struct FurnitureTrainingOptions {
+    std::filesystem::path furniture;  ///< furniture folder with labels.csv; empty: none
+    std::filesystem::path kitchen;    ///< kitchen library folder; empty: none
+    sim::MeshSplit split = sim::MeshSplit::kTune;  ///< the library half trained on
+    int procedural_per_class = 8;     ///< procedural pieces per class, >= 0
+    std::uint64_t seed = 1;           ///< views, sensor noise and procedural pieces
+    FurnitureSensor sensor = FurnitureSensor::kLaser;
+    sim::FurnitureViewParams views{};  ///< 16 views at 1.5-3 m, 1.5 m high
+    sim::LaserParams laser{.fov_deg = 120.0f};
+    sim::KinectParams kinect{};
+    FurniturePartParams parts{};
+    FurnitureVocabularyParams vocabulary{};
+    std::map<std::string, float> thresholds = DefaultFurnitureThresholds();
+    float cad_spacing = 0.02f;  ///< spacing of the CAD models' points [m], > 0
+    int num_threads = 0;        ///< 0 = all cores; never changes the model
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// The pieces trained on: the chosen half of the library (loaded; bad models are skipped with a
+/// warning) and procedural_per_class procedural pieces of every class, procedural ids
+/// "procedural/<class>/train<k>".
+std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTrainingOptions& options);
+
+/// Outer surface points of a piece (canonical frame) with outward normals, `spacing` apart.
+PointCloud FurnitureCadCloud(const sim::PartMesh& mesh, float spacing);
+
+/// The training parts of one piece (class index `cls`, piece index `piece`) from its views.
+std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePiece& piece,
+                                                          int cls, int piece_index,
+                                                          const FurnitureTrainingOptions& options);
+
+/// A scan of a scene from a head pose with the chosen sensor: the laser in the head frame, the
+/// Kinect in its optical frame looking at `target`; `T_world_sensor` receives the sensor pose.
+PointCloud ScanFurniture(const sim::RayCaster& caster, const Eigen::Isometry3f& head,
+                         const Eigen::Vector3f& target, const FurnitureTrainingOptions& options,
+                         std::uint64_t seed, Eigen::Isometry3f& T_world_sensor);
+
+/// A furnished room scanned from `heads` head positions (RoomHeadPoses, 1.5 m high): the laser
+/// sweeps its full field (270 degrees), the Kinect looks towards the room's centre.
+struct ScannedFurnitureRoom {
+    sim::FurnitureRoom room;
+    std::vector<PointCloud> scans;                 ///< in their sensor frames, with labels
+    std::vector<Eigen::Isometry3f> T_world_sensor;
+};
+ScannedFurnitureRoom SimulateFurnitureRoom(const sim::FurnitureRoomParams& params,
+                                           const sim::FurnitureSource& source, int heads,
+                                           const FurnitureTrainingOptions& sensor,
+                                           std::uint64_t seed);
+
+/// Trains the model on `pieces` (one progress step per piece). Returns false, leaving `out`
+/// untouched, when interrupted (InterruptRequested). Throws InvalidArgument for bad options or no
+/// pieces, DataError when the views give no parts.
+bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
+                         const FurnitureTrainingOptions& options, FurnitureModel& out,
+                         Progress* progress = nullptr);
+
+}  // namespace multicue::training
