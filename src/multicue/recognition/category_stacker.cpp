@@ -151,6 +151,10 @@ CategoryStacker CategoryStacker::FromParameters(const std::vector<float>& values
         if (!std::isfinite(v)) throw FormatError(fmt::format("{}: bad stacker value", what));
     }
     auto at = values.begin();
+    // A count of rows: whole, not negative, and below 2^24 (exact in a float).
+    if (*at < 0.0f || *at > 16777216.0f || *at != std::floor(*at)) {
+        throw FormatError(fmt::format("{}: bad stacker row count {}", what, *at));
+    }
     s.train_rows_ = static_cast<std::size_t>(*at++);
     s.mean_.assign(at, at + d);
     at += d;

@@ -628,13 +628,25 @@ nlohmann::json ObjectDatabase::Export() const {
                            {"last_pose", PoseList(o.last_pose)},
                            {"views", std::move(views)}});
     }
-    return {{"format", kApplicationTag},
-            {"schema_version", kSchemaVersion},
-            {"objects", std::move(objects)}};
+    nlohmann::json out{{"format", kApplicationTag},
+                       {"schema_version", kSchemaVersion},
+                       {"objects", std::move(objects)}};
+    // Names, frames and categories come from the file as they are: text that is not UTF-8 (a
+    // damaged file) cannot be written as JSON, and is said so here rather than by the caller's
+    // dump.
+    try {
+        (void)out.dump();
+    } catch (const nlohmann::json::type_error& e) {
+        throw FormatError(std::string("object database export: the database holds text that is not "
+                                      "UTF-8 (") +
+                          e.what() + ")");
+    }
+    return out;
 }
 
 std::size_t ObjectDatabase::Import(const nlohmann::json& data) {
-    if (!data.is_object() || data.value("format", std::string()) != kApplicationTag) {
+    if (!data.is_object() || !data.contains("format") || !data["format"].is_string() ||
+        data["format"].get<std::string>() != kApplicationTag) {
         throw FormatError("object database import: not an export of a multicue object database");
     }
     if (!data.contains("schema_version") || !data["schema_version"].is_number_integer() ||
