@@ -282,22 +282,8 @@ FurnitureRoom MakeFurnitureRoom(const FurnitureRoomParams& p, const FurnitureSou
     const bool seminar = p.type == RoomType::kSeminar;
     room.size = seminar ? Eigen::Vector2f(U(rng, 6.0f, 9.0f), U(rng, 5.0f, 7.0f))
                         : Eigen::Vector2f(U(rng, 4.0f, 6.5f), U(rng, 3.5f, 5.5f));
-    const float sx = room.size.x(), sy = room.size.y(), t = 0.1f;
-    room.scene.objects.push_back(placement_internal::Floor(std::max(sx, sy)));
-    for (int w = 0; w < 4; ++w) {
-        const bool along_x = w < 2;
-        PartMesh m = MakeBoxMesh(along_x ? Eigen::Vector3f(sx + 2 * t, t, p.wall_height)
-                                         : Eigen::Vector3f(t, sy + 2 * t, p.wall_height),
-                                 "wall");
-        const float off = (w % 2 == 0 ? -1.0f : 1.0f) * ((along_x ? sy : sx) / 2 + t / 2);
-        for (auto& v : m.mesh.vertices) {
-            v += along_x ? Eigen::Vector3f(0, off, 0) : Eigen::Vector3f(off, 0, 0);
-        }
-        m.name = "wall";
-        room.scene.objects.push_back(placement_internal::Fixed(
-            std::make_shared<const PartMesh>(std::move(m)), kWallLabel, {225, 220, 210, 255},
-            "wall"));
-    }
+    const float sx = room.size.x(), sy = room.size.y();
+    placement_internal::AddFloorAndWalls(sx, sy, p.wall_height, room.scene);
     room.scene.support_size = room.size;
     RoomBuilder b(room);
     const float gap = p.min_gap;

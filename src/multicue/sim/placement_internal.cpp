@@ -120,6 +120,24 @@ SceneObject Floor(float half) {
                  "floor");
 }
 
+void AddFloorAndWalls(float sx, float sy, float wall_height, Scene& scene) {
+    scene.objects.push_back(Floor(std::max(sx, sy)));
+    const float t = 0.1f;
+    for (int w = 0; w < 4; ++w) {
+        const bool along_x = w < 2;
+        PartMesh m = MakeBoxMesh(along_x ? Eigen::Vector3f(sx + 2 * t, t, wall_height)
+                                         : Eigen::Vector3f(t, sy + 2 * t, wall_height),
+                                 "wall");
+        const float off = (w % 2 == 0 ? -1.0f : 1.0f) * ((along_x ? sy : sx) / 2 + t / 2);
+        for (auto& v : m.mesh.vertices) {
+            v += along_x ? Eigen::Vector3f(0, off, 0) : Eigen::Vector3f(off, 0, 0);
+        }
+        m.name = "wall";
+        scene.objects.push_back(Fixed(std::make_shared<const PartMesh>(std::move(m)), kWallLabel,
+                                      {225, 220, 210, 255}, "wall"));
+    }
+}
+
 float AddTableAndFloor(const TableSceneParams& p, StreamRng& rng, Scene& scene) {
     const Eigen::Vector2f size(
         static_cast<float>(rng.Uniform(p.table_min_size.x(), p.table_max_size.x())),

@@ -63,6 +63,10 @@ SceneObject Fixed(std::shared_ptr<const PartMesh> mesh, std::uint32_t label, Col
 /// A floor slab of 2*half x 2*half m with its top at z = 0 (label kFloorLabel).
 SceneObject Floor(float half);
 
+/// The floor and four walls (0.1 m thick, `wall_height` high, label kWallLabel) of a room of
+/// size_x x size_y m centred on the origin, appended to `scene`.
+void AddFloorAndWalls(float size_x, float size_y, float wall_height, Scene& scene);
+
 /// The table of `params` (size and height drawn from `rng` in this order, then its wood colour)
 /// and the floor, appended to `scene`, which gets the support centre and size. Returns the
 /// table's height [m].

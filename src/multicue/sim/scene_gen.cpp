@@ -192,20 +192,7 @@ Scene MakeRoomScene(const RoomParams& p, ObjectSource& source, std::uint64_t see
     Scene scene;
     scene.support_center = Eigen::Vector3f::Zero();
     scene.support_size = Eigen::Vector2f(sx, sy);
-    scene.objects.push_back(Floor(std::max(sx, sy)));
-    const float t = 0.1f;
-    for (int w = 0; w < 4; ++w) {
-        const bool along_x = w < 2;
-        PartMesh m = MakeBoxMesh(along_x ? Eigen::Vector3f(sx + 2 * t, t, p.wall_height)
-                                         : Eigen::Vector3f(t, sy + 2 * t, p.wall_height),
-                                 "wall");
-        const float off = (w % 2 == 0 ? -1.0f : 1.0f) * ((along_x ? sy : sx) / 2 + t / 2);
-        for (auto& v : m.mesh.vertices)
-            v += along_x ? Eigen::Vector3f(0, off, 0) : Eigen::Vector3f(off, 0, 0);
-        m.name = "wall";
-        scene.objects.push_back(Fixed(std::make_shared<const PartMesh>(std::move(m)), kWallLabel,
-                                      {225, 220, 210, 255}, "wall"));
-    }
+    AddFloorAndWalls(sx, sy, p.wall_height, scene);
     const Eigen::Vector2f lo(-sx / 2 + 0.05f, -sy / 2 + 0.05f), hi = -lo;
     const int n = rng.UniformInt(p.min_furniture, p.max_furniture);
     std::vector<Polygon> placed;
