@@ -1,6 +1,7 @@
 #include "multicue/sim/mesh.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -171,6 +172,22 @@ void CheckPlyHeader(const std::filesystem::path& path) {
     throw FormatError(fmt::format("{}: PLY header without end_header", path.string()));
 }
 
+// Debian's Assimp crashes on damaged COLLADA files (accessors that count more values than their
+// arrays hold), and none of the mesh libraries uses COLLADA: it is refused, by its extension and
+// by its content, whatever the file is called.
+void RefuseCollada(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    std::ifstream in(path, std::ios::binary);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    if (ext == ".dae" || ext == ".zae" || head.find("<COLLADA") != std::string::npos) {
+        throw FormatError(fmt::format(
+            "{}: COLLADA meshes are not read; convert the mesh to OBJ or PLY", path.string()));
+    }
+}
+
 }  // namespace
 
 PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& params) {
@@ -182,6 +199,7 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
         throw IoError(fmt::format("{}: no such mesh file", path.string()));
     }
     CheckPlyHeader(path);
+    RefuseCollada(path);
     Assimp::Importer importer;
     // No vertex joining: OBJ/PLY files already share vertices, and joining would merge parts.
     // The importers take face indices and counts from the file as they are: the scene is
