@@ -585,7 +585,7 @@ std::vector<ObjectView> ObjectDatabase::GetViews(std::int64_t object_id) const {
                                   " holds a truncated descriptor");
             }
             std::vector<float> values(bytes.size() / sizeof(float));
-            std::memcpy(values.data(), bytes.data(), bytes.size());
+            if (!bytes.empty()) std::memcpy(values.data(), bytes.data(), bytes.size());
             v.descriptors[d.Text(0)] = std::move(values);
         }
     }
