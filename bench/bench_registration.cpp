@@ -41,7 +41,7 @@ namespace {
 using namespace multicue;
 
 struct Pair {
-    PointCloud source, target;  // preprocessed
+    PointCloud source, target;              // preprocessed
     PointCloud source_frame, target_frame;  // raw
     RegistrationParams params;
     Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();

@@ -137,7 +137,8 @@ double ProcessCpuMs() {
 const multicue::PointCloud& Cloud(const std::string& frame) {
     static std::map<std::string, multicue::PointCloud> clouds;
     auto it = clouds.find(frame);
-    if (it == clouds.end()) it = clouds.emplace(frame, multicue::io::ReadPcd(FramePath(frame))).first;
+    if (it == clouds.end())
+        it = clouds.emplace(frame, multicue::io::ReadPcd(FramePath(frame))).first;
     return it->second;
 }
 
@@ -272,8 +273,8 @@ void PrintSummary() {
     }
     std::printf("\nSummary (frame time = median of its iterations; medians over frames)\n");
     std::printf("%-26s %6s %10s %10s %-8s %8s %9s %10s %12s %11s\n", "configuration", "frames",
-                "median_ms", "worst_ms", "(frame)", "worst/md", "x_lccp", "cpu_md_ms",
-                "heap_md_MB", "heap_max_MB");
+                "median_ms", "worst_ms", "(frame)", "worst/md", "x_lccp", "cpu_md_ms", "heap_md_MB",
+                "heap_max_MB");
     for (const auto& [config, frames] : g_records) {
         std::vector<double> times, heaps, cpu;
         std::string worst_frame;

@@ -33,9 +33,11 @@ inline void DrawRoom(const std::string& path, const training::ScannedFurnitureRo
     cv::Mat img(static_cast<int>(2 * half.y() * ppm), static_cast<int>(2 * half.x() * ppm), CV_8UC3,
                 cv::Scalar(255, 255, 255));
     auto px = [&](const Eigen::Vector2f& p) {
-        return cv::Point(static_cast<int>((p.x() + half.x()) * ppm), static_cast<int>((half.y() - p.y()) * ppm));
+        return cv::Point(static_cast<int>((p.x() + half.x()) * ppm),
+                         static_cast<int>((half.y() - p.y()) * ppm));
     };
-    const float max_extent = 1.25f * model.max_part_extent(), max_top = model.max_object_height() + 0.15f;
+    const float max_extent = 1.25f * model.max_part_extent(),
+                max_top = model.max_object_height() + 0.15f;
     for (const auto& v : scene.views) {
         for (const auto& part : v.parts) {
             const bool wall = part.extent > max_extent || part.top > max_top;
@@ -67,11 +69,13 @@ inline void DrawRoom(const std::string& path, const training::ScannedFurnitureRo
         if (d.fitted) {
             const auto& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
             std::vector<Eigen::Vector2f> pts;
-            for (std::size_t i = 0; i < cad.cloud.size(); i += 7) pts.push_back((d.fit.T_world_model * cad.cloud.points[i]).head<2>());
+            for (std::size_t i = 0; i < cad.cloud.size(); i += 7)
+                pts.push_back((d.fit.T_world_model * cad.cloud.points[i]).head<2>());
             if (accepted) poly(sim::ConvexHull2D(pts), col, 2);
         }
         const int rad = static_cast<int>(3 + 4 * std::min(d.score, 3.0f));
-        if (accepted || d.score >= 1.0f) cv::circle(img, px(d.hypothesis.centre), rad, col, accepted ? 2 : 1, cv::LINE_AA);
+        if (accepted || d.score >= 1.0f)
+            cv::circle(img, px(d.hypothesis.centre), rad, col, accepted ? 2 : 1, cv::LINE_AA);
         if (!accepted && d.score < 1.0f) return;
         if (!accepted) {
             cv::putText(img, d.rejection.substr(0, 1), px(d.hypothesis.centre) + cv::Point(rad, 0),

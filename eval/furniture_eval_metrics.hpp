@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <fmt/format.h>
+#include <Eigen/Core>
 
 namespace multicue::eval {
 
@@ -67,7 +67,8 @@ inline MatchCounts MatchFrame(const EvalFrame& f, float cut, int only_cls = -1,
     for (const auto& d : f.detections) {
         if (d.score >= cut && (only_cls < 0 || d.cls == only_cls)) dets.push_back(&d);
     }
-    std::stable_sort(dets.begin(), dets.end(), [](auto* a, auto* b) { return a->score > b->score; });
+    std::stable_sort(dets.begin(), dets.end(),
+                     [](auto* a, auto* b) { return a->score > b->score; });
     std::vector<bool> used(f.truth.size(), false);
     for (const auto* d : dets) {
         int best = -1;
@@ -98,12 +99,14 @@ inline MatchCounts MatchFrame(const EvalFrame& f, float cut, int only_cls = -1,
 /// Every detection of class `cls` in a frame, strongest first, with whether it matched a true
 /// object (greedy in score order, so the marks do not depend on any cut); `truth` receives the
 /// frame's true objects of the class.
-inline std::vector<std::pair<float, bool>> MarkDetections(const EvalFrame& f, int cls, std::size_t& truth) {
+inline std::vector<std::pair<float, bool>> MarkDetections(const EvalFrame& f, int cls,
+                                                          std::size_t& truth) {
     std::vector<const DetectionItem*> dets;
     for (const auto& d : f.detections) {
         if (d.cls == cls) dets.push_back(&d);
     }
-    std::stable_sort(dets.begin(), dets.end(), [](auto* a, auto* b) { return a->score > b->score; });
+    std::stable_sort(dets.begin(), dets.end(),
+                     [](auto* a, auto* b) { return a->score > b->score; });
     std::vector<bool> used(f.truth.size(), false);
     truth = 0;
     for (const auto& g : f.truth) truth += g.cls == cls ? 1 : 0;
@@ -125,8 +128,8 @@ inline std::vector<std::pair<float, bool>> MarkDetections(const EvalFrame& f, in
 
 /// Average precision of class `cls` over the frames (area under the precision-recall curve,
 /// precision made monotone), and the score cut with the best F1 (`best_cut`, `best_f1`).
-inline double AveragePrecision(const std::vector<EvalFrame>& frames, int cls, float* best_cut = nullptr,
-                               double* best_f1 = nullptr) {
+inline double AveragePrecision(const std::vector<EvalFrame>& frames, int cls,
+                               float* best_cut = nullptr, double* best_f1 = nullptr) {
     std::vector<std::pair<float, bool>> all;
     std::size_t n_truth = 0;
     for (const auto& f : frames) {
@@ -135,7 +138,8 @@ inline double AveragePrecision(const std::vector<EvalFrame>& frames, int cls, fl
         all.insert(all.end(), marks.begin(), marks.end());
         n_truth += t;
     }
-    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::stable_sort(all.begin(), all.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
     std::vector<double> prec, rec;
     std::size_t tp = 0;
     double f1_max = 0.0;
@@ -196,38 +200,52 @@ inline float Percentile(std::vector<float> v, float q) {
 }
 
 /// Recall against 1 - precision, one polyline per curve, as a small SVG plot.
-inline void WriteCurvesSvg(const std::string& path, const std::string& title,
-                           const std::vector<std::pair<std::string, std::vector<CurvePoint>>>& curves) {
+inline void WriteCurvesSvg(
+    const std::string& path, const std::string& title,
+    const std::vector<std::pair<std::string, std::vector<CurvePoint>>>& curves) {
     const int W = 640, H = 480, L = 70, R = 190, T = 40, B = 60;
     const int pw = W - L - R, ph = H - T - B;
-    static const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
-                                    "#8c564b", "#e377c2", "#7f7f7f"};
+    static const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
+                                    "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"};
     std::string s = fmt::format(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" "
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
+        "font-family=\"sans-serif\" "
         "font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
         W, H);
     s += fmt::format("<text x=\"{}\" y=\"22\" font-size=\"14\">{}</text>\n", L, title);
     for (int k = 0; k <= 10; ++k) {
         const double v = k / 10.0;
         const double x = L + v * pw, y = T + ph - v * ph;
-        s += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#ddd\"/>\n", x, T, T + ph);
-        s += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#ddd\"/>\n", L, y, L + pw);
-        s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{:.1f}</text>\n", x, T + ph + 16, v);
-        s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{:.1f}</text>\n", L - 6, y + 4, v);
+        s += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" stroke=\"#ddd\"/>\n", x,
+                         T, T + ph);
+        s += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#ddd\"/>\n", L,
+                         y, L + pw);
+        s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{:.1f}</text>\n", x,
+                         T + ph + 16, v);
+        s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{:.1f}</text>\n", L - 6,
+                         y + 4, v);
     }
-    s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n", L, T, pw, ph);
-    s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">1 - precision</text>\n", L + pw / 2, H - 18);
-    s += fmt::format("<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">recall</text>\n",
-                     T + ph / 2, T + ph / 2);
+    s += fmt::format(
+        "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n", L,
+        T, pw, ph);
+    s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">1 - precision</text>\n",
+                     L + pw / 2, H - 18);
+    s += fmt::format(
+        "<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" "
+        "text-anchor=\"middle\">recall</text>\n",
+        T + ph / 2, T + ph / 2);
     for (std::size_t c = 0; c < curves.size(); ++c) {
         const char* col = colours[c % 8];
         std::string pts;
         auto sorted = curves[c].second;
-        std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.cut > b.cut; });
+        std::sort(sorted.begin(), sorted.end(),
+                  [](const auto& a, const auto& b) { return a.cut > b.cut; });
         for (const auto& p : sorted) {
-            pts += fmt::format("{:.1f},{:.1f} ", L + (1.0 - p.precision) * pw, T + ph - p.recall * ph);
+            pts +=
+                fmt::format("{:.1f},{:.1f} ", L + (1.0 - p.precision) * pw, T + ph - p.recall * ph);
         }
-        s += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n", pts, col);
+        s += fmt::format(
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n", pts, col);
         // The operating point (cut 1: the class thresholds).
         const CurvePoint* op = nullptr;
         for (const auto& p : curves[c].second) {
@@ -238,8 +256,9 @@ inline void WriteCurvesSvg(const std::string& path, const std::string& title,
                              L + (1.0 - op->precision) * pw, T + ph - op->recall * ph, col);
         }
         const int ly = T + 16 + 18 * static_cast<int>(c);
-        s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" stroke-width=\"2\"/>\n",
-                         L + pw + 10, ly - 4, L + pw + 30, ly - 4, col);
+        s += fmt::format(
+            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" stroke-width=\"2\"/>\n",
+            L + pw + 10, ly - 4, L + pw + 30, ly - 4, col);
         s += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", L + pw + 35, ly, curves[c].first);
     }
     s += "</svg>\n";

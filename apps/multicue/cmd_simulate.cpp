@@ -22,6 +22,7 @@
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "registration_json.hpp"
 
 namespace multicue::cli {
 namespace {
@@ -45,13 +46,8 @@ struct SimulateOptions {
     bool quiet = false;
 };
 
-json Matrix(const Eigen::Isometry3f& T) {
-    json rows = json::array();
-    for (int r = 0; r < 4; ++r) {
-        rows.push_back({T.matrix()(r, 0), T.matrix()(r, 1), T.matrix()(r, 2), T.matrix()(r, 3)});
-    }
-    return rows;
-}
+// A pose as rows of a 4x4 matrix (the float values, exactly, as doubles).
+json Matrix(const Eigen::Isometry3f& T) { return TransformJson(T.cast<double>()); }
 
 json SensorJson(const std::string& sensor, const sim::KinectParams& k, const sim::LaserParams& l,
                 const sim::TofParams& t) {

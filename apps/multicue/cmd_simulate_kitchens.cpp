@@ -22,6 +22,7 @@
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "registration_json.hpp"
 
 #ifndef MULTICUE_KITCHEN_MODELS_DIR
 #define MULTICUE_KITCHEN_MODELS_DIR "../shared/data/meshes/kitchen"
@@ -46,13 +47,8 @@ struct KitchenOptions {
     bool quiet = false;
 };
 
-json Matrix(const Eigen::Isometry3f& T) {
-    json rows = json::array();
-    for (int r = 0; r < 4; ++r) {
-        rows.push_back({T.matrix()(r, 0), T.matrix()(r, 1), T.matrix()(r, 2), T.matrix()(r, 3)});
-    }
-    return rows;
-}
+// A pose as rows of a 4x4 matrix (the float values, exactly, as doubles).
+json Matrix(const Eigen::Isometry3f& T) { return TransformJson(T.cast<double>()); }
 
 json Vec(const Eigen::Vector3f& v) { return json::array({v.x(), v.y(), v.z()}); }
 

@@ -109,7 +109,7 @@ std::optional<Plane> FitPlane(const Cloud::ConstPtr& cloud, const pcl::IndicesCo
 // Drops the segments that are mostly on the table plane and numbers the others 1..K, largest
 // first.
 PeerSegmentation NumberObjects(const Cloud& cloud, std::vector<pcl::Indices> segments,
-                           const std::optional<Plane>& table) {
+                               const std::optional<Plane>& table) {
     if (table) {
         const Eigen::Vector4f& c = table->coefficients;
         std::erase_if(segments, [&](const pcl::Indices& segment) {

@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
@@ -20,7 +20,9 @@ double MsSince(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
-float Cross(const Eigen::Vector2f& a, const Eigen::Vector2f& b) { return a.x() * b.y() - a.y() * b.x(); }
+float Cross(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+    return a.x() * b.y() - a.y() * b.x();
+}
 
 float Area(const Polygon& p) {
     float a = 0.0f;
@@ -52,7 +54,8 @@ Polygon Hull(std::vector<Eigen::Vector2f> pts) {
 Polygon Footprint(const FurnitureCad& cad, const Eigen::Isometry3f& T) {
     std::vector<Eigen::Vector2f> pts;
     const std::size_t step = std::max<std::size_t>(1, cad.cloud.size() / 2000);
-    for (std::size_t i = 0; i < cad.cloud.size(); i += step) pts.push_back((T * cad.cloud.points[i]).head<2>());
+    for (std::size_t i = 0; i < cad.cloud.size(); i += step)
+        pts.push_back((T * cad.cloud.points[i]).head<2>());
     return Hull(std::move(pts));
 }
 
@@ -137,8 +140,8 @@ void FurnitureDetectionParams::Validate() const {
     selection.Validate();
     fit.Validate();
     if (!(min_wall_length > 0.0f) || !std::isfinite(min_wall_length)) {
-        throw InvalidArgument(fmt::format("furniture detection: min_wall_length must be > 0, got {}",
-                                          min_wall_length));
+        throw InvalidArgument(fmt::format(
+            "furniture detection: min_wall_length must be > 0, got {}", min_wall_length));
     }
     if (!(max_overlap > 0.0f && max_overlap <= 1.0f)) {
         throw InvalidArgument(
@@ -169,12 +172,14 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
         scene.views.push_back(ExtractFurnitureParts(*views[v].scan, views[v].T_world_sensor, pp));
         scene.parts_ms += MsSince(t);
         t = std::chrono::steady_clock::now();
-        scene.votes.push_back(CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
+        scene.votes.push_back(
+            CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
         scene.votes_ms += MsSince(t);
-        scene.walls.push_back(params.walls ? FindWalls(scene.views.back(),
-                                                       model.max_object_height() + params.voting.height_margin,
-                                                       params.min_wall_length)
-                                           : std::vector<FurnitureWall>{});
+        scene.walls.push_back(
+            params.walls ? FindWalls(scene.views.back(),
+                                     model.max_object_height() + params.voting.height_margin,
+                                     params.min_wall_length)
+                         : std::vector<FurnitureWall>{});
         if (!params.verify || !params.free_space) continue;
         // Occupancy from the whole scan (the floor too: rays to it free the space above it),
         // thinned to the map's resolution.
@@ -182,11 +187,13 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
         PointCloud world;
         const float floor = scene.views.back().floor_height;
         for (const auto& p : views[v].scan->points) {
-            if (p.allFinite()) world.points.push_back(views[v].T_world_sensor * p - Eigen::Vector3f(0, 0, floor));
+            if (p.allFinite())
+                world.points.push_back(views[v].T_world_sensor * p - Eigen::Vector3f(0, 0, floor));
         }
         world.width = static_cast<std::uint32_t>(world.points.size());
         const auto res = static_cast<float>(params.fit.occupancy_resolution);
-        const PointCloud thin = VoxelGrid(world, {.leaf_size = res / 2, .num_threads = params.num_threads});
+        const PointCloud thin =
+            VoxelGrid(world, {.leaf_size = res / 2, .num_threads = params.num_threads});
         FurnitureFreeSpace fs(params.fit.occupancy_resolution);
         fs.AddView(thin, scene.views.back().sensor_origin);
         scene.free_space.push_back(std::move(fs));
@@ -195,7 +202,8 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
     return scene;
 }
 
-FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std::vector<int>& subset,
+FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
+                                         const std::vector<int>& subset,
                                          const FurnitureModel& model,
                                          const FurnitureFitContext* context,
                                          const FurnitureDetectionParams& params) {
@@ -224,7 +232,8 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
         votes.insert(votes.end(), vv.begin(), vv.end());
     }
     result.votes = votes.size();
-    const auto hyps = SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
+    const auto hyps =
+        SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
     result.selection_ms = MsSince(t);
     std::vector<const FurnitureWall*> walls;
     for (int v : views) {
@@ -247,7 +256,8 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
         FurnitureSpace space;
         space.walls = walls;
         for (int v : views) {
-            if (static_cast<std::size_t>(v) < scene.free_space.size()) space.free.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
+            if (static_cast<std::size_t>(v) < scene.free_space.size())
+                space.free.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
         }
         ParallelFor(
             all.size(), params.num_threads,
@@ -255,12 +265,14 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
                 FurnitureDetection& d = all[i];
                 if (!d.accepted) return;  // behind a wall
                 const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(d.cls)];
-                const PointCloud pts = SupportPoints(scene, d.hypothesis, cls.length / 2 + params.support_margin);
+                const PointCloud pts =
+                    SupportPoints(scene, d.hypothesis, cls.length / 2 + params.support_margin);
                 d.fit = FitFurniture(pts, d.cls, d.hypothesis.centre, *context, space);
                 d.fitted = d.fit.cad >= 0;
                 if (d.fitted) {
                     d.centre = d.fit.T_world_model.translation().head<2>();
-                    d.score *= std::max(0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
+                    d.score *= std::max(
+                        0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
                 }
                 d.accepted = d.fit.accepted;
                 d.rejection = d.fit.rejection;
@@ -275,19 +287,22 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
         for (std::size_t i = 0; i < all.size(); ++i) {
             vote[i] = all[i].hypothesis.normalized;
             if (!all[i].accepted) continue;
-            feet[i] = Footprint(model.cads()[static_cast<std::size_t>(all[i].fit.cad)], all[i].fit.T_world_model);
+            feet[i] = Footprint(model.cads()[static_cast<std::size_t>(all[i].fit.cad)],
+                                all[i].fit.T_world_model);
             areas[i] = Area(feet[i]);
         }
         auto overlaps = [&](std::size_t i, std::size_t k) {
             if (!params.cross_class && all[i].cls != all[k].cls) return false;
-            return ConvexIntersectionArea(feet[i], feet[k]) > params.max_overlap * std::min(areas[i], areas[k]);
+            return ConvexIntersectionArea(feet[i], feet[k]) >
+                   params.max_overlap * std::min(areas[i], areas[k]);
         };
         auto quality = [&](const FurnitureDetection& d) {
             return d.fit.coverage - d.fit.free_share - d.fit.behind_share;
         };
         std::vector<std::size_t> order(all.size());
         for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all[a].score > all[b].score; });
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::size_t a, std::size_t b) { return all[a].score > all[b].score; });
         std::vector<bool> done(all.size(), false);
         std::vector<std::size_t> kept;
         for (std::size_t i : order) {
@@ -323,7 +338,9 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std:
         result.fit_ms = MsSince(t);
     }
     for (auto& d : all) (d.accepted ? result.detections : result.rejected).push_back(std::move(d));
-    auto by_score = [](const FurnitureDetection& a, const FurnitureDetection& b) { return a.score > b.score; };
+    auto by_score = [](const FurnitureDetection& a, const FurnitureDetection& b) {
+        return a.score > b.score;
+    };
     std::stable_sort(result.detections.begin(), result.detections.end(), by_score);
     std::stable_sort(result.rejected.begin(), result.rejected.end(), by_score);
     return result;

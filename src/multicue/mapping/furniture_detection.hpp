@@ -53,7 +53,7 @@ struct FurnitureDetectionParams {
     /// fit.max_behind_share)
     bool walls = true;
     float min_wall_length = 1.0f;  ///< upright planes this long (and taller than any piece) [m]
-    int num_threads = 0;      ///< 0 = all cores; never changes the result
+    int num_threads = 0;           ///< 0 = all cores; never changes the result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -64,9 +64,9 @@ struct FurnitureScene {
     std::vector<std::vector<FurnitureVote>> votes;  ///< per view
     std::vector<FurnitureFreeSpace> free_space;     ///< per view; empty without the test
     std::vector<std::vector<FurnitureWall>> walls;  ///< per view
-    double parts_ms = 0.0;      ///< ExtractFurnitureParts over all views [ms]
-    double votes_ms = 0.0;      ///< CastFurnitureVotes over all views [ms]
-    double occupancy_ms = 0.0;  ///< occupancy maps [ms]
+    double parts_ms = 0.0;                          ///< ExtractFurnitureParts over all views [ms]
+    double votes_ms = 0.0;                          ///< CastFurnitureVotes over all views [ms]
+    double occupancy_ms = 0.0;                      ///< occupancy maps [ms]
 };
 
 /// Parts, votes and (with verify and free_space) occupancy maps of every view. The part
@@ -104,7 +104,8 @@ struct FurnitureDetectionResult {
 
 /// Detections from the views `subset` of `scene` (empty: all, merged). `context` is needed with
 /// verify (InvalidArgument without it) and must belong to `model`.
-FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene, const std::vector<int>& subset,
+FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
+                                         const std::vector<int>& subset,
                                          const FurnitureModel& model,
                                          const FurnitureFitContext* context,
                                          const FurnitureDetectionParams& params);

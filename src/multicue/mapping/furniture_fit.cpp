@@ -29,7 +29,8 @@ struct FurnitureFitContext::Cad {
         const Eigen::Vector3f q = (p - origin) / cell;
         const int x = static_cast<int>(std::floor(q.x())), y = static_cast<int>(std::floor(q.y())),
                   zz = static_cast<int>(std::floor(q.z()));
-        if (x < 0 || y < 0 || zz < 0 || x >= dims.x() || y >= dims.y() || zz >= dims.z()) return false;
+        if (x < 0 || y < 0 || zz < 0 || x >= dims.x() || y >= dims.y() || zz >= dims.z())
+            return false;
         return covered[(static_cast<std::size_t>(x) * dims.y() + y) * dims.z() + zz] != 0;
     }
 };
@@ -82,8 +83,8 @@ void FurnitureFitParams::Validate() const {
     positive(height_tolerance, "height_tolerance");
     positive(max_offset, "max_offset");
     if (!(success_probability > 0.0 && success_probability < 1.0)) {
-        throw InvalidArgument(fmt::format("furniture fit: success_probability must be in (0, 1), got {}",
-                                          success_probability));
+        throw InvalidArgument(fmt::format(
+            "furniture fit: success_probability must be in (0, 1), got {}", success_probability));
     }
     if (!(checked_share > 0.0f && checked_share <= 1.0f)) {
         throw InvalidArgument(
@@ -96,10 +97,12 @@ void FurnitureFitParams::Validate() const {
             "max_model_checks >= 1");
     }
     if (!(min_horizontal_normal >= 0.0f && min_horizontal_normal <= 1.0f)) {
-        throw InvalidArgument(fmt::format(
-            "furniture fit: min_horizontal_normal must be in [0, 1], got {}", min_horizontal_normal));
+        throw InvalidArgument(
+            fmt::format("furniture fit: min_horizontal_normal must be in [0, 1], got {}",
+                        min_horizontal_normal));
     }
-    if (!(min_coverage >= 0.0f && min_coverage <= 1.0f) || !(max_free_share >= 0.0f && max_free_share <= 1.0f)) {
+    if (!(min_coverage >= 0.0f && min_coverage <= 1.0f) ||
+        !(max_free_share >= 0.0f && max_free_share <= 1.0f)) {
         throw InvalidArgument("furniture fit: min_coverage and max_free_share must be in [0, 1]");
     }
     if (!(occupancy_resolution > 0.0) || !std::isfinite(occupancy_resolution)) {
@@ -109,7 +112,8 @@ void FurnitureFitParams::Validate() const {
     icp.Validate();
 }
 
-FurnitureFitContext::FurnitureFitContext(const FurnitureModel& model, const FurnitureFitParams& params)
+FurnitureFitContext::FurnitureFitContext(const FurnitureModel& model,
+                                         const FurnitureFitParams& params)
     : model_(model), params_(params) {
     params.Validate();
     if (model.cads().empty()) throw InvalidArgument("furniture fit: the model has no CAD models");
@@ -135,7 +139,8 @@ FurnitureFitContext::FurnitureFitContext(const FurnitureModel& model, const Furn
         c->cell = eps / 2;
         c->origin = box.min() - Eigen::Vector3f::Constant(eps + c->cell);
         c->dims = ((box.max() - box.min()) / c->cell).array().ceil().cast<int>() +
-                  Eigen::Array3i::Constant(static_cast<int>(std::ceil(2 * (eps + c->cell) / c->cell)) + 1);
+                  Eigen::Array3i::Constant(
+                      static_cast<int>(std::ceil(2 * (eps + c->cell) / c->cell)) + 1);
         c->covered.assign(static_cast<std::size_t>(c->dims.x()) * c->dims.y() * c->dims.z(), 0);
         const int r = static_cast<int>(std::ceil(eps / c->cell));
         for (const auto& p : c->points) {
@@ -145,9 +150,12 @@ FurnitureFitContext::FurnitureFitContext(const FurnitureModel& model, const Furn
                     for (int dz = -r; dz <= r; ++dz) {
                         const Eigen::Vector3i v = q + Eigen::Vector3i(dx, dy, dz);
                         if ((v.array() < 0).any() || (v.array() >= c->dims.array()).any()) continue;
-                        const Eigen::Vector3f centre = c->origin + (v.cast<float>().array() + 0.5f).matrix() * c->cell;
+                        const Eigen::Vector3f centre =
+                            c->origin + (v.cast<float>().array() + 0.5f).matrix() * c->cell;
                         if ((centre - p).norm() > eps) continue;
-                        c->covered[(static_cast<std::size_t>(v.x()) * c->dims.y() + v.y()) * c->dims.z() + v.z()] = 1;
+                        c->covered[(static_cast<std::size_t>(v.x()) * c->dims.y() + v.y()) *
+                                       c->dims.z() +
+                                   v.z()] = 1;
                     }
                 }
             }
@@ -161,7 +169,8 @@ FurnitureFitContext::~FurnitureFitContext() = default;
 
 FurnitureFreeSpace::FurnitureFreeSpace(double resolution) : resolution_(resolution) {
     if (!(resolution > 0.0) || !std::isfinite(resolution)) {
-        throw InvalidArgument(fmt::format("free space: resolution must be > 0, got {}", resolution));
+        throw InvalidArgument(
+            fmt::format("free space: resolution must be > 0, got {}", resolution));
     }
 }
 
@@ -179,7 +188,8 @@ float FurnitureFreeSpace::FreeShare(const std::vector<Eigen::Vector3f>& points) 
     for (const auto& p : points) {
         for (std::size_t v = 0; v < maps_.size(); ++v) {
             const Eigen::Vector3f dir = (p - origins_[v]).normalized();
-            if (maps_[v].Query(p) == Occupancy::kFree && maps_[v].Query(p + step * dir) == Occupancy::kFree) {
+            if (maps_[v].Query(p) == Occupancy::kFree &&
+                maps_[v].Query(p + step * dir) == Occupancy::kFree) {
                 ++free;
                 break;
             }
@@ -223,7 +233,8 @@ Penalty ModelPenalty(const PointCloud& cloud, const Eigen::Isometry3f& T, std::s
     for (const auto* f : space.free) out.free = std::max(out.free, f->FreeShare(world));
     if (!space.walls.empty()) {
         std::size_t behind = 0;
-        for (const auto& p : world) behind += BehindWalls(space.walls, p.head<2>(), wall_margin) ? 1 : 0;
+        for (const auto& p : world)
+            behind += BehindWalls(space.walls, p.head<2>(), wall_margin) ? 1 : 0;
         out.behind = static_cast<float>(behind) / static_cast<float>(world.size());
     }
     return out;
@@ -250,7 +261,8 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
     for (std::size_t i = 0; i < points.size(); ++i) {
         if (points.points[i].allFinite() && points.normals[i].allFinite()) usable.push_back(i);
     }
-    const std::size_t stride = std::max<std::size_t>(1, (usable.size() + p.max_scan_points - 1) / p.max_scan_points);
+    const std::size_t stride =
+        std::max<std::size_t>(1, (usable.size() + p.max_scan_points - 1) / p.max_scan_points);
     for (std::size_t k = 0; k < usable.size(); k += stride) {
         s.push_back(points.points[usable[k]]);
         sn.push_back(points.normals[usable[k]]);
@@ -263,7 +275,8 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
     Rng rng{p.seed ^ (static_cast<std::uint64_t>(cls) << 32) ^ s.size()};
     // The scan points checked per pose: an even share of them.
     std::vector<Eigen::Vector3f> checked;
-    const std::size_t check_stride = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0f / p.checked_share)));
+    const std::size_t check_stride =
+        std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0f / p.checked_share)));
     for (std::size_t k = 0; k < s.size(); k += check_stride) checked.push_back(s[k]);
     const float n_checked = static_cast<float>(checked.size());
     const std::size_t slack = checked.size() / 20;  // poses within 5 % of the best coverage
@@ -292,12 +305,17 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
             ++fit.iterations;
             const std::size_t si = rng.Next() % s.size();
             const Eigen::Vector3f& sp = s[si];
-            const auto lo = std::lower_bound(cad.z.begin(), cad.z.end(), sp.z() - p.height_tolerance);
-            const auto hi = std::upper_bound(cad.z.begin(), cad.z.end(), sp.z() + p.height_tolerance);
+            const auto lo =
+                std::lower_bound(cad.z.begin(), cad.z.end(), sp.z() - p.height_tolerance);
+            const auto hi =
+                std::upper_bound(cad.z.begin(), cad.z.end(), sp.z() + p.height_tolerance);
             const auto n_band = static_cast<std::size_t>(hi - lo);
             if (n_band == 0) continue;
             const std::size_t first = static_cast<std::size_t>(lo - cad.z.begin());
-            const std::size_t tries = std::min(p.max_candidates, std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(p.checked_share * static_cast<float>(n_band)))));
+            const std::size_t tries = std::min(
+                p.max_candidates,
+                std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(
+                                             p.checked_share * static_cast<float>(n_band)))));
             const Eigen::Vector2f sxy = sn[si].head<2>();
             for (std::size_t c = 0; c < tries; ++c) {
                 const std::size_t mi = first + rng.Next() % n_band;
@@ -326,12 +344,16 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
                 }
                 if (abandoned || covered < bar || covered == 0) continue;
                 const float score = static_cast<float>(covered) / n_checked -
-                                    ModelPenalty(cloud, UprightPose(yaw, t), p.max_search_checks, space, p.wall_margin).Sum();
+                                    ModelPenalty(cloud, UprightPose(yaw, t), p.max_search_checks,
+                                                 space, p.wall_margin)
+                                        .Sum();
                 if (covered > model_covered) {
                     model_covered = covered;
                     global_covered = std::max(global_covered, covered);
-                    required = std::min(required, RequiredIterations(static_cast<double>(global_covered) / n_checked,
-                                                                     p.success_probability, p.max_iterations));
+                    required =
+                        std::min(required,
+                                 RequiredIterations(static_cast<double>(global_covered) / n_checked,
+                                                    p.success_probability, p.max_iterations));
                 }
                 if (score > best.score) best = {static_cast<int>(m), covered, score, yaw, t};
             }
@@ -365,7 +387,8 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
             const float yaw = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
             const Eigen::Isometry3f upright = UprightPose(yaw, T.translation().head<2>());
             const std::size_t n = coverage(upright);
-            if (n >= fit.covered && (upright.translation().head<2>() - centre).norm() <= max_offset) {
+            if (n >= fit.covered &&
+                (upright.translation().head<2>() - centre).norm() <= max_offset) {
                 fit.T_world_model = upright;
                 fit.yaw = yaw;
                 fit.covered = n;
@@ -374,7 +397,8 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         }
     }
     fit.coverage = static_cast<float>(fit.covered) / static_cast<float>(s.size());
-    const Penalty pen = ModelPenalty(target, fit.T_world_model, p.max_model_checks, space, p.wall_margin);
+    const Penalty pen =
+        ModelPenalty(target, fit.T_world_model, p.max_model_checks, space, p.wall_margin);
     fit.free_share = pen.free;
     fit.behind_share = pen.behind;
     if (fit.coverage < p.min_coverage) {

@@ -36,7 +36,7 @@ namespace multicue {
 /// enough. Furniture stands on the room's side of it (the 2D floor map that section 4.2.5.2 asks
 /// for against detections inside walls).
 struct FurnitureWall {
-    Eigen::Vector2f point = Eigen::Vector2f::Zero();   ///< on the wall [m]
+    Eigen::Vector2f point = Eigen::Vector2f::Zero();    ///< on the wall [m]
     Eigen::Vector2f normal = Eigen::Vector2f::UnitX();  ///< towards the room (the sensor)
     float lo = 0.0f, hi = 0.0f;  ///< extent along the wall (normal turned by +90 degrees) [m]
     /// True when `x` lies behind the wall by more than `margin`, within its extent (+-0.3 m).
@@ -48,9 +48,9 @@ bool BehindWalls(const std::vector<const FurnitureWall*>& walls, const Eigen::Ve
                  float margin);
 
 struct FurnitureFitParams {
-    float inlier_distance = 0.03f;       ///< a scan point is covered within this of the model [m]
-    double success_probability = 0.99;   ///< p_success of Eq. (4.6), in (0, 1)
-    float height_tolerance = 0.02f;      ///< pairs of points at similar height: |dz| below [m]
+    float inlier_distance = 0.03f;      ///< a scan point is covered within this of the model [m]
+    double success_probability = 0.99;  ///< p_success of Eq. (4.6), in (0, 1)
+    float height_tolerance = 0.02f;     ///< pairs of points at similar height: |dz| below [m]
     /// Share of the candidate pairs and of the scan points checked per pose (thesis: about
     /// half), in (0, 1]
     float checked_share = 0.5f;
@@ -61,7 +61,7 @@ struct FurnitureFitParams {
     float min_horizontal_normal = 0.5f;
     /// The model's centre stays this far from the hypothesis at most, in class widths [-], > 0
     float max_offset = 1.0f;
-    bool refine = true;        ///< ICP refinement after the search
+    bool refine = true;  ///< ICP refinement after the search
     IcpParams icp{.correspondences = {.max_distance = 0.06f},
                   .max_iterations = 30,
                   .min_fitness = 0.1,
@@ -70,14 +70,14 @@ struct FurnitureFitParams {
     /// A point of a fitted model counts as behind a wall beyond this (CAD models are deeper or
     /// shallower than the piece they explain) [m]
     float wall_margin = 0.15f;
-    float max_behind_share = 0.1f;         ///< reject with more of the model behind a wall
-    float min_coverage = 0.5f;             ///< reject below this share of covered scan points
+    float max_behind_share = 0.1f;  ///< reject with more of the model behind a wall
+    float min_coverage = 0.5f;      ///< reject below this share of covered scan points
     /// Reject above this share of model points in free space (0.4 chosen on validation rooms: a
     /// CAD model of another piece of the class sticks out of the scanned one)
     float max_free_share = 0.4f;
-    double occupancy_resolution = 0.05;    ///< voxel of the per-scan occupancy maps [m]
-    std::size_t max_model_checks = 3000;   ///< model points tested against free space at most
-    std::size_t max_search_checks = 300;   ///< the same while searching poses
+    double occupancy_resolution = 0.05;   ///< voxel of the per-scan occupancy maps [m]
+    std::size_t max_model_checks = 3000;  ///< model points tested against free space at most
+    std::size_t max_search_checks = 300;  ///< the same while searching poses
     std::uint64_t seed = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -130,18 +130,18 @@ struct FurnitureSpace {
 struct FurnitureFit {
     int cad = -1;  ///< index into FurnitureModel::cads(); -1 when nothing was found
     Eigen::Isometry3f T_world_model = Eigen::Isometry3f::Identity();  ///< upright
-    float yaw = 0.0f;                ///< [rad]
-    std::size_t scan_points = 0;     ///< the parts' points used
-    std::size_t covered = 0;         ///< of those, covered by the fitted model
-    float coverage = 0.0f;           ///< covered / scan_points
-    int iterations = 0;              ///< RANSAC iterations over all models
+    float yaw = 0.0f;                                                 ///< [rad]
+    std::size_t scan_points = 0;                                      ///< the parts' points used
+    std::size_t covered = 0;  ///< of those, covered by the fitted model
+    float coverage = 0.0f;    ///< covered / scan_points
+    int iterations = 0;       ///< RANSAC iterations over all models
     int models_tried = 0;
-    bool refined = false;            ///< ICP converged and was kept
-    float free_share = 0.0f;         ///< share of model points in observed free space
-    float behind_share = 0.0f;       ///< share of model points behind a wall
-    bool accepted = false;           ///< passed both checks
-    std::string rejection;  ///< "", "coverage", "free_space", "behind_wall" or "no_fit"
-    double ms = 0.0;                 ///< wall time [ms]
+    bool refined = false;       ///< ICP converged and was kept
+    float free_share = 0.0f;    ///< share of model points in observed free space
+    float behind_share = 0.0f;  ///< share of model points behind a wall
+    bool accepted = false;      ///< passed both checks
+    std::string rejection;      ///< "", "coverage", "free_space", "behind_wall" or "no_fit"
+    double ms = 0.0;            ///< wall time [ms]
 };
 
 /// Fits the CAD models of class `cls` to `points` (world frame, floor at z = 0, with normals

@@ -51,7 +51,8 @@ FurnitureActivation ParseFurnitureActivation(std::string_view name) {
 
 void FurnitureVocabularyParams::Validate() const {
     if (words < 1) throw InvalidArgument("furniture vocabulary: words must be >= 1");
-    if (max_iterations < 1) throw InvalidArgument("furniture vocabulary: max_iterations must be >= 1");
+    if (max_iterations < 1)
+        throw InvalidArgument("furniture vocabulary: max_iterations must be >= 1");
     if (num_threads < 0) throw InvalidArgument("furniture vocabulary: num_threads must be >= 0");
 }
 
@@ -68,13 +69,16 @@ FurnitureModel FurnitureModel::Train(std::vector<FurnitureTrainingPart> parts,
     for (const auto& c : classes) {
         if (!(c.width > 0.0f) || !(c.length > 0.0f) || !(c.height > 0.0f) || !Finite(c.width) ||
             !(c.threshold >= 0.0f) || !Finite(c.threshold)) {
-            throw InvalidArgument(fmt::format("furniture class '{}': width, length and height must "
-                                              "be > 0 and the threshold >= 0", c.name));
+            throw InvalidArgument(
+                fmt::format("furniture class '{}': width, length and height must "
+                            "be > 0 and the threshold >= 0",
+                            c.name));
         }
     }
     for (const auto& p : parts) {
         if (p.cls < 0 || p.cls >= n_classes) {
-            throw InvalidArgument(fmt::format("furniture training part of unknown class {}", p.cls));
+            throw InvalidArgument(
+                fmt::format("furniture training part of unknown class {}", p.cls));
         }
         if (p.features.size() != kPartStatsSize) {
             throw InvalidArgument(fmt::format("furniture training part has {} features, not {}",
@@ -127,7 +131,8 @@ void FurnitureModel::Derive() {
     for (const auto& p : parts_) max_part_extent_ = std::max(max_part_extent_, p.features[15]);
     for (const auto& c : classes_) max_object_height_ = std::max(max_object_height_, c.height);
     for (const auto& c : cads_) max_object_height_ = std::max(max_object_height_, c.extent.z());
-    normalized_parts_.resize(static_cast<Eigen::Index>(parts_.size()), static_cast<Eigen::Index>(d));
+    normalized_parts_.resize(static_cast<Eigen::Index>(parts_.size()),
+                             static_cast<Eigen::Index>(d));
     for (std::size_t i = 0; i < parts_.size(); ++i) {
         Normalize({parts_[i].features.data(), kPartStatsSize},
                   normalized_parts_.data() + static_cast<Eigen::Index>(i * d));
@@ -157,7 +162,8 @@ int FurnitureModel::ClassIndex(std::string_view name) const {
 
 void FurnitureModel::Normalize(std::span<const float> in, float* out) const {
     for (std::size_t j = 0; j < columns_.size(); ++j) {
-        out[j] = std::clamp((in[static_cast<std::size_t>(columns_[j])] - lo_[j]) * scale_[j], 0.0f, 1.0f);
+        out[j] = std::clamp((in[static_cast<std::size_t>(columns_[j])] - lo_[j]) * scale_[j], 0.0f,
+                            1.0f);
     }
 }
 
@@ -232,7 +238,8 @@ PointCloud GetCloud(ml::ByteReader& r) {
     for (std::size_t i = 0; i < p.size(); i += 3) {
         c.points.emplace_back(p[i], p[i + 1], p[i + 2]);
         c.normals.emplace_back(n[i], n[i + 1], n[i + 2]);
-        if (!c.points.back().allFinite() || !c.normals.back().allFinite()) r.Fail("non-finite CAD point");
+        if (!c.points.back().allFinite() || !c.normals.back().allFinite())
+            r.Fail("non-finite CAD point");
     }
     c.width = static_cast<std::uint32_t>(c.points.size());
     return c;
@@ -254,7 +261,8 @@ TriangleMesh GetMesh(ml::ByteReader& r) {
     TriangleMesh m;
     for (std::size_t i = 0; i < v.size(); i += 3) m.vertices.emplace_back(v[i], v[i + 1], v[i + 2]);
     for (std::size_t i = 0; i < t.size(); i += 3) {
-        if (t[i] >= m.vertices.size() || t[i + 1] >= m.vertices.size() || t[i + 2] >= m.vertices.size()) {
+        if (t[i] >= m.vertices.size() || t[i + 1] >= m.vertices.size() ||
+            t[i + 2] >= m.vertices.size()) {
             r.Fail("CAD mesh triangle index out of range");
         }
         m.triangles.emplace_back(t[i], t[i + 1], t[i + 2]);
@@ -365,8 +373,8 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
             "{}: furniture model format version {} is not supported (this build reads version {})",
             path.string(), version, kFormatVersion));
     }
-    const std::string payload = ml::UnwrapContainer(bytes, kMagic, kFormatVersion,
-                                                    "furniture model", path.string());
+    const std::string payload =
+        ml::UnwrapContainer(bytes, kMagic, kFormatVersion, "furniture model", path.string());
     ml::ByteReader r(payload, path.string());
     FurnitureModel m;
     m.part_params_ = GetPartParams(r);
@@ -385,8 +393,9 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
         k.length = r.Get<float>();
         k.height = r.Get<float>();
         k.threshold = r.Get<float>();
-        if (!(k.width > 0.0f) || !(k.length > 0.0f) || !(k.height > 0.0f) || !(k.threshold >= 0.0f) ||
-            !Finite(k.width) || !Finite(k.length) || !Finite(k.height) || !Finite(k.threshold)) {
+        if (!(k.width > 0.0f) || !(k.length > 0.0f) || !(k.height > 0.0f) ||
+            !(k.threshold >= 0.0f) || !Finite(k.width) || !Finite(k.length) || !Finite(k.height) ||
+            !Finite(k.threshold)) {
             r.Fail("bad class " + k.name);
         }
         m.classes_.push_back(k);
@@ -409,7 +418,8 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
             r.Fail("bad training part");
         }
         p.features = Eigen::Map<const FeatureVector>(f.data(), kPartStatsSize);
-        if (!p.features.allFinite() || !p.offset.allFinite() || !Finite(p.centre_z)) r.Fail("non-finite training part");
+        if (!p.features.allFinite() || !p.offset.allFinite() || !Finite(p.centre_z))
+            r.Fail("non-finite training part");
         m.parts_.push_back(std::move(p));
     }
     const auto k = r.Get<std::uint64_t>();

@@ -101,8 +101,7 @@ class FurnitureModel {
     /// InvalidArgument for no parts, no classes, a part or CAD model of an unknown class, a part
     /// feature vector that is not 24 long, or bad parameters; DataError for non-finite features.
     static FurnitureModel Train(std::vector<FurnitureTrainingPart> parts,
-                                std::vector<FurnitureClass> classes,
-                                std::vector<FurnitureCad> cads,
+                                std::vector<FurnitureClass> classes, std::vector<FurnitureCad> cads,
                                 const FurniturePartParams& part_params,
                                 const FurnitureVocabularyParams& params);
 
@@ -116,7 +115,9 @@ class FurnitureModel {
                                                 std::size_t activations) const;
 
     /// Training parts (indices into parts()) assigned to word `w`.
-    const std::vector<int>& WordElements(int w) const { return word_elements_.at(static_cast<std::size_t>(w)); }
+    const std::vector<int>& WordElements(int w) const {
+        return word_elements_.at(static_cast<std::size_t>(w));
+    }
     /// #(A_w, o) of Eq. (4.4): elements of word w of class o.
     float WordClassCount(int w, int cls) const;
 
@@ -149,10 +150,10 @@ class FurnitureModel {
     std::vector<FurnitureCad> cads_;
     FurniturePartParams part_params_;
     FurnitureVocabularyParams vocabulary_params_;
-    std::vector<int> columns_;           ///< used feature columns
-    std::vector<float> lo_, scale_;      ///< min-max normalisation per used column
-    FeatureMatrix words_;                ///< k x columns, normalised space
-    FeatureMatrix normalized_parts_;     ///< parts x columns (nearest-part activation)
+    std::vector<int> columns_;        ///< used feature columns
+    std::vector<float> lo_, scale_;   ///< min-max normalisation per used column
+    FeatureMatrix words_;             ///< k x columns, normalised space
+    FeatureMatrix normalized_parts_;  ///< parts x columns (nearest-part activation)
     std::vector<std::vector<int>> word_elements_;
     std::vector<std::vector<float>> word_class_counts_;  ///< word x class
     float max_part_extent_ = 0.0f;

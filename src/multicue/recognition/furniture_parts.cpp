@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
@@ -60,26 +60,29 @@ FurniturePartFrame ParseFurniturePartFrame(std::string_view name) {
 
 void FurniturePartParams::Validate() const {
     if (!(voxel_size >= 0.0f) || !Finite(voxel_size)) {
-        throw InvalidArgument(fmt::format("furniture parts: voxel_size must be >= 0, got {}", voxel_size));
+        throw InvalidArgument(
+            fmt::format("furniture parts: voxel_size must be >= 0, got {}", voxel_size));
     }
     if (!(floor_margin >= 0.0f) || !Finite(floor_margin)) {
         throw InvalidArgument(
             fmt::format("furniture parts: floor_margin must be >= 0, got {}", floor_margin));
     }
     if (!(max_height > floor_margin) || !Finite(max_height)) {
-        throw InvalidArgument(fmt::format(
-            "furniture parts: max_height must be > floor_margin ({}), got {}", floor_margin, max_height));
+        throw InvalidArgument(
+            fmt::format("furniture parts: max_height must be > floor_margin ({}), got {}",
+                        floor_margin, max_height));
     }
     if (!(normal_radius > 0.0f) || !Finite(normal_radius)) {
         throw InvalidArgument(
             fmt::format("furniture parts: normal_radius must be > 0, got {}", normal_radius));
     }
     if (normal_k < 3) {
-        throw InvalidArgument(fmt::format("furniture parts: normal_k must be >= 3, got {}", normal_k));
+        throw InvalidArgument(
+            fmt::format("furniture parts: normal_k must be >= 3, got {}", normal_k));
     }
     if (!(smoothing_radius >= 0.0f) || !Finite(smoothing_radius)) {
-        throw InvalidArgument(
-            fmt::format("furniture parts: smoothing_radius must be >= 0, got {}", smoothing_radius));
+        throw InvalidArgument(fmt::format("furniture parts: smoothing_radius must be >= 0, got {}",
+                                          smoothing_radius));
     }
     region_growing.Validate();
     if (!region_growing.subset.empty()) {
@@ -93,7 +96,8 @@ void FurniturePartParams::Validate() const {
         throw InvalidArgument("furniture parts: stats.radius and stats.voxel_size must be > 0");
     }
     if (num_threads < 0) {
-        throw InvalidArgument(fmt::format("furniture parts: num_threads must be >= 0, got {}", num_threads));
+        throw InvalidArgument(
+            fmt::format("furniture parts: num_threads must be >= 0, got {}", num_threads));
     }
 }
 
@@ -121,7 +125,8 @@ float EstimateFloorHeight(const PointCloud& cloud) {
     return static_cast<float>(sum / static_cast<double>(k));
 }
 
-FurnitureParts ExtractFurnitureParts(const PointCloud& scan, const Eigen::Isometry3f& T_world_sensor,
+FurnitureParts ExtractFurnitureParts(const PointCloud& scan,
+                                     const Eigen::Isometry3f& T_world_sensor,
                                      const FurniturePartParams& params) {
     params.Validate();
     if (!T_world_sensor.matrix().allFinite()) {
@@ -158,10 +163,10 @@ FurnitureParts ExtractFurnitureParts(const PointCloud& scan, const Eigen::Isomet
     cut.height = 1;
     out.sensor_origin.z() -= out.floor_height;
     cut.sensor_origin = out.sensor_origin;
-    PointCloud cloud = params.voxel_size > 0.0f
-                           ? VoxelGrid(cut, {.leaf_size = params.voxel_size,
-                                             .num_threads = params.num_threads})
-                           : std::move(cut);
+    PointCloud cloud =
+        params.voxel_size > 0.0f
+            ? VoxelGrid(cut, {.leaf_size = params.voxel_size, .num_threads = params.num_threads})
+            : std::move(cut);
     cloud.sensor_origin = out.sensor_origin;
     if (cloud.size() < 3) {
         out.cloud = std::move(cloud);

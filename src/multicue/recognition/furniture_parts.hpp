@@ -56,14 +56,14 @@ struct FurniturePartParams {
 
 /// One part of a scan.
 struct FurniturePart {
-    Indices indices;                                   ///< into FurnitureParts::cloud
+    Indices indices;                                     ///< into FurnitureParts::cloud
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  ///< l of Eq. (4.2), world frame [m]
     /// Yaw of the horizontal direction from the sensor to the centroid [rad].
     float bearing = 0.0f;
     /// Yaw of the part's frame (FurniturePartFrame) [rad]: its shape vectors are kept in it.
     float frame_yaw = 0.0f;
-    float top = 0.0f;      ///< highest point [m]
-    float extent = 0.0f;   ///< longest extent (feature L_3) [m]
+    float top = 0.0f;        ///< highest point [m]
+    float extent = 0.0f;     ///< longest extent (feature L_3) [m]
     FeatureVector features;  ///< the 24 values of part_stats.hpp
 };
 
@@ -84,7 +84,8 @@ struct FurnitureParts {
 /// Parts of `scan` (in its sensor frame; T_world_sensor places it in a z-up world frame).
 /// Non-finite points are skipped; a scan without usable points gives no parts. Throws
 /// InvalidArgument for bad parameters or a non-finite pose.
-FurnitureParts ExtractFurnitureParts(const PointCloud& scan, const Eigen::Isometry3f& T_world_sensor,
+FurnitureParts ExtractFurnitureParts(const PointCloud& scan,
+                                     const Eigen::Isometry3f& T_world_sensor,
                                      const FurniturePartParams& params);
 
 /// Height of the floor: the lowest horizontal layer (1 cm bins) holding at least a quarter as

@@ -36,7 +36,8 @@ struct VoteGrid {
 VoteGrid BuildGrid(const std::vector<const FurnitureVote*>& votes, float cell, float scale) {
     VoteGrid g;
     g.cell = cell;
-    Eigen::Vector2f lo(std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity());
+    Eigen::Vector2f lo(std::numeric_limits<float>::infinity(),
+                       std::numeric_limits<float>::infinity());
     Eigen::Vector2f hi = -lo;
     for (const auto* v : votes) {
         lo = lo.cwiseMin(v->x.head<2>());
@@ -47,7 +48,8 @@ VoteGrid BuildGrid(const std::vector<const FurnitureVote*>& votes, float cell, f
     g.ny = g.Cy(hi.y()) + 1;
     std::vector<double> cells(static_cast<std::size_t>(g.nx) * g.ny, 0.0);
     for (const auto* v : votes) {
-        cells[static_cast<std::size_t>(g.Cx(v->x.x())) * g.ny + g.Cy(v->x.y())] += v->weight * scale;
+        cells[static_cast<std::size_t>(g.Cx(v->x.x())) * g.ny + g.Cy(v->x.y())] +=
+            v->weight * scale;
     }
     g.sum.assign(static_cast<std::size_t>(g.nx + 1) * (g.ny + 1), 0.0);
     for (int x = 0; x < g.nx; ++x) {
@@ -65,9 +67,12 @@ VoteGrid BuildGrid(const std::vector<const FurnitureVote*>& votes, float cell, f
 
 const char* FurnitureVoteNormalizationName(FurnitureVoteNormalization n) {
     switch (n) {
-        case FurnitureVoteNormalization::kPerClass: return "per-class";
-        case FurnitureVoteNormalization::kPerWord: return "per-word";
-        case FurnitureVoteNormalization::kBalanced: return "balanced";
+        case FurnitureVoteNormalization::kPerClass:
+            return "per-class";
+        case FurnitureVoteNormalization::kPerWord:
+            return "per-word";
+        case FurnitureVoteNormalization::kBalanced:
+            return "balanced";
     }
     return "per-class";
 }
@@ -86,7 +91,8 @@ void FurnitureVotingParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture voting: extent_margin must be > 0, got {}", extent_margin));
     }
-    if (!Finite(height_margin)) throw InvalidArgument("furniture voting: height_margin must be finite");
+    if (!Finite(height_margin))
+        throw InvalidArgument("furniture voting: height_margin must be finite");
     if (!(max_height_error >= 0.0f) || !Finite(max_height_error)) {
         throw InvalidArgument(fmt::format("furniture voting: max_height_error must be >= 0, got {}",
                                           max_height_error));
@@ -112,8 +118,9 @@ std::vector<FurnitureVote> CastFurnitureVotes(const FurnitureParts& parts,
         if (!part.features.allFinite()) continue;
         const Eigen::Matrix3f R =
             Eigen::AngleAxisf(part.frame_yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-        const auto act = model.Activate({part.features.data(), static_cast<std::size_t>(part.features.size())},
-                                        params.activation, params.activations);
+        const auto act =
+            model.Activate({part.features.data(), static_cast<std::size_t>(part.features.size())},
+                           params.activation, params.activations);
         for (const auto& [a, p] : act) {
             auto vote = [&](int element, float weight) {
                 const FurnitureTrainingPart& e = model.parts()[static_cast<std::size_t>(element)];
@@ -134,19 +141,25 @@ std::vector<FurnitureVote> CastFurnitureVotes(const FurnitureParts& parts,
             if (params.normalization != FurnitureVoteNormalization::kPerClass) {
                 for (std::size_t c = 0; c < n_classes; ++c) {
                     const float n = model.WordClassCount(a, static_cast<int>(c));
-                    total += params.normalization == FurnitureVoteNormalization::kBalanced && n > 0.0f
-                                 ? n / share[c]
-                                 : n;
+                    total +=
+                        params.normalization == FurnitureVoteNormalization::kBalanced && n > 0.0f
+                            ? n / share[c]
+                            : n;
                 }
             }
             for (int e : elements) {
-                const auto cls = static_cast<std::size_t>(model.parts()[static_cast<std::size_t>(e)].cls);
+                const auto cls =
+                    static_cast<std::size_t>(model.parts()[static_cast<std::size_t>(e)].cls);
                 switch (params.normalization) {
                     case FurnitureVoteNormalization::kPerClass:
                         vote(e, p / model.WordClassCount(a, static_cast<int>(cls)));
                         break;
-                    case FurnitureVoteNormalization::kPerWord: vote(e, p / total); break;
-                    case FurnitureVoteNormalization::kBalanced: vote(e, p / (share[cls] * total)); break;
+                    case FurnitureVoteNormalization::kPerWord:
+                        vote(e, p / total);
+                        break;
+                    case FurnitureVoteNormalization::kBalanced:
+                        vote(e, p / (share[cls] * total));
+                        break;
                 }
             }
         }
@@ -176,14 +189,18 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
                                                            int views, const FurnitureModel& model,
                                                            const FurnitureSelectionParams& params) {
     params.Validate();
-    if (views < 1) throw InvalidArgument(fmt::format("furniture selection: views must be >= 1, got {}", views));
+    if (views < 1)
+        throw InvalidArgument(
+            fmt::format("furniture selection: views must be >= 1, got {}", views));
     const int n_classes = static_cast<int>(model.classes().size());
     std::vector<std::vector<const FurnitureVote*>> by_class(static_cast<std::size_t>(n_classes));
     for (const auto& v : votes) {
         if (v.cls < 0 || v.cls >= n_classes) {
-            throw InvalidArgument(fmt::format("furniture selection: vote of unknown class {}", v.cls));
+            throw InvalidArgument(
+                fmt::format("furniture selection: vote of unknown class {}", v.cls));
         }
-        if (v.weight > 0.0f && v.x.allFinite()) by_class[static_cast<std::size_t>(v.cls)].push_back(&v);
+        if (v.weight > 0.0f && v.x.allFinite())
+            by_class[static_cast<std::size_t>(v.cls)].push_back(&v);
     }
     const float scale = 1.0f / static_cast<float>(views);
     std::vector<FurnitureHypothesis> out;
@@ -192,12 +209,14 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
         if (cv.empty()) continue;
         const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(c)];
         const VoteGrid g = BuildGrid(cv, params.cell, scale);
-        const int h = std::max(1, static_cast<int>(std::lround(params.window_scale * cls.width / 2 / params.cell)));
+        const int h = std::max(
+            1, static_cast<int>(std::lround(params.window_scale * cls.width / 2 / params.cell)));
         const double floor = params.threshold_scale * cls.threshold;
         // Window sums and their local maxima among the 8 neighbours.
         std::vector<double> s(static_cast<std::size_t>(g.nx) * g.ny);
         for (int x = 0; x < g.nx; ++x) {
-            for (int y = 0; y < g.ny; ++y) s[static_cast<std::size_t>(x) * g.ny + y] = g.Window(x - h, y - h, x + h, y + h);
+            for (int y = 0; y < g.ny; ++y)
+                s[static_cast<std::size_t>(x) * g.ny + y] = g.Window(x - h, y - h, x + h, y + h);
         }
         std::vector<std::pair<double, int>> peaks;
         for (int x = 0; x < g.nx; ++x) {
@@ -208,7 +227,8 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
                 for (int dx = -1; dx <= 1 && peak; ++dx) {
                     for (int dy = -1; dy <= 1 && peak; ++dy) {
                         const int X = x + dx, Y = y + dy;
-                        if ((dx == 0 && dy == 0) || X < 0 || Y < 0 || X >= g.nx || Y >= g.ny) continue;
+                        if ((dx == 0 && dy == 0) || X < 0 || Y < 0 || X >= g.nx || Y >= g.ny)
+                            continue;
                         const double w = s[static_cast<std::size_t>(X) * g.ny + Y];
                         peak = w < v || (w == v && (X * g.ny + Y) > (x * g.ny + y));
                     }
@@ -261,9 +281,8 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
             out.push_back(std::move(hyp));
         }
     }
-    std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-        return a.normalized > b.normalized;
-    });
+    std::stable_sort(out.begin(), out.end(),
+                     [](const auto& a, const auto& b) { return a.normalized > b.normalized; });
     if (!params.hull_consistency) return out;
     // Section 4.2.4.2: two hypotheses of one class are inconsistent when the footprints of
     // objects centred there (discs of the class width) overlap; the stronger one stays.

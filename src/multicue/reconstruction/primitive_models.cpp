@@ -740,9 +740,8 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     if (usable.size() < 2) return model;
 
     // 1. Hypothesis, on an even subset of the points.
-    const Indices hypothesis_points = params.hypothesis_points > 0
-                                          ? EvenSubset(usable, params.hypothesis_points)
-                                          : usable;
+    const Indices hypothesis_points =
+        params.hypothesis_points > 0 ? EvenSubset(usable, params.hypothesis_points) : usable;
     const CylinderFit fit = HypothesiseCylinder(cloud, hypothesis_points, plane, params, guidance);
     if (!fit.found || fit.inliers.empty()) return model;
 

@@ -56,10 +56,11 @@ struct PartSegmentationResult {
 };
 
 /// Parts of every hypothesis of `clusters` (indices into `cloud`, which needs normals), grown on
-/// one k-d tree over all of them (on organized frames, in pixel windows over them), and the objects after the concave split: pieces with fewer than
-/// `min_object_points` points are no objects. `plane` (a, b, c, d, normal up; zero when unknown)
-/// gives the heights SplitByConvexity compares. Deterministic for any thread count. Throws
-/// InvalidArgument for bad parameters, DataError without normals.
+/// one k-d tree over all of them (on organized frames, in pixel windows over them), and the objects
+/// after the concave split: pieces with fewer than `min_object_points` points are no objects.
+/// `plane` (a, b, c, d, normal up; zero when unknown) gives the heights SplitByConvexity compares.
+/// Deterministic for any thread count. Throws InvalidArgument for bad parameters, DataError without
+/// normals.
 PartSegmentationResult SegmentParts(const PointCloud& cloud, const std::vector<Indices>& clusters,
                                     const Eigen::Vector4f& plane,
                                     const PartSegmentationParams& params,

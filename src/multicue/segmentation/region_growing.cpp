@@ -77,8 +77,8 @@ class TreeNeighborhoods final : public Neighborhoods {
         if (k_ > 0) {
             tree_.SearchKnn(p, k_, found_, found_d2_);
             // With k or more copies of q, the k nearest may all be copies other than q itself.
-            self_may_be_left_out = found_.size() == static_cast<std::size_t>(k_) &&
-                                   found_d2_.back() == 0.0f;
+            self_may_be_left_out =
+                found_.size() == static_cast<std::size_t>(k_) && found_d2_.back() == 0.0f;
             const float radius_sq = radius_ * radius_;
             std::size_t keep = 0;
             while (keep < found_d2_.size() && found_d2_[keep] < radius_sq) ++keep;

@@ -5,8 +5,8 @@
 #include <map>
 #include <numbers>
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <Eigen/Geometry>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/sim/articulated.hpp"
@@ -63,7 +63,8 @@ bool AreaCentroid(const PartMesh& m, const std::vector<std::string>& prefixes, K
 
 bool AreaCentroid(const PartMesh& m, const std::vector<std::string>& prefixes,
                   Eigen::Vector3f& out) {
-    return AreaCentroid(m, prefixes, [](const Eigen::Vector3f&) { return true; }, out);
+    return AreaCentroid(
+        m, prefixes, [](const Eigen::Vector3f&) { return true; }, out);
 }
 
 // Rotates `m` about z by `yaw`, then moves it so that its footprint's box is centred on the
@@ -115,7 +116,8 @@ float FrontYaw(const PartMesh& m, const std::string& category) {
         const Eigen::Vector3f size = box.sizes();
         float yaw = size.x() > size.y() ? kPi / 2 : 0.0f;
         if (AreaCentroid(m, {"drawer", "handle"}, b)) {
-            const Eigen::Vector3f d = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()) * (b - centre);
+            const Eigen::Vector3f d =
+                Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()) * (b - centre);
             if (d.x() < 0.0f) yaw += kPi;
         }
         return yaw;
@@ -179,8 +181,8 @@ PartMesh Chair(StreamRng& rng) {
         for (int k = 0; k < 5; ++k) {
             const Eigen::Matrix3f R = RotZ(a0 + 2 * kPi * static_cast<float>(k) / 5);
             AddBoard(m, V3(arm, 0.04f, 0.03f), R * V3(arm / 2, 0, base_z - 0.015f), "leg", R);
-            AddBoard(m, V3(0.05f, 0.03f, base_z - 0.03f), R * V3(arm - 0.02f, 0, (base_z - 0.03f) / 2),
-                     "caster", R);
+            AddBoard(m, V3(0.05f, 0.03f, base_z - 0.03f),
+                     R * V3(arm - 0.02f, 0, (base_z - 0.03f) / 2), "caster", R);
         }
     } else {
         const float s = U(rng, 0.025f, 0.045f);
@@ -212,9 +214,10 @@ PartMesh Chair(StreamRng& rng) {
         }
         AddBoard(m, V3(back_t, bw, 0.07f), base + R * V3(0, 0, back_h - 0.035f), "chair_back", R);
         for (int k = 0; k < slats; ++k) {
-            const float y = -bw / 2 + bw * static_cast<float>(k + 1) / static_cast<float>(slats + 1);
-            AddBoard(m, V3(back_t * 0.8f, 0.03f, back_h - 0.1f), base + R * V3(0, y, (back_h - 0.1f) / 2),
-                     "chair_back", R);
+            const float y =
+                -bw / 2 + bw * static_cast<float>(k + 1) / static_cast<float>(slats + 1);
+            AddBoard(m, V3(back_t * 0.8f, 0.03f, back_h - 0.1f),
+                     base + R * V3(0, y, (back_h - 0.1f) / 2), "chair_back", R);
         }
     }
     if (Chance(rng, 0.3f)) {  // arms
@@ -235,8 +238,8 @@ PartMesh Table(StreamRng& rng) {
     const float style = static_cast<float>(rng.Uniform());
     if (style < 0.2f) {  // round, on a column and a cross base
         const float r = U(rng, 0.35f, 0.60f);
-        PartMesh top = MakeRevolutionMesh({{0.0f, h - t, 0}, {r, h - t, 0}, {r, h, 0}, {0.0f, h, 0}},
-                                          {"tabletop"}, 32);
+        PartMesh top = MakeRevolutionMesh(
+            {{0.0f, h - t, 0}, {r, h - t, 0}, {r, h, 0}, {0.0f, h, 0}}, {"tabletop"}, 32);
         m.AppendParts(top);
         AddBoard(m, V3(0.08f, 0.08f, h - t - 0.04f), V3(0, 0, (h - t + 0.04f) / 2), "leg");
         const float foot = U(rng, 0.25f, 0.40f);
@@ -261,13 +264,13 @@ PartMesh Table(StreamRng& rng) {
     } else {  // desk on two side panels, a modesty panel at the back, perhaps a drawer unit
         const float pt = U(rng, 0.025f, 0.04f), inset = U(rng, 0.0f, 0.05f);
         for (int side = -1; side <= 1; side += 2) {
-            AddBoard(m, V3(d - 2 * inset, pt, h - t), V3(0, side * (w / 2 - inset - pt / 2), (h - t) / 2),
-                     "vertical_side_panel");
+            AddBoard(m, V3(d - 2 * inset, pt, h - t),
+                     V3(0, side * (w / 2 - inset - pt / 2), (h - t) / 2), "vertical_side_panel");
         }
         if (Chance(rng, 0.7f)) {
             const float ph = U(rng, 0.25f, 0.45f);
-            AddBoard(m, V3(0.02f, w - 2 * inset - 2 * pt, ph), V3(-d / 2 + inset + 0.05f, 0, h - t - ph / 2),
-                     "back_panel");
+            AddBoard(m, V3(0.02f, w - 2 * inset - 2 * pt, ph),
+                     V3(-d / 2 + inset + 0.05f, 0, h - t - ph / 2), "back_panel");
         }
         if (Chance(rng, 0.5f)) {
             const float uw = U(rng, 0.35f, 0.45f), uh = U(rng, 0.45f, h - t - 0.05f);
@@ -284,8 +287,8 @@ PartMesh Storage(StreamRng& rng, bool sideboard) {
     PartMesh m;
     const float d = sideboard ? U(rng, 0.38f, 0.60f) : U(rng, 0.35f, 0.62f);
     const float w = sideboard ? U(rng, 1.20f, 2.20f) : U(rng, 0.40f, 1.00f);
-    const float h = sideboard ? U(rng, 0.50f, 0.90f) : (Chance(rng, 0.2f) ? U(rng, 1.40f, 2.00f)
-                                                                            : U(rng, 0.70f, 1.00f));
+    const float h = sideboard ? U(rng, 0.50f, 0.90f)
+                              : (Chance(rng, 0.2f) ? U(rng, 1.40f, 2.00f) : U(rng, 0.70f, 1.00f));
     const bool legs = Chance(rng, sideboard ? 0.5f : 0.25f);
     const float base = legs ? U(rng, 0.10f, 0.25f) : U(rng, 0.0f, 0.10f);
     const float bt = U(rng, 0.016f, 0.03f);
@@ -312,7 +315,8 @@ PartMesh Storage(StreamRng& rng, bool sideboard) {
     if (style < 0.2f) {  // open shelves
         const int shelves = std::max(1, static_cast<int>(inner_h / U(rng, 0.25f, 0.40f)) - 1);
         for (int k = 1; k <= shelves; ++k) {
-            const float z = z0 + bt + inner_h * static_cast<float>(k) / static_cast<float>(shelves + 1);
+            const float z =
+                z0 + bt + inner_h * static_cast<float>(k) / static_cast<float>(shelves + 1);
             AddBoard(m, V3(d - 2 * bt, inner_w, bt), V3(0, 0, z), "shelf");
         }
         for (int c = 1; c < columns; ++c) {
@@ -352,7 +356,8 @@ void AddBoard(PartMesh& mesh, const Eigen::Vector3f& extents, const Eigen::Vecto
 std::vector<FurnitureEntry> ReadFurnitureLibrary(const std::filesystem::path& furniture,
                                                  const std::filesystem::path& kitchen) {
     if (furniture.empty() && kitchen.empty()) {
-        throw InvalidArgument("furniture library: give a furniture folder, a kitchen folder or both");
+        throw InvalidArgument(
+            "furniture library: give a furniture folder, a kitchen folder or both");
     }
     std::vector<FurnitureEntry> out;
     std::map<std::string, bool> seen;
@@ -394,7 +399,8 @@ std::vector<MeshSplit> FurnitureSplitOf(const std::vector<FurnitureEntry>& libra
     for (std::size_t i = 0; i < library.size(); ++i) by_category[library[i].category].push_back(i);
     for (auto& [category, idx] : by_category) {
         std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
-            const auto ha = MeshNameHash(library[a].model_id), hb = MeshNameHash(library[b].model_id);
+            const auto ha = MeshNameHash(library[a].model_id),
+                       hb = MeshNameHash(library[b].model_id);
             return ha != hb ? ha < hb : library[a].model_id < library[b].model_id;
         });
         for (std::size_t k = 0; k < idx.size(); ++k) {
