@@ -322,6 +322,188 @@ def build_seeds(cli, data, tmp, seeds):
                  "knn:k=5,metric=jm,seed=3,scale=none"]:
         seeds.add("classifier_spec", spec.replace(":", "_").replace(",", "_") + ".txt", spec)
 
+    # URDF: the kitchen models' descriptions and a hand-written one with every joint type.
+    urdfs = sorted((data / "meshes" / "kitchen").glob("*/*.urdf"), key=lambda p: p.stat().st_size)
+    for p in urdfs[:8]:
+        seeds.add_file("urdf", p, f"{p.parent.name}_{p.name}")
+    seeds.add("urdf", "joints.urdf", TINY_URDF)
+
+    # Point cloud messages (CDR and ROS 1) and bags: the shared ROS 2 bags (strings and basic
+    # types) and bags of point cloud messages written here.
+    messages = [pointcloud2_message(*layout) for layout in MESSAGE_LAYOUTS]
+    for i, m in enumerate(messages):
+        seeds.add("point_cloud2", f"cdr_{i}", b"\x00" + encode_cdr(m))
+        seeds.add("point_cloud2", f"ros1_{i}", b"\x01" + encode_ros1(m))
+    for p in sorted((data / "bags" / "ros2").glob("*/*")):
+        if p.suffix in (".db3", ".mcap"):
+            seeds.add_file("ros2_bag", p, f"{p.parent.name}{p.suffix}",
+                           bytes([1 if p.suffix == ".mcap" else 0]))
+    db3 = tmp / "clouds.db3"
+    write_db3(db3, [encode_cdr(m) for m in messages])
+    seeds.add_file("ros2_bag", db3, prefix=b"\x00")
+    bag = tmp / "clouds.bag"
+    if write_ros1_bag(bag, [encode_ros1(m) for m in messages]):
+        seeds.add_file("ros1_bag", bag)
+
+    # A furniture model trained on one piece of the furniture library.
+    library = data / "meshes" / "furniture" / "labels.csv"
+    if library.is_file():
+        lines = library.read_text().splitlines()
+        small = tmp / "furniture"
+        small.mkdir()
+        (small / "labels.csv").write_text("\n".join(lines[:2]) + "\n")
+        header = lines[0].split(",")
+        mesh = lines[1].split(",")[header.index("file")] if "file" in header else None
+        if mesh and (library.parent / mesh).is_file():
+            (small / mesh).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy(library.parent / mesh, small / mesh)
+            model = tmp / "furniture.mcfm"
+            try:
+                run(cli, "map", "furniture", tmp / "scenes" / "scene_0000_view_00.pcd",
+                    "--model", model, "--out", tmp / "furniture_out", "--furniture", small,
+                    "--kitchen", tmp / "no_kitchen", "-q")
+            except subprocess.CalledProcessError:
+                pass  # the scene has no sensor pose in the world frame; the model is written first
+            seeds.add_payload("furniture_model", model)
+
+
+TINY_URDF = """<?xml version="1.0"?>
+<robot name="cupboard">
+  <material name="white"><color rgba="1 1 1 1"/></material>
+  <link name="body"><visual><origin xyz="0 0 0.4" rpy="0 0 0"/>
+    <geometry><box size="0.6 0.5 0.8"/></geometry><material name="white"/></visual></link>
+  <link name="door"><visual><geometry><mesh filename="door.obj" scale="0.001 0.001 0.001"/>
+    </geometry></visual></link>
+  <link name="drawer"/><link name="handle"/>
+  <joint name="door_hinge" type="revolute"><parent link="body"/><child link="door"/>
+    <origin xyz="0.3 -0.25 0.4" rpy="0 0 1.5708"/><axis xyz="0 0 1"/>
+    <limit lower="0" upper="1.57" effort="1" velocity="1"/></joint>
+  <joint name="drawer_slide" type="prismatic"><parent link="body"/><child link="drawer"/>
+    <axis xyz="1 0 0"/><limit lower="0" upper="0.4" effort="1" velocity="1"/></joint>
+  <joint name="handle_fixed" type="fixed"><parent link="drawer"/><child link="handle"/></joint>
+</robot>
+"""
+
+# (height, width, fields as (name, offset, datatype, count), point_step, big endian)
+MESSAGE_LAYOUTS = [
+    (1, 3, [("x", 0, 7, 1), ("y", 4, 7, 1), ("z", 8, 7, 1), ("rgb", 16, 7, 1)], 32, False),
+    (2, 2, [("x", 0, 7, 1), ("y", 4, 7, 1), ("z", 8, 7, 1), ("intensity", 12, 7, 1)], 16, False),
+    (1, 2, [("z", 8, 7, 1), ("x", 0, 7, 1), ("y", 4, 7, 1), ("normal_x", 12, 7, 1),
+            ("normal_y", 16, 7, 1), ("normal_z", 20, 7, 1), ("label", 24, 6, 1),
+            ("r", 28, 2, 1), ("g", 29, 2, 1), ("b", 30, 2, 1), ("ring", 31, 1, 1)], 32, True),
+    (1, 2, [("x", 0, 8, 1), ("y", 8, 8, 1), ("z", 16, 8, 1), ("t", 24, 4, 1)], 28, False),
+]
+
+
+def pointcloud2_message(height, width, fields, point_step, big_endian):
+    order = ">" if big_endian else "<"
+    fmt = {1: "b", 2: "B", 3: "h", 4: "H", 5: "i", 6: "I", 7: "f", 8: "d"}
+    data = bytearray(point_step * width * height)
+    for i in range(width * height):
+        for name, offset, datatype, _ in fields:
+            value = {"x": 0.1 * i, "y": -0.05 * i, "z": 1.0 + 0.01 * i}.get(name, i % 7)
+            if datatype not in (7, 8):
+                value = int(value)
+            struct.pack_into(order + fmt[datatype], data, i * point_step + offset, value)
+    return {"stamp": (12, 345), "frame_id": "camera", "height": height, "width": width,
+            "fields": fields, "big_endian": big_endian, "point_step": point_step,
+            "row_step": point_step * width, "data": bytes(data), "dense": True}
+
+
+def encode_cdr(m):
+    """CDR (little endian) with its encapsulation header, as rosbag2 stores it."""
+    out = bytearray()
+
+    def align(n):
+        out.extend(b"\0" * (-len(out) % n))
+
+    def u32(v):
+        align(4)
+        out.extend(struct.pack("<I", v))
+
+    def string(s):
+        u32(len(s) + 1)
+        out.extend(s.encode() + b"\0")
+
+    out.extend(struct.pack("<iI", *m["stamp"]))
+    string(m["frame_id"])
+    u32(m["height"])
+    u32(m["width"])
+    u32(len(m["fields"]))
+    for name, offset, datatype, count in m["fields"]:
+        string(name)
+        u32(offset)
+        out.append(datatype)
+        u32(count)
+    out.append(1 if m["big_endian"] else 0)
+    u32(m["point_step"])
+    u32(m["row_step"])
+    u32(len(m["data"]))
+    out.extend(m["data"])
+    out.append(1 if m["dense"] else 0)
+    return b"\x00\x01\x00\x00" + bytes(out)
+
+
+def encode_ros1(m):
+    """ROS 1 serialisation: little endian, no alignment, strings without their NUL."""
+    def string(s):
+        return struct.pack("<I", len(s)) + s.encode()
+
+    out = struct.pack("<III", 0, *m["stamp"]) + string(m["frame_id"])
+    out += struct.pack("<III", m["height"], m["width"], len(m["fields"]))
+    for name, offset, datatype, count in m["fields"]:
+        out += string(name) + struct.pack("<IBI", offset, datatype, count)
+    out += struct.pack("<BII", 1 if m["big_endian"] else 0, m["point_step"], m["row_step"])
+    out += struct.pack("<I", len(m["data"])) + m["data"] + bytes([1 if m["dense"] else 0])
+    return out
+
+
+def write_db3(path, messages):
+    """A rosbag2 SQLite bag (schema version 4) of point cloud messages."""
+    import sqlite3
+    db = sqlite3.connect(path)
+    db.executescript(
+        "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);"
+        "INSERT INTO schema VALUES(4, 'humble');"
+        "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,"
+        " serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL,"
+        " type_description_hash TEXT NOT NULL);"
+        "INSERT INTO topics VALUES(1, '/points', 'sensor_msgs/msg/PointCloud2', 'cdr', '', '');"
+        "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,"
+        " timestamp INTEGER NOT NULL, data BLOB NOT NULL);")
+    db.executemany("INSERT INTO messages(topic_id, timestamp, data) VALUES(1, ?, ?)",
+                   [(1000 * (i + 1), m) for i, m in enumerate(messages)])
+    db.commit()
+    db.close()
+
+
+ROS1_BAG_WRITER = """
+import sys, rosbag, rospy
+class PointCloud2:
+    _type = "sensor_msgs/PointCloud2"
+    _md5sum = "1158d486dd51d683ce2f1be655c3c181"
+    _full_text = "Header header\\nuint32 height\\nuint32 width\\nPointField[] fields\\n"
+with rosbag.Bag(sys.argv[1], "w") as bag:
+    for i, path in enumerate(sys.argv[2:]):
+        data = open(path, "rb").read()
+        bag.write("/points", (PointCloud2._type, data, PointCloud2._md5sum, None, PointCloud2),
+                  rospy.Time(1, 1000 * i), raw=True)
+"""
+
+
+def write_ros1_bag(path, messages):
+    """A ROS 1 bag through Debian's Python rosbag (python3-rosbag); False when it is missing."""
+    python = Path("/usr/bin/python3")
+    if not python.is_file():
+        return False
+    files = []
+    for i, m in enumerate(messages):
+        files.append(path.with_name(f"message_{i}.bin"))
+        files[-1].write_bytes(m)
+    result = subprocess.run([str(python), "-c", ROS1_BAG_WRITER, str(path), *map(str, files)],
+                            capture_output=True)
+    return result.returncode == 0 and path.is_file()
+
 
 def write(path, text):
     Path(path).write_text(text)

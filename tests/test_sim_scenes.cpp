@@ -101,6 +101,26 @@ TEST(SimMesh, BadMeshesAreRefusedOrSkipped) {
     EXPECT_THROW(TryLoadMesh(dir / "empty.obj", {}, true), Error);
 }
 
+// A face without indices makes Assimp's PLY importer declare polygons the mesh does not have;
+// Debian's Assimp then asserts in its triangulation and aborts the process.
+TEST(SimMesh, FaceWithoutIndicesIsRefused) {
+    test::TempDir dir;
+    const std::string head =
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+        "0 0 0\n0.1 0 0\n0 0.1 0\n0.1 0.1 0\n3 0 1 2\n";
+    WriteText(dir / "empty_face.ply", head + "0\n");
+    WriteText(dir / "quad.ply", head + "4 0 1 3 2\n");
+    try {
+        LoadMesh(dir / "empty_face.ply");
+        ADD_FAILURE() << "a face without indices was read";
+    } catch (const FormatError& e) {
+        EXPECT_NE(std::string(e.what()).find("no vertex indices"), std::string::npos) << e.what();
+    }
+    const PartMesh quad = LoadMesh(dir / "quad.ply");  // polygons are still triangulated
+    EXPECT_EQ(quad.mesh.triangles.size(), 3u);
+}
+
 TEST(SimMesh, LibraryLabelsAreChecked) {
     test::TempDir dir;
     WriteText(dir / "kit__cube.obj", kCubeObj);

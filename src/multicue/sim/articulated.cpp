@@ -17,6 +17,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/io/image.hpp"
+#include "multicue/sim/assimp_read.hpp"
 
 namespace multicue::sim {
 namespace {
@@ -108,11 +109,7 @@ void AppendVisual(const std::filesystem::path& file, const Eigen::Affine3f& T,
                   std::vector<float>& reflectance) {
     Assimp::Importer importer;
     const aiScene* scene =
-        importer.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_SortByPType);
-    if (scene == nullptr || scene->mRootNode == nullptr) {
-        throw FormatError(
-            fmt::format("{}: cannot read mesh: {}", file.string(), importer.GetErrorString()));
-    }
+        assimp_read::ReadScene(importer, file, aiProcess_Triangulate | aiProcess_SortByPType);
     std::uint32_t part_index = 0;
     const auto it = std::find(out.part_names.begin(), out.part_names.end(), part);
     if (it == out.part_names.end()) {

@@ -13,6 +13,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/sim/assimp_read.hpp"
 
 namespace multicue::sim {
 namespace {
@@ -205,13 +206,8 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
     // The importers take face indices and counts from the file as they are: the scene is
     // validated (indices within the vertices, counts matching arrays) before any other step
     // reads it, and refused when broken.
-    const aiScene* scene =
-        importer.ReadFile(path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate |
-                                             aiProcess_SortByPType | aiProcess_FindInvalidData);
-    if (scene == nullptr || scene->mRootNode == nullptr) {
-        throw FormatError(
-            fmt::format("{}: cannot read mesh: {}", path.string(), importer.GetErrorString()));
-    }
+    const aiScene* scene = assimp_read::ReadScene(
+        importer, path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_FindInvalidData);
     AssimpCollector collector;
     collector.scene = scene;
     collector.scale = params.scale;
