@@ -323,9 +323,9 @@ def build_seeds(cli, data, tmp, seeds):
         seeds.add("classifier_spec", spec.replace(":", "_").replace(",", "_") + ".txt", spec)
 
     # URDF: the kitchen models' descriptions and a hand-written one with every joint type.
-    urdfs = sorted((data / "meshes" / "kitchen").glob("*/*.urdf"), key=lambda p: p.stat().st_size)
+    urdfs = sorted((data / "meshes" / "kitchen").rglob("*.urdf"), key=lambda p: p.stat().st_size)
     for p in urdfs[:8]:
-        seeds.add_file("urdf", p, f"{p.parent.name}_{p.name}")
+        seeds.add_file("urdf", p, f"{p.parent.parent.name}_{p.parent.name}.urdf")
     seeds.add("urdf", "joints.urdf", TINY_URDF)
 
     # Point cloud messages (CDR and ROS 1) and bags: the shared ROS 2 bags (strings and basic
@@ -345,26 +345,11 @@ def build_seeds(cli, data, tmp, seeds):
     if write_ros1_bag(bag, [encode_ros1(m) for m in messages]):
         seeds.add_file("ros1_bag", bag)
 
-    # A furniture model trained on one piece of the furniture library.
-    library = data / "meshes" / "furniture" / "labels.csv"
-    if library.is_file():
-        lines = library.read_text().splitlines()
-        small = tmp / "furniture"
-        small.mkdir()
-        (small / "labels.csv").write_text("\n".join(lines[:2]) + "\n")
-        header = lines[0].split(",")
-        mesh = lines[1].split(",")[header.index("file")] if "file" in header else None
-        if mesh and (library.parent / mesh).is_file():
-            (small / mesh).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy(library.parent / mesh, small / mesh)
-            model = tmp / "furniture.mcfm"
-            try:
-                run(cli, "map", "furniture", tmp / "scenes" / "scene_0000_view_00.pcd",
-                    "--model", model, "--out", tmp / "furniture_out", "--furniture", small,
-                    "--kitchen", tmp / "no_kitchen", "-q")
-            except subprocess.CalledProcessError:
-                pass  # the scene has no sensor pose in the world frame; the model is written first
-            seeds.add_payload("furniture_model", model)
+    # A small furniture model: one procedural piece per class, two views, coarse CAD points.
+    model = tmp / "furniture.mcfm"
+    run(cli, "train", "furniture", "--out", model, "--meshes", "", "--kitchen", "",
+        "--procedural", 1, "--views", 2, "--words", 8, "--cad-spacing", 0.15, "-q")
+    seeds.add_payload("furniture_model", model)
 
 
 TINY_URDF = """<?xml version="1.0"?>

@@ -617,6 +617,28 @@ TEST(PerceiveOutput, FilesFollowTheContract) {
     EXPECT_TRUE(models.HasVertexColors());
 }
 
+TEST(PerceiveOutput, LabelsCloudTakingThePointsEqualsTheCopy) {
+    const auto& s = DemoScene();
+    const PerceiveResult r = Perceive(s.cloud, PerceiveParams{});
+    const PointCloud copied = PerceiveLabelsCloud(s.cloud, r);
+    PointCloud input = s.cloud;
+    const PointCloud taken = PerceiveLabelsCloud(std::move(input), r);
+    EXPECT_EQ(input.size(), 0u);  // NOLINT(bugprone-use-after-move): released on purpose
+    EXPECT_TRUE(input.normals.empty());
+    ASSERT_EQ(taken.size(), copied.size());
+    EXPECT_EQ(taken.width, copied.width);
+    EXPECT_EQ(taken.height, copied.height);
+    EXPECT_EQ(taken.labels, copied.labels);
+    ASSERT_EQ(taken.extra_fields.size(), copied.extra_fields.size());
+    for (std::size_t f = 0; f < taken.extra_fields.size(); ++f) {
+        EXPECT_EQ(taken.extra_fields[f].data, copied.extra_fields[f].data);
+    }
+    for (std::size_t i = 0; i < taken.size(); ++i) {
+        ASSERT_EQ(taken.IsFinite(i), copied.IsFinite(i));
+        if (taken.IsFinite(i)) ASSERT_EQ(taken.points[i], copied.points[i]);
+    }
+}
+
 TEST(PerceiveOutput, FailedWriteKeepsExistingFiles) {
     test::TempDir dir;
     { std::ofstream(dir / "result.json") << "old"; }

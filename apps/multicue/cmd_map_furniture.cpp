@@ -18,11 +18,13 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
+#include "furniture_report.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/io/file_utils.hpp"
 #include "multicue/io/ply.hpp"
 #include "multicue/mapping/furniture_detection.hpp"
+#include "multicue/sim/mesh_split.hpp"
 #include "multicue/training/furniture_training.hpp"
 
 namespace multicue::cli {
@@ -40,6 +42,8 @@ struct MapFurnitureOptions {
     bool verify = true;
     bool free_space = true;
     bool quiet = false;
+    bool detect = false;  ///< `detect furniture`: the model must exist; result.json, report.html
+    bool report = true;
 };
 
 /// The scan in its sensor frame and the sensor's pose in the world (from the file's header).
@@ -63,6 +67,11 @@ FurnitureView SensorView(const std::string& path, PointCloud& scan) {
 
 FurnitureModel LoadOrTrain(const MapFurnitureOptions& o, int threads) {
     if (std::filesystem::exists(o.model)) return FurnitureModel::Load(o.model);
+    if (o.detect) {
+        throw IoError(fmt::format(
+            "{}: no such furniture model (train one with `multicue train furniture --out {}`)",
+            o.model, o.model));
+    }
     training::FurnitureTrainingOptions to;
     to.furniture = o.furniture;
     to.kitchen = o.kitchen;
@@ -160,13 +169,18 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     const std::filesystem::path dir = o.out;
     std::filesystem::create_directories(dir);
     const std::string text = doc.dump(2) + "\n";
-    io::WriteFileAtomically(dir / "detections.json", [&](std::ostream& s) { s << text; });
+    const std::filesystem::path json_path = dir / (o.detect ? "result.json" : "detections.json");
+    io::WriteFileAtomically(json_path, [&](std::ostream& s) { s << text; });
     if (!fitted.triangles.empty()) io::WritePlyMesh(dir / "models.ply", fitted);
+    if (o.detect && o.report) {
+        const std::string page = FurnitureReportPage(doc, views);
+        io::WriteFileAtomically(dir / "report.html", [&](std::ostream& s) { s << page; });
+    }
     if (!o.quiet) {
         std::printf(
-            "multicue map furniture: %zu scans, %zu detections (%zu hypotheses rejected) -> %s\n",
-            scans.size(), r.detections.size(), r.rejected.size(),
-            (dir / "detections.json").string().c_str());
+            "multicue %s furniture: %zu scans, %zu detections (%zu hypotheses rejected) -> %s\n",
+            o.detect ? "detect" : "map", scans.size(), r.detections.size(), r.rejected.size(),
+            json_path.string().c_str());
         for (const auto& d : r.detections) {
             const std::string yaw =
                 d.fitted ? fmt::format("yaw {:4.0f} deg", YawDeg(d.fit.yaw)) : "(not fitted)";
@@ -176,27 +190,12 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     }
 }
 
-}  // namespace
-
-void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global) {
-    auto* cmd = map_command.add_subcommand(
-        "furniture",
-        "Tables, chairs, cabinets and sideboards in scans of a room: part votes, CAD models "
-        "fitted and verified against free space (detections.json, models.ply)");
-    auto o = std::make_shared<MapFurnitureOptions>();
+/// The options `map furniture` and `detect furniture` share.
+void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
     cmd->add_option("SCANS", o->scans,
                     "PCD or PLY scans in one world frame (z up, floor at z = 0) with sensor poses")
         ->required()
         ->check(CLI::ExistingFile);
-    cmd->add_option("--model", o->model,
-                    "furniture model (.mcfm); trained from --furniture and --kitchen and written "
-                    "here when missing")
-        ->required();
-    cmd->add_option("--out", o->out, "output folder: detections.json, models.ply")->required();
-    cmd->add_option("--furniture", o->furniture, "furniture library (labels.csv) for training")
-        ->capture_default_str();
-    cmd->add_option("--kitchen", o->kitchen, "kitchen library for training (tables, cupboards)")
-        ->capture_default_str();
     cmd->add_option("--threshold-scale", o->threshold_scale,
                     "multiplies the class thresholds of the votes (lower: more hypotheses)")
         ->capture_default_str();
@@ -213,7 +212,119 @@ void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global) 
         "--no-free-space", [o](std::int64_t) { o->free_space = false; },
         "fit without the free-space test");
     cmd->add_flag("-q,--quiet", o->quiet, "no summary");
+}
+
+struct TrainFurnitureOptions {
+    std::string out;
+    std::string furniture = MULTICUE_FURNITURE_MODELS_DIR;
+    std::string kitchen = MULTICUE_KITCHEN_LIBRARY_DIR;
+    std::string split = "tune";
+    std::string features = "full";
+    training::FurnitureTrainingOptions t;
+    bool quiet = false;
+};
+
+void TrainFurniture(TrainFurnitureOptions& o, int threads) {
+    o.t.furniture = o.furniture;
+    o.t.kitchen = o.kitchen;
+    o.t.split = sim::ParseMeshSplit(o.split);
+    o.t.vocabulary.features = ParseFurnitureFeatureSet(o.features);
+    o.t.num_threads = threads;
+    o.t.Validate();  // before loading or simulating anything
+    if (o.furniture.empty() && o.kitchen.empty() && o.t.procedural_per_class == 0) {
+        throw InvalidArgument(
+            "train furniture: no pieces to train on (no library, --procedural 0)");
+    }
+    InstallInterruptHandler();
+    const auto pieces = training::FurnitureTrainingPieces(o.t);
+    FurnitureModel model;
+    Progress progress("training", pieces.size());
+    if (!training::TrainFurnitureModel(pieces, o.t, model, &progress)) {
+        throw Error("train furniture: interrupted, no model written");
+    }
+    progress.Finish();
+    model.Save(o.out);
+    if (!o.quiet) {
+        std::printf(
+            "multicue train furniture: %zu pieces, %zu classes, %zu training parts, %zu CAD "
+            "models -> %s\n",
+            pieces.size(), model.classes().size(), model.parts().size(), model.cads().size(),
+            o.out.c_str());
+    }
+}
+
+}  // namespace
+
+void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global) {
+    auto* cmd = map_command.add_subcommand(
+        "furniture",
+        "Tables, chairs, cabinets and sideboards in scans of a room: part votes, CAD models "
+        "fitted and verified against free space (detections.json, models.ply)");
+    auto o = std::make_shared<MapFurnitureOptions>();
+    AddDetectionOptions(cmd, o.get());
+    cmd->add_option("--model", o->model,
+                    "furniture model (.mcfm); trained from --furniture and --kitchen and written "
+                    "here when missing")
+        ->required();
+    cmd->add_option("--out", o->out, "output folder: detections.json, models.ply")->required();
+    cmd->add_option("--furniture", o->furniture, "furniture library (labels.csv) for training")
+        ->capture_default_str();
+    cmd->add_option("--kitchen", o->kitchen, "kitchen library for training (tables, cupboards)")
+        ->capture_default_str();
     cmd->callback([o, &global] { Run(*o, global); });
+}
+
+void AddDetectFurnitureCommand(CLI::App& app, const GlobalOptions& global) {
+    auto* detect = app.add_subcommand("detect", "Detect objects of a kind in scans");
+    detect->require_subcommand(1);
+    auto* cmd = detect->add_subcommand(
+        "furniture",
+        "Tables, chairs, cabinets and sideboards in scans of a room with a trained model "
+        "(result.json, models.ply, report.html)");
+    auto o = std::make_shared<MapFurnitureOptions>();
+    o->detect = true;
+    AddDetectionOptions(cmd, o.get());
+    cmd->add_option("--model", o->model, "furniture model of `multicue train furniture` (.mcfm)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--out", o->out, "output folder: result.json, models.ply, report.html")
+        ->required();
+    cmd->add_flag(
+        "--no-report", [o](std::int64_t) { o->report = false; }, "no report.html");
+    cmd->callback([o, &global] { Run(*o, global); });
+}
+
+void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& global) {
+    auto* cmd = train_command.add_subcommand(
+        "furniture",
+        "Train the furniture model (part vocabulary, shape models, CAD models) on simulated views "
+        "of the furniture and kitchen libraries and procedural pieces");
+    auto o = std::make_shared<TrainFurnitureOptions>();
+    cmd->add_option("--out", o->out, "model file to write (.mcfm)")->required();
+    cmd->add_option("--meshes,--furniture", o->furniture,
+                    "furniture library (labels.csv); empty: none")
+        ->capture_default_str();
+    cmd->add_option("--kitchen", o->kitchen, "kitchen library (tables, cupboards); empty: none")
+        ->capture_default_str();
+    cmd->add_option("--split", o->split,
+                    "library half trained on: tune (the other half stays held out), test, all")
+        ->capture_default_str();
+    cmd->add_option("--procedural", o->t.procedural_per_class, "procedural pieces per class")
+        ->capture_default_str();
+    cmd->add_option("--views", o->t.views.views, "training views per piece (thesis: 16)")
+        ->capture_default_str();
+    cmd->add_option("--words", o->t.vocabulary.words, "words of the vocabulary (k of k-means)")
+        ->capture_default_str();
+    cmd->add_option("--features", o->features,
+                    "part features: full (24 values) or reduced (without features 4, 7, 8)")
+        ->capture_default_str();
+    cmd->add_option("--cad-spacing", o->t.cad_spacing,
+                    "spacing of the CAD models' points used in fitting [m]")
+        ->capture_default_str();
+    cmd->add_option("--seed", o->t.seed, "views, sensor noise and procedural pieces")
+        ->capture_default_str();
+    cmd->add_flag("-q,--quiet", o->quiet, "no summary");
+    cmd->callback([o, &global] { TrainFurniture(*o, global.threads); });
 }
 
 }  // namespace multicue::cli

@@ -71,7 +71,8 @@ PerceiveOptions LoadParams(const std::string& config_path, const std::string& up
 }
 
 /// Runs the pipeline on `cloud` and writes the outputs; returns the result for a summary. The
-/// pipeline works in `cloud` itself (it gains normals), so a large cloud is not held twice.
+/// pipeline works in `cloud` itself (it gains normals) and the labels cloud takes its points, so a
+/// large cloud is not held twice; `cloud` is empty afterwards.
 PerceiveResult RunPerceive(PointCloud& cloud, const std::string& input_name,
                            const std::filesystem::path& out, const PerceiveOptions& options,
                            double load_ms) {
@@ -80,8 +81,8 @@ PerceiveResult RunPerceive(PointCloud& cloud, const std::string& input_name,
     const std::string report =
         options.report.enabled ? PerceiveReportPage(cloud, result, json, options.report).Render()
                                : std::string();
-    WritePerceiveOutputs(out, json, PerceiveLabelsCloud(cloud, result), PerceiveModelsMesh(result),
-                         report);
+    WritePerceiveOutputs(out, json, PerceiveLabelsCloud(std::move(cloud), result),
+                         PerceiveModelsMesh(result), report);
     return result;
 }
 
@@ -372,6 +373,7 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
         PerceiveOptions options;
         options.pipeline.num_threads = global.threads;
         options.report.enabled = !*no_report;
+        const std::uint32_t width = cloud.width, height = cloud.height;  // RunPerceive takes it
         const PerceiveResult result =
             RunPerceive(cloud, (dir / "scene.pcd").string(), dir, options, 0.0);
         std::string objects;
@@ -382,7 +384,7 @@ void AddDemoCommand(CLI::App& app, const GlobalOptions& global) {
         std::printf(
             "multicue demo: simulated Kinect view (%ux%u) of a table with %zu objects (%s) "
             "-> %s\n%s",
-            cloud.width, cloud.height, scene.NumObjects(), objects.c_str(),
+            width, height, scene.NumObjects(), objects.c_str(),
             (dir / "scene.pcd").string().c_str(), Summary(result, dir, options.report).c_str());
     });
 }

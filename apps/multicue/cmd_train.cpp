@@ -31,7 +31,8 @@ struct TrainOptions {
 
 // Every option of `multicue train`; returns --table-scenes (its default depends on --meshes).
 CLI::Option* AddTrainOptions(CLI::App* cmd, TrainOptions* o) {
-    cmd->add_option("--out", o->out, "model file to write (.mcpg)")->required();
+    // Not ->required(): `train furniture` has its own --out (checked in the callback).
+    cmd->add_option("--out", o->out, "model file to write (.mcpg); required");
     cmd->add_option("--meshes", o->meshes,
                     "mesh library folder with labels.csv (added to the procedural objects)");
     cmd->add_option("--labels", o->labels,
@@ -173,7 +174,9 @@ void AddTrainCommand(CLI::App& app, const GlobalOptions& global) {
         "train", "Train the part-graph hashing categoriser on simulated turntable scans");
     auto o = std::make_shared<TrainOptions>();
     CLI::Option* table_scenes = AddTrainOptions(cmd, o.get());
-    cmd->callback([o, &global, table_scenes] {
+    cmd->callback([cmd, o, &global, table_scenes] {
+        if (!cmd->get_subcommands().empty()) return;  // `train furniture` ran instead
+        if (o->out.empty()) throw InvalidArgument("train: --out is required");
         if (table_scenes->count() == 0 && !o->meshes.empty()) {
             o->t.table_scenes = training::kLibraryTableScenes;
         }

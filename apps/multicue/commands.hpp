@@ -42,5 +42,9 @@ CLI::App* AddMapCommand(CLI::App& app, const GlobalOptions& global);
 void AddSimulateFurnitureCommand(CLI::App& simulate, const GlobalOptions& global);
 /// `map furniture` (cmd_map_furniture.cpp), attached to the `map` command.
 void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global);
+/// `detect furniture` (cmd_map_furniture.cpp): the `detect` command and its furniture job.
+void AddDetectFurnitureCommand(CLI::App& app, const GlobalOptions& global);
+/// `train furniture` (cmd_map_furniture.cpp), attached to the `train` command.
+void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& global);
 
 }  // namespace multicue::cli

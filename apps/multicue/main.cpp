@@ -74,9 +74,12 @@ int main(int argc, char** argv) {
     // `map`: maps built from several scans; `map kitchen` is the kitchen's semantic map.
     auto* map_command = multicue::cli::AddMapCommand(app, global);
     multicue::cli::AddMapKitchenCommand(*map_command, global);
-    // Furniture by part configurations: `simulate furniture` and `map furniture`.
+    // Furniture by part configurations: `simulate furniture`, `map furniture`, `train furniture`
+    // and `detect furniture`.
     multicue::cli::AddSimulateFurnitureCommand(*app.get_subcommand("simulate"), global);
     multicue::cli::AddMapFurnitureCommand(*map_command, global);
+    multicue::cli::AddTrainFurnitureCommand(*app.get_subcommand("train"), global);
+    multicue::cli::AddDetectFurnitureCommand(app, global);
 
     app.parse_complete_callback([&] {
         multicue::SetLogLevel(multicue::ParseLogLevel(log_level));

@@ -46,7 +46,15 @@ class SqliteBag : public BagReader {
             return false;
         }
         if (rc != SQLITE_ROW) Fail("reading messages");
-        message.topic = topic_names_.at(sqlite3_column_int64(messages_, 0));
+        const sqlite3_int64 topic_id = sqlite3_column_int64(messages_, 0);
+        const auto topic = topic_names_.find(topic_id);
+        if (topic == topic_names_.end()) {
+            throw FormatError(
+                fmt::format("{}: a message names topic id {}, which the topics table "
+                            "does not have (corrupt bag?)",
+                            name_, topic_id));
+        }
+        message.topic = topic->second;
         message.log_time_ns = sqlite3_column_int64(messages_, 1);
         const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(messages_, 2));
         const int bytes = sqlite3_column_bytes(messages_, 2);

@@ -13,6 +13,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/io/ply.hpp"
 #include "multicue/sim/assimp_read.hpp"
 
 namespace multicue::sim {
@@ -150,27 +151,34 @@ void PartMesh::Validate() const {
 
 namespace {
 
-// Assimp's PLY importer runs past the end of a header that never ends (no `end_header` line) and
-// crashes; such a file is refused here first. A PLY header is ASCII lines of known keywords up to
-// `end_header`; anything else is not a PLY file Assimp should see.
-void CheckPlyHeader(const std::filesystem::path& path) {
+// Whether the file starts like a PLY file ("ply" on its own first line).
+bool IsPlyFile(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
-    std::string line;
-    if (!std::getline(in, line)) return;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line != "ply") return;  // not a PLY file: Assimp picks the importer
-    constexpr int kMaxHeaderLines = 10000;
-    for (int n = 0; n < kMaxHeaderLines && std::getline(in, line); ++n) {
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (line == "end_header") return;
-        const std::string word = line.substr(0, line.find(' '));
-        if (word != "format" && word != "comment" && word != "obj_info" && word != "element" &&
-            word != "property") {
-            throw FormatError(fmt::format("{}: malformed PLY header (line '{}')", path.string(),
-                                          line.substr(0, 40)));
-        }
+    char head[5] = {};
+    in.read(head, 5);
+    const std::string_view h(head, static_cast<std::size_t>(in.gcount()));
+    return h.starts_with("ply\n") || h.starts_with("ply\r\n");
+}
+
+// PLY meshes are read by multicue's own reader (io/ply.hpp, fuzzed with the other readers), not
+// by Assimp: Debian's Assimp crashes on damaged PLY files (a header without end_header, binary
+// data that ends early). The mesh is one part, "part0", as Assimp names it; colours keep their
+// 8-bit values with an opaque alpha, as through Assimp. Faces with more than three vertices are
+// fan-triangulated (the shared PLY meshes have triangles only).
+PartMesh ReadPlyPartMesh(const std::filesystem::path& path, float scale) {
+    TriangleMesh m = io::ReadPlyMesh(path);
+    PartMesh out;
+    out.name = path.filename().string();
+    out.mesh.vertices.reserve(m.vertices.size());
+    for (const auto& v : m.vertices) out.mesh.vertices.push_back(v * scale);
+    out.mesh.triangles = std::move(m.triangles);
+    if (!m.vertex_colors.empty() && m.vertex_colors.size() == m.vertices.size()) {
+        out.mesh.vertex_colors = std::move(m.vertex_colors);
+        for (auto& c : out.mesh.vertex_colors) c.a = 255;
     }
-    throw FormatError(fmt::format("{}: PLY header without end_header", path.string()));
+    if (!out.mesh.triangles.empty()) out.part_names = {"part0"};
+    out.triangle_parts.assign(out.mesh.triangles.size(), 0);
+    return out;
 }
 
 // Debian's Assimp crashes on damaged COLLADA files (accessors that count more values than their
@@ -199,28 +207,32 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
     if (!std::filesystem::is_regular_file(path, ec)) {
         throw IoError(fmt::format("{}: no such mesh file", path.string()));
     }
-    CheckPlyHeader(path);
-    RefuseCollada(path);
-    Assimp::Importer importer;
-    // No vertex joining: OBJ/PLY files already share vertices, and joining would merge parts.
-    // The importers take face indices and counts from the file as they are: the scene is
-    // validated (indices within the vertices, counts matching arrays) before any other step
-    // reads it, and refused when broken.
-    const aiScene* scene = assimp_read::ReadScene(
-        importer, path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_FindInvalidData);
-    AssimpCollector collector;
-    collector.scene = scene;
-    collector.scale = params.scale;
-    collector.out.name = path.filename().string();
-    collector.Visit(scene->mRootNode, aiMatrix4x4());
-    PartMesh out = std::move(collector.out);
+    PartMesh out;
+    if (IsPlyFile(path)) {
+        out = ReadPlyPartMesh(path, params.scale);
+    } else {
+        RefuseCollada(path);
+        Assimp::Importer importer;
+        // No vertex joining: OBJ files already share vertices, and joining would merge parts.
+        // The scene is validated (indices within the vertices, counts matching arrays) before
+        // any other step reads it, and refused when broken.
+        const aiScene* scene = assimp_read::ReadScene(
+            importer, path,
+            aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_FindInvalidData);
+        AssimpCollector collector;
+        collector.scene = scene;
+        collector.scale = params.scale;
+        collector.out.name = path.filename().string();
+        collector.Visit(scene->mRootNode, aiMatrix4x4());
+        out = std::move(collector.out);
+        if (collector.all_colored) out.mesh.vertex_colors = std::move(collector.colors);
+    }
     if (out.mesh.triangles.empty()) {
         throw DataError(fmt::format("{}: mesh has no triangles", path.string()));
     }
     for (const auto& v : out.mesh.vertices) {
         if (!v.allFinite()) throw DataError(fmt::format("{}: non-finite vertex", path.string()));
     }
-    if (collector.all_colored) out.mesh.vertex_colors = std::move(collector.colors);
     const float extent = out.Bounds().sizes().maxCoeff();
     if (extent > params.max_extent || extent < params.min_extent) {
         throw DataError(fmt::format(

@@ -179,9 +179,13 @@ nlohmann::ordered_json PerceiveResultJson(
     return j;
 }
 
-PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& result) {
+namespace {
+
+// The labels cloud around `points` (the input's, copied or taken), with the layout of `input`.
+PointCloud LabelsCloud(std::vector<Eigen::Vector3f> points, const PointCloud& input,
+                       const PerceiveResult& result) {
     PointCloud labels;
-    labels.points = input.points;
+    labels.points = std::move(points);
     labels.width = input.width;
     labels.height = input.height;
     labels.sensor_origin = input.sensor_origin;
@@ -190,12 +194,29 @@ PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& re
     // `object` field beside it keeps readers of format 1 working.
     labels.labels = result.point_objects;
     ExtraField object{"object", 'U', 4, 1, {}};
-    object.data.resize(input.size() * 4);
+    object.data.resize(labels.points.size() * 4);
     std::memcpy(object.data.data(), result.point_objects.data(), object.data.size());
     ExtraField category{"category", 'U', 1, 1, {}};
     category.data.assign(result.point_categories.begin(), result.point_categories.end());
     labels.extra_fields = {std::move(object), std::move(category)};
     return labels;
+}
+
+}  // namespace
+
+PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& result) {
+    return LabelsCloud(input.points, input, result);
+}
+
+PointCloud PerceiveLabelsCloud(PointCloud&& input, const PerceiveResult& result) {
+    std::vector<Eigen::Vector3f> points = std::move(input.points);
+    PointCloud layout;
+    layout.width = input.width;
+    layout.height = input.height;
+    layout.sensor_origin = input.sensor_origin;
+    layout.sensor_orientation = input.sensor_orientation;
+    input = PointCloud();  // normals, curvature and the other fields are released here
+    return LabelsCloud(std::move(points), layout, result);
 }
 
 TriangleMesh PerceiveModelsMesh(const PerceiveResult& result) {

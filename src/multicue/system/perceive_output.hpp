@@ -29,6 +29,9 @@ nlohmann::ordered_json PerceiveResultJson(
 /// The labels cloud: the input's points and layout with the object id as `labels` (PCD field
 /// `label`, uint32) and extra fields object (uint32, the same id) and category (uint8).
 PointCloud PerceiveLabelsCloud(const PointCloud& input, const PerceiveResult& result);
+/// The same, taking the input's points instead of copying them: `input` is left empty (its
+/// normals and other fields released too), so a large frame is not held twice while it is written.
+PointCloud PerceiveLabelsCloud(PointCloud&& input, const PerceiveResult& result);
 
 /// All object models as one mesh, each coloured with the object's colour.
 TriangleMesh PerceiveModelsMesh(const PerceiveResult& result);
