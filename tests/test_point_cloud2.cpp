@@ -219,6 +219,34 @@ TEST(PointCloud2, SeparateColourChannels) {
     }
 }
 
+// A label field stored as float64 is read as integers; a value no uint32 holds is a format error
+// (converting it would be undefined behaviour).
+TEST(PointCloud2, FloatingPointLabelsMustFitTheLabelType) {
+    PointCloud2Message m;
+    m.width = 2;
+    m.fields = {{"x", 0, T(PointFieldType::kFloat32), 1},
+                {"y", 4, T(PointFieldType::kFloat32), 1},
+                {"z", 8, T(PointFieldType::kFloat32), 1},
+                {"label", 12, T(PointFieldType::kFloat64), 1}};
+    m.point_step = 20;
+    m.row_step = 40;
+    m.data.assign(40, 0);
+    const double labels[2] = {7.0, 3.0};
+    std::memcpy(m.data.data() + 12, &labels[0], 8);
+    std::memcpy(m.data.data() + 32, &labels[1], 8);
+    EXPECT_EQ(io::FromPointCloud2(m).labels, (std::vector<std::uint32_t>{7, 3}));
+    for (const double bad : {3.6e227, -2.0, std::nan("")}) {
+        std::memcpy(m.data.data() + 32, &bad, 8);
+        try {
+            io::FromPointCloud2(m, "msg");
+            ADD_FAILURE() << bad << " was read as a label";
+        } catch (const FormatError& e) {
+            EXPECT_NE(std::string(e.what()).find("field 'label' of point 1"), std::string::npos)
+                << e.what();
+        }
+    }
+}
+
 TEST(PointCloud2, EmptyMessageGivesAnEmptyCloud) {
     PointCloud2Message m = io::ToPointCloud2(PointCloud{});
     EXPECT_EQ(m.width, 0u);

@@ -1,7 +1,7 @@
 // The ROS side of the node test (C++17, as ROS 1's message headers need):
-//   ros_test_tool write-bag FRAMES_DIR OUT.bag TOPIC PERIOD_S
+//   ros_test_tool write-bag FRAMES_DIR OUT.bag TOPIC PERIOD_S [none|lz4|bz2]
 //       frames (ROS 1 serialised PointCloud2 files, frame_*.ros1, in name order) into a bag,
-//       PERIOD_S apart, each stamped with its recording time
+//       PERIOD_S apart, each stamped with its recording time; chunks compressed as given
 //   ros_test_tool collect OUT_DIR COUNT TIMEOUT_S
 //       subscribes to /multicue_node/{labelled_cloud,markers,result,stats}; writes each labelled
 //       cloud (<stamp>.labels.ros1), its markers (<stamp>.markers.json) and result
@@ -71,8 +71,10 @@ std::string Stamp(const ros::Time& t) {
 }
 
 int WriteBag(const fs::path& frames, const std::string& out, const std::string& topic,
-             double period) {
+             double period, const std::string& compression) {
     rosbag::Bag bag(out, rosbag::bagmode::Write);
+    if (compression == "lz4") bag.setCompression(rosbag::compression::LZ4);
+    if (compression == "bz2") bag.setCompression(rosbag::compression::BZ2);
     ros::Time t(1700000000, 0);
     for (const auto& f : FrameFiles(frames)) {
         sensor_msgs::PointCloud2 msg = ReadFrame(f);
@@ -235,8 +237,9 @@ int PublishBad(int argc, char** argv, const std::string& topic) {
 int main(int argc, char** argv) {
     const std::vector<std::string> args(argv + 1, argv + argc);
     try {
-        if (args.size() == 5 && args[0] == "write-bag")
-            return WriteBag(args[1], args[2], args[3], std::stod(args[4]));
+        if ((args.size() == 5 || args.size() == 6) && args[0] == "write-bag")
+            return WriteBag(args[1], args[2], args[3], std::stod(args[4]),
+                            args.size() == 6 ? args[5] : "none");
         if (args.size() == 4 && args[0] == "collect")
             return Collect(argc, argv, args[1], std::stoi(args[2]), std::stod(args[3]));
         if (args.size() == 2 && args[0] == "call-task") return CallTask(argc, argv, args[1]);

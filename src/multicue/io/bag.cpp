@@ -164,13 +164,33 @@ std::vector<std::uint8_t> Decompress(const std::string& compression,
     if (size > (std::uint64_t{1} << 34)) {
         throw FormatError(fmt::format("{}: implausible uncompressed size {}", source, size));
     }
-    std::vector<std::uint8_t> out(size);
+    // The output grows with what the data really decompresses to (a megabyte at a time, up to
+    // the claimed size): a damaged size field costs nothing until the data backs it.
+    std::vector<std::uint8_t> out;
+    const auto grow = [&]() {
+        const std::size_t old = out.size();
+        out.resize(old + static_cast<std::size_t>(std::min<std::uint64_t>(size - old, 1 << 20)));
+        return old;
+    };
     if (compression == "zstd") {
 #ifdef MULTICUE_HAVE_ZSTD
-        const std::size_t got = ZSTD_decompress(out.data(), out.size(), data.data(), data.size());
-        if (ZSTD_isError(got) || got != size) {
+        ZSTD_DStream* ds = ZSTD_createDStream();
+        if (ds == nullptr) throw FormatError(source + ": cannot create a zstd context");
+        ZSTD_inBuffer in{data.data(), data.size(), 0};
+        std::size_t ret = ZSTD_initDStream(ds);
+        std::size_t produced = 0;
+        while (!ZSTD_isError(ret) && produced < size) {
+            const std::size_t old = grow();
+            ZSTD_outBuffer ob{out.data() + old, out.size() - old, 0};
+            ret = ZSTD_decompressStream(ds, &ob, &in);
+            produced = old + ob.pos;
+            out.resize(produced);
+            if (ret == 0 || (ob.pos == 0 && in.pos == in.size)) break;
+        }
+        ZSTD_freeDStream(ds);
+        if (ZSTD_isError(ret) || produced != size) {
             throw FormatError(fmt::format("{}: corrupt zstd data ({})", source,
-                                          ZSTD_isError(got) ? ZSTD_getErrorName(got) : "size"));
+                                          ZSTD_isError(ret) ? ZSTD_getErrorName(ret) : "size"));
         }
         return out;
 #endif
@@ -180,18 +200,20 @@ std::vector<std::uint8_t> Decompress(const std::string& compression,
         if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) {
             throw FormatError(source + ": cannot create an lz4 context");
         }
-        std::size_t in_pos = 0, out_pos = 0, ret = 1;
-        while (ret != 0 && in_pos < data.size() && out_pos <= out.size()) {
-            std::size_t in_size = data.size() - in_pos, out_size = out.size() - out_pos;
-            ret = LZ4F_decompress(ctx, out.data() + out_pos, &out_size, data.data() + in_pos,
-                                  &in_size, nullptr);
+        std::size_t in_pos = 0, produced = 0, ret = 1;
+        while (ret != 0 && produced < size) {
+            const std::size_t old = grow();
+            std::size_t in_size = data.size() - in_pos, out_size = out.size() - old;
+            ret = LZ4F_decompress(ctx, out.data() + old, &out_size, data.data() + in_pos, &in_size,
+                                  nullptr);
+            produced = old + (LZ4F_isError(ret) ? 0 : out_size);
+            out.resize(produced);
             if (LZ4F_isError(ret)) break;
             in_pos += in_size;
-            out_pos += out_size;
             if (in_size == 0 && out_size == 0) break;
         }
         LZ4F_freeDecompressionContext(ctx);
-        if (LZ4F_isError(ret) || out_pos != size) {
+        if (LZ4F_isError(ret) || produced != size) {
             throw FormatError(fmt::format("{}: corrupt lz4 data", source));
         }
         return out;

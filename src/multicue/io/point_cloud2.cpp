@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <set>
+#include <type_traits>
 
 #include <fmt/format.h>
 
@@ -174,12 +175,14 @@ namespace {
 /// Reads the points of a checked message field by field; remembers the fields it used.
 struct MessageReader {
     const PointCloud2Message& m;
+    const std::string& source;
     bool swap = false;
     std::size_t n = 0;
     std::set<const PointField*> used;
 
-    explicit MessageReader(const PointCloud2Message& message)
+    MessageReader(const PointCloud2Message& message, const std::string& source_name)
         : m(message),
+          source(source_name),
           swap(message.is_bigendian != (std::endian::native == std::endian::big)),
           n(std::size_t{message.width} * message.height) {}
 
@@ -212,8 +215,25 @@ struct MessageReader {
         const PointField* f = Single(name);
         if (f == nullptr) return;
         out.resize(n);
-        for (std::size_t i = 0; i < n; ++i)
-            out[i] = ReadElement<T>(Point(i) + f->offset, f->datatype, swap);
+        const auto type = static_cast<PointFieldType>(f->datatype);
+        if (std::is_integral_v<T> &&
+            (type == PointFieldType::kFloat32 || type == PointFieldType::kFloat64)) {
+            // A floating-point field read as integers: each value must fit the integer type.
+            const double lo = static_cast<double>(std::numeric_limits<T>::lowest()) - 1.0;
+            const double hi = static_cast<double>(std::numeric_limits<T>::max()) + 1.0;
+            for (std::size_t i = 0; i < n; ++i) {
+                const double v = ReadElement<double>(Point(i) + f->offset, f->datatype, swap);
+                if (!(v > lo && v < hi)) {
+                    throw FormatError(fmt::format(
+                        "{}: field '{}' of point {} holds {}, which is no {}-bit integer value",
+                        source, name, i, v, 8 * sizeof(T)));
+                }
+                out[i] = static_cast<T>(v);
+            }
+        } else {
+            for (std::size_t i = 0; i < n; ++i)
+                out[i] = ReadElement<T>(Point(i) + f->offset, f->datatype, swap);
+        }
         used.insert(f);
     }
     /// Packed rgb/rgba (4 bytes whatever the datatype says: PCL declares rgb float32, rgba
@@ -284,7 +304,7 @@ struct MessageReader {
 
 PointCloud FromPointCloud2(const PointCloud2Message& m, const std::string& source) {
     CheckLayout(m, source);
-    MessageReader reader(m);
+    MessageReader reader(m, source);
     PointCloud cloud;
     if (!reader.Vec3(cloud.points, "x", "y", "z")) {
         std::string names;
