@@ -14,7 +14,10 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "multicue/core/exceptions.hpp"
+#include "multicue/io/file_utils.hpp"
 #include "multicue/io/point_cloud_io.hpp"
 #include "multicue/mapping/furniture_detection.hpp"
 #include "multicue/sim/furniture_scenes.hpp"
@@ -282,6 +285,47 @@ TEST(MapFurnitureCli, RefusesBadParametersAndScansWithoutASensorPose) {
     EXPECT_NE(Cli("map furniture " + (dir / "absent.pcd").string() + " --model " + model +
                   " --out " + out),
               0);
+    std::filesystem::remove_all(dir);
+}
+
+// train furniture writes a model, detect furniture reads it and writes result.json, models.ply
+// and report.html; a missing model is an error, not a training run.
+TEST(DetectFurnitureCli, TrainThenDetectWritesTheResultAndTheReport) {
+    const auto dir = std::filesystem::temp_directory_path() / "multicue_test_detect_furniture";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    const std::string rooms = (dir / "rooms").string(), model = (dir / "m.mcfm").string();
+    ASSERT_EQ(Cli("simulate furniture --out " + rooms +
+                  " --rooms 1 --heads 1 --types office --split procedural -q"),
+              0);
+    const std::string scan = (dir / "rooms" / "room_00_scan_00.pcd").string();
+    EXPECT_NE(
+        Cli("detect furniture " + scan + " --model " + model + " --out " + (dir / "out").string()),
+        0);  // no model yet: refused, nothing trained
+    EXPECT_FALSE(std::filesystem::exists(model));
+    EXPECT_NE(Cli("train furniture --out " + model + " --views 0"), 0);
+    EXPECT_NE(Cli("train furniture --out " + model + " --features some"), 0);
+    EXPECT_NE(Cli("train --views 1"), 0);  // the part-graph training still needs --out
+    ASSERT_EQ(Cli("train furniture --out " + model +
+                  " --meshes '' --kitchen '' --procedural 1 --views 4 --words 8 --cad-spacing 0.1 "
+                  "-q"),
+              0);
+    const FurnitureModel m = FurnitureModel::Load(model);
+    EXPECT_EQ(m.classes().size(), 4u);
+    ASSERT_EQ(Cli("detect furniture " + scan + " --model " + model + " --out " +
+                  (dir / "out").string() + " -q"),
+              0);
+    const auto result = nlohmann::json::parse(io::ReadFileBytes(dir / "out" / "result.json"));
+    EXPECT_TRUE(result["detections"].is_array());
+    EXPECT_TRUE(result["rejected"].is_array());
+    EXPECT_GT(result["detections"].size() + result["rejected"].size(), 0u);
+    const std::string report = io::ReadFileBytes(dir / "out" / "report.html");
+    EXPECT_NE(report.find("<svg"), std::string::npos);
+    EXPECT_NE(report.find("</html>"), std::string::npos);
+    ASSERT_EQ(Cli("detect furniture " + scan + " --model " + model + " --out " +
+                  (dir / "out2").string() + " --no-report -q"),
+              0);
+    EXPECT_FALSE(std::filesystem::exists(dir / "out2" / "report.html"));
     std::filesystem::remove_all(dir);
 }
 

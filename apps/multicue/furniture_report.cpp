@@ -103,8 +103,9 @@ std::string FurnitureReportPage(const nlohmann::json& doc,
         }
         const float x = d["centre"][0], y = d["centre"][1];
         svg += fmt::format(
-            "<text x=\"{:.3f}\" y=\"{:.3f}\" font-size=\"0.18\" fill=\"{}\">{}{}</text>\n", x, -y,
-            ClassColour(cls), Escape(cls), rejected ? " (rejected)" : "");
+            "<text x=\"{:.3f}\" y=\"{:.3f}\" font-size=\"{}\" fill=\"{}\"{}>{}</text>\n", x, -y,
+            rejected ? 0.1 : 0.18, ClassColour(cls), rejected ? " fill-opacity=\"0.6\"" : "",
+            Escape(cls));
         rows += fmt::format(
             "<tr{}><td>{}</td><td>{:.2f}, "
             "{:.2f}</td><td>{}</td><td>{:.2f}</td><td>{}</td><td>{}</td>"
