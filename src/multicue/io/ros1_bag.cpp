@@ -154,11 +154,14 @@ class Ros1Bag : public BagReader {
         read(len, 4, "header length cut off");
         const std::uint64_t header_len = U32(len);
         if (header_len > kMaxHeader) Fail(record_, fmt::format("header of {} bytes", header_len));
+        if (header_len > size_ - pos_) Fail(record_, "header longer than the file");
         header_.resize(header_len);
         read(header_.data(), header_len, "header longer than the file");
         read(len, 4, "data length cut off");
-        data_.resize(U32(len));
-        read(data_.data(), data_.size(), "data longer than the file");
+        const std::uint64_t data_len = U32(len);
+        if (data_len > size_ - pos_) Fail(record_, "data longer than the file");  // before resize
+        data_.resize(data_len);
+        read(data_.data(), data_len, "data longer than the file");
         fields_.emplace(header_, failer(record_));
     }
 
