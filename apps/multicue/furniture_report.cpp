@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "multicue/system/report_page.hpp"
+
 namespace multicue::cli {
 namespace {
 
@@ -15,29 +17,6 @@ const char* ClassColour(const std::string& name) {
     if (name == "cabinet") return "#2ca02c";
     if (name == "sideboard") return "#9467bd";
     return "#7f7f7f";
-}
-
-std::string Escape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        switch (c) {
-            case '<':
-                out += "&lt;";
-                break;
-            case '>':
-                out += "&gt;";
-                break;
-            case '&':
-                out += "&amp;";
-                break;
-            case '"':
-                out += "&quot;";
-                break;
-            default:
-                out += c;
-        }
-    }
-    return out;
 }
 
 // The corners of an oriented box's footprint: centre (x, y), size (sx, sy), yaw [deg].
@@ -99,22 +78,22 @@ std::string FurnitureReportPage(const nlohmann::json& doc,
                 "<polygon points=\"{}\" fill=\"{}\" fill-opacity=\"{}\" stroke=\"{}\" "
                 "stroke-width=\"0.03\"{}><title>{}</title></polygon>\n",
                 Footprint(d["box"]), ClassColour(cls), rejected ? 0.0 : 0.3, ClassColour(cls),
-                rejected ? " stroke-dasharray=\"0.1 0.06\"" : "", Escape(cls));
+                rejected ? " stroke-dasharray=\"0.1 0.06\"" : "", HtmlEscape(cls));
         }
         const float x = d["centre"][0], y = d["centre"][1];
         svg += fmt::format(
             "<text x=\"{:.3f}\" y=\"{:.3f}\" font-size=\"{}\" fill=\"{}\"{}>{}</text>\n", x, -y,
             rejected ? 0.1 : 0.18, ClassColour(cls), rejected ? " fill-opacity=\"0.6\"" : "",
-            Escape(cls));
+            HtmlEscape(cls));
         rows += fmt::format(
             "<tr{}><td>{}</td><td>{:.2f}, "
             "{:.2f}</td><td>{}</td><td>{:.2f}</td><td>{}</td><td>{}</td>"
             "</tr>\n",
-            rejected ? " class=\"rejected\"" : "", Escape(cls), x, y,
+            rejected ? " class=\"rejected\"" : "", HtmlEscape(cls), x, y,
             d.contains("yaw_deg") ? fmt::format("{:.0f}", static_cast<float>(d["yaw_deg"])) : "-",
             static_cast<float>(d.value("score", 0.0f)),
             d.contains("coverage") ? fmt::format("{:.2f}", static_cast<float>(d["coverage"])) : "-",
-            Escape(d.value("rejection", std::string())));
+            HtmlEscape(d.value("rejection", std::string())));
     };
     for (const auto& d : doc["detections"]) draw(d, false);
     for (const auto& d : doc["rejected"]) draw(d, true);
@@ -130,7 +109,7 @@ std::string FurnitureReportPage(const nlohmann::json& doc,
         "</th><th>centre [m]</th><th>yaw [deg]</th><th>score</th><th>coverage</th><th>rejected "
         "because</th></tr>\n{}</table>\n</body></html>\n",
         views.size(), doc["detections"].size(), doc["rejected"].size(),
-        Escape(doc.value("model", std::string())), svg, rows);
+        HtmlEscape(doc.value("model", std::string())), svg, rows);
 }
 
 }  // namespace multicue::cli
