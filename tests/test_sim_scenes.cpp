@@ -122,6 +122,12 @@ TEST(SimMesh, PlyMeshesAreReadWithoutAssimp) {
     EXPECT_FLOAT_EQ(quad.mesh.vertices[3].x(), 0.2f);
     EXPECT_FALSE(quad.mesh.HasVertexColors());
     EXPECT_THROW(LoadMesh(dir / "short.ply"), FormatError);
+    // A .ply name with a damaged first line is refused by multicue's reader (Assimp's looped).
+    WriteText(dir / "damaged.ply", "plx\n" + head.substr(4));
+    EXPECT_THROW(LoadMesh(dir / "damaged.ply"), FormatError);
+    // PLY content behind another name is still read as PLY.
+    WriteText(dir / "quad.mesh", head + "4 0 1 3 2\n");
+    EXPECT_EQ(LoadMesh(dir / "quad.mesh").mesh.triangles.size(), 3u);
 }
 
 TEST(SimMesh, LibraryLabelsAreChecked) {

@@ -1,5 +1,6 @@
 #include "multicue/sim/assimp_read.hpp"
 
+#include <assimp/BaseImporter.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
@@ -9,8 +10,16 @@
 
 namespace multicue::sim::assimp_read {
 
+using Assimp::BaseImporter;
+
 const aiScene* ReadScene(Assimp::Importer& importer, const std::filesystem::path& path,
                          unsigned post_steps) {
+    // Assimp never reads PLY here (its importer crashed, asserted and looped on damaged files;
+    // LoadMesh reads PLY with multicue's reader): its PLY loader is taken out of this importer,
+    // so that a PLY file behind another name is refused instead.
+    if (BaseImporter* ply = importer.GetImporter("ply"); ply != nullptr) {
+        if (importer.UnregisterLoader(ply) == aiReturn_SUCCESS) delete ply;
+    }
     const aiScene* read = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
     if (read == nullptr || read->mRootNode == nullptr) {
         throw FormatError(

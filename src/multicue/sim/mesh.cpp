@@ -208,7 +208,9 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
         throw IoError(fmt::format("{}: no such mesh file", path.string()));
     }
     PartMesh out;
-    if (IsPlyFile(path)) {
+    std::string ext = path.extension().string();
+    for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".ply" || IsPlyFile(path)) {
         out = ReadPlyPartMesh(path, params.scale);
     } else {
         RefuseCollada(path);
