@@ -635,7 +635,9 @@ TEST(PerceiveOutput, LabelsCloudTakingThePointsEqualsTheCopy) {
     }
     for (std::size_t i = 0; i < taken.size(); ++i) {
         ASSERT_EQ(taken.IsFinite(i), copied.IsFinite(i));
-        if (taken.IsFinite(i)) ASSERT_EQ(taken.points[i], copied.points[i]);
+        if (taken.IsFinite(i)) {
+            ASSERT_EQ(taken.points[i], copied.points[i]);
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file Reading recorded ROS messages: one interface over ROS 2 bags (rosbag2's SQLite `.db3`
 /// and MCAP `.mcap` storage, read here without any ROS library) and ROS 1 `.bag` files (read
-/// with librosbag by io/ros1_bag.hpp when the build has it). Messages come as their serialised
+/// by io/ros1_bag.hpp when the build has it). Messages come as their serialised
 /// bytes with the topic's type and serialisation; DecodePointCloud2 turns a point cloud message
 /// into a PointCloud2Message whatever the source.
 
