@@ -228,7 +228,7 @@ class Ros1Bag : public BagReader {
         const std::string source = fmt::format("{}: chunk at byte {}", name_, record_);
         if (*compression == "none") {
             if (size != data_.size()) Fail(record_, "chunk size differs from its data");
-            chunk_ = data_;
+            chunk_.swap(data_);  // data_ is refilled by the next record
         } else if (*compression == "lz4") {
             chunk_ = detail::Decompress("lz4", data_, size, source);
         } else if (*compression == "bz2") {

@@ -13,6 +13,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/io/file_utils.hpp"
 #include "multicue/io/ply.hpp"
 #include "multicue/sim/assimp_read.hpp"
 
@@ -185,13 +186,12 @@ PartMesh ReadPlyPartMesh(const std::filesystem::path& path, float scale) {
 // arrays hold), and none of the mesh libraries uses COLLADA: it is refused, by its extension and
 // by its content, whatever the file is called.
 void RefuseCollada(const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string ext = io::LowerExtension(path);
     std::ifstream in(path, std::ios::binary);
     std::string head(4096, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
-    if (ext == ".dae" || ext == ".zae" || head.find("<COLLADA") != std::string::npos) {
+    if (ext == "dae" || ext == "zae" || head.find("<COLLADA") != std::string::npos) {
         throw FormatError(fmt::format(
             "{}: COLLADA meshes are not read; convert the mesh to OBJ or PLY", path.string()));
     }
@@ -208,9 +208,7 @@ PartMesh LoadMesh(const std::filesystem::path& path, const MeshLoadParams& param
         throw IoError(fmt::format("{}: no such mesh file", path.string()));
     }
     PartMesh out;
-    std::string ext = path.extension().string();
-    for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == ".ply" || IsPlyFile(path)) {
+    if (io::LowerExtension(path) == "ply" || IsPlyFile(path)) {
         out = ReadPlyPartMesh(path, params.scale);
     } else {
         RefuseCollada(path);
