@@ -4,7 +4,7 @@
     scripts/kill_test.py --cli build/multicue [--kills 50] [--jobs train,extract,...] [--seed 1]
                          [--work DIR] [--json report.json]
 
-For each job (train, extract, simulate, import, run, classifier) it prepares inputs, runs the job
+For each job (train, extract, simulate, import, run, classifier, convert, furniture, detect) it prepares inputs, runs the job
 once to completion for the reference output and its duration, then N times: puts the previous
 output (another complete output) in place, starts the job, kills its process with SIGKILL at a
 uniformly random moment within the reference duration, and checks
@@ -389,7 +389,101 @@ class Convert(Job):
         return self.check_old_or_new(out, ref, self.old)
 
 
-JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier, Convert]}
+class Furniture(Job):
+    """train furniture on procedural pieces only (no shared data needed)."""
+    name = "furniture"
+
+    def cmd(self, out, seed=1):
+        return [self.cli, "--threads", "2", "train", "furniture", "--out", out / "model.mcfm",
+                "--meshes", "", "--kitchen", "", "--procedural", "3", "--views", "3", "--words",
+                "10", "--seed", seed, "-q"]
+
+    def prepare(self):
+        self.old = self.work / "old"
+        self.old.mkdir(exist_ok=True)
+        sh(self.cmd(self.old, seed=2))
+
+    def place_old(self, out):
+        super().place_old(out)
+        shutil.copy(self.old / "model.mcfm", out / "model.mcfm")
+
+    def outputs(self):
+        return ["model.mcfm"]
+
+    def check(self, out, ref):
+        return self.check_old_or_new(out, ref, self.old)
+
+
+class Detect(Job):
+    """detect furniture: three outputs (result.json, models.ply, report.html), each written
+    atomically; the previous outputs come from a model trained with another seed."""
+    name = "detect"
+
+    def prepare(self):
+        sh([self.cli, "--threads", "2", "simulate", "furniture", "--out", self.work / "scans",
+            "--rooms", "1", "--heads", "2", "--split", "procedural", "--furniture", "",
+            "--kitchen", "", "-q"])
+        for seed in (1, 2):
+            sh([self.cli, "--threads", "2", "train", "furniture", "--out",
+                self.work / f"model{seed}.mcfm", "--meshes", "", "--kitchen", "", "--procedural",
+                "3", "--views", "3", "--words", "10", "--seed", seed, "-q"])
+        self.old = self.work / "old"
+        self.old.mkdir(exist_ok=True)
+        sh(self.cmd(self.old, seed=2))
+
+    def cmd(self, out, seed=1):
+        return [self.cli, "--threads", "2", "detect", "furniture",
+                *sorted((self.work / "scans").glob("*.pcd")), "--model",
+                self.work / f"model{seed}.mcfm", "--out", out, "-q"]
+
+    def place_old(self, out):
+        super().place_old(out)
+        for f in self.outputs():
+            shutil.copy(self.old / f, out / f)
+
+    def outputs(self):
+        return ["result.json", "models.ply", "report.html"]
+
+    @staticmethod
+    def same_result(a, b):  # result.json without its stage times
+        def load(p):
+            if not p.is_file():
+                return None
+            try:
+                d = json.loads(p.read_text())
+            except ValueError:
+                return None
+            d.pop("timing_ms", None)
+            return d
+        da = load(a)
+        return da is not None and da == load(b)
+
+    def check_equal_files(self, out, ref):
+        if not self.same_result(out / "result.json", ref / "result.json"):
+            raise Failure("detect: result.json differs from the reference after a full run")
+        for f in self.outputs()[1:]:
+            if not same(out / f, ref / f):
+                raise Failure(f"detect: {f} differs from the reference after a full run")
+
+    def check(self, out, ref):
+        states = []
+        for f in self.outputs():
+            p = out / f
+            if not p.exists():
+                raise Failure(f"detect: {f} is missing (the previous one was lost)")
+            if f == "result.json":
+                new, old = self.same_result(p, ref / f), self.same_result(p, self.old / f)
+            else:
+                new, old = same(p, ref / f), same(p, self.old / f)
+            if not (new or old):
+                raise Failure(f"detect: {f} is neither the previous nor the new file "
+                              f"({p.stat().st_size} bytes)")
+            states.append("new" if new else "old")
+        return states
+
+
+JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier, Convert,
+                            Furniture, Detect]}
 
 
 def run_job(job, kills, rng, report):

@@ -10,6 +10,8 @@
 #include <iterator>
 #include <string>
 
+#include "test_paths.hpp"
+
 namespace multicue::test {
 
 struct CliResult {
@@ -19,7 +21,7 @@ struct CliResult {
 
 /// `args` are appended to the tool's path as given (quote paths with spaces yourself).
 inline CliResult RunCli(const std::string& args) {
-    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>&1";
+    const std::string command = std::string(CliPath()) + " " + args + " 2>&1";
     CliResult r;
     FILE* pipe = ::popen(command.c_str(), "r");
     if (pipe == nullptr) return r;

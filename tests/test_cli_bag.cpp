@@ -37,7 +37,7 @@ struct BagFixture {
     std::vector<io::PointCloud2Message> messages;
 
     explicit BagFixture(int frames) {
-        for (const auto& cloud : test::BagTestFrames(frames, MULTICUE_SHARED_DATA_DIR)) {
+        for (const auto& cloud : test::BagTestFrames(frames, test::SharedDataDir())) {
             auto msg = io::ToPointCloud2(cloud);
             msg.stamp = {1700000000 + static_cast<std::int64_t>(messages.size()), 250000000};
             msg.frame_id = "camera_rgb_optical_frame";

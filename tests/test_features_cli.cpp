@@ -17,7 +17,7 @@ namespace multicue {
 namespace {
 
 int RunCli(const std::string& args) {
-    const std::string command = std::string(MULTICUE_CLI_PATH) + " " + args + " 2>/dev/null";
+    const std::string command = std::string(test::CliPath()) + " " + args + " 2>/dev/null";
     const int status = std::system(command.c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }

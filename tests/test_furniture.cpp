@@ -23,6 +23,7 @@
 #include "multicue/sim/furniture_scenes.hpp"
 #include "multicue/sim/raycaster.hpp"
 #include "multicue/training/furniture_training.hpp"
+#include "test_paths.hpp"
 
 namespace multicue {
 namespace {
@@ -259,7 +260,7 @@ TEST(FurnitureDetection, EmptyScansGiveNoDetections) {
 /// Exit status of the CLI with `args`.
 int Cli(const std::string& args) {
     const int rc =
-        std::system((std::string(MULTICUE_CLI_PATH) + " " + args + " 2>/dev/null").c_str());
+        std::system((std::string(test::CliPath()) + " " + args + " 2>/dev/null").c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 

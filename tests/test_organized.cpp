@@ -14,7 +14,7 @@
 namespace multicue {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+using test::kNaN;
 
 // Organized cloud of a pinhole camera (focal length f, principal point at the image centre)
 // looking at a wavy surface 0.8-1.6 m away; about 10% of the pixels are invalid (NaN).

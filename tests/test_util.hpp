@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -12,14 +13,17 @@
 #include <gtest/gtest.h>
 
 #include "multicue/core/point_cloud.hpp"
+#include "test_paths.hpp"
 
 namespace multicue::test {
 
+inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
 /// Path of a file under the shared data folder; skips the test if the folder is absent.
 inline std::filesystem::path SharedData(const std::string& relative) {
-    return std::filesystem::path(MULTICUE_SHARED_DATA_DIR) / relative;
+    return std::filesystem::path(SharedDataDir()) / relative;
 }
-inline bool HasSharedData() { return std::filesystem::is_directory(MULTICUE_SHARED_DATA_DIR); }
+inline bool HasSharedData() { return std::filesystem::is_directory(SharedDataDir()); }
 
 /// A fresh, empty temporary folder, removed when the object goes out of scope.
 class TempDir {

@@ -15,7 +15,7 @@
 namespace multicue {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+using test::kNaN;
 using Coord = std::tuple<int, int, int>;
 
 // Reference: an ordered map from voxel coordinates to point indices, keyed (y, x, z) to iterate

@@ -18,6 +18,7 @@
 
 #include "cli_util.hpp"
 #include "commands.hpp"
+#include "default_paths.hpp"
 #include "furniture_report.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
@@ -34,8 +35,8 @@ struct MapFurnitureOptions {
     std::vector<std::string> scans;
     std::string model;
     std::string out;
-    std::string furniture = MULTICUE_FURNITURE_MODELS_DIR;
-    std::string kitchen = MULTICUE_KITCHEN_LIBRARY_DIR;
+    std::string furniture = DefaultFurnitureDir();
+    std::string kitchen = DefaultKitchenDir();
     float threshold_scale = 1.0f;
     float min_coverage = 0.5f;
     float max_free_share = 0.4f;
@@ -216,8 +217,8 @@ void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
 
 struct TrainFurnitureOptions {
     std::string out;
-    std::string furniture = MULTICUE_FURNITURE_MODELS_DIR;
-    std::string kitchen = MULTICUE_KITCHEN_LIBRARY_DIR;
+    std::string furniture = DefaultFurnitureDir();
+    std::string kitchen = DefaultKitchenDir();
     std::string split = "tune";
     std::string features = "full";
     training::FurnitureTrainingOptions t;

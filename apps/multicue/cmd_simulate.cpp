@@ -47,7 +47,6 @@ struct SimulateOptions {
 };
 
 // A pose as rows of a 4x4 matrix (the float values, exactly, as doubles).
-json Matrix(const Eigen::Isometry3f& T) { return TransformJson(T.cast<double>()); }
 
 json SensorJson(const std::string& sensor, const sim::KinectParams& k, const sim::LaserParams& l,
                 const sim::TofParams& t) {
@@ -364,7 +363,7 @@ class Simulator {
             const PointCloud cloud = Scan(caster, pose, sim::SubSeed(seed, 100 + v));
             const std::string name = fmt::format("{}_{:04}_view_{:02}.pcd", prefix, i, v);
             io::WritePointCloud(dir / name, cloud, io::Encoding::kCompressed);
-            frames.push_back({{"file", name}, {"T_world_sensor", Matrix(pose)}});
+            frames.push_back({{"file", name}, {"T_world_sensor", TransformJson(pose)}});
             ++frames_;
             progress.Advance();
         }

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "default_paths.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/io/file_utils.hpp"
@@ -27,8 +28,8 @@ namespace {
 
 struct SimulateFurnitureOptions {
     std::string out;
-    std::string furniture = MULTICUE_FURNITURE_MODELS_DIR;
-    std::string kitchen = MULTICUE_KITCHEN_LIBRARY_DIR;
+    std::string furniture = DefaultFurnitureDir();
+    std::string kitchen = DefaultKitchenDir();
     std::string split = "test";
     std::vector<std::string> types = {"office", "seminar", "kitchen"};
     int rooms = 3;

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "default_paths.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/io/file_utils.hpp"
@@ -24,10 +25,6 @@
 #include "multicue/sim/sensors.hpp"
 #include "registration_json.hpp"
 
-#ifndef MULTICUE_KITCHEN_MODELS_DIR
-#define MULTICUE_KITCHEN_MODELS_DIR "../shared/data/meshes/kitchen"
-#endif
-
 namespace multicue::cli {
 namespace {
 
@@ -35,7 +32,7 @@ using nlohmann::json;
 
 struct KitchenOptions {
     std::string out;
-    std::string models = MULTICUE_KITCHEN_MODELS_DIR;
+    std::string models = DefaultKitchenDir();
     std::uint64_t seed = 1;
     int kitchens = 10;
     int views = 3;        // Kinect views per kitchen
@@ -48,7 +45,6 @@ struct KitchenOptions {
 };
 
 // A pose as rows of a 4x4 matrix (the float values, exactly, as doubles).
-json Matrix(const Eigen::Isometry3f& T) { return TransformJson(T.cast<double>()); }
 
 json Vec(const Eigen::Vector3f& v) { return json::array({v.x(), v.y(), v.z()}); }
 
@@ -63,7 +59,7 @@ json KitchenJson(const sim::KitchenScene& k) {
                           {"run", inst.run},
                           {"scale", inst.model->scale},
                           {"extent", Vec(inst.model->bounds.sizes())},
-                          {"T_world_model", Matrix(inst.T_world_model)}});
+                          {"T_world_model", TransformJson(inst.T_world_model)}});
     }
     json joints = json::array();
     for (const auto& j : k.joints) {
@@ -173,7 +169,7 @@ class KitchenSimulator {
         ++frames_;
         return {{"file", name},
                 {"sensor", laser ? "laser" : "kinect"},
-                {"T_world_sensor", Matrix(pose)}};
+                {"T_world_sensor", TransformJson(pose)}};
     }
 
     void WriteKitchen(const std::filesystem::path& dir, int i, std::uint64_t seed,

@@ -96,17 +96,17 @@ nlohmann::ordered_json PerceiveMessage(BagRun& run, const io::BagMessage& messag
         entry["frame_id"] = msg.frame_id;
         entry["folder"] = folder;
         PerceiveResult result = Perceive(cloud, run.pipeline, run.models);
-        auto json = PerceiveResultJson(source, result, {{"load", load_ms}});
-        json["message"] = {{"bag", bag_name},          {"topic", run.options.topic},
-                           {"index", index},           {"stamp", msg.stamp.ToString()},
-                           {"frame_id", msg.frame_id}, {"log_time_ns", message.log_time_ns}};
+        auto out = PerceiveResultJson(source, result, {{"load", load_ms}});
+        out["message"] = {{"bag", bag_name},          {"topic", run.options.topic},
+                          {"index", index},           {"stamp", msg.stamp.ToString()},
+                          {"frame_id", msg.frame_id}, {"log_time_ns", message.log_time_ns}};
         const fs::path dir = run.options.out / folder;
         if (run.reports != nullptr) RemoveStaleReport(dir);
-        WritePerceiveOutputs(dir, json, PerceiveLabelsCloud(cloud, result),
+        WritePerceiveOutputs(dir, out, PerceiveLabelsCloud(cloud, result),
                              PerceiveModelsMesh(result));
         entry["objects"] = result.objects.size();
         if (run.reports != nullptr)
-            run.reports->Submit(dir, std::move(cloud), std::move(result), std::move(json));
+            run.reports->Submit(dir, std::move(cloud), std::move(result), std::move(out));
     } catch (const FormatError& e) {
         entry["skipped"] = e.what();
     } catch (const DataError& e) {

@@ -13,6 +13,9 @@ namespace multicue::cli {
 
 /// A 4x4 matrix as rows.
 nlohmann::json TransformJson(const Eigen::Isometry3d& T);
+inline nlohmann::json TransformJson(const Eigen::Isometry3f& T) {
+    return TransformJson(T.cast<double>());
+}
 /// The inverse of TransformJson; throws FormatError unless it is a finite rigid 4x4 matrix.
 Eigen::Isometry3d TransformFromJson(const nlohmann::json& rows);
 /// `M` as a rigid transform: throws InvalidArgument (naming `what`) unless it is finite with an
