@@ -89,12 +89,12 @@ void Run(const RegisterOptions& o, int threads) {
     params.method = method;
     params.num_threads = threads;
     const RegistrationResult r = Register(source, target, params, init);
-    nlohmann::ordered_json json = RegistrationJson(r);
-    json["source"] = o.source;
-    json["target"] = o.target;
-    json["method"] = RegistrationMethodName(method);
-    json["resolution"] = params.preprocess.voxel_size;
-    const std::string text = json.dump(1) + "\n";
+    nlohmann::ordered_json result = RegistrationJson(r);
+    result["source"] = o.source;
+    result["target"] = o.target;
+    result["method"] = RegistrationMethodName(method);
+    result["resolution"] = params.preprocess.voxel_size;
+    const std::string text = result.dump(1) + "\n";
     io::WriteFileAtomically(o.out, [&](std::ostream& s) { s << text; });
     if (!r.converged) {
         throw DataError(

@@ -27,7 +27,7 @@
 namespace multicue::cli {
 namespace {
 
-using nlohmann::json;
+using Json = nlohmann::json;
 
 struct SimulateOptions {
     std::string mode;
@@ -48,7 +48,7 @@ struct SimulateOptions {
 
 // A pose as rows of a 4x4 matrix (the float values, exactly, as doubles).
 
-json SensorJson(const std::string& sensor, const sim::KinectParams& k, const sim::LaserParams& l,
+Json SensorJson(const std::string& sensor, const sim::KinectParams& k, const sim::LaserParams& l,
                 const sim::TofParams& t) {
     if (sensor == "kinect") {
         return {{"type", "kinect"},
@@ -99,8 +99,8 @@ json SensorJson(const std::string& sensor, const sim::KinectParams& k, const sim
             {"frame", "camera optical frame (x right, y down, z forward)"}};
 }
 
-json ObjectsJson(const sim::Scene& scene) {
-    json objects = json::array();
+Json ObjectsJson(const sim::Scene& scene) {
+    Json objects = Json::array();
     for (const auto& o : scene.objects) {
         const Eigen::Quaternionf q(o.T_world_object.linear());
         const Eigen::Vector3f t = o.T_world_object.translation();
@@ -275,7 +275,7 @@ class Simulator {
                       "label (mOSD), category (uint8, index into categories), "
                       "part (uint16, 1 + index into the object's parts; 0 none)"},
                      {"complete", false},
-                     {"scenes", json::array()}};
+                     {"scenes", Json::array()}};
     }
 
     // Objects mode: one job per library mesh (at most --count) or --count procedural objects;
@@ -357,7 +357,7 @@ class Simulator {
         const std::string prefix = o_.mode == "objects" ? "object"
                                    : o_.mode == "rooms" ? "room"
                                                         : "scene";
-        json frames = json::array();
+        Json frames = Json::array();
         for (std::size_t v = 0; v < poses.size(); ++v) {
             const auto pose = SensorPose(scene, poses[v]);
             const PointCloud cloud = Scan(caster, pose, sim::SubSeed(seed, 100 + v));
@@ -368,7 +368,7 @@ class Simulator {
             progress.Advance();
         }
         const auto c = scene.support_center;
-        json entry = {{"id", i},
+        Json entry = {{"id", i},
                       {"seed", seed},
                       {"support",
                        {{"center", {c.x(), c.y(), c.z()}},
@@ -391,7 +391,7 @@ class Simulator {
     sim::KinectParams kinect_;
     sim::LaserParams laser_;
     sim::TofParams tof_;
-    json manifest_;
+    Json manifest_;
     std::size_t frames_ = 0;
 };
 

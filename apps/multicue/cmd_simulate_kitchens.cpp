@@ -28,7 +28,7 @@
 namespace multicue::cli {
 namespace {
 
-using nlohmann::json;
+using Json = nlohmann::json;
 
 struct KitchenOptions {
     std::string out;
@@ -46,10 +46,10 @@ struct KitchenOptions {
 
 // A pose as rows of a 4x4 matrix (the float values, exactly, as doubles).
 
-json Vec(const Eigen::Vector3f& v) { return json::array({v.x(), v.y(), v.z()}); }
+Json Vec(const Eigen::Vector3f& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
-json KitchenJson(const sim::KitchenScene& k) {
-    json models = json::array();
+Json KitchenJson(const sim::KitchenScene& k) {
+    Json models = Json::array();
     for (std::size_t i = 0; i < k.instances.size(); ++i) {
         const auto& inst = k.instances[i];
         models.push_back({{"name", inst.name},
@@ -61,7 +61,7 @@ json KitchenJson(const sim::KitchenScene& k) {
                           {"extent", Vec(inst.model->bounds.sizes())},
                           {"T_world_model", TransformJson(inst.T_world_model)}});
     }
-    json joints = json::array();
+    Json joints = Json::array();
     for (const auto& j : k.joints) {
         const auto& inst = k.instances[static_cast<std::size_t>(j.instance)];
         const auto& aj = inst.model->joints[static_cast<std::size_t>(j.joint)];
@@ -79,7 +79,7 @@ json KitchenJson(const sim::KitchenScene& k) {
              {"axis_point", Vec(j.axis_point)},
              {"axis_direction", Vec(j.axis_direction)}});
     }
-    json runs = json::array();
+    Json runs = Json::array();
     for (const auto& r : k.runs) {
         runs.push_back({{"origin", Vec(r.origin)},
                         {"tangent", Vec(r.tangent)},
@@ -125,7 +125,7 @@ class KitchenSimulator {
                       "(uint16, 1 + link of the model's URDF), joint (uint16, 1 + index into "
                       "joints)"},
                      {"complete", false},
-                     {"kitchens", json::array()}};
+                     {"kitchens", Json::array()}};
         const int per_kitchen = (UseKinect() ? o_.views : 0) + (UseLaser() ? o_.laser_views : 0);
         const int opened = o_.open_doors ? o_.open_per_kitchen * (UseKinect() + UseLaser()) : 0;
         Progress progress(
@@ -158,7 +158,7 @@ class KitchenSimulator {
     bool UseKinect() const { return o_.sensor != "laser"; }
     bool UseLaser() const { return o_.sensor != "kinect"; }
 
-    json Scan(const std::filesystem::path& dir, const std::string& name,
+    Json Scan(const std::filesystem::path& dir, const std::string& name,
               const sim::KitchenScene& kitchen, const sim::RayCaster& caster, bool laser,
               const Eigen::Isometry3f& pose, std::uint64_t seed) {
         PointCloud cloud = laser ? sim::ScanLaser(caster, pose, laser_, seed)
@@ -177,11 +177,11 @@ class KitchenSimulator {
         const std::string stem = fmt::format("kitchen_{:04}", i);
         const std::string urdf_name = stem + ".urdf";
         io::WriteUrdf(dir / urdf_name, sim::KitchenGroundTruthUrdf(kitchen));
-        json entry = KitchenJson(kitchen);
+        Json entry = KitchenJson(kitchen);
         entry["id"] = i;
         entry["seed"] = seed;
         entry["urdf"] = urdf_name;
-        json frames = json::array();
+        Json frames = Json::array();
         std::vector<std::pair<bool, Eigen::Isometry3f>> poses;
         if (UseLaser()) {
             for (const auto& p : sim::KitchenLaserPoses(kitchen, o_.laser_views, seed)) {
@@ -214,11 +214,11 @@ class KitchenSimulator {
 
     // The robot opens fronts one at a time: each opened scan is taken from the pose of a closed
     // scan of the same sensor that sees the front, so the two differ only by that front.
-    json OpenedPairs(const std::filesystem::path& dir, const std::string& stem, std::uint64_t seed,
+    Json OpenedPairs(const std::filesystem::path& dir, const std::string& stem, std::uint64_t seed,
                      sim::KitchenScene& kitchen,
                      const std::vector<std::pair<bool, Eigen::Isometry3f>>& poses,
                      Progress& progress) {
-        json pairs = json::array();
+        Json pairs = Json::array();
         std::vector<std::size_t> fronts;
         for (std::size_t j = 0; j < kitchen.joints.size(); ++j) {
             if (kitchen.joints[j].front) fronts.push_back(j);
@@ -268,7 +268,7 @@ class KitchenSimulator {
                     const bool laser = poses[static_cast<std::size_t>(v)].first;
                     const std::string name =
                         fmt::format("{}_{}_open_{:02}.pcd", stem, laser ? "laser" : "kinect", made);
-                    json frame = Scan(dir, name, kitchen, caster, laser,
+                    Json frame = Scan(dir, name, kitchen, caster, laser,
                                       poses[static_cast<std::size_t>(v)].second,
                                       sim::SubSeed(seed, 500 + 10 * made + (laser ? 1 : 0)));
                     frame["closed_view"] = v;
@@ -294,7 +294,7 @@ class KitchenSimulator {
     KitchenOptions o_;
     sim::KinectParams kinect_;
     sim::LaserParams laser_;
-    json manifest_;
+    Json manifest_;
     std::size_t frames_ = 0;
 };
 
