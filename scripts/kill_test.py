@@ -110,13 +110,9 @@ class Job:
         return 1
 
 
-class Train(Job):
-    name = "train"
-
-    def cmd(self, out, seed=1):
-        return [self.cli, "--threads", "2", "train", "--out", out / "model.mcpg", "--objects", "2",
-                "--views", "2", "--max-parts", "3", "--table-scenes", "1", "--table-views", "1",
-                "--seed", seed]
+class SeededFileJob(Job):
+    """A job writing one file (`output`); the previous output is the same job with another seed."""
+    output = ""
 
     def prepare(self):
         self.old = self.work / "old"
@@ -125,13 +121,23 @@ class Train(Job):
 
     def place_old(self, out):
         super().place_old(out)
-        shutil.copy(self.old / "model.mcpg", out / "model.mcpg")
+        shutil.copy(self.old / self.output, out / self.output)
 
     def outputs(self):
-        return ["model.mcpg"]
+        return [self.output]
 
     def check(self, out, ref):
         return self.check_old_or_new(out, ref, self.old)
+
+
+class Train(SeededFileJob):
+    name = "train"
+    output = "model.mcpg"
+
+    def cmd(self, out, seed=1):
+        return [self.cli, "--threads", "2", "train", "--out", out / self.output, "--objects", "2",
+                "--views", "2", "--max-parts", "3", "--table-scenes", "1", "--table-views", "1",
+                "--seed", seed]
 
 
 class Classifier(Job):
@@ -389,29 +395,18 @@ class Convert(Job):
         return self.check_old_or_new(out, ref, self.old)
 
 
-class Furniture(Job):
+def train_furniture(cli, out, seed):
     """train furniture on procedural pieces only (no shared data needed)."""
+    return [cli, "--threads", "2", "train", "furniture", "--out", out, "--meshes", "", "--kitchen",
+            "", "--procedural", "3", "--views", "3", "--words", "10", "--seed", seed, "-q"]
+
+
+class Furniture(SeededFileJob):
     name = "furniture"
+    output = "model.mcfm"
 
     def cmd(self, out, seed=1):
-        return [self.cli, "--threads", "2", "train", "furniture", "--out", out / "model.mcfm",
-                "--meshes", "", "--kitchen", "", "--procedural", "3", "--views", "3", "--words",
-                "10", "--seed", seed, "-q"]
-
-    def prepare(self):
-        self.old = self.work / "old"
-        self.old.mkdir(exist_ok=True)
-        sh(self.cmd(self.old, seed=2))
-
-    def place_old(self, out):
-        super().place_old(out)
-        shutil.copy(self.old / "model.mcfm", out / "model.mcfm")
-
-    def outputs(self):
-        return ["model.mcfm"]
-
-    def check(self, out, ref):
-        return self.check_old_or_new(out, ref, self.old)
+        return train_furniture(self.cli, out / self.output, seed)
 
 
 class Detect(Job):
@@ -424,9 +419,7 @@ class Detect(Job):
             "--rooms", "1", "--heads", "2", "--split", "procedural", "--furniture", "",
             "--kitchen", "", "-q"])
         for seed in (1, 2):
-            sh([self.cli, "--threads", "2", "train", "furniture", "--out",
-                self.work / f"model{seed}.mcfm", "--meshes", "", "--kitchen", "", "--procedural",
-                "3", "--views", "3", "--words", "10", "--seed", seed, "-q"])
+            sh(train_furniture(self.cli, self.work / f"model{seed}.mcfm", seed))
         self.old = self.work / "old"
         self.old.mkdir(exist_ok=True)
         sh(self.cmd(self.old, seed=2))
