@@ -31,21 +31,14 @@ Eigen::Vector3f PlaneUp(const Eigen::Vector4f& plane) {
 
 // The scan points whose rays from the sensor can cross the box [lo, hi]. For an organized frame
 // in the sensor's frame (a pinhole: x/z and y/z affine in the pixel column and row, checked on a
-// sample of pixels), only the pixels inside the box's projected rectangle; otherwise all points
-// (VerifyModel clips every ray to its grid anyway).
-PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
-                          const Eigen::Vector3f& hi, float voxel_size) {
+// sample of pixels), only the pixels inside the box's projected rectangle; otherwise none, which
+// means every point (VerifyModel clips every ray to its grid and skips invalid points, so the
+// caller passes the frame itself instead of a copy of it).
+std::optional<PointCloud> RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
+                                         const Eigen::Vector3f& hi, float voxel_size) {
     PointCloud out;
-    auto all = [&] {
-        out.points.reserve(cloud.size());
-        for (const auto& p : cloud.points) {
-            if (p.allFinite()) out.points.push_back(p);
-        }
-        out.width = static_cast<std::uint32_t>(out.points.size());
-        out.height = 1;
-        return out;
-    };
-    if (!cloud.IsOrganized()) return all();
+    const std::nullopt_t all = std::nullopt;
+    if (!cloud.IsOrganized()) return all;
     const Eigen::Matrix3f to_sensor = cloud.sensor_orientation.conjugate().toRotationMatrix();
     auto local = [&](const Eigen::Vector3f& p) -> Eigen::Vector3f {
         return to_sensor * (p - cloud.sensor_origin);
@@ -63,7 +56,7 @@ PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
             samples.emplace_back(u, v, q.x() / q.z(), q.y() / q.z());
         }
     }
-    if (samples.size() < 20) return all();
+    if (samples.size() < 20) return all;
     for (const auto& s : samples) {
         const Eigen::Vector2d xu(s[0], 1.0), xv(s[1], 1.0);
         su += xu * xu.transpose();
@@ -71,21 +64,21 @@ PointCloud RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
         bu += xu * s[2];
         bv += xv * s[3];
     }
-    if (std::abs(su.determinant()) < 1e-9 || std::abs(sv.determinant()) < 1e-9) return all();
+    if (std::abs(su.determinant()) < 1e-9 || std::abs(sv.determinant()) < 1e-9) return all;
     const Eigen::Vector2d fu = su.ldlt().solve(bu), fv = sv.ldlt().solve(bv);
-    if (std::abs(fu[0]) < 1e-9 || std::abs(fv[0]) < 1e-9) return all();
+    if (std::abs(fu[0]) < 1e-9 || std::abs(fv[0]) < 1e-9) return all;
     double worst = 0.0;
     for (const auto& s : samples) {
         worst = std::max(worst, std::abs((s[2] - fu[1]) / fu[0] - s[0]));
         worst = std::max(worst, std::abs((s[3] - fv[1]) / fv[0] - s[1]));
     }
-    if (worst > 1.0) return all();  // not a pinhole frame in the sensor's coordinates
+    if (worst > 1.0) return all;  // not a pinhole frame in the sensor's coordinates
     double u0 = std::numeric_limits<double>::max(), u1 = -u0, v0 = u0, v1 = -u0, far = 0.0;
     for (int k = 0; k < 8; ++k) {
         const Eigen::Vector3f corner((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(),
                                      (k & 4) ? hi.z() : lo.z());
         const Eigen::Vector3f q = local(corner);
-        if (!(q.z() > 1e-3f)) return all();  // the box reaches behind the sensor
+        if (!(q.z() > 1e-3f)) return all;  // the box reaches behind the sensor
         far = std::max(far, static_cast<double>(q.z()));
         const double u = (q.x() / q.z() - fu[1]) / fu[0], v = (q.y() / q.z() - fv[1]) / fv[0];
         u0 = std::min(u0, u);
@@ -355,8 +348,8 @@ std::optional<ModelVerificationSummary> VerifyInFrame(const PointCloud& cloud,
     if (cells.prod() > 0.9 * static_cast<double>(vp.max_cells)) return std::nullopt;
     lo.array() -= vp.margin;
     hi.array() += vp.margin;
-    const PointCloud rays = RaysThroughBox(cloud, lo, hi, vp.voxel_size);
-    VerificationResult v = VerifyModel(mesh, rays, cloud.sensor_origin, vp);
+    const std::optional<PointCloud> rays = RaysThroughBox(cloud, lo, hi, vp.voxel_size);
+    VerificationResult v = VerifyModel(mesh, rays ? *rays : cloud, cloud.sensor_origin, vp);
     if (!PlaneUp(plane).isZero() && !v.samples.empty()) {
         const float n = plane.head<3>().norm();
         const float depth = 2.0f * vp.voxel_size;
