@@ -6,12 +6,11 @@
 #                                                   (`asan`, which .ci/run runs after the README's
 #                                                   test command) and the tests of the parallel
 #                                                   loops (core, normals, filters, segmentation,
-#                                                   features, simulator) under ThreadSanitizer
-#                                                   (`tsan`)
-#   scripts/sanitize_ci.sh --full [asan|tsan ...]   every unit test under ASan + UBSan and the
-#                                                   tests of all parallel stages (normals, perceive,
-#                                                   training, simulation, executive) under TSan;
-#                                                   about an hour cold on two cores
+#                                                   features, simulator, perceive, part-graph
+#                                                   training) under ThreadSanitizer (`tsan`)
+#   scripts/sanitize_ci.sh --full [asan|tsan ...]   every unit test under ASan + UBSan and also
+#                                                   perceive's stage tests and the executive's
+#                                                   under TSan; about an hour cold on two cores
 #
 # Builds: build-asan/ (-DMULTICUE_SANITIZE=address,undefined) and build-tsan/
 # (-DMULTICUE_SANITIZE=thread), -O1 -g1 with g++, without benchmarks, accuracy drivers,
@@ -31,12 +30,14 @@ if [[ ${#stages[@]} -eq 0 ]]; then stages=(asan tsan); fi
 
 # The CI scope: the readers (PCD, PLY, OBJ, configuration, PointCloud2, ROS bags, URDF) and the
 # core, search, filters and normals code under ASan + UBSan; under TSan the parallel loops of the
-# core and every parallel loop of perceive's stages below the pipeline itself (normals, filters,
-# region growing and part segmentation, sample consensus, part features) and of the simulator.
+# core, of perceive's stages (normals, filters, region growing and part segmentation, sample
+# consensus, part features), of the simulator, of perceive itself (objects categorised and
+# modelled in parallel, batches of frames) and of part-graph training.
 ci_asan_tests=(test_core test_pcd test_config test_ply_obj test_point_cloud2 test_ros_bags test_urdf
                test_search test_filters test_normals)
 ci_tsan_tests=(test_core test_normals test_filters test_clustering test_convexity_split
-               test_sample_consensus test_features test_sim)
+               test_sample_consensus test_features test_sim test_perceive
+               test_part_graph_training)
 
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
         -DMULTICUE_BUILD_BENCH=OFF -DMULTICUE_BUILD_EVAL=OFF -DMULTICUE_BUILD_EXAMPLES=OFF
@@ -75,8 +76,7 @@ for stage in "${stages[@]}"; do
         tsan)
             tests=("${ci_tsan_tests[@]}")
             if [[ $full -eq 1 ]]; then
-                tests=("${ci_tsan_tests[@]}" test_perceive test_perceive_stages
-                       test_part_graph_training test_executive)
+                tests=("${ci_tsan_tests[@]}" test_perceive_stages test_executive)
             fi
             cmake -S . -B build-tsan "${common[@]}" -DMULTICUE_SANITIZE=thread
             cmake --build build-tsan -j2 --target "${tests[@]}"

@@ -10,7 +10,7 @@ namespace {
 
 constexpr int kBins = 45;
 constexpr int kViewBins = 128;
-const float kInvTwoPi = 1.0f / (2.0f * static_cast<float>(M_PI));
+const float kVfhInvTwoPi = 1.0f / (2.0f * static_cast<float>(M_PI));
 
 }  // namespace
 
@@ -62,10 +62,11 @@ FeatureVector ComputeVfh(const PointCloud& cluster, const VfhParams& params) {
                                   f4)) {
             continue;
         }
-        hist[detail::ClampedBin(kBins * ((f1 + M_PI) * kInvTwoPi), kBins)] += incr;
+        hist[detail::ClampedBin(kBins * ((f1 + M_PI) * kVfhInvTwoPi), kBins)] += incr;
         if (params.pcl_compatible) {
-            hist[kBins + detail::ClampedBin(kBins * ((f2 + M_PI) * kInvTwoPi), kBins)] += incr;
-            hist[2 * kBins + detail::ClampedBin(kBins * ((f3 + M_PI) * kInvTwoPi), kBins)] += incr;
+            hist[kBins + detail::ClampedBin(kBins * ((f2 + M_PI) * kVfhInvTwoPi), kBins)] += incr;
+            hist[2 * kBins + detail::ClampedBin(kBins * ((f3 + M_PI) * kVfhInvTwoPi), kBins)] +=
+                incr;
         } else {
             hist[kBins + detail::ClampedBin(kBins * ((f2 + 1.0) * 0.5), kBins)] += incr;
             hist[2 * kBins + detail::ClampedBin(kBins * ((f3 + 1.0) * 0.5), kBins)] += incr;

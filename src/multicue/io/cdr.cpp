@@ -14,7 +14,7 @@ constexpr std::size_t kHeaderBytes = 4;
 
 /// Reverses the bytes of an unsigned integer (std::byteswap is C++23).
 template <typename T>
-T ByteSwap(T v) {
+T SwapBytes(T v) {
     T r = 0;
     for (std::size_t k = 0; k < sizeof(T); ++k)
         r = static_cast<T>((r << 8) | ((v >> (8 * k)) & 0xffu));
@@ -78,19 +78,19 @@ std::uint8_t CdrReader::U8() { return *Take(1, 1); }
 std::uint16_t CdrReader::U16() {
     std::uint16_t v;
     std::memcpy(&v, Take(2, 2), 2);
-    return SwapFor(big_endian_) ? ByteSwap(v) : v;
+    return SwapFor(big_endian_) ? SwapBytes(v) : v;
 }
 
 std::uint32_t CdrReader::U32() {
     std::uint32_t v;
     std::memcpy(&v, Take(4, 4), 4);
-    return SwapFor(big_endian_) ? ByteSwap(v) : v;
+    return SwapFor(big_endian_) ? SwapBytes(v) : v;
 }
 
 std::uint64_t CdrReader::U64() {
     std::uint64_t v;
     std::memcpy(&v, Take(8, 8), 8);
-    return SwapFor(big_endian_) ? ByteSwap(v) : v;
+    return SwapFor(big_endian_) ? SwapBytes(v) : v;
 }
 
 float CdrReader::F32() { return std::bit_cast<float>(U32()); }

@@ -12,7 +12,7 @@
 namespace multicue::mapping {
 namespace {
 
-constexpr float kDegToRad = 0.017453292519943295f;
+constexpr float kArticulationDegToRad = 0.017453292519943295f;
 
 /// A revolute joint about the front's edge line through `edge_point`, with `into_door` the
 /// in-plane direction from the edge into the front (the axis runs along the edge).
@@ -83,8 +83,8 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
     };
     const float base = std::isnan(floor_height) ? 0.0f : floor_height;
     const bool handle = fx->type == FixtureType::kHandle;
-    const bool horizontal =
-        handle && std::abs(fx->direction.dot(up)) < std::sin(p.horizontal_handle_deg * kDegToRad);
+    const bool horizontal = handle && std::abs(fx->direction.dot(up)) <
+                                          std::sin(p.horizontal_handle_deg * kArticulationDegToRad);
     const bool side = ru < p.top_share || ru > 1.0f - p.top_share;
     if (horizontal || (!handle && !side)) {
         if (height >= p.door_min_height && rv > 1.0f - p.top_share) {
@@ -160,7 +160,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     PlaneFitParams parallel = pp;
     parallel.axis = f.normal;
     parallel.axis_mode = PlaneAxisMode::kParallel;
-    parallel.max_angle = p.parallel_deg * kDegToRad;
+    parallel.max_angle = p.parallel_deg * kArticulationDegToRad;
     const PlaneFit fit_parallel = FitPlane(opened, moved, parallel);
     auto centroid_of = [&](const Indices& idx) {
         Eigen::Vector3f c = Eigen::Vector3f::Zero();
@@ -187,7 +187,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     float travel = 0.0f;
     std::size_t slide_support = 0;
     Indices slide_inliers;
-    const float cos_par = std::cos(p.parallel_deg * kDegToRad);
+    const float cos_par = std::cos(p.parallel_deg * kArticulationDegToRad);
     const PlaneFit& pf =
         std::abs(fit.plane.head<3>().dot(f.normal)) >= cos_par ? fit : fit_parallel;
     if (pf.found && pf.inliers.size() >= p.min_points) {

@@ -13,11 +13,11 @@
 namespace multicue::mapping {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kNoEvidence = std::numeric_limits<float>::quiet_NaN();
 
 /// Median of v (reordered); NaN when empty.
 float MedianOf(std::vector<float>& v) {
-    if (v.empty()) return kNaN;
+    if (v.empty()) return kNoEvidence;
     const auto mid = v.begin() + static_cast<long>(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
     return *mid;
@@ -25,7 +25,7 @@ float MedianOf(std::vector<float>& v) {
 
 /// The q-quantile of v (reordered); NaN when empty.
 float QuantileOf(std::vector<float>& v, float q) {
-    if (v.empty()) return kNaN;
+    if (v.empty()) return kNoEvidence;
     const auto k = static_cast<long>(std::floor(q * static_cast<float>(v.size() - 1)));
     std::nth_element(v.begin(), v.begin() + k, v.end());
     return v[static_cast<std::size_t>(k)];
@@ -44,7 +44,7 @@ void ComputeFaceResiduals(FaceSamples& s, float cell, int radius, int passes, fl
         throw InvalidArgument(fmt::format(
             "fixtures: background cell must be > 0 and radius >= 0, got {} and {}", cell, radius));
     }
-    s.residual.assign(s.size(), kNaN);
+    s.residual.assign(s.size(), kNoEvidence);
     s.nu = s.nv = 0;
     s.start.assign(1, 0);
     s.order.clear();
@@ -76,7 +76,7 @@ void ComputeFaceResiduals(FaceSamples& s, float cell, int radius, int passes, fl
     // Median height per cell, then the median of the medians around each cell. Later passes
     // leave out the samples that stood out of the previous background: a wide handle bar, which
     // fills much of a window, no longer lifts the background of its own cells.
-    std::vector<float> median(ncells, kNaN), background(ncells, kNaN), buffer;
+    std::vector<float> median(ncells, kNoEvidence), background(ncells, kNoEvidence), buffer;
     for (int pass = 0; pass < std::max(1, passes); ++pass) {
         for (std::size_t c = 0; c < ncells; ++c) {
             buffer.clear();

@@ -14,7 +14,7 @@
 namespace multicue::mapping {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kNoFrontValue = std::numeric_limits<float>::quiet_NaN();
 
 /// Median and MAD of the values of `points` (skipping NaN).
 template <typename Ids>
@@ -24,7 +24,7 @@ std::pair<float, float> MedianMad(const std::vector<float>& a, const Ids& points
     for (const auto i : points) {
         if (!std::isnan(a[i])) v.push_back(a[i]);
     }
-    if (v.empty()) return {kNaN, kNaN};
+    if (v.empty()) return {kNoFrontValue, kNoFrontValue};
     auto median = [](std::vector<float>& x) {
         const auto mid = x.begin() + static_cast<long>(x.size() / 2);
         std::nth_element(x.begin(), mid, x.end());
@@ -150,14 +150,14 @@ std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
     if (cue == AppearanceCue::kAuto) {
         cue = cloud.HasColors() ? AppearanceCue::kColor : AppearanceCue::kIntensity;
     }
-    std::vector<float> a(cloud.size(), kNaN);
+    std::vector<float> a(cloud.size(), kNoFrontValue);
     if (cue == AppearanceCue::kColor) {
         if (!cloud.HasColors())
             throw DataError("fronts: the colour cue needs a cloud with colours");
         for (std::size_t i = 0; i < cloud.size(); ++i) {
             const Color& c = cloud.colors[i];
             // Alpha 0 marks points without a colour (a laser scan merged with camera frames).
-            a[i] = c.a == 0 ? kNaN : 0.299f * c.r + 0.587f * c.g + 0.114f * c.b;
+            a[i] = c.a == 0 ? kNoFrontValue : 0.299f * c.r + 0.587f * c.g + 0.114f * c.b;
         }
     } else {
         if (!cloud.HasIntensity()) {
@@ -166,7 +166,7 @@ std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
         for (std::size_t i = 0; i < cloud.size(); ++i) a[i] = cloud.intensity[i] * intensity_scale;
     }
     for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (!cloud.IsFinite(i) || !std::isfinite(a[i])) a[i] = kNaN;
+        if (!cloud.IsFinite(i) || !std::isfinite(a[i])) a[i] = kNoFrontValue;
     }
     return a;
 }
@@ -215,7 +215,7 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                 ++n_a[c];
             }
         }
-        std::vector<float> a(ncells, kNaN), h(ncells, kNaN);
+        std::vector<float> a(ncells, kNoFrontValue), h(ncells, kNoFrontValue);
         for (std::size_t c = 0; c < ncells; ++c) {
             if (n_a[c] > 0) a[c] = static_cast<float>(sum_a[c] / n_a[c]);
             if (n_h[c] > 0) h[c] = static_cast<float>(sum_h[c] / n_h[c]);

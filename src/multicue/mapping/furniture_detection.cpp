@@ -16,7 +16,7 @@ namespace {
 
 using Polygon = std::vector<Eigen::Vector2f>;
 
-double MsSince(std::chrono::steady_clock::time_point t) {
+double MillisecondsSince(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
@@ -170,11 +170,11 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
     for (std::size_t v = 0; v < views.size(); ++v) {
         auto t = std::chrono::steady_clock::now();
         scene.views.push_back(ExtractFurnitureParts(*views[v].scan, views[v].T_world_sensor, pp));
-        scene.parts_ms += MsSince(t);
+        scene.parts_ms += MillisecondsSince(t);
         t = std::chrono::steady_clock::now();
         scene.votes.push_back(
             CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
-        scene.votes_ms += MsSince(t);
+        scene.votes_ms += MillisecondsSince(t);
         scene.walls.push_back(
             params.walls ? FindWalls(scene.views.back(),
                                      model.max_object_height() + params.voting.height_margin,
@@ -197,7 +197,7 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
         FurnitureFreeSpace fs(params.fit.occupancy_resolution);
         fs.AddView(thin, scene.views.back().sensor_origin);
         scene.free_space.push_back(std::move(fs));
-        scene.occupancy_ms += MsSince(t);
+        scene.occupancy_ms += MillisecondsSince(t);
     }
     return scene;
 }
@@ -234,7 +234,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
     result.votes = votes.size();
     const auto hyps =
         SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
-    result.selection_ms = MsSince(t);
+    result.selection_ms = MillisecondsSince(t);
     std::vector<const FurnitureWall*> walls;
     for (int v : views) {
         if (static_cast<std::size_t>(v) >= scene.walls.size()) continue;
@@ -335,7 +335,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             }
             kept.push_back(winner);
         }
-        result.fit_ms = MsSince(t);
+        result.fit_ms = MillisecondsSince(t);
     }
     for (auto& d : all) (d.accepted ? result.detections : result.rejected).push_back(std::move(d));
     auto by_score = [](const FurnitureDetection& a, const FurnitureDetection& b) {

@@ -11,7 +11,7 @@
 namespace multicue::ml {
 namespace {
 
-std::vector<std::string_view> Split(std::string_view line) {
+std::vector<std::string_view> SplitFields(std::string_view line) {
     std::vector<std::string_view> out;
     std::size_t i = 0;
     while (i < line.size()) {
@@ -114,7 +114,7 @@ class Checker {
     std::string SupportVectors() {
         for (std::size_t i = 0; i < total_sv_; ++i, ++line_) {
             if (line_ >= lines_.size()) return "fewer support vectors than total_sv";
-            const auto tokens = Split(lines_[line_]);
+            const auto tokens = SplitFields(lines_[line_]);
             if (tokens.size() < classes_ - 1) return "a support vector lacks its coefficients";
             for (std::size_t k = 0; k < classes_ - 1; ++k) {
                 if (!Real(tokens[k])) return "a support vector coefficient is not a finite number";
@@ -136,14 +136,14 @@ class Checker {
             }
         }
         for (; line_ < lines_.size(); ++line_) {
-            if (!Split(lines_[line_]).empty()) return "more support vectors than total_sv";
+            if (!SplitFields(lines_[line_]).empty()) return "more support vectors than total_sv";
         }
         return "";
     }
 
     std::string_view Peek() const {
         if (line_ >= lines_.size()) return {};
-        const auto t = Split(lines_[line_]);
+        const auto t = SplitFields(lines_[line_]);
         return t.empty() ? std::string_view() : t.front();
     }
 
@@ -153,7 +153,7 @@ class Checker {
         for (const char c : lines_[line_]) {
             if (c == '\r' || c == '\0') return "control characters in the model text";
         }
-        tokens_ = Split(lines_[line_++]);
+        tokens_ = SplitFields(lines_[line_++]);
         if (tokens_.empty() || tokens_[0] != key) return fmt::format("'{}' expected", key);
         if (tokens_.size() != values + 1) {
             return fmt::format("'{}' needs {} values, got {}", key, values, tokens_.size() - 1);

@@ -12,9 +12,7 @@
 namespace multicue {
 namespace {
 
-constexpr std::string_view kMagic = "MCFURNIT";
-
-bool Finite(float x) { return std::isfinite(x); }
+constexpr std::string_view kFurnitureMagic = "MCFURNIT";
 
 }  // namespace
 
@@ -67,8 +65,8 @@ FurnitureModel FurnitureModel::Train(std::vector<FurnitureTrainingPart> parts,
     if (classes.empty()) throw InvalidArgument("furniture vocabulary: no classes");
     const int n_classes = static_cast<int>(classes.size());
     for (const auto& c : classes) {
-        if (!(c.width > 0.0f) || !(c.length > 0.0f) || !(c.height > 0.0f) || !Finite(c.width) ||
-            !(c.threshold >= 0.0f) || !Finite(c.threshold)) {
+        if (!(c.width > 0.0f) || !(c.length > 0.0f) || !(c.height > 0.0f) ||
+            !std::isfinite(c.width) || !(c.threshold >= 0.0f) || !std::isfinite(c.threshold)) {
             throw InvalidArgument(
                 fmt::format("furniture class '{}': width, length and height must "
                             "be > 0 and the threshold >= 0",
@@ -177,7 +175,7 @@ std::vector<std::pair<int, float>> FurnitureModel::Activate(std::span<const floa
     }
     if (activations == 0) throw InvalidArgument("furniture model: activations must be >= 1");
     for (float x : features) {
-        if (!Finite(x)) throw DataError("furniture model: non-finite part feature");
+        if (!std::isfinite(x)) throw DataError("furniture model: non-finite part feature");
     }
     const std::size_t d = columns_.size();
     float f[kPartStatsSize];
@@ -362,19 +360,20 @@ void FurnitureModel::Save(const std::filesystem::path& path) const {
         PutCloud(w, c.cloud);
         PutMesh(w, c.mesh);
     }
-    ml::WriteContainer(path, kMagic, kFormatVersion, w.bytes());
+    ml::WriteContainer(path, kFurnitureMagic, kFormatVersion, w.bytes());
 }
 
 FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
     const std::string bytes = ml::ReadBytes(path);
     const std::uint32_t version = ml::ContainerVersion(bytes);
-    if (bytes.size() >= 8 && bytes.compare(0, 8, kMagic) == 0 && version != kFormatVersion) {
+    if (bytes.size() >= 8 && bytes.compare(0, 8, kFurnitureMagic) == 0 &&
+        version != kFormatVersion) {
         throw FormatError(fmt::format(
             "{}: furniture model format version {} is not supported (this build reads version {})",
             path.string(), version, kFormatVersion));
     }
-    const std::string payload =
-        ml::UnwrapContainer(bytes, kMagic, kFormatVersion, "furniture model", path.string());
+    const std::string payload = ml::UnwrapContainer(bytes, kFurnitureMagic, kFormatVersion,
+                                                    "furniture model", path.string());
     ml::ByteReader r(payload, path.string());
     FurnitureModel m;
     m.part_params_ = GetPartParams(r);
@@ -394,8 +393,8 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
         k.height = r.Get<float>();
         k.threshold = r.Get<float>();
         if (!(k.width > 0.0f) || !(k.length > 0.0f) || !(k.height > 0.0f) ||
-            !(k.threshold >= 0.0f) || !Finite(k.width) || !Finite(k.length) || !Finite(k.height) ||
-            !Finite(k.threshold)) {
+            !(k.threshold >= 0.0f) || !std::isfinite(k.width) || !std::isfinite(k.length) ||
+            !std::isfinite(k.height) || !std::isfinite(k.threshold)) {
             r.Fail("bad class " + k.name);
         }
         m.classes_.push_back(k);
@@ -418,7 +417,7 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
             r.Fail("bad training part");
         }
         p.features = Eigen::Map<const FeatureVector>(f.data(), kPartStatsSize);
-        if (!p.features.allFinite() || !p.offset.allFinite() || !Finite(p.centre_z))
+        if (!p.features.allFinite() || !p.offset.allFinite() || !std::isfinite(p.centre_z))
             r.Fail("non-finite training part");
         m.parts_.push_back(std::move(p));
     }

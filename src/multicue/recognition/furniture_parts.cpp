@@ -22,8 +22,6 @@ double MsSince(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
-bool Finite(float x) { return std::isfinite(x); }
-
 // The yaw of a part's frame (see FurniturePartFrame).
 float PartFrameYaw(const PointCloud& sub, const Eigen::Vector3f& centroid, float bearing) {
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
@@ -59,20 +57,20 @@ FurniturePartFrame ParseFurniturePartFrame(std::string_view name) {
 }
 
 void FurniturePartParams::Validate() const {
-    if (!(voxel_size >= 0.0f) || !Finite(voxel_size)) {
+    if (!(voxel_size >= 0.0f) || !std::isfinite(voxel_size)) {
         throw InvalidArgument(
             fmt::format("furniture parts: voxel_size must be >= 0, got {}", voxel_size));
     }
-    if (!(floor_margin >= 0.0f) || !Finite(floor_margin)) {
+    if (!(floor_margin >= 0.0f) || !std::isfinite(floor_margin)) {
         throw InvalidArgument(
             fmt::format("furniture parts: floor_margin must be >= 0, got {}", floor_margin));
     }
-    if (!(max_height > floor_margin) || !Finite(max_height)) {
+    if (!(max_height > floor_margin) || !std::isfinite(max_height)) {
         throw InvalidArgument(
             fmt::format("furniture parts: max_height must be > floor_margin ({}), got {}",
                         floor_margin, max_height));
     }
-    if (!(normal_radius > 0.0f) || !Finite(normal_radius)) {
+    if (!(normal_radius > 0.0f) || !std::isfinite(normal_radius)) {
         throw InvalidArgument(
             fmt::format("furniture parts: normal_radius must be > 0, got {}", normal_radius));
     }
@@ -80,7 +78,7 @@ void FurniturePartParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture parts: normal_k must be >= 3, got {}", normal_k));
     }
-    if (!(smoothing_radius >= 0.0f) || !Finite(smoothing_radius)) {
+    if (!(smoothing_radius >= 0.0f) || !std::isfinite(smoothing_radius)) {
         throw InvalidArgument(fmt::format("furniture parts: smoothing_radius must be >= 0, got {}",
                                           smoothing_radius));
     }

@@ -12,8 +12,6 @@
 namespace multicue {
 namespace {
 
-bool Finite(float x) { return std::isfinite(x); }
-
 // The summed votes of one class on a grid of cells over the floor.
 struct VoteGrid {
     Eigen::Vector2f origin = Eigen::Vector2f::Zero();  ///< centre of cell (0, 0)
@@ -87,13 +85,13 @@ FurnitureVoteNormalization ParseFurnitureVoteNormalization(std::string_view name
 
 void FurnitureVotingParams::Validate() const {
     if (activations < 1) throw InvalidArgument("furniture voting: activations must be >= 1");
-    if (!(extent_margin > 0.0f) || !Finite(extent_margin)) {
+    if (!(extent_margin > 0.0f) || !std::isfinite(extent_margin)) {
         throw InvalidArgument(
             fmt::format("furniture voting: extent_margin must be > 0, got {}", extent_margin));
     }
-    if (!Finite(height_margin))
+    if (!std::isfinite(height_margin))
         throw InvalidArgument("furniture voting: height_margin must be finite");
-    if (!(max_height_error >= 0.0f) || !Finite(max_height_error)) {
+    if (!(max_height_error >= 0.0f) || !std::isfinite(max_height_error)) {
         throw InvalidArgument(fmt::format("furniture voting: max_height_error must be >= 0, got {}",
                                           max_height_error));
     }
@@ -168,14 +166,14 @@ std::vector<FurnitureVote> CastFurnitureVotes(const FurnitureParts& parts,
 }
 
 void FurnitureSelectionParams::Validate() const {
-    if (!(cell > 0.0f) || !Finite(cell)) {
+    if (!(cell > 0.0f) || !std::isfinite(cell)) {
         throw InvalidArgument(fmt::format("furniture selection: cell must be > 0, got {}", cell));
     }
-    if (!(window_scale > 0.0f) || !Finite(window_scale)) {
+    if (!(window_scale > 0.0f) || !std::isfinite(window_scale)) {
         throw InvalidArgument(
             fmt::format("furniture selection: window_scale must be > 0, got {}", window_scale));
     }
-    if (!(threshold_scale >= 0.0f) || !Finite(threshold_scale)) {
+    if (!(threshold_scale >= 0.0f) || !std::isfinite(threshold_scale)) {
         throw InvalidArgument(fmt::format(
             "furniture selection: threshold_scale must be >= 0, got {}", threshold_scale));
     }

@@ -426,7 +426,7 @@ void AttachOutliers(const PointCloud& cloud, const Indices& indices, const Model
 }
 
 // InvalidArgument "name must be <what>, got value" unless `ok`.
-void Require(bool ok, const char* name, const char* what, double value) {
+void RequireParam(bool ok, const char* name, const char* what, double value) {
     if (!ok) throw InvalidArgument(fmt::format("{} must be {}, got {}", name, what, value));
 }
 
@@ -461,35 +461,37 @@ ObjectModel ModelChecked(const PointCloud& cloud, const PerceivedObject& object,
 }  // namespace
 
 void ConcentricMergeParams::Validate() const {
-    Require(angle_deg >= 0.0f, "angle_deg", ">= 0", angle_deg);
-    Require(distance >= 0.0f, "distance", ">= 0", distance);
-    Require(radius_ratio >= 0.0f, "radius_ratio", ">= 0", radius_ratio);
+    RequireParam(angle_deg >= 0.0f, "angle_deg", ">= 0", angle_deg);
+    RequireParam(distance >= 0.0f, "distance", ">= 0", distance);
+    RequireParam(radius_ratio >= 0.0f, "radius_ratio", ">= 0", radius_ratio);
 }
 
 void ContainedMergeParams::Validate() const {
-    Require(margin >= 0.0f, "margin", ">= 0", margin);
-    Require(min_share > 0.0f && min_share <= 1.0f, "min_share", "in (0, 1]", min_share);
+    RequireParam(margin >= 0.0f, "margin", ">= 0", margin);
+    RequireParam(min_share > 0.0f && min_share <= 1.0f, "min_share", "in (0, 1]", min_share);
 }
 
 void StackedSplitParams::Validate() const {
-    Require(min_step > 0.0f, "min_step", "> 0", min_step);
-    Require(min_gain >= 0.0f, "min_gain", ">= 0", min_gain);
+    RequireParam(min_step > 0.0f, "min_step", "> 0", min_step);
+    RequireParam(min_gain >= 0.0f, "min_gain", ">= 0", min_gain);
 }
 
 void TouchingSplitParams::Validate() const {
-    Require(min_gain >= 0.0f, "min_gain", ">= 0", min_gain);
-    Require(max_overlap >= 0.0f, "max_overlap", ">= 0", max_overlap);
-    Require(max_parts >= 2 && max_parts <= 12, "max_parts", "in [2, 12]", max_parts);
+    RequireParam(min_gain >= 0.0f, "min_gain", ">= 0", min_gain);
+    RequireParam(max_overlap >= 0.0f, "max_overlap", ">= 0", max_overlap);
+    RequireParam(max_parts >= 2 && max_parts <= 12, "max_parts", "in [2, 12]", max_parts);
 }
 
 void ModelParams::Validate() const {
-    Require(min_inlier_ratio >= 0.0f && min_inlier_ratio <= 1.0f, "min_inlier_ratio", "in [0, 1]",
-            min_inlier_ratio);
-    Require(max_size_ratio >= 1.0f && std::isfinite(max_size_ratio), "max_size_ratio", ">= 1",
-            max_size_ratio);
-    Require(size_margin >= 0.0f && std::isfinite(size_margin), "size_margin", ">= 0", size_margin);
-    Require(mesh_max_points >= 3, "mesh_max_points", ">= 3", static_cast<double>(mesh_max_points));
-    Require(several_min_ratio >= 0.0f, "several_min_ratio", ">= 0", several_min_ratio);
+    RequireParam(min_inlier_ratio >= 0.0f && min_inlier_ratio <= 1.0f, "min_inlier_ratio",
+                 "in [0, 1]", min_inlier_ratio);
+    RequireParam(max_size_ratio >= 1.0f && std::isfinite(max_size_ratio), "max_size_ratio", ">= 1",
+                 max_size_ratio);
+    RequireParam(size_margin >= 0.0f && std::isfinite(size_margin), "size_margin", ">= 0",
+                 size_margin);
+    RequireParam(mesh_max_points >= 3, "mesh_max_points", ">= 3",
+                 static_cast<double>(mesh_max_points));
+    RequireParam(several_min_ratio >= 0.0f, "several_min_ratio", ">= 0", several_min_ratio);
     ResolveThreadCount(num_threads);
     ValidateNode("mesh", [&] { mesh.Validate(); });
     ValidateNode("guided_rsd", [&] { guided_rsd.Validate(); });

@@ -444,14 +444,14 @@ void CheckParams(const RotationalFitParams& p) {
     if (p.num_threads < 0) bad(fmt::format("num_threads must be >= 0, got {}", p.num_threads));
 }
 
-float Median(std::vector<float>& v) {
+float MedianInPlace(std::vector<float>& v) {
     const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
     return *mid;
 }
 
 /// Throws InvalidArgument for an index outside the cloud.
-void CheckIndices(const PointCloud& cloud, const Indices& indices) {
+void CheckRotationalIndices(const PointCloud& cloud, const Indices& indices) {
     for (auto i : indices) {
         if (i >= cloud.size()) {
             throw InvalidArgument(
@@ -842,7 +842,7 @@ std::vector<float> BinMedianRadii(const std::vector<std::pair<float, float>>& pr
                               std::numeric_limits<float>::quiet_NaN());
     for (int b = 0; b < bins; ++b) {
         auto& v = binned[static_cast<std::size_t>(b)];
-        if (v.size() >= 2) radius[static_cast<std::size_t>(b)] = Median(v);
+        if (v.size() >= 2) radius[static_cast<std::size_t>(b)] = MedianInPlace(v);
     }
     return radius;
 }
@@ -955,7 +955,7 @@ RotationalModel FitRotationalModel(const PointCloud& cloud, const Indices& indic
     RotationalModel model;
     if (indices.empty()) return model;
     if (!cloud.HasNormals()) throw DataError("rotational fit: the cloud has no normals");
-    CheckIndices(cloud, indices);
+    CheckRotationalIndices(cloud, indices);
     const Indices usable = UsablePoints(cloud, indices);
     if (usable.size() < 10) return model;
     Eigen::Vector3d centroid;

@@ -17,7 +17,7 @@
 namespace multicue {
 namespace {
 
-double DegToRad(double deg) { return deg * std::numbers::pi / 180.0; }
+double DegreesToRadians(double deg) { return deg * std::numbers::pi / 180.0; }
 
 struct Hypothesis {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -181,7 +181,7 @@ RegistrationResult RegisterPlanesGlobal(const PointCloud& source, const PointClo
     }
     // Triples of mutually non-parallel normals, spanning space (three walls' normals are
     // pairwise apart yet coplanar: the height would be free).
-    const double max_cos = std::cos(DegToRad(params.min_triple_angle_deg));
+    const double max_cos = std::cos(DegreesToRadians(params.min_triple_angle_deg));
     auto triples = [&](const std::vector<PlanarPatch>& p) {
         std::vector<std::array<std::size_t, 3>> out;
         for (std::size_t i = 0; i < p.size(); ++i)
@@ -207,7 +207,7 @@ RegistrationResult RegisterPlanesGlobal(const PointCloud& source, const PointClo
             "fewer than three non-parallel planes ({} source, {} target planar patches)",
             source_patches.size(), target_patches.size()));
     }
-    const double tol = DegToRad(params.angle_tolerance_deg);
+    const double tol = DegreesToRadians(params.angle_tolerance_deg);
     auto angle = [](const PlanarPatch& a, const PlanarPatch& b) {
         return std::acos(std::clamp(a.normal.dot(b.normal), -1.0, 1.0));
     };

@@ -14,7 +14,7 @@
 namespace multicue {
 namespace {
 
-constexpr float kDegToRad = 3.14159265358979f / 180.0f;
+constexpr float kMergeDegToRad = 3.14159265358979f / 180.0f;
 
 void CheckParams(const OcclusionMergeParams& p) {
     const auto in_unit = [](float v) { return v >= 0.0f && v <= 1.0f; };
@@ -160,7 +160,7 @@ bool PlaneContinues(const PointCloud& cloud, const std::vector<Indices>& from_pa
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
     const Eigen::Vector3f normal = solver.eigenvectors().col(0).cast<float>();
     const Eigen::Vector3f centre = mean.cast<float>();
-    const float min_cos = std::cos(p.surface_angle_deg * kDegToRad);
+    const float min_cos = std::cos(p.surface_angle_deg * kMergeDegToRad);
     const auto on_plane = [&](Index i) {
         const Eigen::Vector3f& nrm = cloud.normals[i];
         return std::abs(normal.dot(cloud.points[i] - centre)) < p.surface_distance &&
@@ -192,7 +192,7 @@ bool CylinderContinues(const PointCloud& cloud, const Indices& from, const Indic
         static_cast<float>(fit.inliers.size()) < p.min_explained_share * from.size()) {
         return false;
     }
-    const float min_cos = std::cos(p.surface_angle_deg * kDegToRad);
+    const float min_cos = std::cos(p.surface_angle_deg * kMergeDegToRad);
     const auto explained =
         static_cast<std::size_t>(std::count_if(to.begin(), to.end(), [&](Index i) {
             const Eigen::Vector3f d = cloud.points[i] - fit.point;

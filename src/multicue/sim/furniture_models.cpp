@@ -12,11 +12,12 @@
 #include "multicue/sim/articulated.hpp"
 #include "multicue/sim/kitchen_library.hpp"
 #include "multicue/sim/procedural.hpp"
+#include "multicue/sim/sim_math_internal.hpp"
 
 namespace multicue::sim {
 namespace {
 
-constexpr float kPi = std::numbers::pi_v<float>;
+using math_internal::kPi;
 
 // The furniture category of a kitchen model kind; empty for kinds that are no furniture here.
 std::string KitchenFurnitureCategory(const std::string& kind) {
@@ -147,7 +148,7 @@ PartMesh MergeClosed(const ArticulatedModel& model) {
     return out;
 }
 
-float U(StreamRng& rng, float lo, float hi) { return static_cast<float>(rng.Uniform(lo, hi)); }
+using math_internal::U;
 bool Chance(StreamRng& rng, float p) { return rng.Uniform() < p; }
 
 using V3 = Eigen::Vector3f;

@@ -11,14 +11,15 @@
 #include "multicue/sim/objects.hpp"
 #include "multicue/sim/placement_internal.hpp"
 #include "multicue/sim/procedural.hpp"
+#include "multicue/sim/sim_math_internal.hpp"
 
 namespace multicue::sim {
 namespace {
 
+using math_internal::kPi;
 using placement_internal::Polygon;
-constexpr float kPi = std::numbers::pi_v<float>;
 
-float U(StreamRng& rng, float lo, float hi) { return static_cast<float>(rng.Uniform(lo, hi)); }
+using math_internal::U;
 
 Eigen::Isometry3f Upright(const Eigen::Vector2f& at, float yaw) {
     Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
@@ -56,8 +57,8 @@ class RoomBuilder {
         o.mesh = piece.mesh;
         o.T_world_object = T;
         o.label = ObjectLabel(static_cast<std::uint32_t>(++objects_));
-        o.category = furniture ? static_cast<std::uint32_t>(std::max(0, CategoryIndex(piece.category)))
-                               : 0u;
+        o.category =
+            furniture ? static_cast<std::uint32_t>(std::max(0, CategoryIndex(piece.category))) : 0u;
         o.color = color_;
         o.use_vertex_colors = piece.mesh->mesh.HasVertexColors();
         o.source = piece.id;
@@ -88,10 +89,22 @@ class RoomBuilder {
         Eigen::Vector2f at;
         float yaw = 0.0f;
         switch (w) {
-            case 0: at = {along, -half.y() + depth}; yaw = kPi / 2; break;
-            case 1: at = {along, half.y() - depth}; yaw = -kPi / 2; break;
-            case 2: at = {-half.x() + depth, along}; yaw = 0.0f; break;
-            default: at = {half.x() - depth, along}; yaw = kPi; break;
+            case 0:
+                at = {along, -half.y() + depth};
+                yaw = kPi / 2;
+                break;
+            case 1:
+                at = {along, half.y() - depth};
+                yaw = -kPi / 2;
+                break;
+            case 2:
+                at = {-half.x() + depth, along};
+                yaw = 0.0f;
+                break;
+            default:
+                at = {half.x() - depth, along};
+                yaw = kPi;
+                break;
         }
         return TryPlace(piece, at, yaw, gap);
     }
@@ -150,14 +163,22 @@ FurniturePiece Distractor(StreamRng& rng) {
         d.id = "distractor/box";
     } else if (kind == 1) {  // a person
         const float r = U(rng, 0.15f, 0.22f), h = U(rng, 1.55f, 1.9f);
-        m = MakeRevolutionMesh({{0.0f, 0.0f, 0}, {r, 0.0f, 0}, {r, h - 0.25f, 0}, {0.1f, h - 0.2f, 0},
-                                {0.1f, h, 0}, {0.0f, h, 0}},
+        m = MakeRevolutionMesh({{0.0f, 0.0f, 0},
+                                {r, 0.0f, 0},
+                                {r, h - 0.25f, 0},
+                                {0.1f, h - 0.2f, 0},
+                                {0.1f, h, 0},
+                                {0.0f, h, 0}},
                                {"person"}, 16);
         d.id = "distractor/person";
     } else {  // a plant in a pot
         const float r = U(rng, 0.12f, 0.25f);
-        m = MakeRevolutionMesh({{0.0f, 0.0f, 0}, {r * 0.8f, 0.0f, 0}, {r, 0.35f, 0},
-                                {r * 2.0f, 0.6f, 0}, {r * 1.5f, 1.0f, 0}, {0.0f, 1.1f, 0}},
+        m = MakeRevolutionMesh({{0.0f, 0.0f, 0},
+                                {r * 0.8f, 0.0f, 0},
+                                {r, 0.35f, 0},
+                                {r * 2.0f, 0.6f, 0},
+                                {r * 1.5f, 1.0f, 0},
+                                {0.0f, 1.1f, 0}},
                                {"plant"}, 12);
         d.id = "distractor/plant";
     }
@@ -246,9 +267,12 @@ FurniturePiece FurnitureSource::Random(const std::string& category, StreamRng& r
 
 const char* RoomTypeName(RoomType type) {
     switch (type) {
-        case RoomType::kOffice: return "office";
-        case RoomType::kSeminar: return "seminar";
-        case RoomType::kKitchen: return "kitchen";
+        case RoomType::kOffice:
+            return "office";
+        case RoomType::kSeminar:
+            return "seminar";
+        case RoomType::kKitchen:
+            return "kitchen";
     }
     return "office";
 }
@@ -324,9 +348,8 @@ FurnitureRoom MakeFurnitureRoom(const FurnitureRoomParams& p, const FurnitureSou
                     const Eigen::Vector3f local(ds.x() / 2 + cs.x() / 2 + U(rng, 0.05f, 0.35f),
                                                 U(rng, -span, span), 0.0f);
                     const Eigen::Vector3f at = T * local;
-                    b.TryPlace(chair, at.head<2>(), room.furniture.back().yaw + kPi +
-                                                        U(rng, -0.4f, 0.4f),
-                               gap);
+                    b.TryPlace(chair, at.head<2>(),
+                               room.furniture.back().yaw + kPi + U(rng, -0.4f, 0.4f), gap);
                 }
                 break;
             }
@@ -353,12 +376,14 @@ FurnitureRoom MakeFurnitureRoom(const FurnitureRoomParams& p, const FurnitureSou
             for (int k = 0; k < per_row; ++k) {
                 const float y = (static_cast<float>(k) - (per_row - 1) / 2.0f) * (ts.y() + gap_y);
                 if (!b.TryPlace(table, centre + R * Eigen::Vector2f(x, y), yaw, gap)) continue;
-                const int chairs = std::max(1, std::min(3, static_cast<int>(ts.y() / (cs.y() + 0.15f))));
+                const int chairs =
+                    std::max(1, std::min(3, static_cast<int>(ts.y() / (cs.y() + 0.15f))));
                 const float pitch = ts.y() / static_cast<float>(chairs);
                 for (int c = 0; c < chairs; ++c) {
                     if (rng.Uniform() < 0.15) continue;  // an empty place
-                    const Eigen::Vector2f local(x - ts.x() / 2 - cs.x() / 2 - U(rng, 0.05f, 0.25f),
-                                                y - ts.y() / 2 + pitch * (static_cast<float>(c) + 0.5f));
+                    const Eigen::Vector2f local(
+                        x - ts.x() / 2 - cs.x() / 2 - U(rng, 0.05f, 0.25f),
+                        y - ts.y() / 2 + pitch * (static_cast<float>(c) + 0.5f));
                     b.TryPlace(chair, centre + R * local, yaw + U(rng, -0.3f, 0.3f), gap);
                 }
             }
@@ -406,7 +431,8 @@ FurnitureRoom MakeFurnitureRoom(const FurnitureRoomParams& p, const FurnitureSou
 std::vector<Eigen::Isometry3f> RoomHeadPoses(const FurnitureRoom& room, int count, float height,
                                              std::uint64_t seed) {
     if (count < 1) throw InvalidArgument(fmt::format("head count must be >= 1, got {}", count));
-    if (!(height > 0.0f)) throw InvalidArgument(fmt::format("head height must be > 0, got {}", height));
+    if (!(height > 0.0f))
+        throw InvalidArgument(fmt::format("head height must be > 0, got {}", height));
     StreamRng rng(seed, 21);
     std::vector<Polygon> feet;
     for (const auto& o : room.scene.objects) {
@@ -417,7 +443,8 @@ std::vector<Eigen::Isometry3f> RoomHeadPoses(const FurnitureRoom& room, int coun
     std::vector<Eigen::Vector2f> free;
     for (float x = -half.x(); x <= half.x(); x += 0.2f) {
         for (float y = -half.y(); y <= half.y(); y += 0.2f) {
-            const Polygon dot = {{x - 0.01f, y - 0.01f}, {x + 0.01f, y - 0.01f}, {x + 0.01f, y + 0.01f}};
+            const Polygon dot = {
+                {x - 0.01f, y - 0.01f}, {x + 0.01f, y - 0.01f}, {x + 0.01f, y + 0.01f}};
             if (placement_internal::MinSeparation(dot, feet) >= 0.4f) free.emplace_back(x, y);
         }
     }

@@ -7,13 +7,14 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/sim/sim_math_internal.hpp"
 
 namespace multicue::sim {
 namespace {
 
-constexpr float kPi = std::numbers::pi_v<float>;
+using math_internal::kPi;
 
-float U(StreamRng& rng, float lo, float hi) { return static_cast<float>(rng.Uniform(lo, hi)); }
+using math_internal::U;
 
 PartMesh Single(TriangleMesh mesh, const std::string& part) {
     PartMesh pm;

@@ -9,12 +9,13 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/sim/placement_internal.hpp"
 #include "multicue/sim/procedural.hpp"
+#include "multicue/sim/sim_math_internal.hpp"
 
 namespace multicue::sim {
 namespace {
 
-constexpr float kPi = std::numbers::pi_v<float>;
-constexpr std::uint64_t kObjectStream = 1000;
+using math_internal::kObjectStream;
+using math_internal::kPi;
 
 using namespace placement_internal;
 

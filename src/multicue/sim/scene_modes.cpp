@@ -14,14 +14,15 @@
 #include "multicue/sim/placement_internal.hpp"
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/scene_gen.hpp"
+#include "multicue/sim/sim_math_internal.hpp"
 
 namespace multicue::sim {
 namespace {
 
 using namespace placement_internal;
 
-constexpr float kPi = std::numbers::pi_v<float>;
-constexpr std::uint64_t kObjectStream = 1000;
+using math_internal::kObjectStream;
+using math_internal::kPi;
 constexpr float kContact = 5e-4f;        ///< footprints at least this far apart do not touch [m]
 constexpr float kLeanContact = 2e-4f;    ///< gap a leaning object keeps to its support [m]
 constexpr float kLevel = 1e-4f;          ///< z ranges overlapping less than this are stacked [m]

@@ -12,7 +12,7 @@
 namespace multicue::detail {
 namespace {
 
-inline float Cross2(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+inline float Cross2d(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
     return a.x() * b.y() - a.y() * b.x();
 }
 
@@ -34,7 +34,7 @@ std::size_t FillLoop(MeshState& m, std::vector<std::uint32_t> poly, const Eigen:
             const std::uint32_t a = poly[(i + k - 1) % k], b = poly[i], c = poly[(i + 1) % k];
             if (a == c) continue;
             const Eigen::Vector2f qa = q(a), qb = q(b), qc = q(c);
-            if (!(Cross2(qb - qa, qc - qb) > 0.0f)) continue;  // reflex or flat
+            if (!(Cross2d(qb - qa, qc - qb) > 0.0f)) continue;  // reflex or flat
             if (k > 3 && (m.HasDirected(c, a) || m.HasDirected(a, c))) continue;
             if (k == 3 && (m.HasDirected(a, b) || m.HasDirected(b, c) || m.HasDirected(c, a)))
                 continue;
@@ -42,8 +42,8 @@ std::size_t FillLoop(MeshState& m, std::vector<std::uint32_t> poly, const Eigen:
             for (std::uint32_t o : poly) {
                 if (o == a || o == b || o == c) continue;
                 const Eigen::Vector2f qo = q(o);
-                if (Cross2(qb - qa, qo - qa) > 0.0f && Cross2(qc - qb, qo - qb) > 0.0f &&
-                    Cross2(qa - qc, qo - qc) > 0.0f) {
+                if (Cross2d(qb - qa, qo - qa) > 0.0f && Cross2d(qc - qb, qo - qb) > 0.0f &&
+                    Cross2d(qa - qc, qo - qc) > 0.0f) {
                     inside = true;
                     break;
                 }

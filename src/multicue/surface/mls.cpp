@@ -15,7 +15,7 @@
 namespace multicue {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kMlsNaN = std::numeric_limits<float>::quiet_NaN();
 
 void CheckCommon(float radius, float gaussian, int order, int min_neighbors, int threads) {
     if (!(radius > 0.0f) || !std::isfinite(radius))
@@ -50,7 +50,7 @@ void CheckParams(const MlsParams& p) {
     }
 }
 
-void CheckTree(const PointCloud& cloud, const KdTree& tree) {
+void CheckMlsTree(const PointCloud& cloud, const KdTree& tree) {
     const auto& to_cloud = tree.TreeToCloud();
     const auto& points = tree.TreePoints();
     for (std::size_t t = 0; t < to_cloud.size(); ++t) {
@@ -223,7 +223,7 @@ std::uint64_t PointSeed(std::uint64_t seed, std::size_t i) {
 
 MlsResult MovingLeastSquares(const PointCloud& cloud, const KdTree& tree, const MlsParams& params) {
     CheckParams(params);
-    CheckTree(cloud, tree);
+    CheckMlsTree(cloud, tree);
     MlsResult result;
     if (cloud.empty() || tree.empty()) return result;
     const auto settings =
@@ -319,8 +319,8 @@ MlsResult MovingLeastSquaresOrganized(const PointCloud& organized,
     const std::size_t n = organized.size();
     PointCloud& out = result.cloud;
     out = organized;
-    out.normals.assign(n, Eigen::Vector3f::Constant(kNaN));
-    out.curvature.assign(n, kNaN);
+    out.normals.assign(n, Eigen::Vector3f::Constant(kMlsNaN));
+    out.curvature.assign(n, kMlsNaN);
     std::vector<Slot> slots(n);
     const OrganizedSearchParams search{.half_window = params.half_window, .radius = params.radius};
 
@@ -362,7 +362,7 @@ MlsResult MovingLeastSquaresOrganized(const PointCloud& organized,
         const Slot& s = slots[i];
         if (!s.valid) {
             if (organized.IsFinite(i)) ++result.dropped;
-            out.points[i] = Eigen::Vector3f::Constant(kNaN);
+            out.points[i] = Eigen::Vector3f::Constant(kMlsNaN);
             continue;
         }
         out.points[i] = s.point;

@@ -34,7 +34,7 @@ std::string_view TypeColor(const std::string& type) {
 }
 
 template <typename T>
-std::string Base64(const std::vector<T>& v) {
+std::string KitchenBase64(const std::vector<T>& v) {
     return Base64Encode(v.data(), v.size() * sizeof(T));
 }
 
@@ -51,7 +51,7 @@ nlohmann::json FrontMesh(const mapping::Front& f) {
     }
     const std::vector<std::uint32_t> tri = {0, 1, 3, 0, 3, 2, 4, 7, 5, 4, 6, 7, 0, 4, 5, 0, 5, 1,
                                             2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3};
-    return {{"vertices", Base64(vert)}, {"triangles", Base64(tri)}};
+    return {{"vertices", KitchenBase64(vert)}, {"triangles", KitchenBase64(tri)}};
 }
 
 std::string Panel(const mapping::KitchenMap& map) {
@@ -153,12 +153,12 @@ ReportPage KitchenReportPage(const PointCloud& cloud, const mapping::KitchenMap&
     cj["finite"] = finite.size();
     cj["origin"] = {lo.x(), lo.y(), lo.z()};
     cj["scale"] = {scale.x(), scale.y(), scale.z()};
-    cj["positions"] = Base64(q);
-    cj["colors"] = rgb.empty() ? nlohmann::json(nullptr) : nlohmann::json(Base64(rgb));
+    cj["positions"] = KitchenBase64(q);
+    cj["colors"] = rgb.empty() ? nlohmann::json(nullptr) : nlohmann::json(KitchenBase64(rgb));
     cj["object_bytes"] = wide ? 2 : 1;
-    cj["objects"] = wide ? Base64(objects16) : Base64(objects8);
-    cj["categories"] = Base64(classes);
-    cj["parts"] = Base64(parts);
+    cj["objects"] = wide ? KitchenBase64(objects16) : KitchenBase64(objects8);
+    cj["categories"] = KitchenBase64(classes);
+    cj["parts"] = KitchenBase64(parts);
     const Eigen::Vector3f ext = hi - lo;
     cj["point_size"] = std::max(
         0.004f, 1.5f * std::sqrt(std::max(1e-6f, ext.x() * ext.y()) /
