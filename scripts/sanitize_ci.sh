@@ -28,16 +28,22 @@ fi
 stages=("$@")
 if [[ ${#stages[@]} -eq 0 ]]; then stages=(asan tsan); fi
 
-# The CI scope: the readers (PCD, PLY, OBJ, configuration, PointCloud2, ROS bags, URDF) and the
-# core, search, filters and normals code under ASan + UBSan; under TSan the parallel loops of the
+# The CI scope: the readers (PCD, PLY, OBJ, configuration, PointCloud2, ROS bags, URDF, datasets
+# and classifier files, part-graph models, the object database's import, tasks) and the core,
+# search, filters and normals code under ASan + UBSan; under TSan the parallel loops of the
 # core, of perceive's stages (normals, filters, region growing and part segmentation, sample
 # consensus, part features), of the simulator, of perceive itself (objects categorised and
 # modelled in parallel, batches of frames) and of part-graph training.
 ci_asan_tests=(test_core test_pcd test_config test_ply_obj test_point_cloud2 test_ros_bags test_urdf
-               test_search test_filters test_normals)
+               test_search test_filters test_normals test_ml test_part_graph test_object_database
+               test_executive)
 ci_tsan_tests=(test_core test_normals test_filters test_clustering test_convexity_split
                test_sample_consensus test_features test_sim test_perceive
                test_part_graph_training)
+# Part-graph training runs 20 times slower under TSan (215 s for its four tests): the CI scope runs
+# the two that train on several threads, turntable views and perceived table scenes.
+declare -A ci_tsan_filter=(
+    [test_part_graph_training]="PartGraphTraining.DeterministicAcrossThreads:PartGraphTraining.TableScenesAddPerceivedObjects")
 
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
         -DMULTICUE_BUILD_BENCH=OFF -DMULTICUE_BUILD_EVAL=OFF -DMULTICUE_BUILD_EXAMPLES=OFF
@@ -83,7 +89,11 @@ for stage in "${stages[@]}"; do
             built=$(seconds)
             for t in "${tests[@]}"; do
                 echo "sanitize_ci.sh: $t under ThreadSanitizer"
-                "build-tsan/tests/$t" --gtest_brief=1
+                filter="*"
+                if [[ $full -eq 0 && -n "${ci_tsan_filter[$t]:-}" ]]; then
+                    filter="${ci_tsan_filter[$t]}"
+                fi
+                "build-tsan/tests/$t" --gtest_brief=1 --gtest_filter="$filter"
             done
             ;;
         *)
