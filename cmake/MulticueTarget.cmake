@@ -12,7 +12,7 @@ endfunction()
 # from src/ in the build tree and from include/ once installed.
 #
 # With MULTICUE_BATCH_MODULES (the default) a module's source files compile in batches of five
-# (cmake/MulticueBatches.cmake): a cold build of the library takes about a third less compiler
+# (cmake/MulticueBatches.cmake): a cold build of the library takes about half the compiler
 # time. Files generated in the build folder and those listed after UNBATCHED compile on their own.
 # Turn it off when editing one module's files over and over: a change then recompiles one file,
 # not its batch.
