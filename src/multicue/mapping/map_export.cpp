@@ -9,6 +9,16 @@
 #include "multicue/mapping/containers.hpp"
 
 namespace multicue::mapping {
+
+Eigen::Matrix3f FrontRotation(const Front& f) {
+    Eigen::Matrix3f R;
+    R.col(0) = f.u_axis;
+    R.col(1) = f.normal;
+    R.col(2) = f.v_axis;
+    if (R.determinant() < 0) R.col(0) = -R.col(0);
+    return R;
+}
+
 namespace {
 
 using nlohmann::ordered_json;
@@ -42,16 +52,6 @@ io::UrdfVisual Box(const std::string& name, const Eigen::Isometry3d& origin,
     v.rgba = rgba;
     v.material = name + "_material";
     return v;
-}
-
-/// A right-handed rotation whose columns are the front's u, normal and v.
-Eigen::Matrix3f FrontRotation(const Front& f) {
-    Eigen::Matrix3f R;
-    R.col(0) = f.u_axis;
-    R.col(1) = f.normal;
-    R.col(2) = f.v_axis;
-    if (R.determinant() < 0) R.col(0) = -R.col(0);
-    return R;
 }
 
 }  // namespace

@@ -16,6 +16,10 @@
 
 namespace multicue::mapping {
 
+/// A right-handed rotation whose columns are the front's u axis, normal and v axis (the u axis
+/// flipped where the three are left-handed): the front's orientation in the map exports.
+Eigen::Matrix3f FrontRotation(const Front& f);
+
 /// The map as JSON ("format": "multicue.kitchen-map/1"; docs/kitchens.md describes the keys).
 nlohmann::ordered_json KitchenMapJson(const KitchenMap& map);
 

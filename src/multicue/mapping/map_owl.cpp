@@ -11,16 +11,6 @@
 namespace multicue::mapping {
 namespace {
 
-/// A right-handed rotation whose columns are the front's u, normal and v.
-Eigen::Matrix3f OwlFrontRotation(const Front& f) {
-    Eigen::Matrix3f R;
-    R.col(0) = f.u_axis;
-    R.col(1) = f.normal;
-    R.col(2) = f.v_axis;
-    if (R.determinant() < 0) R.col(0) = -R.col(0);
-    return R;
-}
-
 /// KnowRob's class of a container type.
 const char* KnowRobClass(const std::string& type) {
     if (type == "drawer_unit") return "Cupboard";  // a cupboard of drawers
@@ -167,7 +157,7 @@ std::string KitchenMapOwl(const KitchenMap& map, const std::string& name) {
         for (const int x : fr.fixtures) {
             OwlWriter::Link(e, "properPhysicalParts", w.Iri(fmt::format("Fixture_{}", x)));
         }
-        w.PoseOf(id, OwlFrontRotation(fr), fr.center);
+        w.PoseOf(id, FrontRotation(fr), fr.center);
         if (a.type == JointType::kUnknown) continue;
         const std::string jid = fmt::format("Joint_{}", i);
         TiXmlElement* j =

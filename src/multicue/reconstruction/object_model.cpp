@@ -37,8 +37,7 @@ Eigen::Vector3f PlaneUp(const Eigen::Vector4f& plane) {
 std::optional<PointCloud> RaysThroughBox(const PointCloud& cloud, const Eigen::Vector3f& lo,
                                          const Eigen::Vector3f& hi, float voxel_size) {
     PointCloud out;
-    const std::nullopt_t all = std::nullopt;
-    if (!cloud.IsOrganized()) return all;
+    if (!cloud.IsOrganized()) return std::nullopt;
     const Eigen::Matrix3f to_sensor = cloud.sensor_orientation.conjugate().toRotationMatrix();
     auto local = [&](const Eigen::Vector3f& p) -> Eigen::Vector3f {
         return to_sensor * (p - cloud.sensor_origin);
@@ -56,7 +55,7 @@ std::optional<PointCloud> RaysThroughBox(const PointCloud& cloud, const Eigen::V
             samples.emplace_back(u, v, q.x() / q.z(), q.y() / q.z());
         }
     }
-    if (samples.size() < 20) return all;
+    if (samples.size() < 20) return std::nullopt;
     for (const auto& s : samples) {
         const Eigen::Vector2d xu(s[0], 1.0), xv(s[1], 1.0);
         su += xu * xu.transpose();
@@ -64,21 +63,21 @@ std::optional<PointCloud> RaysThroughBox(const PointCloud& cloud, const Eigen::V
         bu += xu * s[2];
         bv += xv * s[3];
     }
-    if (std::abs(su.determinant()) < 1e-9 || std::abs(sv.determinant()) < 1e-9) return all;
+    if (std::abs(su.determinant()) < 1e-9 || std::abs(sv.determinant()) < 1e-9) return std::nullopt;
     const Eigen::Vector2d fu = su.ldlt().solve(bu), fv = sv.ldlt().solve(bv);
-    if (std::abs(fu[0]) < 1e-9 || std::abs(fv[0]) < 1e-9) return all;
+    if (std::abs(fu[0]) < 1e-9 || std::abs(fv[0]) < 1e-9) return std::nullopt;
     double worst = 0.0;
     for (const auto& s : samples) {
         worst = std::max(worst, std::abs((s[2] - fu[1]) / fu[0] - s[0]));
         worst = std::max(worst, std::abs((s[3] - fv[1]) / fv[0] - s[1]));
     }
-    if (worst > 1.0) return all;  // not a pinhole frame in the sensor's coordinates
+    if (worst > 1.0) return std::nullopt;  // not a pinhole frame in the sensor's coordinates
     double u0 = std::numeric_limits<double>::max(), u1 = -u0, v0 = u0, v1 = -u0, far = 0.0;
     for (int k = 0; k < 8; ++k) {
         const Eigen::Vector3f corner((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(),
                                      (k & 4) ? hi.z() : lo.z());
         const Eigen::Vector3f q = local(corner);
-        if (!(q.z() > 1e-3f)) return all;  // the box reaches behind the sensor
+        if (!(q.z() > 1e-3f)) return std::nullopt;  // the box reaches behind the sensor
         far = std::max(far, static_cast<double>(q.z()));
         const double u = (q.x() / q.z() - fu[1]) / fu[0], v = (q.y() / q.z() - fv[1]) / fv[0];
         u0 = std::min(u0, u);

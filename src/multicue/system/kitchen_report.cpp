@@ -33,11 +33,6 @@ std::string_view TypeColor(const std::string& type) {
     return it == names.end() ? "#8c9096" : colors[static_cast<std::size_t>(it - names.begin())];
 }
 
-template <typename T>
-std::string KitchenBase64(const std::vector<T>& v) {
-    return Base64Encode(v.data(), v.size() * sizeof(T));
-}
-
 /// A thin box over a front's rectangle, as a triangle list.
 nlohmann::json FrontMesh(const mapping::Front& f) {
     const Eigen::Vector3f u = f.u_axis * ((f.max.x() - f.min.x()) / 2);
@@ -51,7 +46,7 @@ nlohmann::json FrontMesh(const mapping::Front& f) {
     }
     const std::vector<std::uint32_t> tri = {0, 1, 3, 0, 3, 2, 4, 7, 5, 4, 6, 7, 0, 4, 5, 0, 5, 1,
                                             2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3};
-    return {{"vertices", KitchenBase64(vert)}, {"triangles", KitchenBase64(tri)}};
+    return {{"vertices", Base64Encode(vert)}, {"triangles", Base64Encode(tri)}};
 }
 
 std::string Panel(const mapping::KitchenMap& map) {
@@ -153,12 +148,12 @@ ReportPage KitchenReportPage(const PointCloud& cloud, const mapping::KitchenMap&
     cj["finite"] = finite.size();
     cj["origin"] = {lo.x(), lo.y(), lo.z()};
     cj["scale"] = {scale.x(), scale.y(), scale.z()};
-    cj["positions"] = KitchenBase64(q);
-    cj["colors"] = rgb.empty() ? nlohmann::json(nullptr) : nlohmann::json(KitchenBase64(rgb));
+    cj["positions"] = Base64Encode(q);
+    cj["colors"] = rgb.empty() ? nlohmann::json(nullptr) : nlohmann::json(Base64Encode(rgb));
     cj["object_bytes"] = wide ? 2 : 1;
-    cj["objects"] = wide ? KitchenBase64(objects16) : KitchenBase64(objects8);
-    cj["categories"] = KitchenBase64(classes);
-    cj["parts"] = KitchenBase64(parts);
+    cj["objects"] = wide ? Base64Encode(objects16) : Base64Encode(objects8);
+    cj["categories"] = Base64Encode(classes);
+    cj["parts"] = Base64Encode(parts);
     const Eigen::Vector3f ext = hi - lo;
     cj["point_size"] = std::max(
         0.004f, 1.5f * std::sqrt(std::max(1e-6f, ext.x() * ext.y()) /

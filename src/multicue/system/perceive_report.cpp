@@ -24,11 +24,6 @@ constexpr std::array<std::string_view, kNumCategories> kCategoryColors = {
 
 std::string Hex(const Color& c) { return fmt::format("#{:02x}{:02x}{:02x}", c.r, c.g, c.b); }
 
-template <typename T>
-std::string Base64(const std::vector<T>& v) {
-    return Base64Encode(v.data(), v.size() * sizeof(T));
-}
-
 // The points shown: every finite point up to the budget; beyond it object points are kept (thinned
 // only if they alone exceed it) and the rest is thinned evenly. Input order is kept.
 std::vector<std::size_t> SelectPoints(const PointCloud& cloud, const PerceiveResult& result,
@@ -247,12 +242,12 @@ nlohmann::json CloudJson(const PointCloud& cloud, const PerceiveResult& result,
     j["finite"] = finite;
     j["origin"] = {lo.x(), lo.y(), lo.z()};
     j["scale"] = {scale.x(), scale.y(), scale.z()};
-    j["positions"] = Base64(q);
-    j["colors"] = rgb.empty() ? nlohmann::json(nullptr) : nlohmann::json(Base64(rgb));
+    j["positions"] = Base64Encode(q);
+    j["colors"] = rgb.empty() ? nlohmann::json(nullptr) : nlohmann::json(Base64Encode(rgb));
     j["object_bytes"] = object_bytes;
-    j["objects"] = object_bytes == 1 ? Base64(objects8) : Base64(objects16);
-    j["categories"] = Base64(categories);
-    j["parts"] = Base64(parts);
+    j["objects"] = object_bytes == 1 ? Base64Encode(objects8) : Base64Encode(objects16);
+    j["categories"] = Base64Encode(categories);
+    j["parts"] = Base64Encode(parts);
     j["point_size"] = PointSize(cloud, finite, shown.size(), hi - lo);
     return j;
 }
@@ -263,7 +258,7 @@ nlohmann::json MeshJson(const TriangleMesh& mesh) {
     std::memcpy(v.data(), mesh.vertices.data(), v.size() * sizeof(float));
     std::vector<std::uint32_t> t(mesh.triangles.size() * 3);
     std::memcpy(t.data(), mesh.triangles.data(), t.size() * sizeof(std::uint32_t));
-    return {{"vertices", Base64(v)}, {"triangles", Base64(t)}};
+    return {{"vertices", Base64Encode(v)}, {"triangles", Base64Encode(t)}};
 }
 
 std::string Subtitle(const nlohmann::ordered_json& rj, const PerceiveResult& result,

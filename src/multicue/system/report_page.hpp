@@ -19,6 +19,12 @@ std::string HtmlEscape(std::string_view text);
 /// Standard base64 (RFC 4648, with padding) of `size` bytes; the page's typed arrays use it.
 std::string Base64Encode(const void* data, std::size_t size);
 
+/// The bytes of a vector's elements in base64.
+template <typename T>
+std::string Base64Encode(const std::vector<T>& v) {
+    return Base64Encode(v.data(), v.size() * sizeof(T));
+}
+
 /// True when this build embeds the WebGL viewer (three.js bundled from web/ at build time).
 bool ReportViewerAvailable();
 
