@@ -145,9 +145,9 @@ Run Multicue(RegistrationMethod method) {
         RegistrationParams params = p.params;
         params.method = method;
         params.num_threads = threads;
-        const KdTree ts(p.source), tt(p.target);
+        const KdTree tt(p.target);  // the source's tree is built inside where needed
         const bool global = method == RegistrationMethod::kGlobal;
-        return RegisterPrepared(p.source, ts, p.target, tt, params,
+        return RegisterPrepared(p.source, nullptr, p.target, tt, params,
                                 global ? std::nullopt : std::optional(p.guess), &p.source_frame,
                                 &p.target_frame)
             .T_target_source;

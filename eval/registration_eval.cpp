@@ -123,8 +123,8 @@ std::vector<Method> MakeMethods(const RegistrationEvalOptions& o, const Registra
         m.global = p.method == RegistrationMethod::kGlobal;
         m.run = [p](const PointCloud& s, const PointCloud& t, const PointCloud* s_frame,
                     const PointCloud* t_frame, const std::optional<Eigen::Isometry3d>& guess) {
-            const KdTree ts(s), tt(t);
-            return RegisterPrepared(s, ts, t, tt, p, guess, s_frame, t_frame);
+            const KdTree tt(t);
+            return RegisterPrepared(s, nullptr, t, tt, p, guess, s_frame, t_frame);
         };
         methods.push_back(std::move(m));
     }

@@ -106,6 +106,44 @@ TEST(KdTree, NearestWithinMatchesBruteForce) {
     EXPECT_FALSE(KdTree(PointCloud{}).SearchNearestWithin(c.points[0], 1.0f, i, d2));
 }
 
+// The k nearest within a radius: the brute-force k nearest cut at the radius; its nearest is
+// SearchNearestWithin's, also among duplicated points (ties).
+TEST(KdTree, KnnWithinMatchesBruteForceAndNearestWithin) {
+    PointCloud c = test::RandomCloud(1500, 21);
+    for (std::size_t i = 0; i < 300; ++i) c.points.push_back(c.points[i * 3]);  // exact ties
+    const KdTree tree(c);
+    const PointCloud queries = test::RandomCloud(150, 22, 1.5f);
+    for (const float r : {0.03f, 0.1f, 0.5f}) {
+        for (const auto& q : queries.points) {
+            for (const int k : {1, 2, 5}) {
+                Index idx[5];
+                float d2[5];
+                const std::size_t n = tree.SearchKnnWithin(q, k, r, idx, d2);
+                Indices expected = BruteKnn(c, q, static_cast<std::size_t>(k));
+                std::erase_if(expected, [&](Index i) {
+                    return KdTree::SquaredDistance(c.points[i], q) > r * r;
+                });
+                ASSERT_EQ(n, expected.size());
+                for (std::size_t j = 0; j < n; ++j) {
+                    EXPECT_EQ(d2[j], KdTree::SquaredDistance(c.points[expected[j]], q));
+                }
+                Index nearest = 0;
+                float nearest_d2 = 0.0f;
+                ASSERT_EQ(tree.SearchNearestWithin(q, r, nearest, nearest_d2), n > 0);
+                if (n > 0) {
+                    EXPECT_EQ(idx[0], nearest);
+                    EXPECT_EQ(d2[0], nearest_d2);
+                }
+            }
+        }
+    }
+    Index idx[2];
+    float d2[2];
+    EXPECT_THROW(tree.SearchKnnWithin(c.points[0], 0, 1.0f, idx, d2), InvalidArgument);
+    EXPECT_THROW(tree.SearchKnnWithin(c.points[0], 2, -1.0f, idx, d2), InvalidArgument);
+    EXPECT_EQ(KdTree(PointCloud{}).SearchKnnWithin(c.points[0], 2, 1.0f, idx, d2), 0u);
+}
+
 TEST(KdTree, EmptyAndBadParameters) {
     const KdTree tree{PointCloud{}};
     Indices idx;

@@ -3,12 +3,14 @@
 
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/params.hpp"
+#include "multicue/registration/correspondences.hpp"
 #include "multicue/registration/icp.hpp"
 #include "multicue/registration/preprocess.hpp"
 #include "multicue/registration/register.hpp"
@@ -222,6 +224,50 @@ TEST(Icp, SameResultForAnyThreadCount) {
             EXPECT_EQ(one.inlier_rmse, many.inlier_rmse);
         }
     }
+}
+
+// The correspondence cache of an ICP loop skips searches but never changes a pair: over a
+// converging sequence of estimates (large steps, then ever smaller ones, gates shrinking), Find
+// with one cache gives exactly the pairs of Find without it. Duplicated target points make ties.
+TEST(Icp, CachedCorrespondencesEqualFreshSearches) {
+    const Pair p = TablePair(4.0, {0.03, 0.02, -0.01});
+    PointCloud target = p.target;
+    for (std::size_t i = 0; i < target.size(); i += 7) {
+        target.points.push_back(target.points[i]);
+        target.normals.push_back(target.normals[i]);
+    }
+    target.width = static_cast<std::uint32_t>(target.points.size());
+    const KdTree tree(target);
+    const CorrespondenceSearcher searcher(target, &tree, {.max_distance = 0.02f});
+    Indices subset(p.source.size());
+    std::iota(subset.begin(), subset.end(), Index{0});
+    NearestCache cache;
+    std::vector<Correspondence> cached, fresh;
+    std::size_t pairs = 0;
+    for (int step = 0; step < 30; ++step) {
+        // Estimates approach the truth geometrically, with a jump back at step 12.
+        const double scale = step == 12 ? 1.0 : std::pow(0.6, step % 12);
+        const Eigen::Isometry3d T =
+            p.T_true * MakeTransform(5.0 * scale, Eigen::Vector3d(0.04, -0.03, 0.02) * scale);
+        const float gate = step < 5 ? 0.08f - 0.012f * static_cast<float>(step) : 0.02f;
+        searcher.Find(p.source, subset, T, gate, cached, 1, &cache);
+        searcher.Find(p.source, subset, T, gate, fresh, 1);
+        ASSERT_EQ(cached.size(), fresh.size()) << "step " << step;
+        for (std::size_t k = 0; k < fresh.size(); ++k) {
+            ASSERT_EQ(cached[k].source, fresh[k].source);
+            ASSERT_EQ(cached[k].target, fresh[k].target) << "step " << step;
+            ASSERT_EQ(cached[k].squared_distance, fresh[k].squared_distance);
+        }
+        pairs += fresh.size();
+    }
+    EXPECT_GT(pairs, 30 * p.source.size() / 2);
+    // A cache sized for another subset is reset, not misread.
+    Indices half(subset.begin(), subset.begin() + static_cast<std::ptrdiff_t>(subset.size() / 2));
+    searcher.Find(p.source, half, p.T_true, 0.02f, cached, 1, &cache);
+    searcher.Find(p.source, half, p.T_true, 0.02f, fresh, 1);
+    EXPECT_EQ(cache.entries.size(), half.size());
+    ASSERT_EQ(cached.size(), fresh.size());
+    for (std::size_t k = 0; k < fresh.size(); ++k) EXPECT_EQ(cached[k].target, fresh[k].target);
 }
 
 // Two simulated Kinect frames of one table scene: the projective fast path on the organized

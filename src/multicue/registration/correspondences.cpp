@@ -121,9 +121,56 @@ CorrespondenceSearcher::CorrespondenceSearcher(const PointCloud& target, const K
     }
 }
 
+bool CorrespondenceSearcher::SearchCached(const Eigen::Vector3f& p, float gate,
+                                          NearestCache::Entry& e, Index& index,
+                                          float& squared_distance) const {
+    // Distances move by at most the query's displacement (triangle inequality); the slack
+    // covers the rounding of the single-precision distances.
+    constexpr double kSlack = 1e-5;
+    const double moved = static_cast<double>((p - e.query).norm());  // NaN when never searched
+    // A fresh search looks twice as far as the gate: a point without a partner then learns
+    // how far outside the gate it is, and is not searched again until it has moved that far.
+    double radius = 2.0 * gate;
+    if (moved >= 0.0) {
+        if (e.nearest != kNone) {
+            const double upper = (e.nearest_distance + moved) * (1.0 + kSlack);
+            const double others = (e.second_distance - moved) * (1.0 - kSlack);
+            if (upper < others) {
+                // Still the strict nearest: only its distance changes.
+                squared_distance = KdTree::SquaredDistance(target_.points[e.nearest], p);
+                index = e.nearest;
+                return squared_distance <= gate * gate;
+            }
+            // The two old points are within this of the query: a bound for the new search.
+            if (e.second_exact) {
+                radius = std::min(radius, (e.second_distance + moved) * (1.0 + kSlack));
+            }
+        } else if ((e.nearest_distance - moved) * (1.0 - kSlack) > gate) {
+            return false;  // nothing was within a wider ball
+        }
+    }
+    Index found[2];
+    float d2[2];
+    std::size_t n = tree_->SearchKnnWithin(p, 2, static_cast<float>(radius), found, d2);
+    if (radius < 2.0 * gate && n < 2) {  // rounding defeated the bound
+        radius = 2.0 * gate;
+        n = tree_->SearchKnnWithin(p, 2, static_cast<float>(radius), found, d2);
+    }
+    e.query = p;
+    e.nearest = n > 0 ? found[0] : kNone;
+    e.nearest_distance = n > 0 ? std::sqrt(d2[0]) : static_cast<float>(radius);
+    e.second_exact = n > 1;
+    e.second_distance = n > 1 ? std::sqrt(d2[1]) : static_cast<float>(radius);
+    if (n == 0 || !(d2[0] <= gate * gate)) return false;
+    index = found[0];
+    squared_distance = d2[0];
+    return true;
+}
+
 void CorrespondenceSearcher::Find(const PointCloud& source, const Indices& subset,
                                   const Eigen::Isometry3d& T_target_source, float max_distance,
-                                  std::vector<Correspondence>& out, int num_threads) const {
+                                  std::vector<Correspondence>& out, int num_threads,
+                                  NearestCache* cache) const {
     const float gate = max_distance > 0.0f ? max_distance : params_.max_distance;
     const float gate2 = gate * gate;
     const bool normal_gate =
@@ -137,6 +184,9 @@ void CorrespondenceSearcher::Find(const PointCloud& source, const Indices& subse
     const int h = params_.projective_half_window;
     const auto W = static_cast<int>(target_.width);
     const auto H = static_cast<int>(target_.height);
+    if (cache != nullptr && cache->entries.size() != subset.size()) {
+        cache->entries.assign(subset.size(), NearestCache::Entry{});
+    }
     ParallelForChunks(
         subset.size(), num_threads,
         [&](std::size_t begin, std::size_t end) {
@@ -166,7 +216,8 @@ void CorrespondenceSearcher::Find(const PointCloud& source, const Indices& subse
                 } else {
                     Index j = 0;
                     float d2 = 0.0f;
-                    if (tree_->SearchNearestWithin(p, gate, j, d2)) {
+                    if ((cache != nullptr ? SearchCached(p, gate, cache->entries[k], j, d2)
+                                          : tree_->SearchNearestWithin(p, gate, j, d2))) {
                         best = j;
                         best_d2 = d2;
                     }

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -60,6 +61,20 @@ struct Correspondence {
     float squared_distance = 0.0f;
 };
 
+/// What CorrespondenceSearcher::Find remembers of each subset point's last k-d tree search.
+struct NearestCache {
+    struct Entry {
+        Eigen::Vector3f query = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+        Index nearest = std::numeric_limits<Index>::max();  ///< none when max
+        /// Distance to the nearest point or, without one, a lower bound of it [m]
+        float nearest_distance = 0.0f;
+        /// Distance to the second-nearest point or a lower bound of it [m]
+        float second_distance = 0.0f;
+        bool second_exact = false;  ///< second_distance is the distance of a point
+    };
+    std::vector<Entry> entries;  ///< one per subset point; NaN query = not searched yet
+};
+
 /// The target side of the search, built once per registration.
 class CorrespondenceSearcher {
   public:
@@ -79,11 +94,23 @@ class CorrespondenceSearcher {
     /// (points without a partner are left out); `max_distance` overrides the params' gate when
     /// > 0. Points and normals are taken from `source` (normals optional). The result does not
     /// depend on num_threads.
+    ///
+    /// `cache`, when given, keeps what each subset point's last k-d tree search found, for the
+    /// next call with the same subset (an ICP loop): a point that has moved less than the gap
+    /// between its nearest and second-nearest target points keeps its partner without a search,
+    /// and the other searches start bounded. The result is the same as without the cache. The
+    /// cache is reset when its size is not the subset's; pass one cache per subset.
     void Find(const PointCloud& source, const Indices& subset,
               const Eigen::Isometry3d& T_target_source, float max_distance,
-              std::vector<Correspondence>& out, int num_threads) const;
+              std::vector<Correspondence>& out, int num_threads,
+              NearestCache* cache = nullptr) const;
 
   private:
+    // The nearest target point within `gate` of `p` by the k-d tree, through the point's cache
+    // entry.
+    bool SearchCached(const Eigen::Vector3f& p, float gate, NearestCache::Entry& e, Index& index,
+                      float& squared_distance) const;
+
     const PointCloud& target_;
     const KdTree* tree_;
     CorrespondenceParams params_;

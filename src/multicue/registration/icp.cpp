@@ -93,10 +93,15 @@ NormalSystem PlaneSystem(IcpMethod method, const PointCloud& source, const Point
                 Vector6d J;
                 J.head<3>() = (p - center).cross(n);
                 J.tail<3>() = n;
-                s.H.noalias() += w * J * J.transpose();
+                const Vector6d wJ = w * J;
+                // Upper triangle only: H is symmetric, the lower half is filled below.
+                for (int col = 0; col < 6; ++col) {
+                    for (int row = 0; row <= col; ++row) s.H(row, col) += wJ(row) * J(col);
+                }
                 s.g.noalias() += w * r * J;
                 s.cost += w * r * r;
             }
+            s.H.triangularView<Eigen::StrictlyLower>() = s.H.transpose();
             partial[b] = s;
         },
         1);
@@ -345,10 +350,14 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
     int it = 0;
     const Indices coarse =
         params.coarse_source_points > 0 ? EvenSubset(subset, params.coarse_source_points) : subset;
+    // What each point's previous search found: most searches of the later iterations are
+    // skipped.
+    NearestCache coarse_cache, cache;
     while (it < params.max_iterations) {
         ++it;
-        searcher.Find(source, gate > final_gate ? coarse : subset, T, gate, corr,
-                      params.num_threads);
+        const bool coarse_subset = gate > final_gate && coarse.size() < subset.size();
+        searcher.Find(source, coarse_subset ? coarse : subset, T, gate, corr, params.num_threads,
+                      coarse_subset ? &coarse_cache : &cache);
         if (corr.size() < params.min_correspondences) {
             too_few = true;
             break;
@@ -416,7 +425,7 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
     result.T_target_source = T;
 
     // Final pairs at the final gate: fitness, RMSE, overlap and the constraint analysis.
-    searcher.Find(source, subset, T, final_gate, corr, params.num_threads);
+    searcher.Find(source, subset, T, final_gate, corr, params.num_threads, &cache);
     const float overlap_distance =
         params.overlap_distance > 0.0f ? params.overlap_distance : 0.5f * final_gate;
     double sum2 = 0.0;

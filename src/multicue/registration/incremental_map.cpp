@@ -120,7 +120,7 @@ struct IncrementalMap::Impl {
         const KdTree local_tree(local);
         RegistrationParams p = registration;
         if (p.method == RegistrationMethod::kGlobal) p.method = RegistrationMethod::kPlane;
-        return RegisterPrepared(prepared, prepared_tree, local, local_tree, p, guess);
+        return RegisterPrepared(prepared, &prepared_tree, local, local_tree, p, guess);
     }
 
     void Integrate(const PointCloud& frame, const PointCloud& prepared,
@@ -264,7 +264,7 @@ MapFrameResult IncrementalMap::AddFrame(
             global.method = RegistrationMethod::kGlobal;
             const KdTree last_tree(m.last_prepared);
             const RegistrationResult g =
-                RegisterPrepared(prepared, prepared_tree, m.last_prepared, last_tree, global,
+                RegisterPrepared(prepared, &prepared_tree, m.last_prepared, last_tree, global,
                                  std::nullopt, &frame, &m.last_frame);
             if (g.converged) {
                 RegistrationResult r =

@@ -131,7 +131,7 @@ float SuggestResolution(const PointCloud& cloud) {
 
 namespace {
 
-RegistrationResult Dispatch(const PointCloud& source, const KdTree& source_tree,
+RegistrationResult Dispatch(const PointCloud& source, const KdTree* source_tree_or_null,
                             const PointCloud& target, const KdTree& target_tree,
                             const RegistrationParams& params,
                             const std::optional<Eigen::Isometry3d>& T_init,
@@ -154,6 +154,9 @@ RegistrationResult Dispatch(const PointCloud& source, const KdTree& source_tree,
         return r;
     }
     if (icp.method == IcpMethod::kPointToPoint) icp.method = IcpMethod::kPointToPlane;
+    std::optional<KdTree> own_tree;
+    if (source_tree_or_null == nullptr) own_tree.emplace(source);
+    const KdTree& source_tree = own_tree ? *own_tree : *source_tree_or_null;
     PointPlaneParams point_plane = params.point_plane;
     point_plane.icp = icp;
     PlaneExtractionParams planes = params.planes;
@@ -233,7 +236,7 @@ void CheckAgainstFreeSpace(const PointCloud& source, const PointCloud& target,
     }
 }
 
-RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree& source_tree,
+RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree* source_tree,
                                     const PointCloud& target, const KdTree& target_tree,
                                     const RegistrationParams& params,
                                     const std::optional<Eigen::Isometry3d>& T_init,
@@ -276,8 +279,8 @@ RegistrationResult Register(const PointCloud& source, const PointCloud& target,
         r.reason = s.empty() ? "source has no finite point" : "target has no finite point";
         return r;
     }
-    const KdTree ts(s), tt(t);
-    RegistrationResult r = RegisterPrepared(s, ts, t, tt, params, T_init, &source, &target);
+    const KdTree tt(t);
+    RegistrationResult r = RegisterPrepared(s, nullptr, t, tt, params, T_init, &source, &target);
     r.time_ms = MsSince(start);
     return r;
 }

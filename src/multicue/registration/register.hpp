@@ -85,8 +85,9 @@ RegistrationResult Register(const PointCloud& source, const PointCloud& target,
 
 /// The same on clouds already preprocessed (normals present) with their trees; the raw frames
 /// (organized; with colours for RGB keypoints) may be given for RGB keypoints and the free-space
-/// check (null: none).
-RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree& source_tree,
+/// check (null: none). Only the plane and global methods search the source: its tree may be null,
+/// and is then built here when the method needs it.
+RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree* source_tree,
                                     const PointCloud& target, const KdTree& target_tree,
                                     const RegistrationParams& params,
                                     const std::optional<Eigen::Isometry3d>& T_init,

@@ -30,8 +30,9 @@ inline float Positive(float x) { return 0.5f * (x + std::abs(x)); }
 // Squared length summed in one fixed order, for point distances and box bounds alike: rounding
 // is monotonic, so a box bound never exceeds the distance of a point in the box.
 inline float SquaredLength(float x, float y, float z) { return x * x + (y * y + z * z); }
+// Point distances as KdTree::SquaredDistance computes them for callers.
 inline float SquaredDistance(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-    return SquaredLength(a.x() - b.x(), a.y() - b.y(), a.z() - b.z());
+    return KdTree::SquaredDistance(a, b);
 }
 
 // Squared distance from q to the nearest point of the node's box (0 inside).
@@ -382,6 +383,22 @@ bool KdTree::SearchNearestWithin(const Eigen::Vector3f& query, float max_distanc
     index = impl_->cloud_index[i];
     squared_distance = d;
     return true;
+}
+
+std::size_t KdTree::SearchKnnWithin(const Eigen::Vector3f& query, int k, float max_distance,
+                                    Index* indices, float* squared_distances) const {
+    if (k <= 0) throw InvalidArgument(fmt::format("k must be > 0, got {}", k));
+    if (!(max_distance > 0.0f) || !std::isfinite(max_distance)) {
+        throw InvalidArgument(
+            fmt::format("nearest search max_distance must be > 0, got {}", max_distance));
+    }
+    if (empty()) return 0;
+    KnnSet set(static_cast<std::size_t>(k),
+               std::nextafter(max_distance * max_distance, std::numeric_limits<float>::infinity()),
+               indices, squared_distances);
+    impl_->Knn(query, set);
+    for (std::size_t i = 0; i < set.size(); ++i) indices[i] = impl_->cloud_index[indices[i]];
+    return set.size();
 }
 
 }  // namespace multicue

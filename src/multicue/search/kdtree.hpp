@@ -79,6 +79,21 @@ class KdTree {
     bool SearchNearestWithin(const Eigen::Vector3f& query, float max_distance, Index& index,
                              float& squared_distance) const;
 
+    /// The at most k nearest indexed points within `max_distance` of `query` (distance <=
+    /// max_distance), nearest first, written to `indices` (original cloud indices) and
+    /// `squared_distances`, both with room for k. Returns how many were found. The nearest is the
+    /// one SearchNearestWithin returns, ties included. Throws InvalidArgument if k <= 0 or
+    /// max_distance is not > 0 and finite.
+    std::size_t SearchKnnWithin(const Eigen::Vector3f& query, int k, float max_distance,
+                                Index* indices, float* squared_distances) const;
+
+    /// Squared distance between an indexed point and a query, computed exactly as the searches
+    /// compute it.
+    static float SquaredDistance(const Eigen::Vector3f& point, const Eigen::Vector3f& query) {
+        const float x = point.x() - query.x(), y = point.y() - query.y(), z = point.z() - query.z();
+        return x * x + (y * y + z * z);
+    }
+
     /// The nodes, root first (empty for an empty tree).
     const std::vector<Node>& Nodes() const;
     /// The indexed points in tree order: each node covers a contiguous range.
