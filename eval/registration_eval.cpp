@@ -1,6 +1,7 @@
 // registration_eval: how accurately multicue registers scans, side by side with PCL 1.13 and
 // Open3D 0.16 (with -DMULTICUE_BENCH_PEERS=ON and --peers), on
-//   sim   simulated Kinect sequences around table scenes (20+ views, odometry noise per step):
+//   sim   simulated Kinect sequences around table scenes or, with --scene-mode kitchen, along the
+//         units of simulated kitchens (20+ views, odometry noise per step):
 //         consecutive pairs from the odometry guess (rotation / translation error, success
 //         < 2 deg and < 2 cm, wrong results reported as converged), the frame-to-map trajectory
 //         against the true poses, and global registration without a guess on the pairs that
@@ -23,10 +24,13 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <stdexcept>
 
 #include "driver_options.hpp"
 #include "multicue/registration/incremental_map.hpp"
 #include "multicue/registration/plane_registration.hpp"
+#include "multicue/sim/kitchen_library.hpp"
+#include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/sensors.hpp"
 
@@ -86,13 +90,60 @@ double TranslationError(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B) 
     return TranslationNorm(A.inverse() * B);
 }
 
+namespace {
+
+// A robot's head walking along the longest row of units of a kitchen, 1.5 m high, looking at the
+// units 2-2.8 m away (clear of the other rows, as sim::KitchenCameraPoses stands), its gaze
+// swinging 0.4 m left and right of straight ahead.
+std::vector<Eigen::Isometry3f> KitchenWalk(const sim::KitchenScene& kitchen, int views,
+                                           std::uint64_t seed) {
+    if (kitchen.runs.empty()) throw std::runtime_error("the kitchen has no row of units");
+    const auto& run = *std::max_element(
+        kitchen.runs.begin(), kitchen.runs.end(),
+        [](const auto& a, const auto& b) { return a.end - a.begin < b.end - b.begin; });
+    sim::StreamRng rng(seed, 17);
+    const Eigen::Vector3f& n = run.normal;
+    const float depth = std::abs(n.x()) > 0.5f ? kitchen.size.x() : kitchen.size.y();
+    const float dist = std::min(2.8f, depth - 0.95f) - static_cast<float>(rng.Uniform(0.0, 0.15));
+    const float first = run.begin + 0.3f, last = std::max(first, run.end - 0.3f);
+    std::vector<Eigen::Isometry3f> poses;
+    for (int k = 0; k < views; ++k) {
+        const float t = static_cast<float>(k) / static_cast<float>(std::max(1, views - 1));
+        const float along = first + (last - first) * t;
+        Eigen::Vector3f eye = run.origin + run.tangent * along + n * dist;
+        for (const auto& other : kitchen.runs) {
+            const float clear = std::max(other.depth, 0.85f) + 0.3f;
+            const float d = other.normal.dot(eye - other.origin);
+            if (d < clear) eye += other.normal * (clear - d);
+        }
+        eye.x() = std::clamp(eye.x(), 0.3f, kitchen.size.x() - 0.3f);
+        eye.y() = std::clamp(eye.y(), 0.3f, kitchen.size.y() - 0.3f);
+        eye.z() = 1.5f;
+        const float swing = 0.4f * std::sin(3.0f * std::numbers::pi_v<float> * t);
+        Eigen::Vector3f target = run.origin + run.tangent * (along + swing) + n * 0.5f;
+        target.z() = 0.95f;
+        poses.push_back(sim::LookAt(eye, target));
+    }
+    return poses;
+}
+
+}  // namespace
+
 SimSequence MakeSequence(const RegistrationEvalOptions& o, int index) {
     const std::uint64_t seed = o.seed + static_cast<std::uint64_t>(index);
     SimSequence s;
-    const auto mode = sim::ParseTableSceneMode(o.scene_mode);
-    s.scene = sim::MakeTableScene(sim::TableSceneParamsFor(mode), seed);
-    const auto views =
-        sim::TableViewpoints(s.scene, o.views, sim::TableViewpointParamsFor(mode), seed);
+    std::vector<Eigen::Isometry3f> views;
+    if (o.scene_mode == "kitchen") {
+        static const auto library = sim::ReadKitchenLibrary(DataFolder(o) / "meshes" / "kitchen");
+        static sim::KitchenModelCache cache;
+        const sim::KitchenScene kitchen = sim::MakeKitchenScene(library, cache, {}, seed);
+        s.scene = kitchen.scene;
+        views = KitchenWalk(kitchen, o.views, seed);
+    } else {
+        const auto mode = sim::ParseTableSceneMode(o.scene_mode);
+        s.scene = sim::MakeTableScene(sim::TableSceneParamsFor(mode), seed);
+        views = sim::TableViewpoints(s.scene, o.views, sim::TableViewpointParamsFor(mode), seed);
+    }
     const sim::RayCaster caster(s.scene);
     sim::KinectParams kinect;
     kinect.num_threads = o.threads;
@@ -186,7 +237,8 @@ int main(int argc, char** argv) {
     app.add_option("--views", o.views, "views per scene")
         ->capture_default_str()
         ->check(CLI::Range(2, 200));
-    app.add_option("--scene-mode", o.scene_mode, "table scene mode (boxes, mixed, cylindric, ...)")
+    app.add_option("--scene-mode", o.scene_mode,
+                   "table scene mode (boxes, mixed, cylindric, ...) or kitchen")
         ->capture_default_str();
     app.add_option("--noise-m", o.noise_m, "odometry noise per step: translation [m]")
         ->capture_default_str();

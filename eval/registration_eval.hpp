@@ -3,6 +3,7 @@
 // compared (multicue's and, with -DMULTICUE_BENCH_PEERS=ON, PCL's and Open3D's).
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -21,10 +22,10 @@ struct RegistrationEvalOptions {
     std::uint64_t seed = 1;    // first scene seed (scene s uses seed + s)
     int scenes = 3;
     int views = 24;
-    std::string scene_mode = "mixed";
-    double noise_m = 0.05;     // odometry noise per step: translation [m] ...
-    double noise_deg = 5.0;    // ... and rotation [deg]
-    float resolution = 0.01f;  // voxel of the sim evaluations [m]
+    std::string scene_mode = "mixed";  // a table scene mode, or "kitchen"
+    double noise_m = 0.05;             // odometry noise per step: translation [m] ...
+    double noise_deg = 5.0;            // ... and rotation [deg]
+    float resolution = 0.01f;          // voxel of the sim evaluations [m]
     // Overrides of the registration parameters (negative: keep ForResolution's).
     float gate = -1.0f;
     float initial_gate = -1.0f;
@@ -59,9 +60,11 @@ struct SimSequence {
     std::vector<PointCloud> frames;           // organized Kinect frames, camera frame
 };
 
-/// Scene `index` of the options: the table scene of seed + index, views around it, Kinect
-/// frames, and odometry whose every step is the true step times a perturbation of exactly
-/// noise_deg about a random axis and noise_m along a random direction.
+/// Scene `index` of the options: the table scene of seed + index and views around it, or for
+/// scene_mode "kitchen" a simulated kitchen of the shared articulated models and views of a
+/// robot walking along its longest row of units; Kinect frames, and odometry whose every step is
+/// the true step times a perturbation of exactly noise_deg about a random axis and noise_m along a
+/// random direction.
 SimSequence MakeSequence(const RegistrationEvalOptions& o, int index);
 
 /// A perturbation of exactly `deg` about a random axis and `m` along a random direction.
@@ -88,6 +91,9 @@ struct Method {
 std::vector<Method> MakeMethods(const RegistrationEvalOptions& o, const RegistrationParams& params,
                                 const std::vector<std::string>& names,
                                 const std::vector<double>& peer_gates, bool peers_global);
+
+/// The shared data folder: --data, else $MULTICUE_DATA, else the configured one.
+std::filesystem::path DataFolder(const RegistrationEvalOptions& o);
 
 /// Modes.
 int RunSim(const RegistrationEvalOptions& o);

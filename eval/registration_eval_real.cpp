@@ -21,13 +21,13 @@ struct RealPair {
     std::optional<Eigen::Isometry3d> guess;  // nothing: identity for local methods
 };
 
+}  // namespace
+
 std::filesystem::path DataFolder(const RegistrationEvalOptions& o) {
     if (!o.data.empty()) return o.data;
     if (const char* env = std::getenv("MULTICUE_DATA")) return env;
     return MULTICUE_SHARED_DATA_DIR;
 }
-
-}  // namespace
 
 int RunReal(const RegistrationEvalOptions& o) {
     const auto scans = DataFolder(o) / "scans";

@@ -241,8 +241,13 @@ TEST(KitchenCli, SimulateThenMapWithSharedModels) {
         opened =
             " --opened " + (sim_dir / kitchen["opened"][0]["file"].get<std::string>()).string();
     }
-    r = test::RunCli("map kitchen " + (sim_dir / frame).string() + opened + " -q --out " +
-                     map_dir.string());
+    // The fixture classifier of `train fixtures` (one small kitchen) serves `map kitchen`.
+    const auto fixtures = dir / "fixtures.mcm";
+    r = test::RunCli("train fixtures --kitchens 1 --views 1 -q --out " + fixtures.string() +
+                     " --kitchen " + KitchenModels().string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    r = test::RunCli("map kitchen " + (sim_dir / frame).string() + opened + " -q --fixtures " +
+                     fixtures.string() + " --out " + map_dir.string());
     ASSERT_EQ(r.code, 0) << r.output;
     for (const char* f : {"map.json", "map.urdf", "map.owl", "labels.pcd", "report.html"}) {
         EXPECT_TRUE(std::filesystem::is_regular_file(map_dir / f)) << f;
@@ -294,6 +299,13 @@ TEST(KitchenCli, BadInputWritesNothing) {
               2);
     EXPECT_EQ(test::RunCli("map kitchen --out " + (dir / "e").string()).code, 2);
     EXPECT_FALSE(std::filesystem::exists(dir / "c"));
+    for (const std::string bad :
+         {"--sensor sonar", "--kitchens 0", "--classifier bogus", "--split half", "--views -1"}) {
+        r = test::RunCli("train fixtures " + bad + " --out " + (dir / "f.mcm").string());
+        EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    }
+    EXPECT_EQ(test::RunCli("train fixtures --out " + (dir / "none" / "f.mcm").string()).code, 2);
+    EXPECT_FALSE(std::filesystem::exists(dir / "f.mcm"));
 }
 
 }  // namespace

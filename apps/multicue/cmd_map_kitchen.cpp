@@ -168,8 +168,7 @@ void AddMapKitchenCommand(CLI::App& map_command, const GlobalOptions& global) {
     cmd->add_option("--containers", o->containers,
                     "container classifier (multicue model file); default: rules");
     cmd->add_option("--fixtures", o->fixtures,
-                    "fixture classifier of the sensor (kitchen_eval --save-fixtures); default: "
-                    "rules");
+                    "fixture classifier of the sensor (`multicue train fixtures`); default: rules");
     cmd->add_option("--name", o->name, "name of the map in the URDF and OWL files")
         ->capture_default_str();
     cmd->add_flag(

@@ -46,5 +46,6 @@ void AddMapFurnitureCommand(CLI::App& map_command, const GlobalOptions& global);
 void AddDetectFurnitureCommand(CLI::App& app, const GlobalOptions& global);
 /// `train furniture` (cmd_map_furniture.cpp), attached to the `train` command.
 void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& global);
+void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& global);
 
 }  // namespace multicue::cli

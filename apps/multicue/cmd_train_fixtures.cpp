@@ -1,0 +1,98 @@
+// `multicue train fixtures --out MODEL`: the fixture classifier of `map kitchen --fixtures`
+// (thesis section 4.1.2: handles and knobs), trained on simulated kitchens of one half of the
+// articulated kitchen models scanned by one sensor (docs/kitchens.md).
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "default_paths.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/sim/kitchen_library.hpp"
+#include "multicue/training/kitchen_training.hpp"
+
+namespace multicue::cli {
+namespace {
+
+struct TrainFixturesOptions {
+    std::string out;
+    std::string kitchen = DefaultKitchenDir();
+    std::string sensor = "kinect";
+    std::string split = "tune";
+    std::string spec = "rtrees:trees=100";
+    int views = 0;  // 0: 3 Kinect frames or 1 laser sweep per kitchen
+    training::FixtureTrainingOptions t;
+    bool quiet = false;
+};
+
+void TrainFixtures(TrainFixturesOptions& o, int threads) {
+    // Everything checked before any kitchen is simulated.
+    if (o.sensor != "kinect" && o.sensor != "laser") {
+        throw InvalidArgument(fmt::format("--sensor must be kinect or laser, got '{}'", o.sensor));
+    }
+    if (o.views < 0) throw InvalidArgument(fmt::format("--views must be >= 1, got {}", o.views));
+    const bool laser = o.sensor == "laser";
+    o.t.sensor = laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
+    o.t.split = sim::ParseMeshSplit(o.split);
+    o.t.views = o.views > 0 ? o.views : laser ? 1 : 3;
+    o.t.num_threads = threads;
+    o.t.Validate();
+    ml::CreateClassifier(o.spec);  // throws for a bad spec
+    const std::filesystem::path folder = std::filesystem::path(o.out).parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+        throw InvalidArgument(fmt::format("--out: no such folder '{}'", folder.string()));
+    }
+    const auto library = sim::ReadKitchenLibrary(o.kitchen);
+    InstallInterruptHandler();
+    sim::KitchenModelCache cache;
+    Progress progress("kitchens", static_cast<std::size_t>(o.t.kitchens));
+    const ml::Dataset rows = training::CollectFixtureRows(library, cache, o.t, &progress);
+    if (InterruptRequested()) throw Error("train fixtures: interrupted, no model written");
+    progress.Finish();
+    const auto classifier = training::TrainFixtureClassifier(rows, o.spec);
+    classifier->Save(o.out);
+    if (!o.quiet) {
+        std::size_t fixtures = 0;
+        for (const int l : rows.labels) fixtures += l > 0;
+        std::printf(
+            "multicue train fixtures: %s, %d kitchens of the %s half, %zu candidates (%zu handles "
+            "and knobs) -> %s\n",
+            o.sensor.c_str(), o.t.kitchens, o.split.c_str(), rows.rows(), fixtures, o.out.c_str());
+    }
+}
+
+}  // namespace
+
+void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& global) {
+    auto* cmd = train_command.add_subcommand(
+        "fixtures",
+        "Train the handle and knob classifier of `map kitchen --fixtures` on simulated kitchens "
+        "of one sensor");
+    auto o = std::make_shared<TrainFixturesOptions>();
+    cmd->add_option("--out", o->out, "classifier file to write (.mcm)")->required();
+    cmd->add_option("--sensor", o->sensor, "kinect or laser: the scans the classifier will see")
+        ->capture_default_str();
+    cmd->add_option("--kitchen", o->kitchen, "kitchen library (PartNet-Mobility models)")
+        ->capture_default_str();
+    cmd->add_option("--split", o->split,
+                    "library half trained on: tune (the other half stays held out), test, all")
+        ->capture_default_str();
+    cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
+    cmd->add_option("--views", o->views,
+                    "scans per kitchen (default: 3 Kinect frames or 1 laser sweep)");
+    cmd->add_option("--classifier", o->spec, "classifier spec (`multicue ml classifier train`)")
+        ->capture_default_str();
+    cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")
+        ->capture_default_str();
+    cmd->add_flag("-q,--quiet", o->quiet, "no summary");
+    cmd->callback([o, &global] { TrainFixtures(*o, global.threads); });
+}
+
+}  // namespace multicue::cli
