@@ -88,7 +88,7 @@ int RunSim(const RegistrationEvalOptions& o) {
         o.noise_deg, o.resolution, params.icp.correspondences.max_distance, o.threads);
     const double fine = params.icp.correspondences.max_distance;
     const double coarse = params.icp.initial_max_distance;
-    auto local = MakeMethods(o, params, {"plane", "point-to-plane", "symmetric", "icp"},
+    auto local = MakeMethods(o, params, {"plane", "point-to-plane", "symmetric", "icp", "auto"},
                              {fine, coarse}, false);
     auto global = MakeMethods(o, params, {"global"}, {fine}, true);
     std::map<std::string, Tally> pair_tally, global_tally;

@@ -340,6 +340,20 @@ TEST(RegisterPipeline, AutoWithAndWithoutAGuessAndAnyThreadCount) {
     const auto local = Register(a, b, p, test::MakeTransform(3.0, {0.02, 0, 0}) * T);
     EXPECT_TRUE(local.converged) << local.reason;
     EXPECT_LT(test::RotationErrorDeg(local.T_target_source, T), 0.3);
+    // A guess far outside the reach of local alignment: `plane` alone fails, `auto` then aligns
+    // without the guess.
+    const Eigen::Isometry3d far = test::MakeTransform(-60.0, {0.5, 0.4, 0.0}) * T;
+    RegistrationParams plane = p;
+    plane.method = RegistrationMethod::kPlane;
+    const auto lost = Register(a, b, plane, far);
+    EXPECT_FALSE(lost.converged && test::RotationErrorDeg(lost.T_target_source, T) < 1.0);
+    const auto recovered = Register(a, b, p, far);
+    EXPECT_TRUE(recovered.converged) << recovered.reason;
+    EXPECT_LT(test::RotationErrorDeg(recovered.T_target_source, T), 0.3);
+    EXPECT_LT(test::TranslationError(recovered.T_target_source, T), 0.003);
+    if (!lost.converged) {
+        EXPECT_NE(recovered.reason.find("without it"), std::string::npos) << recovered.reason;
+    }
     // Empty and NaN-only input: flagged, not thrown.
     EXPECT_EQ(Register(PointCloud{}, b, p).status, RegistrationStatus::kEmptyInput);
 }

@@ -130,9 +130,11 @@ void AddRegisterCommand(CLI::App& app, const GlobalOptions& global) {
     auto o = std::make_shared<RegisterOptions>();
     cmd->add_option("SOURCE", o->source, "scan to move (.pcd or .ply)")->required();
     cmd->add_option("TARGET", o->target, "scan to align to")->required();
-    cmd->add_option("--method", o->method,
-                    "icp (point-to-point), point-to-plane, symmetric, plane (points and planes), "
-                    "global (no guess needed), auto (plane with --init, else global)")
+    cmd->add_option(
+           "--method", o->method,
+           "icp (point-to-point), point-to-plane, symmetric, plane (points and planes), "
+           "global (no guess needed), auto (plane with --init, global if that fails or without "
+           "--init)")
         ->capture_default_str();
     cmd->add_option("--init", o->init,
                     "initial guess of T_target_source: 12 or 16 comma-separated numbers (rows), "

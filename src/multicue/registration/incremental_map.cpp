@@ -119,7 +119,10 @@ struct IncrementalMap::Impl {
         }
         const KdTree local_tree(local);
         RegistrationParams p = registration;
-        if (p.method == RegistrationMethod::kGlobal) p.method = RegistrationMethod::kPlane;
+        // From the guess only: the map has its own fallback (global against the last frame).
+        if (p.method == RegistrationMethod::kGlobal || p.method == RegistrationMethod::kAuto) {
+            p.method = RegistrationMethod::kPlane;
+        }
         return RegisterPrepared(prepared, &prepared_tree, local, local_tree, p, guess);
     }
 

@@ -243,10 +243,27 @@ RegistrationResult RegisterPrepared(const PointCloud& source, const KdTree* sour
                                     const PointCloud* source_frame,
                                     const PointCloud* target_frame) {
     params.Validate();
-    RegistrationResult r = Dispatch(source, source_tree, target, target_tree, params, T_init,
-                                    source_frame, target_frame);
-    if (params.free_space.enabled) {
-        CheckAgainstFreeSpace(source, target, source_frame, target_frame, params.free_space, r);
+    const auto start = std::chrono::steady_clock::now();
+    const auto run = [&](const RegistrationParams& p, const std::optional<Eigen::Isometry3d>& T) {
+        RegistrationResult r =
+            Dispatch(source, source_tree, target, target_tree, p, T, source_frame, target_frame);
+        if (p.free_space.enabled) {
+            CheckAgainstFreeSpace(source, target, source_frame, target_frame, p.free_space, r);
+        }
+        return r;
+    };
+    RegistrationResult r = run(params, T_init);
+    if (params.method == RegistrationMethod::kAuto && T_init && !r.converged) {
+        // The guess led into a wrong minimum (repeated structure: a row of identical cupboard
+        // doors) or too far off: align without it.
+        RegistrationParams global = params;
+        global.method = RegistrationMethod::kGlobal;
+        RegistrationResult g = run(global, std::nullopt);
+        if (g.converged) {
+            g.reason = fmt::format("from the guess: {}; without it: {}", r.reason, g.reason);
+            r = std::move(g);
+        }
+        r.time_ms = MsSince(start);
     }
     return r;
 }
