@@ -33,7 +33,7 @@ enum class RegistrationMethod {
     kSymmetric,     ///< symmetric ICP
     kPlane,         ///< points and planes from the guess
     kGlobal,        ///< planes, else features, without a guess; then points and planes
-    kAuto,  ///< kPlane with a guess, then kGlobal if that fails; kGlobal without a guess
+    kAuto,          ///< kPlane with a guess, then kGlobal if that fails; kGlobal without a guess
 };
 
 /// "icp", "point-to-plane", "symmetric", "plane", "global", "auto"; and back (InvalidArgument

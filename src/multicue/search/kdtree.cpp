@@ -367,22 +367,7 @@ bool KdTree::SearchNearest(const Eigen::Vector3f& query, Index& index,
 
 bool KdTree::SearchNearestWithin(const Eigen::Vector3f& query, float max_distance, Index& index,
                                  float& squared_distance) const {
-    if (!(max_distance > 0.0f) || !std::isfinite(max_distance)) {
-        throw InvalidArgument(
-            fmt::format("nearest search max_distance must be > 0, got {}", max_distance));
-    }
-    if (empty()) return false;
-    Index i = 0;
-    float d = 0.0f;
-    // The set keeps points strictly below its bound: one step above r^2 keeps distance == r.
-    KnnSet set(1,
-               std::nextafter(max_distance * max_distance, std::numeric_limits<float>::infinity()),
-               &i, &d);
-    impl_->Knn(query, set);
-    if (set.size() == 0) return false;
-    index = impl_->cloud_index[i];
-    squared_distance = d;
-    return true;
+    return SearchKnnWithin(query, 1, max_distance, &index, &squared_distance) == 1;
 }
 
 std::size_t KdTree::SearchKnnWithin(const Eigen::Vector3f& query, int k, float max_distance,
@@ -393,6 +378,7 @@ std::size_t KdTree::SearchKnnWithin(const Eigen::Vector3f& query, int k, float m
             fmt::format("nearest search max_distance must be > 0, got {}", max_distance));
     }
     if (empty()) return 0;
+    // The set keeps points strictly below its bound: one step above r^2 keeps distance == r.
     KnnSet set(static_cast<std::size_t>(k),
                std::nextafter(max_distance * max_distance, std::numeric_limits<float>::infinity()),
                indices, squared_distances);
