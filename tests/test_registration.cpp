@@ -268,6 +268,21 @@ TEST(Icp, CachedCorrespondencesEqualFreshSearches) {
     EXPECT_EQ(cache.entries.size(), half.size());
     ASSERT_EQ(cached.size(), fresh.size());
     for (std::size_t k = 0; k < fresh.size(); ++k) EXPECT_EQ(cached[k].target, fresh[k].target);
+    // The target registered to itself: a query on a duplicated point has both old partners at
+    // distance 0, and a second search from the same pose must not bound itself to radius 0.
+    Indices all(target.size());
+    std::iota(all.begin(), all.end(), Index{0});
+    NearestCache self;
+    for (int repeat = 0; repeat < 2; ++repeat) {
+        ASSERT_NO_THROW(
+            searcher.Find(target, all, Eigen::Isometry3d::Identity(), 0.02f, cached, 1, &self));
+        searcher.Find(target, all, Eigen::Isometry3d::Identity(), 0.02f, fresh, 1);
+        ASSERT_EQ(cached.size(), fresh.size());
+        for (std::size_t k = 0; k < fresh.size(); ++k) {
+            EXPECT_EQ(cached[k].target, fresh[k].target);
+            EXPECT_EQ(cached[k].squared_distance, 0.0f);
+        }
+    }
 }
 
 // Two simulated Kinect frames of one table scene: the projective fast path on the organized

@@ -141,9 +141,15 @@ bool CorrespondenceSearcher::SearchCached(const Eigen::Vector3f& p, float gate,
                 index = e.nearest;
                 return squared_distance <= gate * gate;
             }
-            // The two old points are within this of the query: a bound for the new search.
-            if (e.second_exact) {
-                radius = std::min(radius, (e.second_distance + moved) * (1.0 + kSlack));
+            // The two old points are still candidates: the farther of them bounds the new
+            // search (a positive bound: duplicate points may both lie on the query).
+            if (e.second != kNone) {
+                const float bound2 = std::max(KdTree::SquaredDistance(target_.points[e.nearest], p),
+                                              KdTree::SquaredDistance(target_.points[e.second], p));
+                if (bound2 > 0.0f) {
+                    radius =
+                        std::min(radius, std::sqrt(static_cast<double>(bound2)) * (1.0 + kSlack));
+                }
             }
         } else if ((e.nearest_distance - moved) * (1.0 - kSlack) > gate) {
             return false;  // nothing was within a wider ball
@@ -159,7 +165,7 @@ bool CorrespondenceSearcher::SearchCached(const Eigen::Vector3f& p, float gate,
     e.query = p;
     e.nearest = n > 0 ? found[0] : kNone;
     e.nearest_distance = n > 0 ? std::sqrt(d2[0]) : static_cast<float>(radius);
-    e.second_exact = n > 1;
+    e.second = n > 1 ? found[1] : kNone;
     e.second_distance = n > 1 ? std::sqrt(d2[1]) : static_cast<float>(radius);
     if (n == 0 || !(d2[0] <= gate * gate)) return false;
     index = found[0];

@@ -70,7 +70,8 @@ struct NearestCache {
         float nearest_distance = 0.0f;
         /// Distance to the second-nearest point or a lower bound of it [m]
         float second_distance = 0.0f;
-        bool second_exact = false;  ///< second_distance is the distance of a point
+        /// The second-nearest point (second_distance is then its distance); none when max
+        Index second = std::numeric_limits<Index>::max();
     };
     std::vector<Entry> entries;  ///< one per subset point; NaN query = not searched yet
 };

@@ -21,6 +21,25 @@ namespace {
 // sums are added in order: the result does not depend on the threads.
 constexpr std::size_t kBlock = 512;
 
+// RobustWeight, inlined into the per-pair loops.
+inline double KernelWeight(RobustKernelType type, double r, double k) {
+    const double a = std::abs(r);
+    switch (type) {
+        case RobustKernelType::kHuber:
+            return a <= k ? 1.0 : k / a;
+        case RobustKernelType::kTukey: {
+            if (a >= k) return 0.0;
+            const double u = 1.0 - (a / k) * (a / k);
+            return u * u;
+        }
+        case RobustKernelType::kCauchy:
+            return 1.0 / (1.0 + (a / k) * (a / k));
+        case RobustKernelType::kNone:
+            break;
+    }
+    return 1.0;
+}
+
 // The depth-noise weight of a pair (IcpParams::depth_noise), 1 when it is off.
 struct DepthWeights {
     double k = 0.0;   // sigma = k d^2
@@ -87,7 +106,7 @@ NormalSystem PlaneSystem(IcpMethod method, const PointCloud& source, const Point
                 const Eigen::Vector3d n = ResidualNormal(method, source, target, c, R);
                 if (!n.allFinite()) continue;  // a target pixel without a normal
                 const double r = n.dot(p - q);
-                const double w = RobustWeight(kernel, r, scale) *
+                const double w = KernelWeight(kernel, r, scale) *
                                  depth(source.points[c.source], target.points[c.target]);
                 if (w <= 0.0) continue;
                 Vector6d J;
@@ -126,7 +145,7 @@ bool PointStep(const PointCloud& source, const PointCloud& target,
         a[k] = T * source.points[corr[k].source].cast<double>();
         b[k] = target.points[corr[k].target].cast<double>();
         w[k] =
-            RobustWeight(kernel, std::sqrt(static_cast<double>(corr[k].squared_distance)), scale) *
+            KernelWeight(kernel, std::sqrt(static_cast<double>(corr[k].squared_distance)), scale) *
             depth(source.points[corr[k].source], target.points[corr[k].target]);
     }
     return FitRigidTransform(a, b, w, delta);
@@ -227,23 +246,7 @@ RobustKernelType ParseRobustKernel(const std::string& name) {
         fmt::format("unknown robust kernel '{}' (choices: none, huber, tukey, cauchy)", name));
 }
 
-double RobustWeight(RobustKernelType type, double r, double k) {
-    const double a = std::abs(r);
-    switch (type) {
-        case RobustKernelType::kHuber:
-            return a <= k ? 1.0 : k / a;
-        case RobustKernelType::kTukey: {
-            if (a >= k) return 0.0;
-            const double u = 1.0 - (a / k) * (a / k);
-            return u * u;
-        }
-        case RobustKernelType::kCauchy:
-            return 1.0 / (1.0 + (a / k) * (a / k));
-        case RobustKernelType::kNone:
-            break;
-    }
-    return 1.0;
-}
+double RobustWeight(RobustKernelType type, double r, double k) { return KernelWeight(type, r, k); }
 
 double DepthNoiseWeight(double d_source, double d_target, double depth_noise, double noise_floor) {
     if (depth_noise <= 0.0) return 1.0;

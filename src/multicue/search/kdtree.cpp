@@ -200,14 +200,23 @@ struct KdTree::Impl {
 
     // Best-first descent: the nearer child first, the other one only if its box can still hold
     // a point nearer than the current bound.
-    void Knn(const Eigen::Vector3f& q, KnnSet& set) const {
+    void Knn(const Eigen::Vector3f& query, KnnSet& set) const {
         if (nodes.empty()) return;
-        std::array<std::pair<Index, float>, kMaxDepth> stack;
+        // Local copies of the query and the bound: the set's writes could otherwise alias them,
+        // and the compiler would reload both for every point.
+        const Eigen::Vector3f q = query;
+        float bound = set.Bound();
+        // Left uninitialised: std::pair would zero all of it on every search.
+        struct Pending {
+            Index node;
+            float distance;
+        };
+        std::array<Pending, kMaxDepth> stack;
         std::size_t top = 0;
         Index n = 0;
         float d = BoxDistanceSquared(nodes[0], q);
         for (;;) {
-            if (d < set.Bound()) {
+            if (d < bound) {
                 const Node& node = nodes[n];
                 if (!node.IsLeaf()) {
                     Index near = n + 1, far = node.second_child;
@@ -217,20 +226,23 @@ struct KdTree::Impl {
                         std::swap(near, far);
                         std::swap(d_near, d_far);
                     }
-                    if (d_far < set.Bound()) stack[top++] = {far, d_far};
+                    if (d_far < bound) stack[top++] = {far, d_far};
                     n = near;
                     d = d_near;
                     continue;
                 }
                 for (Index i = node.begin; i < node.end; ++i) {
                     const float di = SquaredDistance(points[i], q);
-                    if (di < set.Bound()) set.Add(di, i);
+                    if (di < bound) {
+                        set.Add(di, i);
+                        bound = set.Bound();
+                    }
                 }
             }
             if (top == 0) return;
             --top;
-            n = stack[top].first;
-            d = stack[top].second;
+            n = stack[top].node;
+            d = stack[top].distance;
         }
     }
 
