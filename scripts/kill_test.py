@@ -2,10 +2,11 @@
 """Kills multicue's long jobs at random moments and checks what they leave behind.
 
     scripts/kill_test.py --cli build/multicue [--kills 50] [--jobs train,extract,...] [--seed 1]
-                         [--work DIR] [--json report.json]
+                         [--work DIR] [--json report.json] [--kitchen-models DIR]
 
-For each job (train, extract, simulate, import, run, classifier, convert, furniture, detect) it prepares inputs, runs the job
-once to completion for the reference output and its duration, then N times: puts the previous
+For each job (train, extract, simulate, import, run, classifier, convert, furniture, detect,
+fixtures) it prepares inputs, runs the job once to completion for the reference output and its
+duration, then N times: puts the previous
 output (another complete output) in place, starts the job, kills its process with SIGKILL at a
 uniformly random moment within the reference duration, and checks
 
@@ -409,6 +410,17 @@ class Furniture(SeededFileJob):
         return train_furniture(self.cli, out / self.output, seed)
 
 
+class Fixtures(SeededFileJob):
+    """train fixtures: simulated kitchens of the shared kitchen models (skipped without them)."""
+    name = "fixtures"
+    output = "fixtures.mcm"
+    models = None  # the kitchen model library, from --kitchen-models
+
+    def cmd(self, out, seed=1):
+        return [self.cli, "--threads", "2", "train", "fixtures", "--out", out / self.output,
+                "--kitchens", "1", "--views", "1", "--kitchen", self.models, "--seed", seed, "-q"]
+
+
 class Detect(Job):
     """detect furniture: three outputs (result.json, models.ply, report.html), each written
     atomically; the previous outputs come from a model trained with another seed."""
@@ -476,7 +488,7 @@ class Detect(Job):
 
 
 JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier, Convert,
-                            Furniture, Detect]}
+                            Furniture, Detect, Fixtures]}
 
 
 def run_job(job, kills, rng, report):
@@ -560,12 +572,17 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--work")
     ap.add_argument("--json")
+    ap.add_argument("--kitchen-models", help="kitchen model library of the fixtures job")
     args = ap.parse_args()
+    Fixtures.models = Path(args.kitchen_models) if args.kitchen_models else None
     cli = Path(args.cli).resolve()
     work = Path(args.work) if args.work else Path(tempfile.mkdtemp(prefix="multicue-kill-"))
     rng = random.Random(args.seed)
     report, failed = {}, False
     for name in args.jobs.split(","):
+        if name == "fixtures" and (Fixtures.models is None or not Fixtures.models.is_dir()):
+            print(f"{name}: skipped (no kitchen models: --kitchen-models)", flush=True)
+            continue
         try:
             run_job(JOBS[name](cli, work), args.kills, rng, report)
             print(f"{name}: {json.dumps(report[name])}", flush=True)
