@@ -374,6 +374,67 @@ TEST(BoundingBox, HullDropsInteriorAndCollinearPoints) {
     EXPECT_EQ(MinAreaRectangle({}).Area(), 0.0f);
 }
 
+// Gift wrapping as the oracle: counter-clockwise from the lowest of the leftmost points, the
+// farthest of collinear candidates, so collinear points are never vertices.
+std::vector<Eigen::Vector2f> GiftWrap(const std::vector<Eigen::Vector2f>& pts) {
+    auto cross = [](const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+        const Eigen::Vector2d u = (a - o).cast<double>(), v = (b - o).cast<double>();
+        return u.x() * v.y() - u.y() * v.x();
+    };
+    std::size_t start = 0;
+    for (std::size_t i = 1; i < pts.size(); ++i) {
+        const auto& p = pts[i];
+        const auto& s = pts[start];
+        if (p.x() < s.x() || (p.x() == s.x() && p.y() < s.y())) start = i;
+    }
+    std::vector<Eigen::Vector2f> hull;
+    std::size_t current = start;
+    do {
+        hull.push_back(pts[current]);
+        std::size_t next = current == 0 ? 1 : 0;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            if (pts[i] == pts[current]) continue;
+            const double c = cross(pts[current], pts[next], pts[i]);
+            if (c < 0.0 || (c == 0.0 && (pts[i] - pts[current]).squaredNorm() >
+                                            (pts[next] - pts[current]).squaredNorm())) {
+                next = i;
+            }
+        }
+        current = next;
+    } while (pts[current] != pts[start] && hull.size() <= pts.size());
+    return hull;
+}
+
+// The hull drops interior points before sorting: the result is still exactly the hull, on
+// integer grids with many collinear boundary points and duplicates, on noisy discs and on thin
+// slivers (sets large enough for the early drop to run).
+TEST(BoundingBox, HullEqualsGiftWrapping) {
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> grid(0, 12);
+    std::uniform_real_distribution<float> uni(-1.0f, 1.0f);
+    for (int trial = 0; trial < 30; ++trial) {
+        std::vector<Eigen::Vector2f> pts;
+        const int kind = trial % 3;
+        for (int i = 0; i < 400; ++i) {
+            if (kind == 0) {
+                pts.emplace_back(static_cast<float>(grid(rng)), static_cast<float>(grid(rng)));
+            } else if (kind == 1) {
+                const float a = uni(rng) * kPi, r = std::sqrt(std::abs(uni(rng)));
+                pts.emplace_back(0.3f + 0.1f * r * std::cos(a), -0.2f + 0.1f * r * std::sin(a));
+            } else {
+                const float t = uni(rng);
+                pts.emplace_back(t, 0.01f * t + 1e-4f * uni(rng));
+            }
+        }
+        const auto hull = ConvexHull2d(pts);
+        const auto oracle = GiftWrap(pts);
+        ASSERT_EQ(hull.size(), oracle.size()) << "trial " << trial;
+        for (std::size_t i = 0; i < hull.size(); ++i) {
+            EXPECT_EQ(hull[i], oracle[i]) << "trial " << trial << " vertex " << i;
+        }
+    }
+}
+
 TEST(BoundingBox, OrientedBoundingBoxOfBoxSurface) {
     // Points on all six faces of a rotated box: the oriented box is the box itself.
     const Eigen::Matrix3f R =
