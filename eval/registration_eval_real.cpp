@@ -2,8 +2,9 @@
 // preprocessed clouds from the same guess; every result is scored by the same measure
 // (EvaluateAlignment: nearest-neighbour inlier RMSE and overlap within two resolutions), and the
 // capture sequence by cycle consistency (1->2->3 composed against 1->3 direct). The bunny pair
-// also has a reference pose: each scan registered to the full-resolution Stanford mesh, where the
-// dense target removes the sampling error of a 400-point partner.
+// also has reference poses: each scan registered to the full-resolution Stanford mesh, where the
+// dense target removes the sampling error of a 400-point partner, by several methods (peers
+// included) so that no method is scored against its own reference alone.
 
 #include <chrono>
 #include <cmath>
@@ -23,29 +24,44 @@ struct RealPair {
     std::optional<Eigen::Isometry3d> guess;  // nothing: identity for local methods
 };
 
-// bun0 -> bun4 from registering each scan to the full-resolution mesh with `method` (a
-// symmetric or point-to-plane ICP from the identity: bun0 is in the mesh's frame, bun4 about 35
-// degrees from it); nothing when the mesh is missing or a registration fails.
-std::optional<Eigen::Isometry3d> BunnyReference(const std::filesystem::path& data,
-                                                RegistrationMethod method) {
+// References for bun0 -> bun4: each scan registered to the full-resolution mesh from the
+// identity (bun0 is in the mesh's frame, bun4 about 35 degrees from it) by multicue's symmetric
+// and point-to-plane ICP and, with --peers, PCL's ICP and Open3D's point-to-plane ICP (gate 15
+// mesh resolutions); a method is left out where either registration fails, all of them when
+// the mesh is missing.
+std::vector<std::pair<std::string, Eigen::Isometry3d>> BunnyReferences(
+    const RegistrationEvalOptions& o) {
+    const std::filesystem::path data = DataFolder(o);
     const auto mesh_path = data / "meshes" / "benchmark" / "bun_zipper.ply";
-    if (!std::filesystem::exists(mesh_path)) return std::nullopt;
+    if (!std::filesystem::exists(mesh_path)) return {};
     const PointCloud mesh = io::ReadPointCloud(mesh_path);
-    RegistrationParams params = RegistrationParams::ForResolution(SuggestResolution(mesh));
-    params.method = method;
+    RegistrationEvalOptions ro = o;
+    ro.resolution = SuggestResolution(mesh);
+    const RegistrationParams params = RegistrationParams::ForResolution(ro.resolution);
     const PointCloud t = PreprocessForRegistration(mesh, params.preprocess);
-    const KdTree tt(t);
-    std::optional<Eigen::Isometry3d> to_mesh[2];
-    const char* scans[2] = {"bun0.pcd", "bun4.pcd"};
+    PointCloud scans[2];
+    const char* names[2] = {"bun0.pcd", "bun4.pcd"};
     for (int i = 0; i < 2; ++i) {
-        const PointCloud scan = io::ReadPointCloud(data / "scans" / scans[i]);
-        const PointCloud s = PreprocessForRegistration(scan, params.preprocess);
-        const auto r = RegisterPrepared(s, nullptr, t, tt, params, Eigen::Isometry3d::Identity(),
-                                        nullptr, nullptr);
-        if (!r.converged) return std::nullopt;
-        to_mesh[i] = r.T_target_source;
+        scans[i] = PreprocessForRegistration(io::ReadPointCloud(data / "scans" / names[i]),
+                                             params.preprocess);
     }
-    return to_mesh[1]->inverse() * *to_mesh[0];
+    std::vector<std::pair<std::string, Eigen::Isometry3d>> references;
+    for (const auto& m :
+         MakeMethods(ro, params, {"symmetric", "point-to-plane"}, {15.0 * ro.resolution}, false)) {
+        if (m.name.rfind("multicue", 0) != 0 && m.name != "pcl-icp" &&
+            m.name != "o3d-point-to-plane") {
+            continue;
+        }
+        Eigen::Isometry3d to_mesh[2];
+        bool converged = true;
+        for (int i = 0; i < 2 && converged; ++i) {
+            const auto r = m.run(scans[i], t, nullptr, nullptr, Eigen::Isometry3d::Identity());
+            converged = r.converged;
+            to_mesh[i] = r.T_target_source;
+        }
+        if (converged) references.emplace_back(m.name, to_mesh[1].inverse() * to_mesh[0]);
+    }
+    return references;
 }
 
 }  // namespace
@@ -127,21 +143,32 @@ int RunReal(const RegistrationEvalOptions& o) {
                 order.push_back(m.name);
         }
     }
-    const auto reference = BunnyReference(DataFolder(o), RegistrationMethod::kSymmetric);
-    const auto check = BunnyReference(DataFolder(o), RegistrationMethod::kPointToPlane);
-    if (reference && check) {
+    const auto references = BunnyReferences(o);
+    if (!references.empty()) {
         std::printf(
-            "\nbun0 -> bun4 against the reference from the full-resolution mesh (each scan "
-            "registered to bun_zipper.ply; a point-to-plane reference differs from it by %.3f deg "
-            "/ %.2f mm)\n| method | rotation [deg] | translation [mm] |\n|---|---|---|\n",
-            RotationError(*check, *reference), 1000.0 * TranslationError(*check, *reference));
+            "\nbun0 -> bun4 against references from the full-resolution mesh (each scan "
+            "registered to bun_zipper.ply by the method of the column): rotation [deg] / "
+            "translation [mm]\n| method |");
+        for (const auto& r : references) std::printf(" %s reference |", r.first.c_str());
+        std::printf("\n|---|");
+        for (std::size_t k = 0; k < references.size(); ++k) std::printf("---|");
+        std::printf("\n");
         for (const auto& name : order) {
             const auto f = found[name].find("bun0>bun4");
             if (f == found[name].end()) continue;
-            std::printf("| %s | %.3f | %.2f |\n", name.c_str(),
-                        RotationError(f->second, *reference),
-                        1000.0 * TranslationError(f->second, *reference));
+            std::printf("| %s |", name.c_str());
+            for (const auto& r : references) {
+                std::printf(" %.3f / %.2f |", RotationError(f->second, r.second),
+                            1000.0 * TranslationError(f->second, r.second));
+            }
+            std::printf("\n");
         }
+        std::printf("| (the references against the first) |");
+        for (const auto& r : references) {
+            std::printf(" %.3f / %.2f |", RotationError(r.second, references.front().second),
+                        1000.0 * TranslationError(r.second, references.front().second));
+        }
+        std::printf("\n");
     }
     std::printf(
         "\nCycle consistency: capture0001 -> 0002 -> 0003 composed against 0001 -> 0003\n"

@@ -6,9 +6,9 @@
 
 For each job (train, extract, simulate, import, run, classifier, convert, furniture, detect,
 fixtures) it prepares inputs, runs the job once to completion for the reference output and its
-duration, then N times: puts the previous
-output (another complete output) in place, starts the job, kills its process with SIGKILL at a
-uniformly random moment within the reference duration, and checks
+duration, then N times: puts the previous output (another complete output) in place, starts the
+job, kills its process with SIGKILL at a uniformly random moment within the reference duration,
+and checks
 
 * every output file is either the previous complete file or the new complete one, byte for byte
   (simulate: every frame the manifest lists is complete and equal to the reference; dataset

@@ -56,42 +56,21 @@ double QuarterOffset(double a, double c) {
 
 // Akl-Toussaint: the points extreme in eight directions (the axes and diagonals) lie on the hull,
 // so a point strictly inside their polygon is strictly inside the hull and never one of its
-// vertices. Dropping those before the sort leaves the hull as it was; on object footprints it
-// keeps a few percent of the points.
+// vertices. Dropping those before the sort leaves the hull as it was.
 void DropInterior(std::vector<Eigen::Vector2f>& points) {
     if (points.size() < 64) return;
     // Directions counter-clockwise from -y: the extremes come out in hull order.
-    constexpr int kDirections = 8;
-    const auto score = [](const Eigen::Vector2f& p, int d) {
-        const double x = p.x(), y = p.y();
-        switch (d) {
-            case 0:
-                return -y;
-            case 1:
-                return x - y;
-            case 2:
-                return x;
-            case 3:
-                return x + y;
-            case 4:
-                return y;
-            case 5:
-                return y - x;
-            case 6:
-                return -x;
-            default:
-                return -x - y;
-        }
-    };
+    constexpr std::size_t kDirections = 8;
     std::array<std::size_t, kDirections> extreme{};
     std::array<double, kDirections> best;
     best.fill(-std::numeric_limits<double>::infinity());
     for (std::size_t i = 0; i < points.size(); ++i) {
-        for (int d = 0; d < kDirections; ++d) {
-            const double v = score(points[i], d);
-            if (v > best[static_cast<std::size_t>(d)]) {
-                best[static_cast<std::size_t>(d)] = v;
-                extreme[static_cast<std::size_t>(d)] = i;
+        const double x = points[i].x(), y = points[i].y();
+        const std::array<double, kDirections> score = {-y, x - y, x, x + y, y, y - x, -x, -x - y};
+        for (std::size_t d = 0; d < kDirections; ++d) {
+            if (score[d] > best[d]) {
+                best[d] = score[d];
+                extreme[d] = i;
             }
         }
     }
