@@ -86,8 +86,8 @@ TEST(OrganizedSearch, KnnMatchesBruteForceOverWindow) {
     const PointCloud c = PinholeCloud(40, 30, 33.0f, 5);
     Indices idx;
     std::vector<float> d2;
-    for (const auto& [half, radius, k] :
-         {std::tuple{2, 1.0f, 5}, std::tuple{4, 0.06f, 12}, std::tuple{1, 10.0f, 30}}) {
+    for (const auto& [half, radius, k] : {std::tuple{2, 1.0f, 5}, std::tuple{4, 0.06f, 12},
+                                          std::tuple{1, 10.0f, 30}, std::tuple{3, 0.05f, 16}}) {
         const OrganizedSearchParams p{.half_window = half, .radius = radius};
         for (Index i = 0; i < c.size(); ++i) {
             auto expected = BruteWindow(c, i, half, radius);

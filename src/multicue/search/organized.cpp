@@ -4,6 +4,8 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -61,6 +63,29 @@ inline std::uint64_t Pack(float d2, Index i) {
     return (std::uint64_t{std::bit_cast<std::uint32_t>(d2)} << 32) | i;
 }
 
+// Pixel offsets (dv * width + du) of a whole window, by increasing pixel distance from the
+// centre (rings); cached per thread for the last half-size and width.
+const std::vector<std::ptrdiff_t>& RingOffsets(int half_window, std::size_t width) {
+    thread_local int cached_half = -1;
+    thread_local std::size_t cached_width = 0;
+    thread_local std::vector<std::ptrdiff_t> offsets;
+    if (cached_half == half_window && cached_width == width) return offsets;
+    std::vector<std::pair<int, std::ptrdiff_t>> ring;
+    const auto w = static_cast<std::ptrdiff_t>(width);
+    for (int dv = -half_window; dv <= half_window; ++dv) {
+        for (int du = -half_window; du <= half_window; ++du) {
+            ring.emplace_back(du * du + dv * dv, std::ptrdiff_t{dv} * w + du);
+        }
+    }
+    std::stable_sort(ring.begin(), ring.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    offsets.clear();
+    for (const auto& r : ring) offsets.push_back(r.second);
+    cached_half = half_window;
+    cached_width = width;
+    return offsets;
+}
+
 }  // namespace
 
 std::size_t OrganizedRadiusSearch(const PointCloud& cloud, Index center,
@@ -108,27 +133,38 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
     const std::uint8_t* mask = params.mask.empty() ? nullptr : params.mask.data();
     std::size_t m = 0;
     if (kk <= kInsertionMaxK) {
-        // Small k: keep the best k sorted and insert the rare candidates that beat the worst.
+        // Small k: keep the best k sorted and insert the candidates that beat the worst.
         best.resize(std::min(kk, window));
         const std::size_t cap = best.size();
         std::uint64_t* top = best.data();
-        for (std::size_t v = win.v0; v <= win.v1; ++v) {
-            const Eigen::Vector3f* row = cloud.points.data() + v * w;
-            for (std::size_t u = win.u0; u <= win.u1; ++u) {
-                if (mask != nullptr && mask[v * w + u] == 0) continue;
-                const float d2 = (row[u] - c).squaredNorm();
-                if (!(d2 <= r2)) continue;
-                const std::uint64_t key = Pack(d2, static_cast<Index>(v * w + u));
-                std::size_t j = m;
-                if (m < cap) {
-                    ++m;
-                } else if (key < top[cap - 1]) {
-                    j = cap - 1;
-                } else {
-                    continue;
-                }
-                for (; j > 0 && top[j - 1] > key; --j) top[j] = top[j - 1];
-                top[j] = key;
+        auto consider = [&](std::size_t i) {
+            if (mask != nullptr && mask[i] == 0) return;
+            const float d2 = (cloud.points[i] - c).squaredNorm();
+            if (!(d2 <= r2)) return;
+            const std::uint64_t key = Pack(d2, static_cast<Index>(i));
+            std::size_t j = m;
+            if (m < cap) {
+                ++m;
+            } else if (key < top[cap - 1]) {
+                j = cap - 1;
+            } else {
+                return;
+            }
+            for (; j > 0 && top[j - 1] > key; --j) top[j] = top[j - 1];
+            top[j] = key;
+        };
+        const auto hw = static_cast<std::size_t>(params.half_window);
+        if (win.u1 - win.u0 == 2 * hw && win.v1 - win.v0 == 2 * hw) {
+            // A whole window: nearest pixels first, so that the first k candidates are mostly
+            // the nearest in 3D too and later ones seldom displace them. The keys order
+            // candidates completely, so the scan order does not change the result.
+            const std::vector<std::ptrdiff_t>& offsets = RingOffsets(params.half_window, w);
+            for (const std::ptrdiff_t o : offsets) {
+                consider(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(center) + o));
+            }
+        } else {
+            for (std::size_t v = win.v0; v <= win.v1; ++v) {
+                for (std::size_t u = win.u0; u <= win.u1; ++u) consider(v * w + u);
             }
         }
     } else {

@@ -278,6 +278,14 @@ class HullEdges {
             out = std::max(out, -inward_[k].dot(p - hull_[k]));
         return out;
     }
+    /// Whether Outside(p) <= -margin: p lies at least `margin` inside every edge (stops at the
+    /// first edge it does not; like Outside, an edge giving NaN does not count).
+    bool Inside(const Eigen::Vector3f& p, float margin) const {
+        for (std::size_t k = 0; k < hull_.size(); ++k) {
+            if (-inward_[k].dot(p - hull_[k]) > -margin) return false;
+        }
+        return true;
+    }
 
   private:
     const std::vector<Eigen::Vector3f>& hull_;
@@ -302,7 +310,7 @@ std::size_t CountSupported(const PointCloud& sample_cloud, const Indices& inlier
     const Eigen::Vector3f up = plane.head<3>();
     const HullEdges edges(hull, up);
     const float margin = 2.0f * params.distance_threshold;
-    auto inside = [&](const Eigen::Vector3f& p) { return edges.Outside(p) <= -margin; };
+    auto inside = [&](const Eigen::Vector3f& p) { return edges.Inside(p, margin); };
     const float low = std::max(prism.min_height, params.distance_threshold);
     const float high = std::max(low, prism.max_height);
     const float eye = up.dot(viewpoint) + plane.w();  // > 0: the normal faces the viewpoint
