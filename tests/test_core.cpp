@@ -104,6 +104,22 @@ TEST(Parallel, MoreThreadsThanCoresIsQuietAndGivesTheSameResult) {
     EXPECT_EQ(a, b);
 }
 
+// ParallelSelect keeps the indices in ascending order whatever the thread count and block size.
+TEST(Parallel, SelectKeepsTheSerialOrder) {
+    const auto keep = [](std::size_t i) { return (i * 2654435761u) % 7 < 3; };
+    Indices serial;
+    for (std::size_t i = 0; i < 100003; ++i) {
+        if (keep(i)) serial.push_back(static_cast<Index>(i));
+    }
+    for (const int threads : {1, 2, 0}) {
+        for (const std::size_t grain : {std::size_t{1}, std::size_t{1000}, std::size_t{1 << 20}}) {
+            EXPECT_EQ(ParallelSelect(100003, threads, keep, grain), serial);
+        }
+    }
+    EXPECT_TRUE(ParallelSelect(0, 2, keep).empty());
+    EXPECT_TRUE(ParallelSelect(1000, 2, [](std::size_t) { return false; }).empty());
+}
+
 // Loops nested in a parallel loop (objects in parallel, each with loops of its own) run in the
 // outer loop's threads, isolated: a thread-local buffer used around an inner loop is never taken
 // over by another outer task meanwhile, and the results are the serial ones.

@@ -70,6 +70,24 @@ TEST(PolygonalPrism, HeightAndFootprintLimits) {
     EXPECT_EQ(in, (Indices{0, 4}));
 }
 
+// Many points, some on the hull's corners: the same ascending selection with any thread count.
+TEST(PolygonalPrism, ThreadsGiveTheDirectSelection) {
+    const auto hull = PlaneConvexHull(Square(0.5f, 6), {}, kTable);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> xy(-0.7f, 0.7f), z(0.7f, 1.4f);
+    PointCloud c;
+    for (int k = 0; k < 50000; ++k) c.points.emplace_back(xy(rng), xy(rng), z(rng));
+    for (const auto& h : hull) c.points.push_back(h + Eigen::Vector3f(0, 0, 0.05f));
+    c.SetUnorganized();
+    const PrismParams params{.min_height = 0.01f, .max_height = 0.5f};
+    const Indices serial = PolygonalPrism(c, kTable, hull, params, 1);
+    EXPECT_GT(serial.size(), 1000u);
+    EXPECT_LT(serial.size(), c.size() / 2);
+    EXPECT_TRUE(std::is_sorted(serial.begin(), serial.end()));
+    EXPECT_EQ(PolygonalPrism(c, kTable, hull, params, 2), serial);
+    EXPECT_EQ(PolygonalPrism(c, kTable, hull, params, 0), serial);
+}
+
 TEST(PolygonalPrism, ContractAndEmpty) {
     const auto hull = PlaneConvexHull(Square(0.5f, 2), {}, kTable);
     EXPECT_THROW(

@@ -10,8 +10,10 @@
 #include <tbb/task_arena.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/types.hpp"
 
 #include <functional>
+#include <vector>
 
 namespace multicue {
 
@@ -76,6 +78,29 @@ void ParallelFor(std::size_t n, int num_threads, Body&& body, std::size_t grain 
             for (std::size_t i = begin; i < end; ++i) body(i);
         },
         grain);
+}
+
+/// The i in [0, n) for which keep(i) holds, ascending, whatever the thread count: blocks of
+/// indices are selected in parallel and joined in order.
+template <typename Keep>
+Indices ParallelSelect(std::size_t n, int num_threads, Keep&& keep, std::size_t grain = 16384) {
+    const std::size_t blocks = std::max<std::size_t>(1, (n + grain - 1) / grain);
+    std::vector<Indices> kept(blocks);
+    ParallelFor(
+        blocks, num_threads,
+        [&](std::size_t b) {
+            const std::size_t end = std::min(n, (b + 1) * grain);
+            for (std::size_t i = b * grain; i < end; ++i) {
+                if (keep(i)) kept[b].push_back(static_cast<Index>(i));
+            }
+        },
+        1);
+    std::size_t total = 0;
+    for (const auto& k : kept) total += k.size();
+    Indices out;
+    out.reserve(total);
+    for (const auto& k : kept) out.insert(out.end(), k.begin(), k.end());
+    return out;
 }
 
 }  // namespace multicue

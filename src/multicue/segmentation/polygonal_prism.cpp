@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 
 namespace multicue {
 namespace {
@@ -140,7 +141,8 @@ std::vector<Eigen::Vector3f> PlaneConvexHull(const PointCloud& cloud, const Indi
 }
 
 Indices PolygonalPrism(const PointCloud& cloud, const Eigen::Vector4f& plane,
-                       const std::vector<Eigen::Vector3f>& hull, const PrismParams& params) {
+                       const std::vector<Eigen::Vector3f>& hull, const PrismParams& params,
+                       int num_threads) {
     CheckPlane(plane);
     params.Validate();
     if (hull.size() < 3) {
@@ -150,26 +152,25 @@ Indices PolygonalPrism(const PointCloud& cloud, const Eigen::Vector4f& plane,
     const Eigen::Vector3f n = plane.head<3>();
     Eigen::Vector3f u, v;
     PlaneBasis(n, u, v);
-    std::vector<Eigen::Vector2f> poly;
-    poly.reserve(hull.size());
-    for (const auto& h : hull) poly.emplace_back(h.dot(u), h.dot(v));
-
-    Indices inside;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
+    // The polygon's corners and edges in the plane's basis.
+    std::vector<Eigen::Vector2f> corner, edge;
+    corner.reserve(hull.size());
+    for (const auto& h : hull) corner.emplace_back(h.dot(u), h.dot(v));
+    edge.reserve(hull.size());
+    for (std::size_t k = 0; k < corner.size(); ++k)
+        edge.push_back(corner[(k + 1) % corner.size()] - corner[k]);
+    return ParallelSelect(cloud.size(), num_threads, [&](std::size_t i) {
         const Eigen::Vector3f& p = cloud.points[i];
-        if (!p.allFinite()) continue;
+        if (!p.allFinite()) return false;
         const float h = n.dot(p) + plane.w();
-        if (h < params.min_height || h > params.max_height) continue;
+        if (h < params.min_height || h > params.max_height) return false;
         const Eigen::Vector2f q(p.dot(u), p.dot(v));
-        bool in = true;
-        for (std::size_t k = 0; k < poly.size() && in; ++k) {
-            const Eigen::Vector2f& a = poly[k];
-            const Eigen::Vector2f& b = poly[(k + 1) % poly.size()];
-            in = (b - a).x() * (q - a).y() - (b - a).y() * (q - a).x() >= 0.0f;
+        for (std::size_t k = 0; k < corner.size(); ++k) {
+            const Eigen::Vector2f d = q - corner[k];
+            if (!(edge[k].x() * d.y() - edge[k].y() * d.x() >= 0.0f)) return false;
         }
-        if (in) inside.push_back(static_cast<Index>(i));
-    }
-    return inside;
+        return true;
+    });
 }
 
 }  // namespace multicue

@@ -44,8 +44,9 @@ struct PrismParams {
 /// Points whose height above `plane` (along its normal) lies in [min_height, max_height] and whose
 /// projection falls inside the convex polygon `hull` (as returned by PlaneConvexHull). NaN points
 /// are never inside. Indices ascending. Throws InvalidArgument when min_height > max_height or the
-/// hull has fewer than three vertices.
+/// hull has fewer than three vertices. `num_threads` (0 = all cores) does not change the result.
 Indices PolygonalPrism(const PointCloud& cloud, const Eigen::Vector4f& plane,
-                       const std::vector<Eigen::Vector3f>& hull, const PrismParams& params);
+                       const std::vector<Eigen::Vector3f>& hull, const PrismParams& params,
+                       int num_threads = 1);
 
 }  // namespace multicue

@@ -8,6 +8,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/segmentation/disjoint_sets.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
@@ -188,13 +189,9 @@ Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, fl
 }
 
 // The cloud's finite points: the candidates and the table are taken among them.
-Indices FinitePoints(const PointCloud& cloud) {
-    Indices finite;
-    finite.reserve(cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (cloud.IsFinite(i)) finite.push_back(static_cast<Index>(i));
-    }
-    return finite;
+Indices FinitePoints(const PointCloud& cloud, int num_threads) {
+    return ParallelSelect(cloud.size(), num_threads,
+                          [&](std::size_t i) { return cloud.IsFinite(i); });
 }
 
 // Up direction and how strictly the table must follow it: the given one, else world z when the
@@ -397,14 +394,17 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
     for (std::size_t k = 0; k < sample.size(); ++k) position_of[sample[k]] = static_cast<Index>(k);
 
     supported.assign(candidates.size(), 0);
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-        Indices local;
-        local.reserve(candidates[k].inliers.size());
-        for (Index i : candidates[k].inliers) local.push_back(position_of[i]);
-        std::sort(local.begin(), local.end());
-        supported[k] = CountSupported(sample_cloud, local, candidates[k].plane, cloud.sensor_origin,
-                                      params, prism);
-    }
+    ParallelFor(
+        candidates.size(), params.num_threads,
+        [&](std::size_t k) {
+            Indices local;
+            local.reserve(candidates[k].inliers.size());
+            for (Index i : candidates[k].inliers) local.push_back(position_of[i]);
+            std::sort(local.begin(), local.end());
+            supported[k] = CountSupported(sample_cloud, local, candidates[k].plane,
+                                          cloud.sensor_origin, params, prism);
+        },
+        1);
     const std::size_t enough = std::max<std::size_t>(
         1, static_cast<std::size_t>(
                std::ceil(params.min_supported_fraction * static_cast<float>(sample.size()))));
@@ -427,13 +427,12 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
 
 // All points of the full cloud within the distance threshold of the plane.
 Indices PointsOnPlane(const PointCloud& cloud, const Indices& finite, const Eigen::Vector4f& plane,
-                      float distance_threshold) {
-    Indices on_plane;
-    for (Index i : finite) {
-        if (std::abs(plane.head<3>().dot(cloud.points[i]) + plane.w()) <= distance_threshold) {
-            on_plane.push_back(i);
-        }
-    }
+                      float distance_threshold, int num_threads) {
+    Indices on_plane = ParallelSelect(finite.size(), num_threads, [&](std::size_t k) {
+        return std::abs(plane.head<3>().dot(cloud.points[finite[k]]) + plane.w()) <=
+               distance_threshold;
+    });
+    for (Index& k : on_plane) k = finite[k];
     return on_plane;
 }
 
@@ -446,7 +445,7 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     CheckParams(params);
     prism.Validate();
     SupportPlane result;
-    const Indices finite = FinitePoints(cloud);
+    const Indices finite = FinitePoints(cloud, params.num_threads);
     if (finite.size() < 3) return result;
 
     const UpPrior up = ChooseUp(cloud, params);
@@ -460,7 +459,8 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     const Eigen::Vector4f plane = candidates[chosen].plane;
 
     // All points of the full cloud on the plane, then its largest connected patch.
-    const Indices on_plane = PointsOnPlane(cloud, finite, plane, params.distance_threshold);
+    const Indices on_plane =
+        PointsOnPlane(cloud, finite, plane, params.distance_threshold, params.num_threads);
     Patch table;
     if (cloud.IsOrganized() && !on_plane.empty()) {
         table = LargestPatchOrganized(cloud, on_plane, params.cluster_tolerance);
@@ -533,13 +533,13 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     const SupportPlane& s = region.support;
     // A plane that supports nothing (see-through, or nothing stands on it) is no table.
     if (s.found && s.hull.size() >= 3 && s.supported > 0) {
-        region.points = PolygonalPrism(cloud, s.plane, s.hull, prism);
+        region.points = PolygonalPrism(cloud, s.plane, s.hull, prism, support.num_threads);
         if (prism.edge_reach > 0.0f && !region.points.empty())
             AddObjectsBeyondTheHull(cloud, s, prism, region.points);
     }
     if (region.points.empty()) {
         region.support = SupportPlane{};
-        region.points = FinitePoints(cloud);
+        region.points = FinitePoints(cloud, support.num_threads);
     }
     return region;
 }
