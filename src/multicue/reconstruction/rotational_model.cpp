@@ -716,9 +716,9 @@ std::vector<ScoredStart> RefinementStarts(const std::vector<Sample>& samples,
     return starts;
 }
 
-/// Nelder-Mead from each of the first `refined` starts (twice, the second with finer steps); the
-/// result of lowest cost (the first of equal ones). The starts run in parallel, each on its own
-/// copy of the cost (it keeps scratch buffers); the result does not depend on the thread count.
+/// Nelder-Mead from each of the first `refined` starts, then again from the end of lowest cost (the
+/// first of equal ones) with finer steps. The starts run in parallel, each on its own copy of the
+/// cost (it keeps scratch buffers); the result does not depend on the thread count.
 Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredStart>& starts,
                              std::size_t refined, const Eigen::Vector4d& scale, double tolerance,
                              int num_threads) {
@@ -728,13 +728,8 @@ Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredSt
         refined, num_threads,
         [&](std::size_t k) {
             const ContourCost own = cost;
-            Eigen::Vector4d y = starts[k].second;
-            for (int restart = 0; restart < 2; ++restart) {
-                y = NelderMead<4>(own, y, restart == 0 ? scale : Eigen::Vector4d(0.25 * scale),
-                                  tolerance, 400);
-            }
-            ends[k] = y;
-            end_costs[k] = own(y);
+            ends[k] = NelderMead<4>(own, starts[k].second, scale, tolerance, 400);
+            end_costs[k] = own(ends[k]);
         },
         1);
     Eigen::Vector4d x = starts.front().second;
@@ -745,7 +740,8 @@ Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredSt
             x_cost = end_costs[k];
         }
     }
-    return x;
+    // The best end restarted with finer steps.
+    return NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
 }
 
 /// Second criterion, the thinnest contour (section 5.4.2.2, see the header): where the normals
