@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -695,21 +696,34 @@ using ScoredStart = std::pair<double, Eigen::Vector4d>;
 
 /// Starts of the simplex searches, the best `refined` (at most 3) first: the normal-line axis and
 /// about 150 directions within 30 degrees of it, each with the normal-line position for it (the
-/// contour cost has local minima; the normal lines place each direction well).
+/// contour cost has local minima; the normal lines place each direction well). The directions are
+/// scored in parallel, each block on its own copy of the cost, and kept in their order.
 std::vector<ScoredStart> RefinementStarts(const std::vector<Sample>& samples,
                                           const ContourCost& cost, const AxisSearch& search,
-                                          std::size_t& refined) {
+                                          int num_threads, std::size_t& refined) {
     const AxisOffsets& o = cost.offsets();
+    const std::vector<Eigen::Vector3d> directions = CapDirections(o.a0, 30.0 * kPi / 180.0, 150);
+    std::vector<std::optional<ScoredStart>> scored(directions.size());
+    ParallelForChunks(
+        directions.size(), num_threads,
+        [&](std::size_t begin, std::size_t end) {
+            const ContourCost own = cost;
+            for (std::size_t k = begin; k < end; ++k) {
+                const Eigen::Vector3d& d = directions[k];
+                if (d.dot(o.a0) < 0.5 || search.TooTilted(d)) continue;
+                const AxisFit fit = EvaluateDirection(samples, 1, d, search.t, search.sin_parallel);
+                const Eigen::Vector4d x(d.dot(o.e1) / d.dot(o.a0), d.dot(o.e2) / d.dot(o.a0),
+                                        (fit.center - o.c0).dot(o.e1),
+                                        (fit.center - o.c0).dot(o.e2));
+                scored[k] = ScoredStart(own(x), x);
+            }
+        },
+        16);
     std::vector<ScoredStart> starts;
-    auto start_at = [&](const Eigen::Vector3d& d) {
-        if (d.dot(o.a0) < 0.5 || search.TooTilted(d)) return;
-        const AxisFit fit = EvaluateDirection(samples, 1, d, search.t, search.sin_parallel);
-        const Eigen::Vector4d x(d.dot(o.e1) / d.dot(o.a0), d.dot(o.e2) / d.dot(o.a0),
-                                (fit.center - o.c0).dot(o.e1), (fit.center - o.c0).dot(o.e2));
-        starts.emplace_back(cost(x), x);
-    };
     starts.emplace_back(cost(Eigen::Vector4d::Zero()), Eigen::Vector4d::Zero());
-    for (const auto& d : CapDirections(o.a0, 30.0 * kPi / 180.0, 150)) start_at(d);
+    for (const auto& s : scored) {
+        if (s) starts.push_back(*s);
+    }
     refined = std::min<std::size_t>(3, starts.size());
     std::partial_sort(starts.begin(), starts.begin() + static_cast<std::ptrdiff_t>(refined),
                       starts.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
@@ -757,7 +771,8 @@ void RefineAxisByContour(const std::vector<Sample>& samples, const AxisSearch& s
     const Eigen::Vector4d scale(0.05, 0.05, 0.005, 0.005);
     const double tolerance = 1e-4 * params.profile_tolerance * params.profile_tolerance;
     std::size_t refined = 0;
-    const std::vector<ScoredStart> starts = RefinementStarts(samples, cost, search, refined);
+    const std::vector<ScoredStart> starts =
+        RefinementStarts(samples, cost, search, params.num_threads, refined);
     Eigen::Vector4d x = BestOfStarts(cost, starts, refined, scale, tolerance, params.num_threads);
     cost.DropEndLevel();
     for (int restart = 0; restart < 2; ++restart) {
