@@ -87,6 +87,8 @@ TEST(RemoveNonFinite, KeepsFinitePointsWithTheirFields) {
         if (std::isfinite(c.points[i].x()) && std::isfinite(c.points[i].z())) expected.push_back(i);
     }
     EXPECT_EQ(FiniteIndices(c), expected);
+    EXPECT_EQ(FiniteIndices(c, 2), expected);
+    EXPECT_EQ(FiniteIndices(c, 0), expected);
     const PointCloud out = RemoveNonFinite(c);
     ASSERT_EQ(out.size(), expected.size());
     EXPECT_EQ(out.height, 1u);

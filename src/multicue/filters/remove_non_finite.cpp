@@ -1,14 +1,12 @@
 #include "multicue/filters/remove_non_finite.hpp"
 
+#include "multicue/core/parallel.hpp"
+
 namespace multicue {
 
-Indices FiniteIndices(const PointCloud& cloud) {
-    Indices out;
-    out.reserve(cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (cloud.points[i].allFinite()) out.push_back(static_cast<Index>(i));
-    }
-    return out;
+Indices FiniteIndices(const PointCloud& cloud, int num_threads) {
+    return ParallelSelect(cloud.size(), num_threads,
+                          [&](std::size_t i) { return cloud.IsFinite(i); });
 }
 
 PointCloud RemoveNonFinite(const PointCloud& cloud) {

@@ -9,6 +9,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/filters/remove_non_finite.hpp"
 #include "multicue/segmentation/disjoint_sets.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
@@ -188,12 +189,6 @@ Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, fl
     return patch;
 }
 
-// The cloud's finite points: the candidates and the table are taken among them.
-Indices FinitePoints(const PointCloud& cloud, int num_threads) {
-    return ParallelSelect(cloud.size(), num_threads,
-                          [&](std::size_t i) { return cloud.IsFinite(i); });
-}
-
 // Up direction and how strictly the table must follow it: the given one, else world z when the
 // cloud has a sensor position, else the camera's -y with the looser camera tilt.
 struct UpPrior {
@@ -271,20 +266,24 @@ class HullEdges {
     /// distance to the nearest edge), at most the distance to the hull outside it.
     float Outside(const Eigen::Vector3f& p) const {
         float out = -std::numeric_limits<float>::max();
-        for (std::size_t k = 0; k < hull_.size(); ++k)
-            out = std::max(out, -inward_[k].dot(p - hull_[k]));
+        for (std::size_t k = 0; k < hull_.size(); ++k) out = std::max(out, Beyond(k, p));
         return out;
     }
     /// Whether Outside(p) <= -margin: p lies at least `margin` inside every edge (stops at the
     /// first edge it does not; like Outside, an edge giving NaN does not count).
     bool Inside(const Eigen::Vector3f& p, float margin) const {
         for (std::size_t k = 0; k < hull_.size(); ++k) {
-            if (-inward_[k].dot(p - hull_[k]) > -margin) return false;
+            if (Beyond(k, p) > -margin) return false;
         }
         return true;
     }
 
   private:
+    /// Signed distance of p beyond edge k's line (negative on the hull's side).
+    float Beyond(std::size_t k, const Eigen::Vector3f& p) const {
+        return -inward_[k].dot(p - hull_[k]);
+    }
+
     const std::vector<Eigen::Vector3f>& hull_;
     std::vector<Eigen::Vector3f> inward_;
 };
@@ -445,7 +444,7 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     CheckParams(params);
     prism.Validate();
     SupportPlane result;
-    const Indices finite = FinitePoints(cloud, params.num_threads);
+    const Indices finite = FiniteIndices(cloud, params.num_threads);
     if (finite.size() < 3) return result;
 
     const UpPrior up = ChooseUp(cloud, params);
@@ -539,7 +538,7 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     }
     if (region.points.empty()) {
         region.support = SupportPlane{};
-        region.points = FinitePoints(cloud, support.num_threads);
+        region.points = FiniteIndices(cloud, support.num_threads);
     }
     return region;
 }
