@@ -619,6 +619,37 @@ TEST(PrimitiveModels, UprightCylindersFromSingleViewScans) {
                 1e3f * worst_r, worst_axis, 1e3f * worst_h);
 }
 
+TEST(PrimitiveModels, CylinderStartReplacesTheConsensusSearch) {
+    sim::TableTopScene scene;
+    scene.cylinders.push_back({{0.05f, 0.0f}, 0.04f, 0.15f, {}});
+    const Scan scan = ScanScene(scene);
+    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(obj.size(), 300u);
+    const CylinderModel searched = FitObjectCylinder(scan.cloud, obj, scan.plane, {});
+    ASSERT_TRUE(searched.found);
+    // A start a few millimetres and degrees off converges to the searched cylinder.
+    const Eigen::Vector3f up = scan.plane.head<3>().normalized();
+    Eigen::Vector3f tilt = up.unitOrthogonal();
+    const CylinderStart near{searched.center + 0.004f * tilt,
+                             (searched.axis + 0.05f * tilt).normalized(), 0.036f};
+    const CylinderModel started = FitObjectCylinder(scan.cloud, obj, scan.plane, {}, {}, near);
+    ASSERT_TRUE(started.found);
+    EXPECT_NEAR(started.radius, searched.radius, 2e-4f);
+    EXPECT_LT(AngleDeg(started.axis, searched.axis), 0.2f);
+    EXPECT_LT((started.center - searched.center).norm(), 0.001f);
+    EXPECT_NEAR(started.height, searched.height, 0.002f);
+    // A start outside the radius range, or one no point lies on, falls back to the search.
+    for (const CylinderStart& bad :
+         {CylinderStart{searched.center, searched.axis, 5.0f},
+          CylinderStart{searched.center + 2.0f * tilt, searched.axis, 0.04f},
+          CylinderStart{Eigen::Vector3f::Constant(std::nanf("")), searched.axis, 0.04f}}) {
+        const CylinderModel fallback = FitObjectCylinder(scan.cloud, obj, scan.plane, {}, {}, bad);
+        ASSERT_TRUE(fallback.found);
+        EXPECT_EQ(fallback.radius, searched.radius);
+        EXPECT_EQ(fallback.center, searched.center);
+    }
+}
+
 TEST(PrimitiveModels, LyingCylinderFromSingleViewScan) {
     const LyingCan can;
     const float r = can.radius, len = can.length;
@@ -761,6 +792,11 @@ TEST(Categorize, LyingCanIsCylinder) {
     EXPECT_EQ(r.category, Category::kCylinder) << CategoryName(r.category);
     EXPECT_FALSE(r.cylinder_upright);
     EXPECT_NEAR(r.cylinder_radius, 0.033f, 0.004f);
+    // The point given with the cylinder lies on the can's axis.
+    const LyingCan can;
+    const Eigen::Vector3f p_w = scan.T_world_camera * r.cylinder_point;
+    const Eigen::Vector3f w = p_w - can.center_w;
+    EXPECT_LT((w - w.dot(can.axis_w) * can.axis_w).norm(), 0.004f);
 }
 
 TEST(Categorize, UnknownSupportPlane) {

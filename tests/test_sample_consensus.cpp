@@ -10,10 +10,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "multicue/core/exceptions.hpp"
-#include "multicue/segmentation/sac_internal.hpp"
 #include "multicue/segmentation/cylinder_least_squares.hpp"
 #include "multicue/segmentation/sac_circle.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
+#include "multicue/segmentation/sac_internal.hpp"
 #include "multicue/segmentation/sac_line.hpp"
 #include "multicue/segmentation/sac_plane.hpp"
 #include "multicue/segmentation/sac_sphere.hpp"
@@ -164,8 +164,8 @@ TEST(SampleConsensus, PolynomialAcosIsAcosToAFloatsRounding) {
     double worst = 0.0;
     for (int k = 0; k <= 1000000; ++k) {
         const float x = static_cast<float>(k) / 1000000.0f;
-        worst = std::max(worst, std::abs(double{sac_internal::AcosUnit(x)} -
-                                         std::acos(static_cast<double>(x))));
+        worst = std::max(
+            worst, std::abs(double{sac_internal::AcosUnit(x)} - std::acos(static_cast<double>(x))));
     }
     EXPECT_LT(worst, 2e-7);
     EXPECT_EQ(sac_internal::AcosUnit(1.0f), 0.0f);
@@ -305,6 +305,68 @@ TEST(SampleConsensus, RecoversSphereFromOneSidedView) {
     EXPECT_LT((fit.center - centre).norm(), 0.003f);
     EXPECT_NEAR(fit.radius, radius, 0.003f);
     ExpectInliersCloseToTruth(fit.inliers, 700, 25);
+}
+
+// Half a sphere facing the sensor with noisy outward normals, and `outliers` points with random
+// normals around it.
+PointCloud OrientedSphereScene(Generator& g, const Eigen::Vector3f& centre, float radius,
+                               int points, int outliers) {
+    PointCloud c;
+    while (static_cast<int>(c.points.size()) < points) {
+        const Eigen::Vector3f dir = g.UnitVector();
+        if (dir.dot(-centre) <= 0.0f) continue;
+        c.points.emplace_back(centre + radius * dir + g.Noise(kSigma));
+        c.normals.emplace_back((dir + g.Noise(0.03f)).normalized());
+    }
+    g.AddOutliers(c, outliers, centre, 0.25f);
+    return c;
+}
+
+TEST(SampleConsensus, OrientedSamplesRecoverTheSphereWithFewerSamples) {
+    Generator g(21);
+    const Eigen::Vector3f centre(-0.15f, 0.05f, 0.9f);
+    const float radius = 0.08f;
+    // 40 % inliers: a sample of 4 points is clean once in 39 draws, a pair once in 6.
+    const PointCloud c = OrientedSphereScene(g, centre, radius, 400, 600);
+    SphereFitParams p{.sac = {.distance_threshold = 0.008f, .max_iterations = 2000}};
+    const SphereFit four = FitSphere(c, {}, p);
+    p.oriented_samples = true;
+    const SphereFit two = FitSphere(c, {}, p);
+    ASSERT_TRUE(four.found);
+    ASSERT_TRUE(two.found);
+    EXPECT_LT((two.center - centre).norm(), 0.003f);
+    EXPECT_NEAR(two.radius, radius, 0.003f);
+    ExpectInliersCloseToTruth(two.inliers, 400, 25);
+    EXPECT_TRUE(two.converged);
+    EXPECT_LT(two.iterations * 3, four.iterations);
+    // The same seed gives the same sphere.
+    const SphereFit again = FitSphere(c, {}, p);
+    EXPECT_EQ(again.center, two.center);
+    EXPECT_EQ(again.inliers, two.inliers);
+}
+
+TEST(SampleConsensus, OrientedSphereSamplesNeedNormalsAndNonParallelOnes) {
+    Generator g(22);
+    PointCloud c = OrientedSphereScene(g, Eigen::Vector3f(0.0f, 0.0f, 1.0f), 0.1f, 100, 0);
+    PointCloud bare = c;
+    bare.normals.clear();
+    EXPECT_THROW(FitSphere(bare, {}, {.oriented_samples = true}), DataError);
+    EXPECT_TRUE(FitSphere(bare, {}, {}).found);  // four points need no normals
+    // Parallel normals (a plane) give no centre: every pair is degenerate.
+    PointCloud flat;
+    for (int i = 0; i < 50; ++i) {
+        flat.points.emplace_back(0.01f * static_cast<float>(i % 10),
+                                 0.01f * static_cast<float>(i / 10), 1.0f);
+        flat.normals.emplace_back(0.0f, 0.0f, -1.0f);
+    }
+    flat.SetUnorganized();
+    const SphereFit none =
+        FitSphere(flat, {}, {.sac = {.max_iterations = 50}, .oriented_samples = true});
+    EXPECT_FALSE(none.found);
+    EXPECT_EQ(none.iterations, 50);
+    // Two usable points are enough to try.
+    EXPECT_FALSE(FitSphere(c, {0}, {.oriented_samples = true}).found);
+    EXPECT_TRUE(FitSphere(c, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9}, {.oriented_samples = true}).found);
 }
 
 TEST(SampleConsensus, RecoversCylinderFromPointsWithNormals) {

@@ -123,6 +123,7 @@ struct CylinderEvidence {
     float coverage = 0.0f;  // AxialCoverage
     float radius = 0.0f;
     Eigen::Vector3f axis = Eigen::Vector3f::Zero();
+    Eigen::Vector3f point = Eigen::Vector3f::Zero();  // on the axis
 };
 
 // Side points (within `threshold` of the side, normal within the angle of radial) and cap points
@@ -134,6 +135,7 @@ CylinderEvidence MeasureCylinder(const PointCloud& cloud, const Indices& sample,
     CylinderEvidence ev;
     ev.radius = fit.radius;
     ev.axis = fit.axis;
+    ev.point = fit.point;
     const auto n = static_cast<float>(sample.size());
     float lo = std::numeric_limits<float>::infinity(), hi = -lo;
     std::size_t side = 0;
@@ -365,6 +367,7 @@ CylinderEvidence BestCylinder(const PointCloud& cloud, const Indices& sample,
     r.cylinder_coverage = best_cyl.coverage;
     r.cylinder_radius = best_cyl.radius;
     r.cylinder_axis = best_cyl.axis;
+    r.cylinder_point = best_cyl.point;
     return best_cyl;
 }
 
@@ -375,8 +378,10 @@ float SphereScore(const PointCloud& cloud, const Indices& sample, const SacParam
     // Box-like normals zero the sphere's score whatever sphere fits: then none is fitted (its
     // measurements stay 0, as when no sphere is found).
     if (r.axis_area >= params.sphere_box_axis_area_max) return 0.0f;
-    SphereFitParams spp{
-        .sac = sac, .min_radius = params.min_radius, .max_radius = params.max_radius};
+    SphereFitParams spp{.sac = sac,
+                        .min_radius = params.min_radius,
+                        .max_radius = params.max_radius,
+                        .oriented_samples = true};
     const SphereFit sphere = FitSphere(cloud, sample, spp);
     float sphere_score = 0.0f;
     if (sphere.found) {

@@ -17,7 +17,8 @@
 ///   (min_coverage .. full_coverage: a ball's equator band also fits a cylinder) and the diameter
 ///   matches the object's size (upright: the footprint's length; lying: the height;
 ///   size_tolerance);
-/// - sphere: RANSAC sphere with normals (FitSphere); share of points on it (same test as the
+/// - sphere: RANSAC sphere with normals, hypotheses from pairs of oriented points (FitSphere);
+/// share of points on it (same test as the
 ///   cylinder side), provided the diameter matches the object's largest extent, fading out
 ///   as axis_area rises from sphere_box_axis_area to sphere_box_axis_area_max (the faces of a
 ///   large box fit a large sphere within the threshold); from there on no sphere is fitted;
@@ -173,7 +174,8 @@ struct CategoryResult {
     float cylinder_coverage = 0.0f;      ///< share of the object's extent along the axis that the
                                          ///< side points span [-]
     float cylinder_radius = 0.0f;        ///< radius of the best cylinder, 0 if none [m]
-    Eigen::Vector3f cylinder_axis = Eigen::Vector3f::Zero();  ///< its unit axis, 0 if none
+    Eigen::Vector3f cylinder_axis = Eigen::Vector3f::Zero();   ///< its unit axis, 0 if none
+    Eigen::Vector3f cylinder_point = Eigen::Vector3f::Zero();  ///< a point on its axis [m]
     bool cylinder_upright = false;     ///< the best cylinder is the upright one
     float sphere_inlier_ratio = 0.0f;  ///< share of points on the best sphere, 0 if none [-]
     float sphere_radius = 0.0f;        ///< its radius, 0 if none (or box-like: not fitted) [m]

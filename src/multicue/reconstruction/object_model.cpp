@@ -288,7 +288,14 @@ float FitPrimitive(const PointCloud& cloud, const PerceivedObject& object,
     if (c == Category::kCylinder || c == Category::kPlate) {
         CylinderModelParams p = params.cylinder;
         p.sac.num_threads = params.num_threads;
-        CylinderModel cyl = FitObjectCylinder(cloud, object.indices, plane, p, guidance.Round());
+        // The categoriser's cylinder (when it fitted one) starts the refinement.
+        std::optional<CylinderStart> start;
+        const CategoryResult& r = object.category;
+        if (r.cylinder_radius > 0.0f) {
+            start = CylinderStart{r.cylinder_point, r.cylinder_axis, r.cylinder_radius};
+        }
+        CylinderModel cyl =
+            FitObjectCylinder(cloud, object.indices, plane, p, guidance.Round(), start);
         if (cyl.found) {
             model.mesh = CylinderMesh(cyl);
             model.cylinder = cyl;

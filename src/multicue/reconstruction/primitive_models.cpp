@@ -724,7 +724,8 @@ BoxModel FitOrientedBoundingBox(const PointCloud& cloud, const Indices& indices,
 
 CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
                                 const Eigen::Vector4f& support_plane,
-                                const CylinderModelParams& params, const FitGuidance& guidance) {
+                                const CylinderModelParams& params, const FitGuidance& guidance,
+                                const std::optional<CylinderStart>& start) {
     ValidateCylinderParams(params);
     ValidateFitGuidance(guidance, cloud.size());
     const std::optional<Eigen::Vector4f> plane = NormalizeSupportPlane(support_plane);
@@ -739,18 +740,32 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     const Indices usable = WithNormals(cloud, finite);
     if (usable.size() < 2) return model;
 
-    // 1. Hypothesis, on an even subset of the points.
-    const Indices hypothesis_points =
-        params.hypothesis_points > 0 ? EvenSubset(usable, params.hypothesis_points) : usable;
-    const CylinderFit fit = HypothesiseCylinder(cloud, hypothesis_points, plane, params, guidance);
-    if (!fit.found || fit.inliers.empty()) return model;
-
+    // 1. Hypothesis: the start given, else RANSAC on an even subset of the points.
     // 2. Refinement on the side points, with the axis snapped to the support when asked.
-    CylinderEstimate x{fit.point.cast<double>(), fit.axis.cast<double>().normalized(),
-                       double{fit.radius}};
-    CylinderRefineParams refine{.freedom = CylinderAxisFreedom::kFree};
-    const bool upright = SnapToSupport(plane, params, x, refine);
-    const Indices side = RefineOnSidePoints(cloud, usable, fit, params, refine, x);
+    CylinderEstimate x;
+    CylinderRefineParams refine;
+    bool upright = false;
+    Indices side;
+    if (start && start->radius >= params.min_radius && start->radius <= params.max_radius &&
+        start->point.allFinite() && start->axis.allFinite() && start->axis.norm() > 0.5f) {
+        x = {start->point.cast<double>(), start->axis.cast<double>().normalized(),
+             double{start->radius}};
+        refine = {.freedom = CylinderAxisFreedom::kFree};
+        upright = SnapToSupport(plane, params, x, refine);
+        side = RefineOnSidePoints(cloud, usable, CylinderFit{}, params, refine, x);
+        if (side.size() < 5) side.clear();
+    }
+    if (side.empty()) {
+        const Indices hypothesis_points =
+            params.hypothesis_points > 0 ? EvenSubset(usable, params.hypothesis_points) : usable;
+        const CylinderFit fit =
+            HypothesiseCylinder(cloud, hypothesis_points, plane, params, guidance);
+        if (!fit.found || fit.inliers.empty()) return model;
+        x = {fit.point.cast<double>(), fit.axis.cast<double>().normalized(), double{fit.radius}};
+        refine = {.freedom = CylinderAxisFreedom::kFree};
+        upright = SnapToSupport(plane, params, x, refine);
+        side = RefineOnSidePoints(cloud, usable, fit, params, refine, x);
+    }
 
     // 3. Extent along the axis.
     const Eigen::Vector3f axis = x.axis.cast<float>();

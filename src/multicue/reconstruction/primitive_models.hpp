@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include <Eigen/Core>
 
@@ -202,9 +203,18 @@ struct CylinderModelParams {
     }
 };
 
+/// A cylinder found earlier (the categoriser's), the start of FitObjectCylinder's refinement.
+struct CylinderStart {
+    Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< a point on the axis [m]
+    Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();  ///< unit axis
+    float radius = 0.0f;                              ///< [m]
+};
+
 /// Cylinder of an object (cans, cups, bottles; section 5.4.2.1).
-/// 1. Hypothesis: RANSAC with normals (FitCylinder): two points with their normals give two skew
-///    lines, their shortest connection the axis. With a known support plane (non-zero) the
+/// 1. Hypothesis: `start` when given (a cylinder already fitted to the object, such as the
+///    categoriser's; ignored when its radius is outside [min_radius, max_radius] or it has no
+///    side points), else RANSAC with normals (FitCylinder): two points with their normals give two
+///    skew lines, their shortest connection the axis. With a known support plane (non-zero) the
 ///    axis is first searched within upright_angle_deg of up; with allow_free_axis also without
 ///    the prior, and the free cylinder wins when it has at least free_axis_gain times the upright
 ///    one's (prior-weighted) inliers. Without a plane the axis is free. With guidance, curved
@@ -228,7 +238,8 @@ struct CylinderModelParams {
 CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
                                 const Eigen::Vector4f& support_plane,
                                 const CylinderModelParams& params = {},
-                                const FitGuidance& guidance = {});
+                                const FitGuidance& guidance = {},
+                                const std::optional<CylinderStart>& start = std::nullopt);
 
 /// Distance of p to the surface of the solid box (inside or outside) [m].
 float BoxSurfaceDistance(const BoxModel& box, const Eigen::Vector3f& p);

@@ -627,6 +627,21 @@ ContourSets SelectContourSets(const std::vector<Sample>& samples, const Eigen::V
     return sets;
 }
 
+/// Every second point of each set (the flags kept with their points).
+ContourSets EveryOther(const ContourSets& sets) {
+    ContourSets thin;
+    for (std::size_t k = 0; k < sets.side.size(); k += 2) {
+        thin.side.push_back(sets.side[k]);
+        thin.inner.push_back(sets.inner[k]);
+    }
+    for (std::size_t k = 0; k < sets.cap.size(); k += 2) {
+        thin.cap.push_back(sets.cap[k]);
+        thin.down.push_back(sets.down[k]);
+    }
+    for (std::size_t k = 0; k < sets.all.size(); k += 2) thin.all.push_back(sets.all[k]);
+    return thin;
+}
+
 /// The refinement's parameters of an axis: two offsets of the direction and two of the position
 /// from the normal-line axis (a0 through c0), along the basis e1, e2 perpendicular to a0.
 struct AxisOffsets {
@@ -730,8 +745,8 @@ std::vector<ScoredStart> RefinementStarts(const std::vector<Sample>& samples,
     return starts;
 }
 
-/// Nelder-Mead from each of the first `refined` starts, then again from the end of lowest cost (the
-/// first of equal ones) with finer steps. The starts run in parallel, each on its own copy of the
+/// Nelder-Mead from each of the first `refined` starts; the end of lowest cost (the first of equal
+/// ones). The starts run in parallel, each on its own copy of the
 /// cost (it keeps scratch buffers); the result does not depend on the thread count.
 Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredStart>& starts,
                              std::size_t refined, const Eigen::Vector4d& scale, double tolerance,
@@ -754,8 +769,7 @@ Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredSt
             x_cost = end_costs[k];
         }
     }
-    // The best end restarted with finer steps.
-    return NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
+    return x;
 }
 
 /// Second criterion, the thinnest contour (section 5.4.2.2, see the header): where the normals
@@ -767,13 +781,17 @@ void RefineAxisByContour(const std::vector<Sample>& samples, const AxisSearch& s
     ContourSets sets =
         SelectContourSets(samples, best.direction, best.center, params.profile_points, search);
     if (sets.side.size() < 20) return;
+    // The starts are scored and descended on every second point; the best end is restarted on
+    // all of them.
+    const ContourCost coarse(EveryOther(sets), best.direction, best.center, search, params);
     ContourCost cost(std::move(sets), best.direction, best.center, search, params);
     const Eigen::Vector4d scale(0.05, 0.05, 0.005, 0.005);
     const double tolerance = 1e-4 * params.profile_tolerance * params.profile_tolerance;
     std::size_t refined = 0;
     const std::vector<ScoredStart> starts =
-        RefinementStarts(samples, cost, search, params.num_threads, refined);
-    Eigen::Vector4d x = BestOfStarts(cost, starts, refined, scale, tolerance, params.num_threads);
+        RefinementStarts(samples, coarse, search, params.num_threads, refined);
+    Eigen::Vector4d x = BestOfStarts(coarse, starts, refined, scale, tolerance, params.num_threads);
+    x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
     cost.DropEndLevel();
     for (int restart = 0; restart < 2; ++restart) {
         x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);

@@ -26,7 +26,8 @@
 /// third score, the level of an end (rim_weight): the second highest point in each of 24 sectors
 /// around the axis, at either end, should be at one height. The axis direction (2 angles) and
 /// position (2 offsets) are found by Nelder-Mead from the best 3 of about 150 directions within
-/// 30 degrees of the normal-line axis scored with all three, and the best result is polished on
+/// 30 degrees of the normal-line axis scored with all three (on every second point; the best end
+/// is searched again on all of them), and the best result is polished on
 /// the contour alone (the end level is biased on small tops such as a bottle's cap, where a
 /// millimetre is degrees). At most profile_points points take part.
 ///

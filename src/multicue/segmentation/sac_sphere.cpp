@@ -9,11 +9,41 @@
 namespace multicue {
 namespace {
 
+// A sphere through two points whose normals point along its radii: the centre is the midpoint
+// of the normal lines' closest approach, the radius the mean distance of the points from it.
+// Parallel normals (sine below 1e-3) leave the centre undetermined.
+bool SphereFromOrientedPair(const PointCloud& cloud, std::span<const Index> s, float min_radius,
+                            float max_radius, SacCoefficients& c) {
+    const Eigen::Vector3d p1 = cloud.points[s[0]].cast<double>();
+    const Eigen::Vector3d p2 = cloud.points[s[1]].cast<double>();
+    const Eigen::Vector3d n1 = cloud.normals[s[0]].cast<double>().normalized();
+    const Eigen::Vector3d n2 = cloud.normals[s[1]].cast<double>().normalized();
+    const double b = n1.dot(n2);
+    const double denom = 1.0 - b * b;
+    if (!(denom > 1e-6)) return false;
+    const Eigen::Vector3d w0 = p1 - p2;
+    const double d = n1.dot(w0);
+    const double e = n2.dot(w0);
+    const double s1 = (b * e - d) / denom;
+    const double t2 = (e - b * d) / denom;
+    const Eigen::Vector3d centre = 0.5 * ((p1 + s1 * n1) + (p2 + t2 * n2));
+    const double r = 0.5 * ((p1 - centre).norm() + (p2 - centre).norm());
+    if (!centre.allFinite() || !sac_internal::RadiusAccepted(r, min_radius, max_radius)) {
+        return false;
+    }
+    c.resize(4);
+    c.head<3>() = centre.cast<float>();
+    c[3] = static_cast<float>(r);
+    return true;
+}
+
 // Coefficients: (centre, r).
-SacModel MakeSphereModel(float min_radius, float max_radius) {
+SacModel MakeSphereModel(float min_radius, float max_radius, bool oriented) {
     SacModel m;
-    m.sample_size = 4;
+    m.sample_size = oriented ? 2 : 4;
+    m.needs_normals = oriented;
     m.fit_sample = [=](const PointCloud& cloud, std::span<const Index> s, SacCoefficients& c) {
+        if (oriented) return SphereFromOrientedPair(cloud, s, min_radius, max_radius, c);
         // |p_i - c|^2 = r^2 for all four points; subtracting the first equation leaves the linear
         // system 2 (p_i - p_0) . (c - p_0) = |p_i - p_0|^2, i = 1..3.
         const Eigen::Vector3d p0 = cloud.points[s[0]].cast<double>();
@@ -89,7 +119,8 @@ SphereFit FitSphere(const PointCloud& cloud, const Indices& indices,
                     const SphereFitParams& params) {
     sac_internal::ValidateRadiusLimits(params.min_radius, params.max_radius, "sphere");
     SacResult r = RunSampleConsensus(
-        cloud, indices, MakeSphereModel(params.min_radius, params.max_radius), params.sac);
+        cloud, indices,
+        MakeSphereModel(params.min_radius, params.max_radius, params.oriented_samples), params.sac);
     SphereFit fit;
     if (r.found) {
         fit.center = r.coefficients.head<3>();

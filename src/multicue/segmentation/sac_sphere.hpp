@@ -16,10 +16,15 @@ struct SphereFitParams {
     SacParams sac{};          ///< sampling, threshold, stopping and refinement
     float min_radius = 0.0f;  ///< smallest accepted radius [m]
     float max_radius = std::numeric_limits<float>::infinity();  ///< largest accepted radius [m]
+    /// Hypotheses from two points and their normals (the centre where the normal lines come
+    /// closest) instead of four points: a sample is all inliers with probability w^2 instead of
+    /// w^4, so far fewer samples reach the same confidence on objects that are partly spherical.
+    /// Needs normals.
+    bool oriented_samples = false;
 };
 
 struct SphereFit {
-    bool found = false;  ///< a sphere with at least 4 inliers was found
+    bool found = false;  ///< a sphere with at least 4 inliers (2 with oriented samples) was found
     Eigen::Vector3f center = Eigen::Vector3f::Zero();  ///< centre [m]
     float radius = 0.0f;                               ///< radius [m]
     Indices inliers;         ///< points within the threshold, in input order
@@ -34,7 +39,8 @@ struct SphereFit {
 /// distances of the inliers (Levenberg-Marquardt, started at the sample's sphere). Spheres outside
 /// [min_radius, max_radius] are rejected.
 /// Throws InvalidArgument for bad parameters or an index out of range, DataError when normals are
-/// needed but missing. Fewer than 4 usable points give found = false.
+/// needed but missing (normal weight or oriented samples). Fewer than 4 usable points (2 with
+/// oriented samples) give found = false.
 SphereFit FitSphere(const PointCloud& cloud, const Indices& indices, const SphereFitParams& params);
 
 }  // namespace multicue
