@@ -97,6 +97,16 @@ TEST(ModelGrouping, TouchingBoxesThatOneBoxExplainsPoorlyAreSplit) {
     ASSERT_EQ(again.size(), 2u);
     EXPECT_EQ(again[0].indices, objects[0].indices);
     EXPECT_EQ(again[1].parts, objects[1].parts);
+    // The splits are tried on any number of threads with the same result.
+    for (const int threads : {1, 2, 3}) {
+        ModelParams q = p;
+        q.num_threads = threads;
+        std::vector<PerceivedObject> threaded{test::MergedObject(f, {0, 1}, Category::kBox)};
+        SplitTouchingBoxes(f.cloud, threaded, f.plane, q, 150);
+        ASSERT_EQ(threaded.size(), 2u) << threads;
+        EXPECT_EQ(threaded[0].indices, objects[0].indices) << threads;
+        EXPECT_EQ(threaded[1].indices, objects[1].indices) << threads;
+    }
 
     // One box explains a single box: nothing to split.
     const auto one = test::ScanShapes({{Shape::kBox, {0.2f, 0.12f, 0.10f}, {0, 0, 0}}});

@@ -10,6 +10,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/reconstruction/part_count_model.hpp"
 
 namespace multicue {
@@ -142,39 +143,63 @@ BoxPair BestBoxPair(const PointCloud& cloud, const PerceivedObject& o,
                          [&](const Eigen::Vector3f& p) { return BoxSurfaceDistance(box, p); });
     };
     const std::size_t m = big.size();
+    // The parts' points once in ascending order, each with the position of its part in `big`:
+    // every split's two groups are then read off in order by one pass.
+    std::vector<std::pair<Index, std::uint32_t>> tagged;
+    for (std::size_t k = 0; k < m; ++k) {
+        for (Index i : o.parts[big[k]]) tagged.emplace_back(i, static_cast<std::uint32_t>(k));
+    }
+    std::sort(tagged.begin(), tagged.end());
+    // Part big[0] is always in group a; mask `s + 1` picks group b among the others. The splits
+    // are tried in parallel and judged in order.
+    struct Trial {
+        bool valid = false;
+        BoxModel a, b;
+        std::size_t na = 0, nb = 0;
+        float both = 0.0f;
+    };
+    const std::size_t splits = (std::size_t{1} << (m - 1)) - 1;
+    std::vector<Trial> trials(splits);
+    ParallelFor(
+        splits, params.num_threads,
+        [&](std::size_t s) {
+            const auto mask = static_cast<std::uint32_t>(s + 1);
+            Indices ga, gb;
+            for (const auto& [i, k] : tagged) {
+                const bool in_b = k > 0 && (mask >> (k - 1)) & 1u;
+                (in_b ? gb : ga).push_back(i);
+            }
+            ga = EvenSubset(ga, t.max_points / 2);
+            gb = EvenSubset(gb, t.max_points / 2);
+            Trial& trial = trials[s];
+            trial.na = ga.size();
+            trial.nb = gb.size();
+            trial.a = FitUprightBox(cloud, ga, plane, params.box);
+            if (!trial.a.found || explained(trial.a, ga) < params.min_inlier_ratio) return;
+            trial.b = FitUprightBox(cloud, gb, plane, params.box);
+            if (!trial.b.found || explained(trial.b, gb) < params.min_inlier_ratio) return;
+            if (std::max(BoxOverlap(trial.a, trial.b), BoxOverlap(trial.b, trial.a)) >
+                t.max_overlap) {
+                return;
+            }
+            std::size_t n = 0;
+            for (Index i : sample) {
+                n += std::min(BoxSurfaceDistance(trial.a, cloud.points[i]),
+                              BoxSurfaceDistance(trial.b, cloud.points[i])) <= threshold;
+            }
+            trial.both = static_cast<float>(n) / static_cast<float>(sample.size());
+            trial.valid = true;
+        },
+        1);
     float best = one_ratio + t.min_gain;
     BoxPair pair;
-    // Part big[0] is always in group a; each mask picks group b among the others.
-    for (std::uint32_t mask = 1; mask < (1u << (m - 1)); ++mask) {
-        Indices ga, gb;
-        for (std::size_t k = 0; k < m; ++k) {
-            const bool in_b = k > 0 && (mask >> (k - 1)) & 1u;
-            const Indices& part = o.parts[big[k]];
-            (in_b ? gb : ga).insert((in_b ? gb : ga).end(), part.begin(), part.end());
-        }
-        std::sort(ga.begin(), ga.end());
-        std::sort(gb.begin(), gb.end());
-        ga = EvenSubset(ga, t.max_points / 2);
-        gb = EvenSubset(gb, t.max_points / 2);
-        const BoxModel a = FitUprightBox(cloud, ga, plane, params.box);
-        const BoxModel b = FitUprightBox(cloud, gb, plane, params.box);
-        if (!a.found || !b.found) continue;
-        if (explained(a, ga) < params.min_inlier_ratio ||
-            explained(b, gb) < params.min_inlier_ratio) {
-            continue;
-        }
-        if (std::max(BoxOverlap(a, b), BoxOverlap(b, a)) > t.max_overlap) continue;
-        std::size_t n = 0;
-        for (Index i : sample) {
-            n += std::min(BoxSurfaceDistance(a, cloud.points[i]),
-                          BoxSurfaceDistance(b, cloud.points[i])) <= threshold;
-        }
-        const float both = static_cast<float>(n) / static_cast<float>(sample.size());
-        LogDebug("perceive: touching boxes {} | {}: {:.2f} (one box {:.2f})", ga.size(), gb.size(),
-                 both, one_ratio);
-        if (both > best) {
-            best = both;
-            pair = {true, a, b};
+    for (const Trial& trial : trials) {
+        if (!trial.valid) continue;
+        LogDebug("perceive: touching boxes {} | {}: {:.2f} (one box {:.2f})", trial.na, trial.nb,
+                 trial.both, one_ratio);
+        if (trial.both > best) {
+            best = trial.both;
+            pair = {true, trial.a, trial.b};
         }
     }
     return pair;
