@@ -39,8 +39,19 @@ struct PlaneBasis {
 };
 
 // Azimuth of a horizontal direction modulo a quarter turn, in [0, pi/2).
+// The remainder of x by a quarter turn, as std::fmod gives it. Within two quarter turns it is x
+// itself or x less one quarter turn, which is exact there (Sterbenz), so fmod is left for the
+// rest.
+double QuarterRemainder(double x) {
+    const double m = std::abs(x);
+    if (m < kQuarterTurn) return x;
+    // copysign keeps fmod's sign of a zero remainder (-0 for x = -pi/2).
+    if (m < 2.0 * kQuarterTurn) return std::copysign(x - std::copysign(kQuarterTurn, x), x);
+    return std::fmod(x, kQuarterTurn);
+}
+
 double QuarterAzimuth(double x, double y) {
-    double a = std::fmod(std::atan2(y, x), kQuarterTurn);
+    double a = QuarterRemainder(std::atan2(y, x));
     if (a < 0.0) a += kQuarterTurn;
     if (a >= kQuarterTurn) a -= kQuarterTurn;
     return a;
@@ -48,7 +59,7 @@ double QuarterAzimuth(double x, double y) {
 
 // Signed offset of angle a from centre c modulo a quarter turn, in [-pi/4, pi/4).
 double QuarterOffset(double a, double c) {
-    double d = std::fmod(a - c, kQuarterTurn);
+    double d = QuarterRemainder(a - c);
     if (d < -kQuarterTurn / 2) d += kQuarterTurn;
     if (d >= kQuarterTurn / 2) d -= kQuarterTurn;
     return d;

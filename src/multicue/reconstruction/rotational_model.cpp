@@ -587,10 +587,17 @@ AxisFit SearchNormalLineAxis(const std::vector<Sample>& samples, const AxisSearc
         samples, directions, search, params.refine_candidates, params.num_threads);
     const double spacing =
         std::sqrt(2.0 * kPi * (1.0 - std::cos(search.max_tilt)) / directions.size());
+    // The candidates descend in parallel; the first of the lowest cost wins.
+    std::vector<AxisFit> ends(candidates.size());
+    ParallelFor(
+        candidates.size(), params.num_threads,
+        [&](std::size_t k) {
+            ends[k] = DescendLocalGrid(samples, directions[candidates[k]], spacing, search);
+        },
+        1);
     AxisFit best;
-    for (std::size_t d : candidates) {
-        const AxisFit current = DescendLocalGrid(samples, directions[d], spacing, search);
-        if (current.cost < best.cost) best = current;
+    for (const AxisFit& end : ends) {
+        if (end.cost < best.cost) best = end;
     }
     return best;
 }
