@@ -520,10 +520,14 @@ GroupingResult SplitTouchingRound(const PointCloud& cloud, std::vector<Perceived
             out.Keep(std::move(o));
             continue;
         }
+        // The second group's cylinder only when the first one's explains its group.
         const CylinderModel a = FitObjectCylinder(cloud, ga, plane, params.cylinder);
-        const CylinderModel b = FitObjectCylinder(cloud, gb, plane, params.cylinder);
-        bool keep = !a.found || !b.found || explained(a, ga) < params.min_inlier_ratio ||
-                    explained(b, gb) < params.min_inlier_ratio;
+        bool keep = !a.found || explained(a, ga) < params.min_inlier_ratio;
+        CylinderModel b;
+        if (!keep) {
+            b = FitObjectCylinder(cloud, gb, plane, params.cylinder);
+            keep = !b.found || explained(b, gb) < params.min_inlier_ratio;
+        }
         if (!keep) {
             std::size_t n = 0;
             for (Index i : o.indices) {
