@@ -38,7 +38,6 @@ struct PlaneBasis {
     Eigen::Vector3f Lift(const Eigen::Vector2f& q) const { return q.x() * u + q.y() * v; }
 };
 
-// Azimuth of a horizontal direction modulo a quarter turn, in [0, pi/2).
 // The remainder of x by a quarter turn, as std::fmod gives it. Within two quarter turns it is x
 // itself or x less one quarter turn, which is exact there (Sterbenz), so fmod is left for the
 // rest.
@@ -50,6 +49,7 @@ double QuarterRemainder(double x) {
     return std::fmod(x, kQuarterTurn);
 }
 
+// Azimuth of a horizontal direction modulo a quarter turn, in [0, pi/2).
 double QuarterAzimuth(double x, double y) {
     double a = QuarterRemainder(std::atan2(y, x));
     if (a < 0.0) a += kQuarterTurn;

@@ -18,10 +18,10 @@
 ///   matches the object's size (upright: the footprint's length; lying: the height;
 ///   size_tolerance);
 /// - sphere: RANSAC sphere with normals, hypotheses from pairs of oriented points (FitSphere);
-/// share of points on it (same test as the
-///   cylinder side), provided the diameter matches the object's largest extent, fading out
-///   as axis_area rises from sphere_box_axis_area to sphere_box_axis_area_max (the faces of a
-///   large box fit a large sphere within the threshold); from there on no sphere is fitted;
+///   share of points on it (same test as the cylinder side), provided the diameter matches the
+///   object's largest extent, fading out as axis_area rises from sphere_box_axis_area to
+///   sphere_box_axis_area_max (the faces of a large box fit a large sphere within the
+///   threshold); from there on no sphere is fitted;
 /// - plate: thin (thickness / largest extent) and round (hull area / minimum rectangle area
 ///   across the thin axis: pi/4 for a disc, 1 for a slab). With a support plane only objects
 ///   whose thin axis is up (lying plates) qualify: across a horizontal axis a single view shows

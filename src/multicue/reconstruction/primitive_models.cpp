@@ -743,17 +743,19 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
     // 1. Hypothesis: the start given, else RANSAC on an even subset of the points.
     // 2. Refinement on the side points, with the axis snapped to the support when asked.
     CylinderEstimate x;
-    CylinderRefineParams refine;
     bool upright = false;
     Indices side;
+    const auto refine_from = [&](const Eigen::Vector3f& point, const Eigen::Vector3f& axis,
+                                 float radius, const CylinderFit& fit) {
+        x = {point.cast<double>(), axis.cast<double>().normalized(), double{radius}};
+        CylinderRefineParams refine{.freedom = CylinderAxisFreedom::kFree};
+        upright = SnapToSupport(plane, params, x, refine);
+        side = RefineOnSidePoints(cloud, usable, fit, params, refine, x);
+    };
     if (start && start->radius >= params.min_radius && start->radius <= params.max_radius &&
         start->point.allFinite() && start->axis.allFinite() && start->axis.norm() > 0.5f) {
-        x = {start->point.cast<double>(), start->axis.cast<double>().normalized(),
-             double{start->radius}};
-        refine = {.freedom = CylinderAxisFreedom::kFree};
-        upright = SnapToSupport(plane, params, x, refine);
-        side = RefineOnSidePoints(cloud, usable, CylinderFit{}, params, refine, x);
-        if (side.size() < 5) side.clear();
+        refine_from(start->point, start->axis, start->radius, CylinderFit{});
+        if (side.size() < 5) side.clear();  // too few side points to trust the start
     }
     if (side.empty()) {
         const Indices hypothesis_points =
@@ -761,10 +763,7 @@ CylinderModel FitObjectCylinder(const PointCloud& cloud, const Indices& indices,
         const CylinderFit fit =
             HypothesiseCylinder(cloud, hypothesis_points, plane, params, guidance);
         if (!fit.found || fit.inliers.empty()) return model;
-        x = {fit.point.cast<double>(), fit.axis.cast<double>().normalized(), double{fit.radius}};
-        refine = {.freedom = CylinderAxisFreedom::kFree};
-        upright = SnapToSupport(plane, params, x, refine);
-        side = RefineOnSidePoints(cloud, usable, fit, params, refine, x);
+        refine_from(fit.point, fit.axis, fit.radius, fit);
     }
 
     // 3. Extent along the axis.

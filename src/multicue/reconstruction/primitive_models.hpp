@@ -212,13 +212,13 @@ struct CylinderStart {
 
 /// Cylinder of an object (cans, cups, bottles; section 5.4.2.1).
 /// 1. Hypothesis: `start` when given (a cylinder already fitted to the object, such as the
-///    categoriser's; ignored when its radius is outside [min_radius, max_radius] or it has no
-///    side points), else RANSAC with normals (FitCylinder): two points with their normals give two
-///    skew lines, their shortest connection the axis. With a known support plane (non-zero) the
-///    axis is first searched within upright_angle_deg of up; with allow_free_axis also without
-///    the prior, and the free cylinder wins when it has at least free_axis_gain times the upright
-///    one's (prior-weighted) inliers. Without a plane the axis is free. With guidance, curved
-///    points (small RSD r_min) are drawn more often and the shape prior weights sampling and
+///    categoriser's; ignored when its radius is outside [min_radius, max_radius] or fewer than 5
+///    side points lie on it), else RANSAC with normals (FitCylinder): two points with their normals
+///    give two skew lines, their shortest connection the axis. With a known support plane
+///    (non-zero) the axis is first searched within upright_angle_deg of up; with allow_free_axis
+///    also without the prior, and the free cylinder wins when it has at least free_axis_gain times
+///    the upright one's (prior-weighted) inliers. Without a plane the axis is free. With guidance,
+///    curved points (small RSD r_min) are drawn more often and the shape prior weights sampling and
 ///    scoring (sections 5.4.1, 5.4.2.1); params.sac's own weights are then replaced.
 /// 2. Refinement: least squares (Levenberg-Marquardt) of | dist(p, axis) - r | over the side
 ///    points (within side_distance of the surface, normal within side_normal_angle_deg of

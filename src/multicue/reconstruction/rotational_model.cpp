@@ -753,8 +753,8 @@ std::vector<ScoredStart> RefinementStarts(const std::vector<Sample>& samples,
 }
 
 /// Nelder-Mead from each of the first `refined` starts; the end of lowest cost (the first of equal
-/// ones). The starts run in parallel, each on its own copy of the
-/// cost (it keeps scratch buffers); the result does not depend on the thread count.
+/// ones). The starts run in parallel, each on its own copy of the cost (it keeps scratch
+/// buffers); the result does not depend on the thread count.
 Eigen::Vector4d BestOfStarts(const ContourCost& cost, const std::vector<ScoredStart>& starts,
                              std::size_t refined, const Eigen::Vector4d& scale, double tolerance,
                              int num_threads) {

@@ -37,16 +37,9 @@ SacModel MakeCylinderModel(const CylinderLimits& limits) {
         const double sine = cross.norm();
         if (!(sine > 1e-3)) return false;
         const Eigen::Vector3d axis = cross / sine;
-        // Closest approach of the lines p1 + s n1 and p2 + t n2; the connecting segment is along
-        // the axis, so both ends lie on it and so does their midpoint.
-        const Eigen::Vector3d w0 = p1 - p2;
-        const double b = n1.dot(n2);
-        const double d = n1.dot(w0);
-        const double e = n2.dot(w0);
-        const double denom = 1.0 - b * b;
-        const double s1 = (b * e - d) / denom;
-        const double t2 = (e - b * d) / denom;
-        const Eigen::Vector3d point = 0.5 * ((p1 + s1 * n1) + (p2 + t2 * n2));
+        // The segment connecting the normal lines' closest points is along the axis, so both ends
+        // lie on it and so does their midpoint.
+        const Eigen::Vector3d point = sac_internal::NormalLinesMidpoint(p1, n1, p2, n2);
         auto radial = [&](const Eigen::Vector3d& p) {
             const Eigen::Vector3d w = p - point;
             return (w - w.dot(axis) * axis).norm();

@@ -36,6 +36,21 @@ void ValidateMaxAngle(float max_angle, const char* what);
 /// Throws InvalidArgument naming `what` unless 0 <= min_radius <= max_radius (max may be inf).
 void ValidateRadiusLimits(float min_radius, float max_radius, const char* what);
 
+/// The midpoint of the closest approach of the lines p1 + s n1 and p2 + t n2 (unit directions, not
+/// parallel: the caller checks that 1 - (n1 . n2)^2 is well above 0). Samples of oriented points
+/// meet there: on a cylinder's axis, at a sphere's centre.
+inline Eigen::Vector3d NormalLinesMidpoint(const Eigen::Vector3d& p1, const Eigen::Vector3d& n1,
+                                           const Eigen::Vector3d& p2, const Eigen::Vector3d& n2) {
+    const Eigen::Vector3d w0 = p1 - p2;
+    const double b = n1.dot(n2);
+    const double d = n1.dot(w0);
+    const double e = n2.dot(w0);
+    const double denom = 1.0 - b * b;
+    const double s1 = (b * e - d) / denom;
+    const double t2 = (e - b * d) / denom;
+    return 0.5 * ((p1 + s1 * n1) + (p2 + t2 * n2));
+}
+
 /// True if r is finite and in [min_radius, max_radius].
 inline bool RadiusAccepted(double r, float min_radius, float max_radius) {
     return std::isfinite(r) && r >= min_radius && r <= max_radius;

@@ -19,14 +19,8 @@ bool SphereFromOrientedPair(const PointCloud& cloud, std::span<const Index> s, f
     const Eigen::Vector3d n1 = cloud.normals[s[0]].cast<double>().normalized();
     const Eigen::Vector3d n2 = cloud.normals[s[1]].cast<double>().normalized();
     const double b = n1.dot(n2);
-    const double denom = 1.0 - b * b;
-    if (!(denom > 1e-6)) return false;
-    const Eigen::Vector3d w0 = p1 - p2;
-    const double d = n1.dot(w0);
-    const double e = n2.dot(w0);
-    const double s1 = (b * e - d) / denom;
-    const double t2 = (e - b * d) / denom;
-    const Eigen::Vector3d centre = 0.5 * ((p1 + s1 * n1) + (p2 + t2 * n2));
+    if (!(1.0 - b * b > 1e-6)) return false;
+    const Eigen::Vector3d centre = sac_internal::NormalLinesMidpoint(p1, n1, p2, n2);
     const double r = 0.5 * ((p1 - centre).norm() + (p2 - centre).norm());
     if (!centre.allFinite() || !sac_internal::RadiusAccepted(r, min_radius, max_radius)) {
         return false;
