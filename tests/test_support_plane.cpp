@@ -278,6 +278,70 @@ TEST(SupportPlane, ObjectsBeyondTheVisibleTableAreInTheRegionWallsAreNot) {
     EXPECT_THROW(FindTableRegion(c, {}, {.edge_reach = -1.0f}), InvalidArgument);
 }
 
+// An organized frame in world coordinates (z up): a table cut in two in the image by a strip of
+// box fronts standing on it, a box top and a hole inside it, and after a run of invalid pixels a
+// shelf at the table's height 1.5 m away.
+PointCloud OrganizedTableFrame() {
+    std::mt19937 rng(41);
+    std::normal_distribution<float> noise(0.0f, 0.002f);
+    const std::uint32_t w = 200, h = 120;
+    PointCloud c;
+    c.points.resize(std::size_t{w} * h);
+    for (std::uint32_t v = 0; v < h; ++v) {
+        for (std::uint32_t u = 0; u < w; ++u) {
+            const float y = -0.3f + 0.005f * static_cast<float>(v);
+            float x = -0.5f + 0.007f * static_cast<float>(u), z = 0.75f + noise(rng);
+            if (u >= 140 && u < 150) {
+                x = z = test::kNaN;  // nothing measured
+            } else if (u >= 150) {
+                x += 1.0f;  // the shelf
+            } else if (u >= 60 && u < 70) {
+                z = 0.75f + 0.02f * static_cast<float>(u - 59);  // box fronts, rows 0 to h
+            } else if (u >= 90 && u < 110 && v >= 40 && v < 70) {
+                z = 0.85f;  // a box top
+            } else if (u >= 20 && u < 30 && v >= 80 && v < 90) {
+                x = z = test::kNaN;  // a hole
+            }
+            c.points[std::size_t{v} * w + u] = {x, y, z};
+        }
+    }
+    c.width = w;
+    c.height = h;
+    c.sensor_origin = {0.0f, -1.0f, 1.5f};
+    return c;
+}
+
+// The organized path (pixel runs joined through neighbouring rows and border pixels) keeps the
+// same patch as clustering every plane point in 3D, whatever the thread count.
+TEST(SupportPlane, OrganizedPatchEqualsTheUnorganizedOneOnAnyThreadCount) {
+    const PointCloud organized = OrganizedTableFrame();
+    ASSERT_TRUE(organized.IsOrganized());
+    PointCloud flat = organized;
+    flat.SetUnorganized();
+    const SupportPlane a = FindSupportPlane(organized, {.num_threads = 1});
+    const SupportPlane b = FindSupportPlane(organized, {.num_threads = 2});
+    const SupportPlane f = FindSupportPlane(flat, {.num_threads = 1});
+    ASSERT_TRUE(a.found);
+    ASSERT_TRUE(f.found);
+    EXPECT_EQ(a.plane, f.plane);
+    EXPECT_EQ(a.inliers, f.inliers);
+    EXPECT_EQ(a.inliers, b.inliers);
+    EXPECT_EQ(a.hull.size(), b.hull.size());
+    // Both halves of the table, nothing of the shelf.
+    std::size_t left = 0, right = 0;
+    for (Index i : a.inliers) {
+        const Eigen::Vector3f& p = organized.points[i];
+        EXPECT_LT(p.x(), 0.5f);
+        left += p.x() < -0.1f ? 1 : 0;
+        right += p.x() > 0.0f ? 1 : 0;
+    }
+    EXPECT_GT(left, 5000u);
+    EXPECT_GT(right, 3000u);
+    const TableRegion ra = FindTableRegion(organized, {.num_threads = 1}, {});
+    const TableRegion rb = FindTableRegion(organized, {.num_threads = 2}, {});
+    EXPECT_EQ(ra.points, rb.points);
+}
+
 TEST(SupportPlane, NoPlaneAndContract) {
     EXPECT_FALSE(FindSupportPlane(PointCloud{}, {}).found);
     EXPECT_FALSE(FindSupportPlane(test::RandomCloud(2000, 9), {}).found);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -86,75 +88,112 @@ struct PixelRun {
     std::uint32_t v, u0, u1;  // row, first and last column (inclusive)
 };
 
-Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, float tolerance) {
+Patch LargestPatchOrganized(const PointCloud& cloud, const Indices& on_plane, float tolerance,
+                            int num_threads) {
     const std::size_t w = cloud.width, h = cloud.height;
+    constexpr std::size_t kRowGrain = 16;
     std::vector<std::uint8_t> in(cloud.size(), 0);
-    for (Index i : on_plane) in[i] = 1;
+    ParallelFor(
+        on_plane.size(), num_threads, [&](std::size_t k) { in[on_plane[k]] = 1; }, 16384);
     const float tol_sq = tolerance * tolerance;
     auto near = [&](std::size_t i, std::size_t j) {
         return (cloud.points[i] - cloud.points[j]).squaredNorm() <= tol_sq;
     };
-    // Runs of plane pixels along each row, cut where two neighbours are too far apart.
+    // Runs of plane pixels along each row, cut where two neighbours are too far apart (rows in
+    // parallel, joined in row order).
+    std::vector<std::vector<PixelRun>> row_runs(h);
+    ParallelFor(
+        h, num_threads,
+        [&](std::size_t v) {
+            std::vector<PixelRun>& out = row_runs[v];
+            const std::size_t row = v * w;
+            for (std::size_t u = 0; u < w; ++u) {
+                if (in[row + u] == 0) continue;
+                if (u > 0 && in[row + u - 1] != 0 && near(row + u - 1, row + u)) {
+                    out.back().u1 = static_cast<std::uint32_t>(u);
+                } else {
+                    out.push_back({static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(u),
+                                   static_cast<std::uint32_t>(u)});
+                }
+            }
+        },
+        kRowGrain);
     std::vector<PixelRun> runs;
     std::vector<std::size_t> row_start(h + 1, 0);
     for (std::size_t v = 0; v < h; ++v) {
         row_start[v] = runs.size();
-        const std::size_t row = v * w;
-        for (std::size_t u = 0; u < w; ++u) {
-            if (in[row + u] == 0) continue;
-            if (u > 0 && in[row + u - 1] != 0 && near(row + u - 1, row + u)) {
-                runs.back().u1 = static_cast<std::uint32_t>(u);
-            } else {
-                runs.push_back({static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(u),
-                                static_cast<std::uint32_t>(u)});
-            }
-        }
+        runs.insert(runs.end(), row_runs[v].begin(), row_runs[v].end());
     }
     row_start[h] = runs.size();
+    row_runs = {};
     // Runs of neighbouring rows touching diagonally or straight, with a pair of pixels within the
-    // tolerance, are one piece.
-    detail::DisjointSets pieces(runs.size());
-    for (std::size_t v = 0; v + 1 < h; ++v) {
-        std::size_t b = row_start[v + 1];
-        for (std::size_t a = row_start[v]; a < row_start[v + 1]; ++a) {
-            const PixelRun& ra = runs[a];
-            while (b < row_start[v + 2] && runs[b].u1 + 1 < ra.u0) ++b;
-            for (std::size_t c = b; c < row_start[v + 2] && runs[c].u0 <= ra.u1 + 1; ++c) {
-                const PixelRun& rb = runs[c];
-                if (pieces.Find(static_cast<Index>(a)) == pieces.Find(static_cast<Index>(c)))
-                    continue;
-                bool linked = false;
-                const std::uint32_t lo = std::max(ra.u0, rb.u0 > 0 ? rb.u0 - 1 : 0);
-                const std::uint32_t hi = std::min(ra.u1, rb.u1 + 1);
-                for (std::uint32_t u = lo; u <= hi && !linked; ++u) {
-                    const std::size_t i = v * w + u;
-                    for (std::uint32_t x = u > rb.u0 ? u - 1 : rb.u0; x <= std::min(u + 1, rb.u1);
-                         ++x) {
-                        if (near(i, (v + 1) * w + x)) {
-                            linked = true;
-                            break;
+    // tolerance, are one piece. The pairs are found for each pair of rows in parallel and joined
+    // afterwards (the pieces and their representatives do not depend on the order of joining).
+    std::vector<std::vector<std::pair<Index, Index>>> row_links(h);
+    ParallelFor(
+        h > 0 ? h - 1 : 0, num_threads,
+        [&](std::size_t v) {
+            std::size_t b = row_start[v + 1];
+            for (std::size_t a = row_start[v]; a < row_start[v + 1]; ++a) {
+                const PixelRun& ra = runs[a];
+                while (b < row_start[v + 2] && runs[b].u1 + 1 < ra.u0) ++b;
+                for (std::size_t c = b; c < row_start[v + 2] && runs[c].u0 <= ra.u1 + 1; ++c) {
+                    const PixelRun& rb = runs[c];
+                    bool linked = false;
+                    const std::uint32_t lo = std::max(ra.u0, rb.u0 > 0 ? rb.u0 - 1 : 0);
+                    const std::uint32_t hi = std::min(ra.u1, rb.u1 + 1);
+                    for (std::uint32_t u = lo; u <= hi && !linked; ++u) {
+                        const std::size_t i = v * w + u;
+                        for (std::uint32_t x = u > rb.u0 ? u - 1 : rb.u0;
+                             x <= std::min(u + 1, rb.u1); ++x) {
+                            if (near(i, (v + 1) * w + x)) {
+                                linked = true;
+                                break;
+                            }
                         }
                     }
+                    if (linked)
+                        row_links[v].emplace_back(static_cast<Index>(a), static_cast<Index>(c));
                 }
-                if (linked) pieces.Unite(static_cast<Index>(a), static_cast<Index>(c));
             }
-        }
-    }
-    // Border pixels and their runs.
+        },
+        kRowGrain);
+    detail::DisjointSets pieces(runs.size());
+    for (const auto& links : row_links)
+        for (const auto& [a, c] : links) pieces.Unite(a, c);
+    row_links = {};
+    // Border pixels and their runs (rows in parallel, joined in row order: ascending).
+    struct BorderPixel {
+        Index pixel;
+        std::uint32_t run;
+    };
+    std::vector<std::vector<BorderPixel>> row_border(h);
+    ParallelFor(
+        h, num_threads,
+        [&](std::size_t v) {
+            for (std::size_t r = row_start[v]; r < row_start[v + 1]; ++r) {
+                const PixelRun& run = runs[r];
+                const std::size_t row = v * w;
+                for (std::uint32_t u = run.u0; u <= run.u1; ++u) {
+                    const std::size_t i = row + u;
+                    const bool inner = u > run.u0 && u < run.u1 && v > 0 && v + 1 < h &&
+                                       in[i - w] != 0 && in[i + w] != 0;
+                    if (!inner)
+                        row_border[v].push_back(
+                            {static_cast<Index>(i), static_cast<std::uint32_t>(r)});
+                }
+            }
+        },
+        kRowGrain);
     Indices border;
     std::vector<std::uint32_t> border_run;
-    for (std::size_t r = 0; r < runs.size(); ++r) {
-        const PixelRun& run = runs[r];
-        const std::size_t row = std::size_t{run.v} * w;
-        for (std::uint32_t u = run.u0; u <= run.u1; ++u) {
-            const std::size_t i = row + u;
-            const bool inner = u > run.u0 && u < run.u1 && run.v > 0 && run.v + 1 < h &&
-                               in[i - w] != 0 && in[i + w] != 0;
-            if (inner) continue;
-            border.push_back(static_cast<Index>(i));
-            border_run.push_back(static_cast<std::uint32_t>(r));
+    for (const auto& row : row_border) {
+        for (const BorderPixel& b : row) {
+            border.push_back(b.pixel);
+            border_run.push_back(b.run);
         }
     }
+    row_border = {};
     const ClusteringResult linked = EuclideanClusteringGrid(
         cloud, {.tolerance = tolerance, .subset = border, .compute_labels = true});
     // Border pixels of one 3D cluster join their pieces.
@@ -462,7 +501,8 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
         PointsOnPlane(cloud, finite, plane, params.distance_threshold, params.num_threads);
     Patch table;
     if (cloud.IsOrganized() && !on_plane.empty()) {
-        table = LargestPatchOrganized(cloud, on_plane, params.cluster_tolerance);
+        table =
+            LargestPatchOrganized(cloud, on_plane, params.cluster_tolerance, params.num_threads);
     } else {
         table.points = LargestPatch(cloud, on_plane, params.cluster_tolerance);
         table.border = table.points;
@@ -486,7 +526,7 @@ namespace {
 
 // Objects standing beyond the visible hull (PrismParams::edge_reach), appended to `region`.
 void AddObjectsBeyondTheHull(const PointCloud& cloud, const SupportPlane& s,
-                             const PrismParams& prism, Indices& region) {
+                             const PrismParams& prism, int num_threads, Indices& region) {
     constexpr float kTouch = 0.03f;       // a cluster reaches this close to the hull [m]
     constexpr float kTolerance = 0.015f;  // points of one cluster [m]
     constexpr float kRise = 0.10f;        // looked at above max_height, to see what rises [m]
@@ -495,18 +535,17 @@ void AddObjectsBeyondTheHull(const PointCloud& cloud, const SupportPlane& s,
     const HullEdges edges(s.hull, up);
     std::vector<std::uint8_t> in_region(cloud.size(), 0);
     for (Index i : region) in_region[i] = 1;
-    Indices beyond;
     std::vector<float> outside_by(cloud.size(), 0.0f);
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (in_region[i] != 0 || !cloud.IsFinite(i)) continue;
+    const Indices beyond = ParallelSelect(cloud.size(), num_threads, [&](std::size_t i) {
+        if (in_region[i] != 0 || !cloud.IsFinite(i)) return false;
         const Eigen::Vector3f& p = cloud.points[i];
         const float h = up.dot(p) + s.plane.w();
-        if (h < prism.min_height || h > prism.max_height + kRise) continue;
+        if (h < prism.min_height || h > prism.max_height + kRise) return false;
         const float out = edges.Outside(p);  // outside: at most the distance to the hull
-        if (out <= 0.0f || out > prism.edge_reach) continue;
+        if (out <= 0.0f || out > prism.edge_reach) return false;
         outside_by[i] = out;
-        beyond.push_back(static_cast<Index>(i));
-    }
+        return true;
+    });
     if (beyond.empty()) return;
     const ClusteringResult clusters = EuclideanClusteringGrid(
         cloud, {.tolerance = kTolerance, .min_cluster_size = kMinPoints, .subset = beyond});
@@ -534,7 +573,7 @@ TableRegion FindTableRegion(const PointCloud& cloud, const SupportPlaneParams& s
     if (s.found && s.hull.size() >= 3 && s.supported > 0) {
         region.points = PolygonalPrism(cloud, s.plane, s.hull, prism, support.num_threads);
         if (prism.edge_reach > 0.0f && !region.points.empty())
-            AddObjectsBeyondTheHull(cloud, s, prism, region.points);
+            AddObjectsBeyondTheHull(cloud, s, prism, support.num_threads, region.points);
     }
     if (region.points.empty()) {
         region.support = SupportPlane{};
