@@ -318,6 +318,26 @@ TEST(RecoverImageGrid, PutsADepthFrameBackOnItsPixels) {
     }
 }
 
+TEST(RecoverImageGrid, TheSameGridOnAnyThreadCount) {
+    const PointCloud frame = PinholeCloud(160, 120, 140.0f, 5);
+    Indices pixel_of_point;
+    const PointCloud flat = DropGrid(frame, 3, pixel_of_point);
+    const auto one = RecoverImageGrid(flat, 1);
+    const auto two = RecoverImageGrid(flat, 2);
+    ASSERT_TRUE(one.has_value());
+    ASSERT_TRUE(two.has_value());
+    EXPECT_EQ(one->organized.width, two->organized.width);
+    EXPECT_EQ(one->organized.height, two->organized.height);
+    EXPECT_EQ(one->input_of, two->input_of);
+    EXPECT_EQ(one->pixel_of, two->pixel_of);
+    ASSERT_EQ(one->organized.size(), two->organized.size());
+    for (std::size_t p = 0; p < one->organized.size(); ++p) {
+        const Eigen::Vector3f& x = one->organized.points[p];
+        const Eigen::Vector3f& y = two->organized.points[p];
+        EXPECT_TRUE(x == y || (!x.allFinite() && !y.allFinite()));
+    }
+}
+
 TEST(RecoverImageGrid, NothingForCloudsThatAreNotOneDepthImage) {
     const PointCloud frame = PinholeCloud(80, 60, 70.0f, 7);
     Indices order;

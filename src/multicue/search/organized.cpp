@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 
 namespace multicue {
 namespace {
@@ -281,7 +282,7 @@ std::optional<std::pair<double, double>> LatticeOf(std::vector<double> values) {
 
 }  // namespace
 
-std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud) {
+std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud, int num_threads) {
     if (cloud.IsOrganized() || cloud.empty() || cloud.HasSensorPosition()) return std::nullopt;
     const std::size_t n = cloud.size();
     std::vector<double> a, b;
@@ -300,7 +301,10 @@ std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud) {
         b.push_back(static_cast<double>(q.y()) / q.z());
         finite.push_back(static_cast<Index>(i));
     }
-    const auto la = LatticeOf(a), lb = LatticeOf(b);
+    // The two lattices (each sorts its values) side by side.
+    std::optional<std::pair<double, double>> la, lb;
+    ParallelFor(
+        2, num_threads, [&](std::size_t k) { (k == 0 ? la : lb) = LatticeOf(k == 0 ? a : b); }, 1);
     if (!la || !lb) return std::nullopt;
     const auto [pa, a0] = *la;
     const auto [pb, b0] = *lb;
@@ -336,13 +340,16 @@ std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud) {
     o.points.assign(grid.input_of.size(), Eigen::Vector3f::Constant(nan));
     if (cloud.HasNormals()) o.normals.assign(o.points.size(), Eigen::Vector3f::Constant(nan));
     if (cloud.HasColors()) o.colors.assign(o.points.size(), Color{});
-    for (std::size_t p = 0; p < grid.input_of.size(); ++p) {
-        const Index i = grid.input_of[p];
-        if (i == ImageGrid::kNoPoint) continue;
-        o.points[p] = cloud.points[i];
-        if (!o.normals.empty()) o.normals[p] = cloud.normals[i];
-        if (!o.colors.empty()) o.colors[p] = cloud.colors[i];
-    }
+    ParallelFor(
+        grid.input_of.size(), num_threads,
+        [&](std::size_t p) {
+            const Index i = grid.input_of[p];
+            if (i == ImageGrid::kNoPoint) return;
+            o.points[p] = cloud.points[i];
+            if (!o.normals.empty()) o.normals[p] = cloud.normals[i];
+            if (!o.colors.empty()) o.colors[p] = cloud.colors[i];
+        },
+        16384);
     return grid;
 }
 

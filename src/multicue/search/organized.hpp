@@ -85,7 +85,8 @@ struct ImageGrid {
 /// of the points lie within a tenth of a pixel of a lattice node, no two points share a pixel,
 /// and the image has at most 4096 x 4096 pixels and 8 times as many pixels as points. Returns
 /// nothing otherwise (a cloud that was filtered, merged from several views, transformed into a
-/// world frame, or from a laser scanner), and for organized or empty clouds.
-std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud);
+/// world frame, or from a laser scanner), and for organized or empty clouds. `num_threads`
+/// (0 = all cores) does not change the result.
+std::optional<ImageGrid> RecoverImageGrid(const PointCloud& cloud, int num_threads = 1);
 
 }  // namespace multicue

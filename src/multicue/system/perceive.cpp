@@ -206,7 +206,8 @@ PerceiveResult PerceiveInPlace(PointCloud& input, const PerceiveParams& given,
     PerceiveResult result;
     const auto start = std::chrono::steady_clock::now();
     std::optional<ImageGrid> grid;
-    if (params.image_grid && !input.IsOrganized()) grid = RecoverImageGrid(input);
+    if (params.image_grid && !input.IsOrganized())
+        grid = RecoverImageGrid(input, params.num_threads);
     if (!grid) {
         result = PerceiveFrame(input, params, models);
     } else {
