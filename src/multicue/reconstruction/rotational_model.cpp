@@ -799,10 +799,10 @@ void RefineAxisByContour(const std::vector<Sample>& samples, const AxisSearch& s
         RefinementStarts(samples, coarse, search, params.num_threads, refined);
     Eigen::Vector4d x = BestOfStarts(coarse, starts, refined, scale, tolerance, params.num_threads);
     x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
+    // One polish on the contour alone (a second one changed the axes by hundredths of a degree on
+    // simulated bottles, bowls and pitchers).
     cost.DropEndLevel();
-    for (int restart = 0; restart < 2; ++restart) {
-        x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
-    }
+    x = NelderMead<4>(cost, x, Eigen::Vector4d(0.25 * scale), tolerance, 400);
     profile_spread = static_cast<float>(std::sqrt(cost(x)));
     cost.offsets().Axis(x, best.direction, best.center);
     best.cost = LineCost(samples, best.direction, best.center, search.t, search.sin_parallel);
