@@ -131,7 +131,7 @@ void RandomCurvature(PointCloud& c, std::mt19937& rng, float lo = 0.0f, float hi
 // depth sensor would, so that neighbouring pixels on one object are never far apart in 3D.
 struct OrganizedScene {
     PointCloud cloud;
-    std::vector<int> object;             // per pixel: -1 background, else 0..3
+    std::vector<int> object;              // per pixel: -1 background, else 0..3
     std::vector<Eigen::Vector3f> normal;  // per pixel: the surface normal, NaN on the background
 };
 
@@ -574,6 +574,47 @@ TEST(EuclideanClusteringOrganized, DiagonalPixelsJoinOnlyWithEightConnectivity) 
     EXPECT_EQ(four.clusters.size(), 12u);
 }
 
+TEST(EuclideanClusteringOrganized, TheSameClustersOnAnyThreadCount) {
+    const OrganizedScene scene = MakeOrganizedScene(13);
+    const PointCloud& c = scene.cloud;
+    const KdTree tree(c);
+    const auto reference = EuclideanClustering(c, tree, {.tolerance = 0.025f});
+    for (int threads : {1, 2, 3, 0}) {
+        const auto organized = EuclideanClusteringOrganized(c, {.tolerance = 0.025f,
+                                                                .half_window = 2,
+                                                                .compute_labels = true,
+                                                                .num_threads = threads});
+        EXPECT_EQ(organized.clusters, reference.clusters) << threads << " threads";
+    }
+}
+
+TEST(EuclideanClusteringOrganized, ArmsJoinedFarBelowAreOneCluster) {
+    // A U of pixels 60 rows tall: its two arms (columns 2 and 9) meet only in the bottom row, many
+    // rows below where they start, and a separate bar lies beside it.
+    PointCloud c;
+    c.width = 16;
+    c.height = 64;
+    c.points.assign(c.width * c.height, Eigen::Vector3f::Constant(kNaN));
+    auto set = [&](std::uint32_t u, std::uint32_t v) {
+        c.points[v * c.width + u] =
+            Eigen::Vector3f(0.01f * static_cast<float>(u), 0.01f * static_cast<float>(v), 1.0f);
+    };
+    for (std::uint32_t v = 1; v <= 60; ++v) {
+        set(2, v);
+        set(9, v);
+        set(13, v);
+    }
+    for (std::uint32_t u = 2; u <= 9; ++u) set(u, 60);
+    for (int threads : {1, 2, 0}) {
+        const auto r =
+            EuclideanClusteringOrganized(c, {.tolerance = 0.015f, .num_threads = threads});
+        ASSERT_EQ(r.clusters.size(), 2u) << threads << " threads";
+        EXPECT_EQ(r.clusters[0].size(), 60u + 60u + 6u);
+        EXPECT_EQ(r.clusters[0].front(), 1u * 16u + 2u);
+        EXPECT_EQ(r.clusters[1].size(), 60u);
+    }
+}
+
 TEST(EuclideanClusteringOrganized, RejectsBadParametersAndInput) {
     const PointCloud c = PatchWithGap();
     EXPECT_THROW(EuclideanClusteringOrganized(c, {.tolerance = 0.0f}), InvalidArgument);
@@ -581,6 +622,7 @@ TEST(EuclideanClusteringOrganized, RejectsBadParametersAndInput) {
                  InvalidArgument);
     EXPECT_THROW(EuclideanClusteringOrganized(c, {.connectivity = 6}), InvalidArgument);
     EXPECT_THROW(EuclideanClusteringOrganized(c, {.half_window = 0}), InvalidArgument);
+    EXPECT_THROW(EuclideanClusteringOrganized(c, {.num_threads = -1}), InvalidArgument);
     EXPECT_THROW(EuclideanClusteringOrganized(c, {.mask = std::vector<std::uint8_t>(5, 1)}),
                  InvalidArgument);
     EXPECT_THROW(EuclideanClusteringOrganized(
@@ -970,8 +1012,7 @@ TEST(RegionGrowingOrganized, MatchesTheTreeWhereTheWindowHoldsTheNearest) {
             const RegionGrowingParams params{
                 .radius = 0.03f, .k = k, .max_angle_deg = angle, .subset = objects};
             const auto expected = RegionGrowing(c, tree, params);
-            const auto got =
-                RegionGrowingOrganized(c, params, {.half_window = 6, .mask = mask});
+            const auto got = RegionGrowingOrganized(c, params, {.half_window = 6, .mask = mask});
             EXPECT_EQ(got.parts, expected.parts) << "k " << k << " angle " << angle;
             EXPECT_EQ(got.part_ids, expected.part_ids);
             EXPECT_EQ(got.num_merged_parts, expected.num_merged_parts);
@@ -980,8 +1021,8 @@ TEST(RegionGrowingOrganized, MatchesTheTreeWhereTheWindowHoldsTheNearest) {
     }
     // Only a part of the objects: the parts lie within it.
     Indices first(objects.begin(), objects.begin() + objects.size() / 3);
-    const auto part = RegionGrowingOrganized(
-        c, {.radius = 0.03f, .k = 8, .subset = first}, {.half_window = 3, .mask = mask});
+    const auto part = RegionGrowingOrganized(c, {.radius = 0.03f, .k = 8, .subset = first},
+                                             {.half_window = 3, .mask = mask});
     for (const auto& p : part.parts)
         for (Index i : p) EXPECT_TRUE(std::binary_search(first.begin(), first.end(), i));
 }

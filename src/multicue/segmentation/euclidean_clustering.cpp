@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/segmentation/disjoint_sets.hpp"
 
 namespace multicue {
@@ -309,6 +310,7 @@ ClusteringResult EuclideanClusteringOrganized(const PointCloud& organized,
     if (!params.subset.empty() && !params.mask.empty()) {
         throw InvalidArgument("give either a subset or a mask for organized clustering, not both");
     }
+    ResolveThreadCount(params.num_threads);  // throws on negative values
     const std::size_t n = organized.size();
     if (!params.mask.empty() && params.mask.size() != n) {
         throw InvalidArgument(
@@ -339,21 +341,43 @@ ClusteringResult EuclideanClusteringOrganized(const PointCloud& organized,
     const int width = static_cast<int>(organized.width);
     const int height = static_cast<int>(organized.height);
     const float tolerance_sq = params.tolerance * params.tolerance;
+    // Blocks of rows are linked in parallel: a link inside a block touches only the block's own
+    // pixels (their sets hold nothing else yet), so blocks never share an entry of `sets`. Links
+    // reaching into a later block are joined afterwards, in order. With the smallest index as
+    // every set's representative, the sets do not depend on the order of the unions.
+    constexpr int kBlockRows = 16;
+    const int blocks = (height + kBlockRows - 1) / kBlockRows;
     detail::DisjointSets sets(n);
-    for (int v = 0; v < height; ++v) {
-        for (int u = 0; u < width; ++u) {
-            const auto i = static_cast<Index>(v * width + u);
-            if (active[i] == 0) continue;
-            const Eigen::Vector3f& p = organized.points[i];
-            for (const auto& [du, dv] : offsets) {
-                const int uu = u + du;
-                const int vv = v + dv;
-                if (uu < 0 || uu >= width || vv >= height) continue;
-                const auto j = static_cast<Index>(vv * width + uu);
-                if (active[j] == 0) continue;
-                if ((organized.points[j] - p).squaredNorm() < tolerance_sq) sets.Unite(i, j);
+    std::vector<std::vector<std::pair<Index, Index>>> crossing(static_cast<std::size_t>(blocks));
+    ParallelFor(
+        static_cast<std::size_t>(blocks), params.num_threads,
+        [&](std::size_t b) {
+            const int v0 = static_cast<int>(b) * kBlockRows;
+            const int v1 = std::min(height, v0 + kBlockRows);
+            for (int v = v0; v < v1; ++v) {
+                for (int u = 0; u < width; ++u) {
+                    const auto i = static_cast<Index>(v * width + u);
+                    if (active[i] == 0) continue;
+                    const Eigen::Vector3f& p = organized.points[i];
+                    for (const auto& [du, dv] : offsets) {
+                        const int uu = u + du;
+                        const int vv = v + dv;
+                        if (uu < 0 || uu >= width || vv >= height) continue;
+                        const auto j = static_cast<Index>(vv * width + uu);
+                        if (active[j] == 0) continue;
+                        if (!((organized.points[j] - p).squaredNorm() < tolerance_sq)) continue;
+                        if (vv < v1) {
+                            sets.Unite(i, j);
+                        } else {
+                            crossing[b].emplace_back(i, j);
+                        }
+                    }
+                }
             }
-        }
+        },
+        1);
+    for (const auto& links : crossing) {
+        for (const auto& [i, j] : links) sets.Unite(i, j);
     }
 
     // Roots are the smallest indices, so visiting pixels in order creates each component at its
@@ -380,6 +404,7 @@ void ObjectClusteringParams::Validate() const {
         throw InvalidArgument(
             fmt::format("organized_half_window must be >= 1 pixel, got {}", organized_half_window));
     }
+    ResolveThreadCount(num_threads);  // throws on negative values
 }
 
 ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
@@ -391,7 +416,8 @@ ClusteringResult ClusterObjects(const PointCloud& cloud, const Indices& region,
                                                     .min_cluster_size = params.min_points,
                                                     .max_cluster_size = params.max_points,
                                                     .subset = region,
-                                                    .half_window = params.organized_half_window});
+                                                    .half_window = params.organized_half_window,
+                                                    .num_threads = params.num_threads});
     }
     return EuclideanClusteringGrid(cloud, {.tolerance = params.tolerance,
                                            .min_cluster_size = params.min_points,

@@ -49,6 +49,8 @@ struct OrganizedClusteringParams {
     int half_window = 1;   ///< pixel reach of a neighbourhood; 1 = the 4 or 8 adjacent pixels,
                            ///< h > 1 bridges invalid gaps up to h - 1 pixels wide [pixels]
     bool compute_labels = false;  ///< also fill ClusteringResult::labels
+    /// Blocks of rows are linked in parallel (0 = all cores); never changes the result.
+    int num_threads = 1;
 };
 
 struct ClusteringResult {
@@ -110,6 +112,7 @@ struct ObjectClusteringParams {
     std::size_t max_points = 200000;  ///< larger clusters are not objects [points]; >= min_points
     /// Organized frames: pixel reach of a neighbourhood; 2 bridges one-pixel gaps [pixels]; >= 1.
     int organized_half_window = 2;
+    int num_threads = 1;  ///< organized frames: rows linked in parallel (0 = all cores)
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A

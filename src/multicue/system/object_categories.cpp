@@ -164,7 +164,9 @@ void CategorizeObjects(const PointCloud& cloud, std::vector<PerceivedObject>& ob
     CheckCategorizationModel(params, model);
     const std::vector<std::size_t> targets = Targets(objects.size(), which);
     CategoryParams rules = params.rules;
-    rules.num_threads = 1;  // objects run in parallel
+    // Objects run in parallel; the fits inside one (its consensus scoring) help where objects
+    // are few or of unequal size, nested in the same threads. The result does not depend on it.
+    rules.num_threads = params.num_threads;
     ParallelFor(
         targets.size(), params.num_threads,
         [&](std::size_t r) {

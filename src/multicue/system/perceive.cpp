@@ -79,6 +79,7 @@ void PerceiveParams::Validate() const {
 PerceiveParams ApplyThreadCount(PerceiveParams p) {
     p.normals.organized.num_threads = p.normals.unorganized.num_threads = p.num_threads;
     p.support.num_threads = p.num_threads;
+    p.clustering.num_threads = p.num_threads;
     p.parts.num_threads = p.num_threads;
     p.category.num_threads = p.num_threads;
     p.models.num_threads = p.num_threads;
