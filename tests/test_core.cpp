@@ -7,6 +7,7 @@
 #include "multicue/core/parallel.hpp"
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/core/progress.hpp"
+#include "multicue/core/task_order.hpp"
 #include "multicue/core/triangle_mesh.hpp"
 #include "test_util.hpp"
 
@@ -118,6 +119,13 @@ TEST(Parallel, SelectKeepsTheSerialOrder) {
     }
     EXPECT_TRUE(ParallelSelect(0, 2, keep).empty());
     EXPECT_TRUE(ParallelSelect(1000, 2, [](std::size_t) { return false; }).empty());
+}
+
+TEST(Parallel, LargestFirstOrdersBySizeThenPosition) {
+    const std::vector<std::size_t> sizes = {3, 9, 3, 0, 9, 5};
+    const auto size = [&](std::size_t k) { return sizes[k]; };
+    EXPECT_EQ(LargestFirst(sizes.size(), size), (std::vector<std::size_t>{1, 4, 5, 0, 2, 3}));
+    EXPECT_TRUE(LargestFirst(0, size).empty());
 }
 
 // Loops nested in a parallel loop (objects in parallel, each with loops of its own) run in the

@@ -16,6 +16,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/core/task_order.hpp"
 #include "multicue/reconstruction/fit_guidance.hpp"
 
 namespace multicue {
@@ -528,10 +529,14 @@ void ModelObjects(const PointCloud& cloud, std::vector<PerceivedObject>& objects
             throw InvalidArgument(fmt::format("object {} of {} to model", k, objects.size()));
         }
     }
+    // The largest objects first: a large one started last would keep one thread busy alone.
+    const auto target = [&](std::size_t r) { return which.empty() ? r : which[r]; };
+    const std::vector<std::size_t> order =
+        LargestFirst(n, [&](std::size_t r) { return objects[target(r)].indices.size(); });
     ParallelFor(
         n, params.num_threads,
-        [&](std::size_t r) {
-            PerceivedObject& o = objects[which.empty() ? r : which[r]];
+        [&](std::size_t q) {
+            PerceivedObject& o = objects[target(order[q])];
             o.model = ModelChecked(cloud, o, plane, params);
         },
         1);

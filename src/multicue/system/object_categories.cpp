@@ -9,6 +9,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/core/params.hpp"
+#include "multicue/core/task_order.hpp"
 #include "multicue/recognition/category_stacker.hpp"
 #include "multicue/recognition/part_vocabulary.hpp"
 
@@ -167,10 +168,13 @@ void CategorizeObjects(const PointCloud& cloud, std::vector<PerceivedObject>& ob
     // Objects run in parallel; the fits inside one (its consensus scoring) help where objects
     // are few or of unequal size, nested in the same threads. The result does not depend on it.
     rules.num_threads = params.num_threads;
+    // The largest objects first: a large one started last would keep one thread busy alone.
+    const std::vector<std::size_t> order = LargestFirst(
+        targets.size(), [&](std::size_t r) { return objects[targets[r]].indices.size(); });
     ParallelFor(
-        targets.size(), params.num_threads,
-        [&](std::size_t r) {
-            PerceivedObject& o = objects[targets[r]];
+        order.size(), params.num_threads,
+        [&](std::size_t q) {
+            PerceivedObject& o = objects[targets[order[q]]];
             o.category = CategorizeObject(cloud, o.indices, o.parts, plane, rules);
             RestrictCategories(o.category, allowed);
         },
