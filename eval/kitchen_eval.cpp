@@ -24,6 +24,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <fmt/format.h>
@@ -178,6 +179,8 @@ struct Scores {
     std::size_t any_tp = 0, any_fp = 0, any_fn = 0;
     std::map<std::string, std::size_t> fp_on;   ///< class of the point under a false detection
     std::map<std::string, std::size_t> fn_why;  ///< why true fixtures were missed
+    /// Per kitchen model (its library id): visible true fixtures and those found (either type).
+    std::map<std::string, std::pair<std::size_t, std::size_t>> fixtures_by_model;
     Stats front_iou_detectable, front_iou_all, front_iou_found;
     /// Fronts whose fixture was detected and that were matched: share of the predicted front's
     /// points on the true front (precision) and of the true front's points covered (recall).
@@ -368,6 +371,15 @@ class Evaluator {
                 if (du[d] || map.fixtures[d].indices.empty()) continue;
                 const Index mid = map.fixtures[d].indices[map.fixtures[d].indices.size() / 2];
                 ++s.fp_on[sim::KitchenClassNames()[t.semantic[mid]]];
+            }
+            for (std::size_t g = 0; g < fixtures.size(); ++g) {
+                const std::size_t instance = t.model[fixtures[g].points.front()];
+                const std::string id = instance >= 1 && instance <= k.instances.size()
+                                           ? k.instances[instance - 1].model->id
+                                           : std::string("unknown");
+                auto& [visible, found] = s.fixtures_by_model[id];
+                ++visible;
+                found += gu[g] ? 1 : 0;
             }
             for (std::size_t g = 0; g < fixtures.size(); ++g) {
                 if (gu[g]) continue;
@@ -684,6 +696,29 @@ class Evaluator {
         pr("handle", s.handle_tp, s.handle_fp, s.handle_fn);
         pr("knob", s.knob_tp, s.knob_fp, s.knob_fn);
         pr("any", s.any_tp, s.any_fp, s.any_fn);
+        {
+            // The worst models: the kitchen models whose fixtures are missed most (ties: lower
+            // recall first), with found / visible.
+            std::vector<std::tuple<std::size_t, double, std::string>> models;
+            for (const auto& [id, vf] : s.fixtures_by_model) {
+                models.emplace_back(
+                    vf.first - vf.second,
+                    ratio(static_cast<double>(vf.second), static_cast<double>(vf.first)), id);
+            }
+            std::sort(models.begin(), models.end(), [](const auto& a, const auto& b) {
+                return std::get<0>(a) > std::get<0>(b) ||
+                       (std::get<0>(a) == std::get<0>(b) && std::get<1>(a) < std::get<1>(b));
+            });
+            std::printf("  most missed models (found / visible):");
+            for (std::size_t m = 0; m < models.size() && (o_.verbose || m < 5); ++m) {
+                const auto& vf = s.fixtures_by_model.at(std::get<2>(models[m]));
+                std::printf(" %s %zu/%zu", std::get<2>(models[m]).c_str(), vf.second, vf.first);
+            }
+            std::printf("\n");
+            for (const auto& [id, vf] : s.fixtures_by_model) {
+                j["fixtures"]["by_model"][id] = {{"visible", vf.first}, {"found", vf.second}};
+            }
+        }
         if (o_.verbose) {
             std::printf("  missed fixtures:");
             for (const auto& [c, n] : s.fn_why) std::printf(" [%s] %zu", c.c_str(), n);
