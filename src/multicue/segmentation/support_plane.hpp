@@ -49,7 +49,9 @@ struct SupportPlaneParams {
     /// the table's legs, chairs). raised_gap <= 0 turns this off.
     float raised_gap = 0.3f;          ///< [m]
     float raised_ratio = 0.08f;       ///< [-]
-    std::size_t max_samples = 20000;  ///< points used for the robust fit (strided subsample)
+    /// Points used for the robust fit and the support counts (a strided subsample); 10000 scored
+    /// as 20000 did on the validation splits, with a sixth less work in this stage.
+    std::size_t max_samples = 10000;
     /// The table is the largest set of its plane's inliers connected within this distance: the
     /// objects on it cut its visible top into pieces up to about their size apart [m].
     float cluster_tolerance = 0.2f;
