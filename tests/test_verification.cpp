@@ -66,6 +66,22 @@ TEST(Verification, AModelHiddenBehindTheObjectIsOccludedNotInvalid) {
     EXPECT_GT(r.occluded_ratio, 0.9f);
 }
 
+TEST(Verification, TheSameStatesOnAnyThreadCount) {
+    const ScannedBox s = ScanOneBox();
+    BoxModel shifted = s.truth;  // partly in free space, partly verified, partly hidden
+    shifted.center += 0.04f * s.toward_camera;
+    for (const BoxModel& model : {s.truth, shifted}) {
+        const auto one = VerifyModel(BoxMesh(model), s.scan, Eigen::Vector3f::Zero());
+        for (int threads : {2, 3, 0}) {
+            VerificationParams p;
+            p.num_threads = threads;
+            const auto many = VerifyModel(BoxMesh(model), s.scan, Eigen::Vector3f::Zero(), p);
+            EXPECT_EQ(many.states, one.states) << threads << " threads";
+            EXPECT_EQ(many.invalid_ratio, one.invalid_ratio);
+        }
+    }
+}
+
 TEST(Verification, EmptyModelsAndBadParameters) {
     const ScannedBox s = ScanOneBox();
     const auto empty = VerifyModel(TriangleMesh{}, s.scan, Eigen::Vector3f::Zero());
@@ -74,6 +90,10 @@ TEST(Verification, EmptyModelsAndBadParameters) {
     VerificationParams bad;
     bad.voxel_size = 0.0f;
     EXPECT_THROW(VerifyModel(BoxMesh(s.truth), s.scan, Eigen::Vector3f::Zero(), bad),
+                 InvalidArgument);
+    VerificationParams negative_threads;
+    negative_threads.num_threads = -1;
+    EXPECT_THROW(VerifyModel(BoxMesh(s.truth), s.scan, Eigen::Vector3f::Zero(), negative_threads),
                  InvalidArgument);
     VerificationParams huge;
     huge.voxel_size = 0.0001f;

@@ -346,8 +346,9 @@ std::optional<ModelVerificationSummary> VerifyInFrame(const PointCloud& cloud,
                                                       const TriangleMesh& mesh,
                                                       const Eigen::Vector4f& plane,
                                                       const ModelParams& params) {
-    const VerificationParams& vp = params.verification;
     if (!params.verification.enabled) return std::nullopt;
+    VerificationParams vp = params.verification;
+    vp.num_threads = params.num_threads;  // nested in the loop over objects: its threads help
     const Eigen::AlignedBox3f bounds = MeshBounds(mesh);
     Eigen::Vector3f lo = bounds.min(), hi = bounds.max();
     const Eigen::Vector3d cells =

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/search/voxel_traversal.hpp"
 
 namespace multicue {
@@ -67,6 +68,7 @@ void VerificationParams::Validate() const {
         throw InvalidArgument(
             fmt::format("verification: sample_spacing must be > 0, got {}", sample_spacing));
     }
+    ResolveThreadCount(num_threads);  // throws on negative values
 }
 
 std::vector<Eigen::Vector3f> SampleMeshSurface(const TriangleMesh& mesh, float spacing) {
@@ -142,8 +144,25 @@ VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan
             grid.dims.x(), grid.dims.y(), grid.dims.z(), params.max_cells));
     }
     grid.cells.assign(static_cast<std::size_t>(cells), kUnknown);
-    for (const auto& p : scan.points) {
-        if (p.allFinite()) CastRay(grid, sensor_origin, p);
+    // A cell ends occupied when some ray ends in it, else free when some ray crosses it, whatever
+    // the order of the rays: blocks of rays are cast into grids of their own, joined by taking
+    // each cell's highest state (unknown < free < occupied).
+    const std::size_t threads = static_cast<std::size_t>(ArenaThreadCount(params.num_threads));
+    const std::size_t blocks = scan.size() >= 4096 ? threads : 1;
+    std::vector<Grid> grids(blocks - 1, grid);
+    ParallelFor(
+        blocks, params.num_threads,
+        [&](std::size_t b) {
+            Grid& g = b == 0 ? grid : grids[b - 1];
+            const std::size_t end = scan.size() * (b + 1) / blocks;
+            for (std::size_t i = scan.size() * b / blocks; i < end; ++i) {
+                if (scan.points[i].allFinite()) CastRay(g, sensor_origin, scan.points[i]);
+            }
+        },
+        1);
+    for (const Grid& g : grids) {
+        for (std::size_t c = 0; c < grid.cells.size(); ++c)
+            grid.cells[c] = std::max(grid.cells[c], g.cells[c]);
     }
 
     result.states.resize(result.samples.size());

@@ -32,6 +32,7 @@ struct VerificationParams {
     int tolerance_voxels = 1;           ///< occupied cells this close verify a sample [cells]; >= 0
     float max_invalid_ratio = 0.1f;     ///< larger invalid shares reject the model, [0, 1]
     std::size_t max_cells = 16u << 20;  ///< refuse grids larger than this [cells]
+    int num_threads = 1;  ///< rays cast in parallel (0 = all cores); never changes the result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
