@@ -47,8 +47,8 @@ struct SupportPlaneParams {
     /// table are smaller than the table). In the choice by support, a supporting candidate
     /// raised_gap above the winner is the table standing on the floor (the floor may hold more:
     /// the table's legs, chairs). raised_gap <= 0 turns this off.
-    float raised_gap = 0.3f;          ///< [m]
-    float raised_ratio = 0.08f;       ///< [-]
+    float raised_gap = 0.3f;     ///< [m]
+    float raised_ratio = 0.08f;  ///< [-]
     /// Points used for the robust fit and the support counts (a strided subsample); 10000 scored
     /// as 20000 did on the validation splits, with a sixth less work in this stage.
     std::size_t max_samples = 10000;
