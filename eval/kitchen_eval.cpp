@@ -8,8 +8,11 @@
 // container classifier are trained on kitchens of the other half of the models (never the ones
 // scored; --train-split tune trains on the tune half when the tune half is scored, to validate);
 // --fixture-kitchens 0 finds fixtures by rules, --rules types containers by rules.
+// --vary-handles varies the handle lengths of the fixture training kitchens (sim::VaryHandles),
+// --vary-scored-handles those of the scored kitchens: a validation on handle lengths the
+// classifier has not seen.
 //
-//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--fixture-kitchens 12]
+//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--fixture-kitchens 24]
 //                           [--views 3] [--seed 1] [--sensor both|kinect|laser] [--split test]
 //                           [--train-split other|tune|test] [--rules] [--json F]
 //                           [--save-containers MODEL] [--save-fixtures PREFIX]
@@ -66,7 +69,7 @@ struct Options {
     std::string save_containers;
     std::string train_split = "other";
     int tune_fold = -1;
-    int fixture_kitchens = 12;
+    int fixture_kitchens = training::FixtureTrainingOptions{}.kitchens;
     int fixture_views = 0;  ///< scans per training kitchen (0: --views / --laser-views)
     std::uint64_t fixture_seed = 7;
     std::string fixture_spec = "rtrees:trees=100";
@@ -75,6 +78,10 @@ struct Options {
     std::string fronts = "grow";
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
     std::string load_fixtures;
+    bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
+    bool vary_scored_handles = false;
+    float vary_chance = sim::HandleVariation{}.chance;
+    float vary_min_shrink = sim::HandleVariation{}.min_shrink;
 };
 
 /// Sets one field of the region growing's parameters from NAME=VALUE.
@@ -271,6 +278,9 @@ class Evaluator {
         t.split = split;
         t.seed = o_.fixture_seed;
         t.fold = o_.tune_fold >= 0 ? 1 - o_.tune_fold : -1;
+        t.vary_handles = o_.vary_handles;
+        t.handle_variation.chance = o_.vary_chance;
+        t.handle_variation.min_shrink = o_.vary_min_shrink;
         const ml::Dataset rows = training::CollectFixtureRows(library, cache, t);
         std::size_t positive = 0;
         for (const int l : rows.labels) positive += l > 0;
@@ -630,6 +640,7 @@ class Evaluator {
         for (int i = 0; i < o_.kitchens; ++i) {
             const std::uint64_t seed = sim::SubSeed(o_.seed, static_cast<std::uint64_t>(i));
             sim::KitchenScene k = sim::MakeKitchenScene(test_lib, cache, {}, seed);
+            if (o_.vary_scored_handles) sim::VaryHandles(k, {}, sim::SubSeed(seed, 43));
             // The ground truth of joint axes comes from the kitchen's URDF, written and re-read.
             const io::UrdfModel gt = io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)),
                                                    fmt::format("kitchen_{}.urdf", i));
@@ -654,6 +665,8 @@ class Evaluator {
                               {"containers", o_.rules ? "rules" : "rtrees"},
                               {"fixtures", o_.fixture_kitchens > 0 ? o_.fixture_spec : "rules"},
                               {"fixture_kitchens", o_.fixture_kitchens},
+                              {"vary_handles", o_.vary_handles},
+                              {"vary_scored_handles", o_.vary_scored_handles},
                               {"fixture_confidence", o_.fixture_confidence},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
@@ -847,6 +860,16 @@ int main(int argc, char** argv) {
     app.add_option("--fixture-confidence", o.fixture_confidence,
                    "P(handle) + P(knob) a fixture needs")
         ->capture_default_str();
+    app.add_flag("--vary-handles", o.vary_handles,
+                 "vary the handle lengths of the fixture training kitchens");
+    app.add_option("--vary-chance", o.vary_chance, "chance that a training handle is varied")
+        ->capture_default_str();
+    app.add_option("--vary-min-shrink", o.vary_min_shrink,
+                   "shortest varied training handle as a share of its own length")
+        ->capture_default_str();
+    app.add_flag("--vary-scored-handles", o.vary_scored_handles,
+                 "vary the handle lengths of the scored kitchens too (handle designs unseen in "
+                 "training)");
     app.add_option("--save-fixtures", o.save_fixtures,
                    "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
     app.add_option("--fronts", o.fronts,

@@ -360,10 +360,17 @@ TEST(FixtureParams, BadValuesNameTheField) {
     m = KitchenParamsFor(KitchenSensor::kLaser);
     m.image_edges.high = -1.0f;
     EXPECT_THROW(m.Validate(), InvalidArgument);
-    EXPECT_THROW(training::FixtureTrainingOptions{.kitchens = 0}.Validate(), InvalidArgument);
-    EXPECT_THROW(training::FixtureTrainingOptions{.match_distance = 0.0f}.Validate(),
+    auto options = [](auto change) {
+        training::FixtureTrainingOptions o;
+        change(o);
+        return o;
+    };
+    using Options = training::FixtureTrainingOptions;
+    EXPECT_THROW(options([](Options& o) { o.kitchens = 0; }).Validate(), InvalidArgument);
+    EXPECT_THROW(options([](Options& o) { o.match_distance = 0.0f; }).Validate(), InvalidArgument);
+    EXPECT_THROW(options([](Options& o) { o.fold = 2; }).Validate(), InvalidArgument);
+    EXPECT_THROW(options([](Options& o) { o.handle_variation.max_length = 0.01f; }).Validate(),
                  InvalidArgument);
-    EXPECT_THROW(training::FixtureTrainingOptions{.fold = 2}.Validate(), InvalidArgument);
     EXPECT_THROW(training::SelectKitchenFold({}, 2), InvalidArgument);
 }
 

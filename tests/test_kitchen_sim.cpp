@@ -8,6 +8,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
 #include <numbers>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +20,7 @@
 #include "multicue/io/point_cloud_io.hpp"
 #include "multicue/io/urdf.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
+#include "multicue/sim/procedural.hpp"
 #include "multicue/sim/sensors.hpp"
 #include "test_util.hpp"
 
@@ -140,6 +144,103 @@ TEST(Articulated, MissingPartMeshesAreSkippedOrRefused) {
     }
 }
 
+/// A kitchen of one drawer front (0.6 m wide along y) whose handle is a bar 0.2 m long along y,
+/// 4.5 cm in front of it, on two mounts at y = +-0.08.
+sim::KitchenScene OneHandleKitchen() {
+    auto moved = [](sim::PartMesh m, const Eigen::Vector3f& offset) {
+        for (auto& v : m.mesh.vertices) v += offset;
+        return m;
+    };
+    sim::PartMesh mesh = sim::MakeBoxMesh({0.02f, 0.6f, 0.3f}, "drawer_front");
+    mesh.AppendParts(moved(sim::MakeBoxMesh({0.015f, 0.2f, 0.015f}, "handle"), {0.045f, 0, 0.19f}));
+    for (const float y : {-0.08f, 0.08f}) {
+        mesh.AppendParts(
+            moved(sim::MakeBoxMesh({0.03f, 0.015f, 0.015f}, "handle"), {0.025f, y, 0.19f}));
+    }
+    sim::KitchenScene k;
+    sim::SceneObject o;
+    o.mesh = std::make_shared<const sim::PartMesh>(std::move(mesh));
+    k.scene.objects.push_back(o);
+    k.truth.push_back({0, 0, sim::KitchenClass::kDrawer});
+    return k;
+}
+
+/// Bounds of the vertices of `m` with index in [first, last).
+Eigen::AlignedBox3f VertexBounds(const sim::PartMesh& m, std::size_t first, std::size_t last) {
+    Eigen::AlignedBox3f b;
+    for (std::size_t i = first; i < last; ++i) b.extend(m.mesh.vertices[i]);
+    return b;
+}
+
+TEST(KitchenScene, VaryHandlesStretchesTheBarAndMovesItsMountsRigidly) {
+    const sim::KitchenScene original = OneHandleKitchen();
+    const sim::PartMesh& before = *original.scene.objects[0].mesh;
+    const std::size_t box = 8;  // vertices of a box: front [0, 8), bar [8, 16), mounts
+    ASSERT_EQ(before.mesh.vertices.size(), 4 * box);
+    sim::HandleVariation v;
+    v.chance = 1.0f;
+    int longer = 0, shorter = 0;
+    for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+        sim::KitchenScene k = original;
+        ASSERT_EQ(sim::VaryHandles(k, v, seed), 1);
+        const sim::PartMesh& after = *k.scene.objects[0].mesh;
+        ASSERT_NE(&after, &before);  // a mesh of its own; the shared one is unchanged
+        EXPECT_TRUE(VertexBounds(before, box, 2 * box)
+                        .isApprox(Eigen::AlignedBox3f(Eigen::Vector3f(0.0375f, -0.1f, 0.19f),
+                                                      Eigen::Vector3f(0.0525f, 0.1f, 0.205f))));
+        // The front stays; the bar keeps its cross-section and centre, its length lies between
+        // half its own and the front's width less the margins.
+        EXPECT_TRUE(VertexBounds(after, 0, box).isApprox(VertexBounds(before, 0, box)));
+        const Eigen::AlignedBox3f bar = VertexBounds(after, box, 2 * box);
+        const float length = bar.sizes().y();
+        EXPECT_GE(length, 0.1f - 1e-5f);
+        EXPECT_LE(length, 0.6f - 2 * v.front_margin + 1e-5f);
+        EXPECT_NEAR(bar.center().y(), 0.0f, 1e-5f);
+        EXPECT_NEAR(bar.sizes().x(), 0.015f, 1e-5f);
+        EXPECT_NEAR(bar.sizes().z(), 0.015f, 1e-5f);
+        // The mounts keep their width and move with the bar's ends.
+        for (std::size_t m = 2; m < 4; ++m) {
+            const Eigen::AlignedBox3f mount = VertexBounds(after, m * box, (m + 1) * box);
+            EXPECT_NEAR(mount.sizes().y(), 0.015f, 1e-5f);
+            EXPECT_NEAR(std::abs(mount.center().y()), 0.08f + (length - 0.2f) / 2, 1e-5f);
+        }
+        longer += length > 0.2f;
+        shorter += length < 0.2f;
+        // Deterministic for a seed.
+        sim::KitchenScene again = original;
+        sim::VaryHandles(again, v, seed);
+        EXPECT_EQ(again.scene.objects[0].mesh->mesh.vertices, after.mesh.vertices);
+    }
+    EXPECT_GT(longer, 0);
+    EXPECT_GT(shorter, 0);
+}
+
+TEST(KitchenScene, VaryHandlesLeavesKnobsAndRefusesBadParameters) {
+    sim::KitchenScene k = OneHandleKitchen();
+    const auto* mesh = k.scene.objects[0].mesh.get();
+    sim::HandleVariation v;
+    v.chance = 0.0f;
+    EXPECT_EQ(sim::VaryHandles(k, v, 1), 0);
+    EXPECT_EQ(k.scene.objects[0].mesh.get(), mesh);
+    // A round handle (a knob shaped like one) is not stretched.
+    v.chance = 1.0f;
+    v.min_elongation = 20.0f;
+    EXPECT_EQ(sim::VaryHandles(k, v, 1), 0);
+    // Room structure (no model instance) is never touched.
+    k.truth[0].instance = -1;
+    v.min_elongation = 2.0f;
+    EXPECT_EQ(sim::VaryHandles(k, v, 1), 0);
+    for (auto change : std::vector<std::function<void(sim::HandleVariation&)>>{
+             [](auto& h) { h.chance = 1.5f; }, [](auto& h) { h.min_length = 0.0f; },
+             [](auto& h) { h.max_length = 0.01f; },
+             [](auto& h) { h.min_shrink = std::numeric_limits<float>::quiet_NaN(); },
+             [](auto& h) { h.min_elongation = 0.5f; }}) {
+        sim::HandleVariation bad;
+        change(bad);
+        EXPECT_THROW(sim::VaryHandles(k, bad, 1), InvalidArgument);
+    }
+}
+
 TEST(KitchenLibrary, SplitIsStableAndKeepsDuplicatesInTraining) {
     std::vector<sim::KitchenModelEntry> lib;
     for (int i = 0; i < 6; ++i)
@@ -243,8 +344,8 @@ TEST(KitchenCli, SimulateThenMapWithSharedModels) {
     }
     // The fixture classifier of `train fixtures` (one small kitchen) serves `map kitchen`.
     const auto fixtures = dir / "fixtures.mcm";
-    r = test::RunCli("train fixtures --kitchens 1 --views 1 -q --out " + fixtures.string() +
-                     " --kitchen " + KitchenModels().string());
+    r = test::RunCli("train fixtures --kitchens 1 --views 1 -q --vary-handles --out " +
+                     fixtures.string() + " --kitchen " + KitchenModels().string());
     ASSERT_EQ(r.code, 0) << r.output;
     r = test::RunCli("map kitchen " + (sim_dir / frame).string() + opened + " -q --fixtures " +
                      fixtures.string() + " --out " + map_dir.string());
@@ -300,7 +401,8 @@ TEST(KitchenCli, BadInputWritesNothing) {
     EXPECT_EQ(test::RunCli("map kitchen --out " + (dir / "e").string()).code, 2);
     EXPECT_FALSE(std::filesystem::exists(dir / "c"));
     for (const std::string bad :
-         {"--sensor sonar", "--kitchens 0", "--classifier bogus", "--split half", "--views -1"}) {
+         {"--sensor sonar", "--kitchens 0", "--classifier bogus", "--split half", "--views -1",
+          "--vary-handles --handle-lengths 0.5,0.1", "--handle-lengths 0.1"}) {
         r = test::RunCli("train fixtures " + bad + " --out " + (dir / "f.mcm").string());
         EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
     }

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -29,6 +30,7 @@ struct TrainFixturesOptions {
     std::string spec = "rtrees:trees=100";
     int views = 0;  // 0: 3 Kinect frames or 1 laser sweep per kitchen
     training::FixtureTrainingOptions t;
+    std::vector<float> lengths = {t.handle_variation.min_length, t.handle_variation.max_length};
     bool quiet = false;
 };
 
@@ -43,6 +45,12 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     o.t.split = sim::ParseMeshSplit(o.split);
     o.t.views = o.views > 0 ? o.views : laser ? 1 : 3;
     o.t.num_threads = threads;
+    if (o.lengths.size() != 2) {
+        throw InvalidArgument(
+            fmt::format("--handle-lengths needs MIN,MAX, got {} values", o.lengths.size()));
+    }
+    o.t.handle_variation.min_length = o.lengths[0];
+    o.t.handle_variation.max_length = o.lengths[1];
     o.t.Validate();
     ml::CreateClassifier(o.spec);  // throws for a bad spec
     const std::filesystem::path folder = std::filesystem::path(o.out).parent_path();
@@ -87,6 +95,12 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
     cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
     cmd->add_option("--views", o->views,
                     "scans per kitchen (default: 3 Kinect frames or 1 laser sweep)");
+    cmd->add_flag("--vary-handles", o->t.vary_handles,
+                  "stretch or shrink the training kitchens' handles (sim::VaryHandles)");
+    cmd->add_option("--handle-lengths", o->lengths,
+                    "MIN,MAX: range of the varied handle lengths with --vary-handles [m]")
+        ->delimiter(',')
+        ->capture_default_str();
     cmd->add_option("--classifier", o->spec, "classifier spec (`multicue ml classifier train`)")
         ->capture_default_str();
     cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")

@@ -48,7 +48,7 @@ struct FixtureParams {
     float cluster_tolerance = 0.015f;  ///< Euclidean clustering tolerance [m]
     float merge_gap = 0.025f;          ///< clusters whose boxes lie closer are one fixture [m]
     std::size_t min_points = 12;       ///< smaller clusters are noise [points]
-    float max_diameter = 0.6f;         ///< larger clusters are too big to grasp [m]
+    float max_diameter = 1.2f;         ///< larger clusters (box diagonal) are no handle [m]
     float max_protrusion_extent = 0.09f;  ///< larger extent along the face normal: no fixture [m]
     /// Rules: a fixture stands at least this far out of the face around it (local protrusion) [m]
     float min_protrusion = 0.029f;

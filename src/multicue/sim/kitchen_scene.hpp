@@ -154,4 +154,24 @@ std::vector<Eigen::Isometry3f> KitchenLaserPoses(const KitchenScene& kitchen, in
 std::vector<Eigen::Isometry3f> KitchenCameraPoses(const KitchenScene& kitchen, int count,
                                                   std::uint64_t seed);
 
+/// Handle variety for training: PartNet-Mobility holds few handle designs per kind, so a
+/// classifier trained on one half of the models meets handles of lengths it never saw on the
+/// other. VaryHandles stretches or shrinks handles along their length (the middle is scaled, the
+/// ends with their mounts move rigidly), keeping their cross-section, mounts and position.
+struct HandleVariation {
+    float chance = 0.7f;          ///< chance that a handle is varied (the others keep their length)
+    float min_length = 0.04f;     ///< shortest varied handle [m]
+    float max_length = 1.0f;      ///< longest varied handle [m]
+    float min_shrink = 0.5f;      ///< a handle keeps at least this share of its length
+    float front_margin = 0.03f;   ///< a varied handle ends this far inside its front's edges [m]
+    float min_elongation = 2.0f;  ///< handles less elongated than this (length / width) are kept
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Varies the handles of every model link in `kitchen` (the mesh parts named "handle", split into
+/// connected pieces) as `variation` says; a varied link gets a mesh of its own, the library's
+/// meshes are not changed. Deterministic for a seed. Returns the number of handles varied.
+int VaryHandles(KitchenScene& kitchen, const HandleVariation& variation, std::uint64_t seed);
+
 }  // namespace multicue::sim

@@ -97,6 +97,7 @@ void FixtureTrainingOptions::Validate() const {
         throw InvalidArgument(
             fmt::format("train fixtures: num_threads must be >= 0, got {}", num_threads));
     }
+    handle_variation.Validate();
 }
 
 std::vector<int> LabelFixtureCandidates(const PointCloud& scan,
@@ -158,7 +159,8 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
     params.num_threads = o.num_threads;
     for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
         const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
-        const sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, {}, seed);
+        sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, {}, seed);
+        if (o.vary_handles) sim::VaryHandles(kitchen, o.handle_variation, sim::SubSeed(seed, 41));
         const auto frames = ScanKitchen(kitchen, laser ? 0 : o.views, laser ? o.views : 0, seed);
         for (std::size_t f = 0; f < frames.size(); ++f) {
             try {
