@@ -1,13 +1,15 @@
 // Fixture evidence and fronts between outlines on small synthetic kitchens: the local background
 // of a face (closed form), one evidence row per candidate with the handle's measured shape, a
 // fixture classifier trained on synthetic rows deciding what is a fixture, fronts bounded by the
-// gaps around a door, image edges of an organized scan, and bad parameters.
+// gaps around a door, image edges of an organized scan, the room structure on any thread count,
+// and bad parameters.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 
 #include "kitchen_test_data.hpp"
 #include "multicue/core/exceptions.hpp"
@@ -77,6 +79,33 @@ TEST(FixtureEvidence, LocalBackgroundOfAFaceWithAProudDoor) {
     FaceSamples empty;
     EXPECT_NO_THROW(ComputeFaceResiduals(empty, 0.03f, 3));
     EXPECT_TRUE(empty.residual.empty());
+}
+
+TEST(RoomStructure, TheSameOnAnyThreadCount) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    RoomStructureParams p;
+    p.num_threads = 1;
+    const RoomStructure one = SegmentRoomStructure(k.cloud, RoomFrame{}, p);
+    ASSERT_GE(one.components.size(), 4u);
+    std::set<int> axes;
+    for (const auto& c : one.components) axes.insert(c.axis);
+    EXPECT_EQ(axes.size(), 3u);  // planes of every axis, joined from parallel work
+    for (const int threads : {2, 0}) {
+        p.num_threads = threads;
+        const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, p);
+        ASSERT_EQ(s.components.size(), one.components.size());
+        for (std::size_t c = 0; c < s.components.size(); ++c) {
+            EXPECT_EQ(s.components[c].indices, one.components[c].indices);
+            EXPECT_EQ(s.components[c].label, one.components[c].label);
+            EXPECT_EQ(s.components[c].area, one.components[c].area);
+            EXPECT_EQ(s.components[c].plane, one.components[c].plane);
+        }
+        EXPECT_EQ(s.point_component, one.point_component);
+        EXPECT_EQ(s.plane_axis, one.plane_axis);
+        EXPECT_EQ(s.floor_height, one.floor_height);
+    }
+    p.num_threads = -1;
+    EXPECT_THROW(SegmentRoomStructure(k.cloud, RoomFrame{}, p), InvalidArgument);
 }
 
 TEST(FixtureEvidence, OneRowPerCandidateDescribingTheHandle) {

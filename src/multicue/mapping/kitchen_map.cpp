@@ -213,7 +213,9 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     map.frame = axes.frame;
     stage("axes");
     // Floor, ceiling, walls, worktops and tables, furniture faces.
-    RoomStructure structure = SegmentRoomStructure(r.cloud, map.frame, p.structure, r.ranges);
+    RoomStructureParams structure_params = p.structure;
+    structure_params.num_threads = p.num_threads;
+    RoomStructure structure = SegmentRoomStructure(r.cloud, map.frame, structure_params, r.ranges);
     map.floor_height = structure.floor_height;
     map.ceiling_height = structure.ceiling_height;
     bool vertical = false;

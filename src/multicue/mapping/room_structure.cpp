@@ -1,6 +1,7 @@
 #include "multicue/mapping/room_structure.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -10,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 
 namespace multicue::mapping {
@@ -166,6 +168,10 @@ void RoomStructureParams::Validate() const {
         throw InvalidArgument(fmt::format(
             "room structure: max_behind_share must be in [0, 1), got {}", max_behind_share));
     }
+    if (num_threads < 0) {
+        throw InvalidArgument(
+            fmt::format("room structure: num_threads must be >= 0, got {}", num_threads));
+    }
 }
 
 Eigen::Vector3f PlaneV(const PlanarComponent& c, const RoomFrame& frame) {
@@ -201,14 +207,14 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
     // Each point's plane tolerance, growing with its range.
     std::vector<float> tolerance(cloud.size(), p.distance_threshold);
     if (p.range_noise > 0.0f) {
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
+        ParallelFor(cloud.size(), p.num_threads, [&](std::size_t i) {
             const float r =
                 ranges.empty() ? (cloud.points[i] - cloud.sensor_origin).norm() : ranges[i];
             if (std::isfinite(r)) {
                 tolerance[i] = std::clamp(p.range_noise * r * r, p.distance_threshold,
                                           p.max_distance_threshold);
             }
-        }
+        });
     }
     const float cos_n = std::cos(p.normal_angle_deg * 0.017453292519943295f);
     const Eigen::Vector3f up = frame.Up();
@@ -219,35 +225,54 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
         std::vector<int> components;
     };
     std::vector<PlaneInfo> planes;
+    // The axes in parallel, joined in axis order (a point on planes of two axes keeps the later).
+    std::array<std::vector<AxisPlane>, 3> along;
+    ParallelFor(
+        3, p.num_threads,
+        [&](std::size_t k) {
+            along[k] = PlanesAlong(cloud, frame.axes.col(static_cast<int>(k)), static_cast<int>(k),
+                                   p, cos_n, tolerance);
+        },
+        1);
     for (int k = 0; k < 3; ++k) {
-        for (auto& pl : PlanesAlong(cloud, frame.axes.col(k), k, p, cos_n, tolerance)) {
+        for (auto& pl : along[static_cast<std::size_t>(k)]) {
             for (const Index i : pl.points) out.plane_axis[i] = static_cast<std::int8_t>(k);
             planes.push_back({std::move(pl), {}});
         }
     }
-    for (std::size_t pi = 0; pi < planes.size(); ++pi) {
-        const AxisPlane& pl = planes[pi].plane;
-        EuclideanClusteringParams cp;
-        cp.tolerance = p.component_tolerance;
-        cp.min_cluster_size = p.min_component_points;
-        cp.subset = pl.points;
-        const ClusteringResult clusters = EuclideanClusteringGrid(cloud, cp);
-        for (const Indices& cluster : clusters.clusters) {
-            PlanarComponent c;
-            c.axis = pl.axis;
-            const Eigen::Vector3f n = pl.sign * frame.axes.col(pl.axis);
-            c.plane = Eigen::Vector4f(n.x(), n.y(), n.z(), -pl.sign * pl.offset);
-            c.indices = cluster;
-            std::vector<Eigen::Vector2f> uv;
-            uv.reserve(cluster.size());
-            c.min = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
-            c.max = -c.min;
-            for (const Index i : cluster) {
-                uv.push_back(PlaneCoordinates(c, frame, cloud.points[i]));
-                c.min = c.min.cwiseMin(uv.back());
-                c.max = c.max.cwiseMax(uv.back());
+    // Each plane's connected components in parallel, numbered in plane order.
+    std::vector<std::vector<PlanarComponent>> plane_components(planes.size());
+    ParallelFor(
+        planes.size(), p.num_threads,
+        [&](std::size_t pi) {
+            const AxisPlane& pl = planes[pi].plane;
+            EuclideanClusteringParams cp;
+            cp.tolerance = p.component_tolerance;
+            cp.min_cluster_size = p.min_component_points;
+            cp.subset = pl.points;
+            const ClusteringResult clusters = EuclideanClusteringGrid(cloud, cp);
+            for (const Indices& cluster : clusters.clusters) {
+                PlanarComponent c;
+                c.axis = pl.axis;
+                const Eigen::Vector3f n = pl.sign * frame.axes.col(pl.axis);
+                c.plane = Eigen::Vector4f(n.x(), n.y(), n.z(), -pl.sign * pl.offset);
+                c.indices = cluster;
+                std::vector<Eigen::Vector2f> uv;
+                uv.reserve(cluster.size());
+                c.min = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
+                c.max = -c.min;
+                for (const Index i : cluster) {
+                    uv.push_back(PlaneCoordinates(c, frame, cloud.points[i]));
+                    c.min = c.min.cwiseMin(uv.back());
+                    c.max = c.max.cwiseMax(uv.back());
+                }
+                c.area = OccupiedArea(uv, p.cell_size);
+                plane_components[pi].push_back(std::move(c));
             }
-            c.area = OccupiedArea(uv, p.cell_size);
+        },
+        1);
+    for (std::size_t pi = 0; pi < planes.size(); ++pi) {
+        for (PlanarComponent& c : plane_components[pi]) {
             planes[pi].components.push_back(static_cast<int>(out.components.size()));
             out.components.push_back(std::move(c));
         }

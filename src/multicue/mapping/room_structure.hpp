@@ -41,6 +41,9 @@ struct RoomStructureParams {
     float min_counter_area = 0.04f;       ///< [m^2]
     float worktop_wall_distance = 0.25f;  ///< a worktop's edge lies this close to a wall [m]
     float min_face_area = 0.015f;         ///< furniture face candidates [m^2]
+    /// The three axes' planes, and each plane's components, in parallel (0 = all cores); the
+    /// result does not depend on it.
+    int num_threads = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
