@@ -1,13 +1,14 @@
 // Fixture evidence and fronts between outlines on small synthetic kitchens: the local background
 // of a face (closed form), one evidence row per candidate with the handle's measured shape, a
 // fixture classifier trained on synthetic rows deciding what is a fixture, fronts bounded by the
-// gaps around a door, image edges of an organized scan, the room structure on any thread count,
-// and bad parameters.
+// gaps around a door, image edges of an organized scan, the room structure and the fixtures on any
+// thread count, and bad parameters.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <set>
 
@@ -106,6 +107,37 @@ TEST(RoomStructure, TheSameOnAnyThreadCount) {
     }
     p.num_threads = -1;
     EXPECT_THROW(SegmentRoomStructure(k.cloud, RoomFrame{}, p), InvalidArgument);
+}
+
+TEST(Fixtures, TheSameOnAnyThreadCount) {
+    const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
+    FixtureParams p;
+    p.num_threads = 1;
+    const FixtureResult one = DetectFixtures(k.cloud, RoomFrame{}, s, p);
+    ASSERT_GE(one.candidates.size(), 2u);
+    auto same_floats = [](const std::vector<float>& a, const std::vector<float>& b) {
+        return a.size() == b.size() &&
+               std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+    };
+    for (const int threads : {2, 0}) {
+        p.num_threads = threads;
+        const FixtureResult r = DetectFixtures(k.cloud, RoomFrame{}, s, p);
+        ASSERT_EQ(r.candidates.size(), one.candidates.size());
+        for (std::size_t c = 0; c < r.candidates.size(); ++c) {
+            EXPECT_EQ(FixtureFeatureRow(r.candidates[c].evidence),
+                      FixtureFeatureRow(one.candidates[c].evidence));
+            EXPECT_EQ(r.candidates[c].accepted, one.candidates[c].accepted);
+            EXPECT_EQ(r.candidates[c].fixture.center, one.candidates[c].fixture.center);
+        }
+        ASSERT_EQ(r.fixtures.size(), one.fixtures.size());
+        ASSERT_EQ(r.rejected.size(), one.rejected.size());
+        EXPECT_EQ(r.candidate_points, one.candidate_points);
+        EXPECT_EQ(r.point_face, one.point_face);
+        EXPECT_TRUE(same_floats(r.point_residual, one.point_residual));
+    }
+    p.num_threads = -1;
+    EXPECT_THROW(DetectFixtures(k.cloud, RoomFrame{}, s, p), InvalidArgument);
 }
 
 TEST(FixtureEvidence, OneRowPerCandidateDescribingTheHandle) {

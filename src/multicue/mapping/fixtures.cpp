@@ -12,6 +12,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/mapping/fronts.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/sac_circle.hpp"
@@ -28,6 +29,10 @@ void FixtureParams::Validate() const {
     positive("max_height", max_height);
     positive("cluster_tolerance", cluster_tolerance);
     positive("max_diameter", max_diameter);
+    if (num_threads < 0) {
+        throw InvalidArgument(
+            fmt::format("fixtures: num_threads must be >= 0, got {}", num_threads));
+    }
     positive("max_protrusion_extent", max_protrusion_extent);
     positive("min_protrusion", min_protrusion);
     positive("footprint_reach", footprint_reach);
@@ -320,9 +325,10 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
             ? AppearanceValues(cloud, AppearanceCue::kAuto, 255.0f)
             : std::vector<float>(cloud.size(), std::numeric_limits<float>::quiet_NaN());
     // Every point on a face or in front of one is a sample of that face.
-    std::vector<FaceSamples> samples(faces.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (!cloud.IsFinite(i)) continue;
+    // The face of every point in parallel, then the samples in point order.
+    std::vector<std::int32_t> face_of(cloud.size(), -1);
+    ParallelFor(cloud.size(), p.num_threads, [&](std::size_t i) {
+        if (!cloud.IsFinite(i)) return;
         const Eigen::Vector3f& x = cloud.points[i];
         const int comp = i < s.point_component.size() ? s.point_component[i] : -1;
         int best = comp >= 0 ? face_slot[static_cast<std::size_t>(comp)] : -1;
@@ -352,7 +358,13 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 if (h < p.min_height && c.area >= p.min_blocking_area) break;
             }
         }
+        face_of[i] = best;
+    });
+    std::vector<FaceSamples> samples(faces.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const int best = face_of[i];
         if (best < 0) continue;
+        const Eigen::Vector3f& x = cloud.points[i];
         const PlanarComponent& c = s.components[static_cast<std::size_t>(faces[best])];
         FaceSamples& fs = samples[static_cast<std::size_t>(best)];
         const float r = ranges.empty() ? (x - cloud.sensor_origin).norm() : ranges[i];
@@ -365,121 +377,151 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
     }
     const PlaneCells plane_cells(cloud, frame, s, p);
     std::vector<std::int32_t> sample_of(cloud.size(), -1);
-    for (std::size_t k = 0; k < faces.size(); ++k) {
-        FaceSamples& fs = samples[k];
-        if (fs.size() < p.min_points) continue;
-        const PlanarComponent& face = s.components[static_cast<std::size_t>(faces[k])];
-        ComputeFaceResiduals(fs, p.background_cell, p.background_radius, p.background_passes,
-                             p.min_residual);
-        // Heights above the background averaged per small cell: a handle one depth step out of
-        // its door stands out of the noise once a few of its points are averaged.
-        struct Cell {
-            float sum = 0.0f, sigma = 0.0f;
-            std::uint32_t n = 0;
-        };
-        std::unordered_map<std::uint64_t, Cell> cells;
-        auto key = [&](const Eigen::Vector2f& q) {
-            const auto a = static_cast<std::int64_t>(std::floor(q.x() / p.residual_cell));
-            const auto b = static_cast<std::int64_t>(std::floor(q.y() / p.residual_cell));
-            return (static_cast<std::uint64_t>(a + (1 << 30)) << 32) ^
-                   static_cast<std::uint64_t>(b + (1 << 30));
-        };
-        for (std::size_t j = 0; j < fs.size(); ++j) {
-            Cell& c = cells[key(fs.q[j])];
-            c.sum += fs.residual[j];
-            c.sigma += fs.sigma[j];
-            ++c.n;
-        }
-        Indices candidates;
-        for (std::size_t j = 0; j < fs.size(); ++j) {
-            if (fs.residual[j] <= 0.0f) continue;
-            const Cell& c = cells[key(fs.q[j])];
-            const float n = static_cast<float>(c.n);
-            const float threshold =
-                std::max(p.min_residual, p.residual_sigmas * c.sigma / n / std::sqrt(n));
-            // Its cell stands out on average, or the point itself clearly does (sparse scans).
-            if (c.sum / n >= threshold ||
-                fs.residual[j] >= std::max(p.min_residual, p.point_sigmas * fs.sigma[j])) {
-                candidates.push_back(fs.points[j]);
+    // The faces in parallel (each point is a sample of one face only, so the per-point arrays
+    // are written in disjoint places); their clusters are then classified and joined in face
+    // order, so the result does not depend on the thread count.
+    struct Measured {
+        FixtureCandidate candidate;
+        bool shape_ok = false;
+        bool too_large = false;
+        Eigen::Vector3f center = Eigen::Vector3f::Zero();
+        std::size_t points = 0;
+    };
+    std::vector<Indices> face_candidates(faces.size());
+    std::vector<std::vector<Measured>> measured(faces.size());
+    ParallelFor(
+        faces.size(), p.num_threads,
+        [&](std::size_t k) {
+            FaceSamples& fs = samples[k];
+            if (fs.size() < p.min_points) return;
+            const PlanarComponent& face = s.components[static_cast<std::size_t>(faces[k])];
+            ComputeFaceResiduals(fs, p.background_cell, p.background_radius, p.background_passes,
+                                 p.min_residual);
+            // Heights above the background averaged per small cell: a handle one depth step out of
+            // its door stands out of the noise once a few of its points are averaged.
+            struct Cell {
+                float sum = 0.0f, sigma = 0.0f;
+                std::uint32_t n = 0;
+            };
+            std::unordered_map<std::uint64_t, Cell> cells;
+            auto key = [&](const Eigen::Vector2f& q) {
+                const auto a = static_cast<std::int64_t>(std::floor(q.x() / p.residual_cell));
+                const auto b = static_cast<std::int64_t>(std::floor(q.y() / p.residual_cell));
+                return (static_cast<std::uint64_t>(a + (1 << 30)) << 32) ^
+                       static_cast<std::uint64_t>(b + (1 << 30));
+            };
+            for (std::size_t j = 0; j < fs.size(); ++j) {
+                Cell& c = cells[key(fs.q[j])];
+                c.sum += fs.residual[j];
+                c.sigma += fs.sigma[j];
+                ++c.n;
             }
-        }
-        for (std::size_t j = 0; j < fs.size(); ++j) {
-            sample_of[fs.points[j]] = static_cast<std::int32_t>(j);
-        }
-        result.candidate_points.insert(result.candidate_points.end(), candidates.begin(),
-                                       candidates.end());
-        if (candidates.size() >= p.min_points) {
-            EuclideanClusteringParams cp;
-            cp.tolerance = p.cluster_tolerance;
-            cp.min_cluster_size = p.min_points;
-            cp.subset = std::move(candidates);
-            const std::vector<Indices> clusters =
-                MergeClose(cloud, EuclideanClusteringGrid(cloud, cp).clusters, p.merge_gap);
-            for (const Indices& cluster : clusters) {
-                Eigen::AlignedBox3f box;
-                for (const Index i : cluster) box.extend(cloud.points[i]);
-                if (box.sizes().norm() > p.max_diameter) {
-                    ++result.too_large;
-                    result.rejected.push_back({box.center(), cluster.size(), "too large"});
-                    continue;
+            Indices candidates;
+            for (std::size_t j = 0; j < fs.size(); ++j) {
+                if (fs.residual[j] <= 0.0f) continue;
+                const Cell& c = cells[key(fs.q[j])];
+                const float n = static_cast<float>(c.n);
+                const float threshold =
+                    std::max(p.min_residual, p.residual_sigmas * c.sigma / n / std::sqrt(n));
+                // Its cell stands out on average, or the point itself clearly does (sparse scans).
+                if (c.sum / n >= threshold ||
+                    fs.residual[j] >= std::max(p.min_residual, p.point_sigmas * fs.sigma[j])) {
+                    candidates.push_back(fs.points[j]);
                 }
-                FixtureCandidate cand;
-                cand.fixture.face = faces[k];
-                const bool shape_ok = MeasureFixture(cloud, cluster, face, frame, p, cand.fixture);
-                std::vector<std::uint32_t> members;
-                for (const Index i : cluster) {
-                    members.push_back(static_cast<std::uint32_t>(sample_of[i]));
-                }
-                cand.evidence = MeasureFixtureEvidence(fs, members, cand.fixture, face, frame,
-                                                       s.floor_height, p);
-                if (cloud.IsOrganized() && p.border_px > 0) {
-                    const auto b = static_cast<std::uint32_t>(p.border_px);
+            }
+            for (std::size_t j = 0; j < fs.size(); ++j) {
+                sample_of[fs.points[j]] = static_cast<std::int32_t>(j);
+            }
+            face_candidates[k] = candidates;
+            if (candidates.size() >= p.min_points) {
+                EuclideanClusteringParams cp;
+                cp.tolerance = p.cluster_tolerance;
+                cp.min_cluster_size = p.min_points;
+                cp.subset = std::move(candidates);
+                const std::vector<Indices> clusters =
+                    MergeClose(cloud, EuclideanClusteringGrid(cloud, cp).clusters, p.merge_gap);
+                for (const Indices& cluster : clusters) {
+                    Eigen::AlignedBox3f box;
+                    for (const Index i : cluster) box.extend(cloud.points[i]);
+                    Measured m;
+                    m.center = box.center();
+                    m.points = cluster.size();
+                    if (box.sizes().norm() > p.max_diameter) {
+                        m.too_large = true;
+                        measured[k].push_back(std::move(m));
+                        continue;
+                    }
+                    FixtureCandidate& cand = m.candidate;
+                    cand.fixture.face = faces[k];
+                    m.shape_ok = MeasureFixture(cloud, cluster, face, frame, p, cand.fixture);
+                    std::vector<std::uint32_t> members;
                     for (const Index i : cluster) {
-                        const std::uint32_t u = i % cloud.width, v = i / cloud.width;
-                        if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
-                            cand.evidence.border = 1.0f;
+                        members.push_back(static_cast<std::uint32_t>(sample_of[i]));
+                    }
+                    cand.evidence = MeasureFixtureEvidence(fs, members, cand.fixture, face, frame,
+                                                           s.floor_height, p);
+                    if (cloud.IsOrganized() && p.border_px > 0) {
+                        const auto b = static_cast<std::uint32_t>(p.border_px);
+                        for (const Index i : cluster) {
+                            const std::uint32_t u = i % cloud.width, v = i / cloud.width;
+                            if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
+                                cand.evidence.border = 1.0f;
+                            }
                         }
                     }
+                    cand.evidence.attached_share = plane_cells.AttachedShare(cluster, face.axis);
+                    measured[k].push_back(std::move(m));
                 }
-                cand.evidence.attached_share = plane_cells.AttachedShare(cluster, face.axis);
-                if (classifier != nullptr) {
-                    const std::vector<float> row = FixtureFeatureRow(cand.evidence);
-                    const ml::FeatureMatrix x = Eigen::Map<const ml::FeatureMatrix>(
-                        row.data(), 1, static_cast<Eigen::Index>(row.size()));
-                    const ml::FeatureMatrix proba = classifier->PredictProba(x);
-                    float handle = 0.0f, knob = 0.0f;
-                    for (std::size_t c = 0; c < classifier->num_classes(); ++c) {
-                        const auto& name = classifier->class_names()[c];
-                        (name == "handle" ? handle
-                         : name == "knob" ? knob
-                                          : cand.confidence) +=
-                            proba(0, static_cast<Eigen::Index>(c));
-                    }
-                    cand.confidence = handle + knob;
-                    cand.accepted = cand.confidence >= p.min_confidence;
-                    cand.fixture.type = handle >= knob ? FixtureType::kHandle : FixtureType::kKnob;
-                    if (cand.fixture.type == FixtureType::kKnob) {
-                        cand.fixture.direction = face.plane.head<3>();
-                    }
-                    cand.reason = cand.accepted ? "" : "classifier";
-                } else {
-                    cand.reason = FixtureByRules(cand.evidence, shape_ok, p);
-                    cand.accepted = cand.reason[0] == '\0';
-                    cand.confidence = cand.accepted ? 1.0f : 0.0f;
-                }
-                if (cand.accepted) {
-                    result.fixtures.push_back(cand.fixture);
-                } else {
-                    ++result.unclassified;
-                    result.rejected.push_back({box.center(), cluster.size(), cand.reason});
-                }
-                result.candidates.push_back(std::move(cand));
             }
-        }
-        for (std::size_t j = 0; j < fs.size(); ++j) {
-            sample_of[fs.points[j]] = -1;
-            result.point_face[fs.points[j]] = faces[k];
-            result.point_residual[fs.points[j]] = fs.residual[j];
+            for (std::size_t j = 0; j < fs.size(); ++j) {
+                sample_of[fs.points[j]] = -1;
+                result.point_face[fs.points[j]] = faces[k];
+                result.point_residual[fs.points[j]] = fs.residual[j];
+            }
+        },
+        1);
+    for (std::size_t k = 0; k < faces.size(); ++k) {
+        result.candidate_points.insert(result.candidate_points.end(), face_candidates[k].begin(),
+                                       face_candidates[k].end());
+        const PlanarComponent& face = s.components[static_cast<std::size_t>(faces[k])];
+        for (Measured& m : measured[k]) {
+            if (m.too_large) {
+                ++result.too_large;
+                result.rejected.push_back({m.center, m.points, "too large"});
+                continue;
+            }
+            FixtureCandidate& cand = m.candidate;
+            if (classifier != nullptr) {
+                const std::vector<float> row = FixtureFeatureRow(cand.evidence);
+                const ml::FeatureMatrix x = Eigen::Map<const ml::FeatureMatrix>(
+                    row.data(), 1, static_cast<Eigen::Index>(row.size()));
+                const ml::FeatureMatrix proba = classifier->PredictProba(x);
+                float handle = 0.0f, knob = 0.0f;
+                for (std::size_t c = 0; c < classifier->num_classes(); ++c) {
+                    const auto& name = classifier->class_names()[c];
+                    (name == "handle" ? handle
+                     : name == "knob" ? knob
+                                      : cand.confidence) += proba(0, static_cast<Eigen::Index>(c));
+                }
+                cand.confidence = handle + knob;
+                cand.accepted = cand.confidence >= p.min_confidence;
+                cand.fixture.type = handle >= knob ? FixtureType::kHandle : FixtureType::kKnob;
+                if (cand.fixture.type == FixtureType::kKnob) {
+                    cand.fixture.direction = face.plane.head<3>();
+                }
+                cand.reason = cand.accepted ? "" : "classifier";
+            } else {
+                cand.reason = FixtureByRules(cand.evidence, m.shape_ok, p);
+                cand.accepted = cand.reason[0] == '\0';
+                cand.confidence = cand.accepted ? 1.0f : 0.0f;
+            }
+            if (cand.accepted) {
+                result.fixtures.push_back(cand.fixture);
+            } else {
+                ++result.unclassified;
+                result.rejected.push_back({m.center, m.points, cand.reason});
+            }
+            result.candidates.push_back(std::move(cand));
         }
     }
     return result;

@@ -74,6 +74,8 @@ struct FixtureParams {
     float line_threshold = 0.008f;    ///< RANSAC line inlier distance [m]
     float circle_threshold = 0.005f;  ///< RANSAC circle inlier distance [m]
     std::uint64_t seed = 1;           ///< RANSAC seed
+    /// Points and faces in parallel (0 = all cores); the result does not depend on it.
+    int num_threads = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };

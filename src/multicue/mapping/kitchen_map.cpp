@@ -223,8 +223,10 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     if (!vertical) throw DataError("map kitchen: no vertical planes (walls or furniture faces)");
     stage("structure");
     // Handles and knobs in front of the faces.
+    FixtureParams fixture_params = p.fixtures;
+    fixture_params.num_threads = p.num_threads;
     FixtureResult fixtures =
-        DetectFixtures(r.cloud, map.frame, structure, p.fixtures, r.ranges, fixture_classifier);
+        DetectFixtures(r.cloud, map.frame, structure, fixture_params, r.ranges, fixture_classifier);
     map.fixtures = std::move(fixtures.fixtures);
     r.rejected_fixtures = std::move(fixtures.rejected);
     r.fixture_candidates = std::move(fixtures.candidates);
