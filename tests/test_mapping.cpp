@@ -181,6 +181,18 @@ TEST(Articulation, HingeSideFromTheHandle) {
     ASSERT_EQ(a.type, JointType::kRevolute);
     EXPECT_GT(std::abs(a.axis.z()), 0.999f);
     EXPECT_NEAR(a.origin.x(), 0.6f, 0.01f);
+    // The hinge line lies the hinge depth behind the front's surface (y = 2.4).
+    EXPECT_NEAR(a.origin.y(), 2.4f + ArticulationParams{}.hinge_depth, 1e-4f);
+    ArticulationParams flush;
+    flush.hinge_depth = 0.0f;
+    EXPECT_NEAR(ArticulationFromFixtures(f, {HandleAt({1.05f, 2.365f, 0.5f}, true)}, RoomFrame{},
+                                         0.0f, flush)
+                    .origin.y(),
+                2.4f, 1e-4f);
+    flush.hinge_depth = -0.01f;
+    EXPECT_THROW(ArticulationFromFixtures(f, {HandleAt({1.05f, 2.365f, 0.5f}, true)}, RoomFrame{},
+                                          0.0f, flush),
+                 InvalidArgument);
     // Opening swings the free edge out of the furniture (towards -y).
     EXPECT_LT(Opened(a, {1.1f, 2.4f, 0.5f}, 0.1f).y(), 2.39f);
     // Near the left edge: hinged at the right edge.

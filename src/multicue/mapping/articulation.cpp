@@ -14,17 +14,18 @@ namespace {
 
 constexpr float kArticulationDegToRad = 0.017453292519943295f;
 
-/// A revolute joint about the front's edge line through `edge_point`, with `into_door` the
-/// in-plane direction from the edge into the front (the axis runs along the edge).
+/// A revolute joint about the front's edge line through `edge_point` (moved behind the surface by
+/// the hinge depth), with `into_door` the in-plane direction from the edge into the front (the
+/// axis runs along the edge).
 Articulation Hinge(const Front& f, const Eigen::Vector3f& edge_point,
-                   const Eigen::Vector3f& into_door, float upper) {
+                   const Eigen::Vector3f& into_door, const ArticulationParams& p) {
     Articulation a;
     a.type = JointType::kRevolute;
-    a.origin = edge_point;
+    a.origin = edge_point - f.normal * p.hinge_depth;
     // A positive rotation about into_door x n moves the free edge along +n (out).
     a.axis = into_door.cross(f.normal).normalized();
     a.lower = 0.0f;
-    a.upper = upper;
+    a.upper = p.revolute_upper;
     a.source = "fixture";
     return a;
 }
@@ -36,6 +37,10 @@ void ArticulationParams::Validate() const {
         throw InvalidArgument(
             fmt::format("articulation: horizontal_handle_deg must be in (0, 90), got {}",
                         horizontal_handle_deg));
+    }
+    if (!(hinge_depth >= 0.0f && hinge_depth < 0.5f)) {
+        throw InvalidArgument(
+            fmt::format("articulation: hinge_depth must be in [0, 0.5) m, got {}", hinge_depth));
     }
     if (!(door_min_height > 0.0f) || !(top_share > 0.0f && top_share < 1.0f) ||
         !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f)) {
@@ -89,12 +94,12 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
     if (horizontal || (!handle && !side)) {
         if (height >= p.door_min_height && rv > 1.0f - p.top_share) {
             // Hinged at the bottom edge: an oven or dishwasher door.
-            return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p.revolute_upper);
+            return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
         }
         if (f.min.y() - base > p.flap_min_bottom && rv < p.top_share &&
             height >= 0.6f * p.door_min_height) {
             // A flap hinged at the top edge (wall cupboards).
-            return Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p.revolute_upper);
+            return Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
         }
         Articulation a;
         a.type = JointType::kPrismatic;
@@ -107,9 +112,9 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
     }
     // Vertical handle or a knob off the centre: hinged at the farther vertical edge.
     if (ru >= 0.5f) {
-        return Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p.revolute_upper);
+        return Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p);
     }
-    return Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p.revolute_upper);
+    return Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
 }
 
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,
