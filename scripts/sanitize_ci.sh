@@ -7,7 +7,8 @@
 #                                                   test command) and the tests of the parallel
 #                                                   loops (core, normals, filters, segmentation,
 #                                                   features, simulator, perceive, part-graph
-#                                                   training) under ThreadSanitizer (`tsan`)
+#                                                   training, kitchen room structure and
+#                                                   fixtures) under ThreadSanitizer (`tsan`)
 #   scripts/sanitize_ci.sh --full [asan|tsan ...]   every unit test under ASan + UBSan and also
 #                                                   perceive's stage tests and the executive's
 #                                                   under TSan; about an hour cold on two cores
@@ -34,16 +35,18 @@ if [[ ${#stages[@]} -eq 0 ]]; then stages=(asan tsan); fi
 # ASan, 15 minutes more: --full); under TSan the parallel loops of the
 # core, of perceive's stages (normals, filters, region growing and part segmentation, sample
 # consensus, part features), of the simulator, of perceive itself (objects categorised and
-# modelled in parallel, batches of frames) and of part-graph training.
+# modelled in parallel, batches of frames), of part-graph training and of the kitchen map's room
+# structure and fixtures.
 ci_asan_tests=(test_core test_pcd test_config test_ply_obj test_point_cloud2 test_ros_bags test_urdf
                test_search test_filters test_normals test_ml)
 ci_tsan_tests=(test_core test_normals test_filters test_clustering test_convexity_split
                test_sample_consensus test_features test_sim test_perceive
-               test_part_graph_training)
+               test_part_graph_training test_kitchen_fixtures)
 # Part-graph training runs 20 times slower under TSan (215 s for its four tests): the CI scope runs
 # the two that train on several threads, turntable views and perceived table scenes.
 declare -A ci_tsan_filter=(
-    [test_part_graph_training]="PartGraphTraining.DeterministicAcrossThreads:PartGraphTraining.TableScenesAddPerceivedObjects")
+    [test_part_graph_training]="PartGraphTraining.DeterministicAcrossThreads:PartGraphTraining.TableScenesAddPerceivedObjects"
+    [test_kitchen_fixtures]="RoomStructure.TheSameOnAnyThreadCount:Fixtures.TheSameOnAnyThreadCount")
 
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
         -DMULTICUE_BUILD_BENCH=OFF -DMULTICUE_BUILD_EVAL=OFF -DMULTICUE_BUILD_EXAMPLES=OFF
