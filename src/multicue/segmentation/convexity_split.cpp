@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/segmentation/border_features.hpp"
-#include "multicue/segmentation/disjoint_sets.hpp"
 #include "multicue/segmentation/part_borders.hpp"
 
 namespace multicue {

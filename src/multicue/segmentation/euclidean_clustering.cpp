@@ -10,9 +10,9 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
-#include "multicue/segmentation/disjoint_sets.hpp"
 
 namespace multicue {
 namespace {

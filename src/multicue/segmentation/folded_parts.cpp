@@ -8,8 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
-#include "multicue/segmentation/disjoint_sets.hpp"
 
 namespace multicue {
 namespace {

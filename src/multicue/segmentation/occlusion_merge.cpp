@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
-#include "multicue/segmentation/disjoint_sets.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
 
 namespace multicue {

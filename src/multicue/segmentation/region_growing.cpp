@@ -10,10 +10,10 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/search/organized.hpp"
-#include "multicue/segmentation/disjoint_sets.hpp"
 
 namespace multicue {
 namespace {

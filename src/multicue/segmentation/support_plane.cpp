@@ -8,11 +8,11 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/filters/remove_non_finite.hpp"
-#include "multicue/segmentation/disjoint_sets.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "multicue/segmentation/sac_plane.hpp"

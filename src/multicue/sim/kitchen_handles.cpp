@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <vector>
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
@@ -21,14 +21,6 @@ struct Piece {
     Eigen::AlignedBox3f box;
 };
 
-std::uint32_t Find(std::vector<std::uint32_t>& parent, std::uint32_t i) {
-    while (parent[i] != i) {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    return i;
-}
-
 /// The handles of a mesh: the vertices of its "handle" triangles split into connected pieces,
 /// pieces whose boxes come within kJoinGap joined. Vertices shared with other triangles are left
 /// out (they belong to the front as well).
@@ -40,25 +32,21 @@ std::vector<Piece> HandlePieces(const PartMesh& m, std::vector<bool>& other_vert
     }
     std::vector<bool> handle_vertex(nv, false);
     other_vertex.assign(nv, false);
-    std::vector<std::uint32_t> parent(nv);
-    std::iota(parent.begin(), parent.end(), 0u);
+    detail::DisjointSets sets(nv);
     for (std::size_t t = 0; t < m.mesh.triangles.size(); ++t) {
         const auto& tri = m.mesh.triangles[t];
         const bool h = t < m.triangle_parts.size() && handle_part[m.triangle_parts[t]];
         for (int c = 0; c < 3; ++c) (h ? handle_vertex : other_vertex)[tri[c]] = true;
         if (h) {
-            const std::uint32_t a = Find(parent, tri[0]);
-            for (int c = 1; c < 3; ++c) {
-                const std::uint32_t b = Find(parent, tri[c]);
-                if (a != b) parent[std::max(a, b)] = std::min(a, b);
-            }
+            sets.Unite(tri[0], tri[1]);
+            sets.Unite(tri[0], tri[2]);
         }
     }
     std::vector<Piece> pieces;
     std::vector<int> piece_of(nv, -1);
     for (std::uint32_t v = 0; v < nv; ++v) {
         if (!handle_vertex[v] || other_vertex[v]) continue;
-        const std::uint32_t r = Find(parent, v);
+        const Index r = sets.Find(v);
         if (piece_of[r] < 0) {
             piece_of[r] = static_cast<int>(pieces.size());
             pieces.emplace_back();

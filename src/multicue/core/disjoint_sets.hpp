@@ -1,5 +1,5 @@
 #pragma once
-/// \file Union-find over dense indices, shared by the clustering algorithms of this module.
+/// \file Union-find over dense indices, shared by the clustering algorithms and the simulator.
 /// Internal helper: not part of the stable API.
 
 #include <cstddef>
