@@ -13,6 +13,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/search/kdtree.hpp"
+#include "multicue/search/organized.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/region_growing.hpp"
 #include "test_util.hpp"
@@ -284,6 +285,17 @@ TEST(EuclideanClusteringGrid, IdenticalToTheKdTreeVersion) {
     }
     EXPECT_EQ(AsSet(EuclideanClusteringGrid(c, {.tolerance = 0.08f, .subset = subset}).clusters),
               AsSet(BruteForceClusters(c, use, 0.08f)));
+    // A subset given out of order, with repeats and a NaN point: the same as the plain one.
+    PointCloud holes = c;
+    holes.points[subset[5]] = Eigen::Vector3f::Constant(kNaN);
+    Indices shuffled = subset;
+    shuffled.insert(shuffled.end(), subset.begin(), subset.begin() + 40);
+    std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(5));
+    const auto plain = EuclideanClusteringGrid(holes, {.tolerance = 0.08f, .subset = subset});
+    const auto mixed = EuclideanClusteringGrid(holes, {.tolerance = 0.08f, .subset = shuffled});
+    EXPECT_EQ(mixed.clusters, plain.clusters);
+    EXPECT_EQ(mixed.num_points, plain.num_points);
+    EXPECT_LT(plain.num_points, subset.size());
 }
 
 TEST(EuclideanClusteringGrid, DenseSheetsOneGapApart) {
@@ -1067,6 +1079,64 @@ TEST(RegionGrowingOrganized, OneNeighbourTableForSeveralGrowings) {
     EXPECT_THROW(RegionGrowing(c, first, p), InvalidArgument);
     EXPECT_THROW(OrganizedNeighbourTable(c, {static_cast<Index>(c.size())}, params, search),
                  InvalidArgument);
+}
+
+// Each row of the neighbour table is the point's own window search (OrganizedKnnSearch), cut
+// strictly at the radius: on a small frame with holes, a mask that leaves out pixels (a centre
+// among them), pixels at every image border, and repeated points whose equal distances are
+// ranked by index; for k below, at and above the window's size.
+TEST(RegionGrowingOrganized, NeighbourTableRowsAreTheWindowSearches) {
+    constexpr std::size_t kWidth = 23, kHeight = 17;
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> jitter(-0.002f, 0.002f);
+    std::uniform_int_distribution<int> coin(0, 9);
+    PointCloud c;
+    c.width = kWidth;
+    c.height = kHeight;
+    c.points.resize(kWidth * kHeight);
+    std::vector<std::uint8_t> mask(c.size(), 1);
+    for (std::size_t v = 0; v < kHeight; ++v) {
+        for (std::size_t u = 0; u < kWidth; ++u) {
+            const std::size_t i = v * kWidth + u;
+            c.points[i] = {0.004f * static_cast<float>(u) + jitter(rng),
+                           0.004f * static_cast<float>(v) + jitter(rng),
+                           1.0f + 0.01f * std::sin(0.7f * static_cast<float>(u))};
+            if (coin(rng) == 0) c.points[i] = Eigen::Vector3f::Constant(kNaN);
+            if (coin(rng) == 0) mask[i] = 0;
+        }
+    }
+    for (std::size_t i = 40; i < 60; ++i) c.points[i + 1] = c.points[i];  // ties
+    Indices all(c.size());
+    std::iota(all.begin(), all.end(), Index{0});
+    for (int hw : {1, 3, 5}) {
+        for (int k : {1, 7, 16, 60}) {
+            const RegionGrowingParams params{.radius = 0.015f, .k = k};
+            const OrganizedSearchParams search{.half_window = hw, .mask = mask};
+            const NeighbourTable table = OrganizedNeighbourTable(c, all, params, search, 2);
+            OrganizedSearchParams s = search;
+            s.radius = params.radius;
+            Indices nb;
+            std::vector<float> d2;
+            for (std::size_t r = 0; r < all.size(); ++r) {
+                OrganizedKnnSearch(c, all[r], k, s, nb, d2);
+                Indices expected;
+                std::vector<float> expected_d2;
+                for (std::size_t m = 0; m < nb.size(); ++m) {
+                    if (!(d2[m] < params.radius * params.radius)) continue;
+                    expected.push_back(nb[m]);
+                    expected_d2.push_back(d2[m]);
+                }
+                const auto begin = static_cast<std::ptrdiff_t>(r * table.stride);
+                const Indices got(table.neighbours.begin() + begin,
+                                  table.neighbours.begin() + begin + table.count[r]);
+                const std::vector<float> got_d2(
+                    table.squared_distances.begin() + begin,
+                    table.squared_distances.begin() + begin + table.count[r]);
+                ASSERT_EQ(got, expected) << "hw " << hw << " k " << k << " point " << all[r];
+                ASSERT_EQ(got_d2, expected_d2);
+            }
+        }
+    }
 }
 
 TEST(RegionGrowingOrganized, RejectsBadInputAndHandlesEmptyInput) {

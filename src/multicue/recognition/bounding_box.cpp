@@ -93,10 +93,11 @@ void DropInterior(std::vector<Eigen::Vector2f>& points) {
     while (polygon.size() > 1 && polygon.front() == polygon.back()) polygon.pop_back();
     if (polygon.size() < 3) return;
     const std::size_t n = polygon.size();
+    polygon.push_back(polygon.front());  // closed: edge j runs from vertex j to j + 1
     std::erase_if(points, [&](const Eigen::Vector2f& p) {
         const Eigen::Vector2d q = p.cast<double>();
         for (std::size_t j = 0; j < n; ++j) {
-            if (!(Cross(polygon[j], polygon[(j + 1) % n], q) > 0.0)) return false;
+            if (!(Cross(polygon[j], polygon[j + 1], q) > 0.0)) return false;
         }
         return true;
     });

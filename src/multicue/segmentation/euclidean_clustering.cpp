@@ -168,14 +168,12 @@ struct ClusterGrid {
 
 // Nothing when the points span more than 2^21 - 5 cells along an axis (coordinates are counted
 // from their lower corner).
-std::optional<ClusterGrid> BuildClusterGrid(const PointCloud& cloud,
-                                            const std::vector<std::uint8_t>& marked,
-                                            std::size_t num_points, float tolerance) {
+std::optional<ClusterGrid> BuildClusterGrid(const PointCloud& cloud, const Indices& members,
+                                            float tolerance) {
     const double inv = 1.0 / (static_cast<double>(tolerance) / std::sqrt(3.0) * (1.0 - 1e-6));
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
     Eigen::Vector3d hi = -lo;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (marked[i] == 0) continue;
+    for (Index i : members) {
         lo = lo.cwiseMin(cloud.points[i].cast<double>());
         hi = hi.cwiseMax(cloud.points[i].cast<double>());
     }
@@ -184,11 +182,10 @@ std::optional<ClusterGrid> BuildClusterGrid(const PointCloud& cloud,
         return ((p.cast<double>() - lo) * inv).array().floor().cast<int>() + 2;
     };
     std::vector<std::pair<std::uint64_t, Index>> keyed;
-    keyed.reserve(num_points);
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (marked[i] == 0) continue;
+    keyed.reserve(members.size());
+    for (Index i : members) {
         const Eigen::Vector3i c = cell_of(cloud.points[i]);
-        keyed.emplace_back(CellKey(c.x(), c.y(), c.z()), static_cast<Index>(i));
+        keyed.emplace_back(CellKey(c.x(), c.y(), c.z()), i);
     }
     std::sort(keyed.begin(), keyed.end());
     ClusterGrid grid;
@@ -245,9 +242,11 @@ std::vector<Indices> GridComponents(const PointCloud& cloud, const ClusterGrid& 
     detail::DisjointSets sets(cells.size());
     for (std::uint32_t a = 0; a < cells.size(); ++a) {
         const GridCell& ca = cells[a];
-        for (int dx = -2; dx <= 2; ++dx) {
-            for (int dy = -2; dy <= 2; ++dy) {
-                for (int dz = -2; dz <= 2; ++dz) {
+        // Only the cells of larger keys (cells are in key order, keys in (x, y, z) order): the
+        // others were paired with this one when they were `a`.
+        for (int dx = 0; dx <= 2; ++dx) {
+            for (int dy = dx == 0 ? 0 : -2; dy <= 2; ++dy) {
+                for (int dz = dx == 0 && dy == 0 ? 1 : -2; dz <= 2; ++dz) {
                     const auto it = grid.cell_of_key.find(CellKey(ca.x + dx, ca.y + dy, ca.z + dz));
                     if (it == grid.cell_of_key.end() || it->second <= a) continue;
                     const std::uint32_t b = it->second;
@@ -286,8 +285,20 @@ ClusteringResult EuclideanClusteringGrid(const PointCloud& cloud,
         return Finish({}, n, 0, params.min_cluster_size, params.max_cluster_size,
                       params.compute_labels);
     }
-    const std::optional<ClusterGrid> grid =
-        BuildClusterGrid(cloud, marked, num_points, params.tolerance);
+    // The marked points as a list, so that a small subset of a large cloud costs its own size.
+    Indices members;
+    members.reserve(num_points);
+    if (params.subset.empty()) {
+        for (std::size_t i = 0; i < n; ++i)
+            if (marked[i] != 0) members.push_back(static_cast<Index>(i));
+    } else {
+        for (Index i : params.subset) {
+            if (marked[i] != 1) continue;
+            marked[i] = 2;  // listed
+            members.push_back(i);
+        }
+    }
+    const std::optional<ClusterGrid> grid = BuildClusterGrid(cloud, members, params.tolerance);
     if (!grid) {  // kilometres wide at this tolerance: the k-d tree
         const KdTree tree = params.subset.empty() ? KdTree(cloud) : KdTree(cloud, params.subset);
         return EuclideanClustering(cloud, tree, params);

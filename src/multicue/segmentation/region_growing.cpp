@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 #include <span>
+#include <tuple>
 #include <utility>
 
 #include <fmt/format.h>
@@ -429,6 +430,146 @@ void WindowNeighbours(const PointCloud& cloud, Index q, int k, float radius_sq,
     squared_distances.resize(kept);
 }
 
+// The k nearest window neighbours of many points at once, the same as WindowNeighbours gives one
+// by one. The pixels around the points are copied once into three coordinate planes (x, y, z),
+// NaN where a pixel is no candidate (masked, not finite or beyond the image), so that a window's
+// squared distances come row by row, four at a time in Eigen's packets.
+class WindowPlanes {
+  public:
+    WindowPlanes(const PointCloud& cloud, const Indices& points,
+                 const OrganizedSearchParams& search, int num_threads)
+        : cloud_(cloud), hw_(search.half_window), width_(cloud.width) {
+        // The points' pixel rectangle, grown by the window on each side and on the right to a
+        // whole number of 4-column blocks.
+        std::ptrdiff_t u_lo = std::numeric_limits<std::ptrdiff_t>::max(), u_hi = -1;
+        std::ptrdiff_t v_lo = u_lo, v_hi = -1;
+        const auto w = static_cast<std::ptrdiff_t>(cloud.width);
+        for (Index i : points) {
+            const std::ptrdiff_t u = i % w, v = i / w;
+            u_lo = std::min(u_lo, u);
+            u_hi = std::max(u_hi, u);
+            v_lo = std::min(v_lo, v);
+            v_hi = std::max(v_hi, v);
+        }
+        window_cols_ = static_cast<std::size_t>((2 * hw_ + 1 + 3) / 4 * 4);
+        u0_ = u_lo - hw_;
+        v0_ = v_lo - hw_;
+        cols_ = static_cast<std::size_t>(u_hi - u_lo) + window_cols_;
+        rows_ = static_cast<std::size_t>(v_hi - v_lo + 2 * hw_ + 1);
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        x_.assign(cols_ * rows_, nan);
+        y_.assign(cols_ * rows_, nan);
+        z_.assign(cols_ * rows_, nan);
+        const std::uint8_t* mask = search.mask.empty() ? nullptr : search.mask.data();
+        const auto h = static_cast<std::ptrdiff_t>(cloud.height);
+        ParallelFor(
+            rows_, num_threads,
+            [&](std::size_t r) {
+                const std::ptrdiff_t v = v0_ + static_cast<std::ptrdiff_t>(r);
+                if (v < 0 || v >= h) return;
+                for (std::size_t c = 0; c < cols_; ++c) {
+                    const std::ptrdiff_t u = u0_ + static_cast<std::ptrdiff_t>(c);
+                    if (u < 0 || u >= w) continue;
+                    const auto i = static_cast<std::size_t>(v * w + u);
+                    const Eigen::Vector3f& p = cloud.points[i];
+                    if ((mask != nullptr && mask[i] == 0) || !p.allFinite()) continue;
+                    x_[r * cols_ + c] = p.x();
+                    y_[r * cols_ + c] = p.y();
+                    z_[r * cols_ + c] = p.z();
+                }
+            },
+            16);
+        // The window's positions by increasing pixel distance from the centre, as plane offsets
+        // (into a window's distances) and image offsets.
+        std::vector<std::tuple<int, std::size_t, std::ptrdiff_t>> ring;
+        for (int dv = -hw_; dv <= hw_; ++dv) {
+            for (int du = -hw_; du <= hw_; ++du) {
+                ring.emplace_back(du * du + dv * dv,
+                                  static_cast<std::size_t>(dv + hw_) * window_cols_ +
+                                      static_cast<std::size_t>(du + hw_),
+                                  std::ptrdiff_t{dv} * w + du);
+            }
+        }
+        std::stable_sort(ring.begin(), ring.end(), [](const auto& a, const auto& b) {
+            return std::get<0>(a) < std::get<0>(b);
+        });
+        for (const auto& [d, slot, offset] : ring) {
+            ring_slot_.push_back(slot);
+            ring_offset_.push_back(offset);
+        }
+    }
+
+    /// The up to k nearest candidates of `center` strictly within radius_sq, nearest first
+    /// (ties by index), as packed keys in keys[0, k); their number.
+    std::size_t Nearest(Index center, std::size_t k, float radius_sq, std::vector<float>& dist,
+                        std::uint64_t* keys) const {
+        const auto w = static_cast<std::ptrdiff_t>(width_);
+        const std::ptrdiff_t u = center % w, v = center / w;
+        const std::size_t base = static_cast<std::size_t>(v - hw_ - v0_) * cols_ +
+                                 static_cast<std::size_t>(u - hw_ - u0_);
+        // The centre itself may lie outside the mask; it only needs finite coordinates.
+        const Eigen::Vector3f& centre = cloud_.points[center];
+        if (!centre.allFinite()) return 0;
+        const float cx = centre.x(), cy = centre.y(), cz = centre.z();
+        const std::size_t window_rows = static_cast<std::size_t>(2 * hw_ + 1);
+        dist.resize(window_rows * window_cols_);
+        using Block = Eigen::Array4f;
+        for (std::size_t r = 0; r < window_rows; ++r) {
+            const std::size_t row = base + r * cols_;
+            for (std::size_t c = 0; c < window_cols_; c += 4) {
+                const Block dx = Eigen::Map<const Block>(x_.data() + row + c) - cx;
+                const Block dy = Eigen::Map<const Block>(y_.data() + row + c) - cy;
+                const Block dz = Eigen::Map<const Block>(z_.data() + row + c) - cz;
+                // Summed as Eigen's squaredNorm of a 3-vector sums, so the distances are those
+                // of the point-by-point search to the last bit.
+                Eigen::Map<Block>(dist.data() + r * window_cols_ + c) =
+                    dx.square() + (dy.square() + dz.square());
+            }
+        }
+        // The first k candidates in ring order bound the k-th nearest distance from above; only
+        // candidates within that bound are ranked.
+        float bound = -1.0f;
+        std::size_t found = 0;
+        for (std::size_t q = 0; q < ring_slot_.size() && found < k; ++q) {
+            const float d2 = dist[ring_slot_[q]];
+            if (!(d2 < radius_sq)) continue;  // NaN: no candidate
+            ++found;
+            bound = std::max(bound, d2);
+        }
+        if (found < k) bound = radius_sq;
+        // The k best of them kept sorted by insertion.
+        std::size_t m = 0;
+        for (std::size_t q = 0; q < ring_slot_.size(); ++q) {
+            const float d2 = dist[ring_slot_[q]];
+            if (!(d2 < radius_sq && d2 <= bound)) continue;
+            const std::uint64_t key =
+                (std::uint64_t{std::bit_cast<std::uint32_t>(d2)} << 32) |
+                static_cast<std::uint32_t>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
+            std::size_t j = m;
+            if (m < k) {
+                ++m;
+            } else if (key < keys[k - 1]) {
+                j = k - 1;
+            } else {
+                continue;
+            }
+            for (; j > 0 && keys[j - 1] > key; --j) keys[j] = keys[j - 1];
+            keys[j] = key;
+        }
+        return m;
+    }
+
+  private:
+    const PointCloud& cloud_;
+    int hw_;
+    std::size_t width_;
+    std::ptrdiff_t u0_ = 0, v0_ = 0;
+    std::size_t cols_ = 0, rows_ = 0, window_cols_ = 0;
+    std::vector<float> x_, y_, z_;
+    std::vector<std::size_t> ring_slot_;
+    std::vector<std::ptrdiff_t> ring_offset_;
+};
+
 }  // namespace
 
 NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indices& points,
@@ -461,6 +602,28 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
     OrganizedSearchParams s = search;
     s.radius = params.radius;
     const float radius_sq = params.radius * params.radius;
+    if (params.k > 0 && !points.empty()) {
+        const WindowPlanes planes(organized, points, search, num_threads);
+        const auto k = static_cast<std::size_t>(params.k);
+        ParallelForChunks(
+            points.size(), num_threads,
+            [&](std::size_t begin, std::size_t end) {
+                std::vector<float> dist;
+                std::vector<std::uint64_t> keys(k);
+                for (std::size_t r = begin; r < end; ++r) {
+                    const std::size_t m =
+                        planes.Nearest(points[r], k, radius_sq, dist, keys.data());
+                    for (std::size_t j = 0; j < m; ++j) {
+                        table.neighbours[r * table.stride + j] = static_cast<Index>(keys[j]);
+                        table.squared_distances[r * table.stride + j] =
+                            std::bit_cast<float>(static_cast<std::uint32_t>(keys[j] >> 32));
+                    }
+                    table.count[r] = static_cast<std::uint16_t>(m);
+                }
+            },
+            1024);
+        return table;
+    }
     ParallelForChunks(
         points.size(), num_threads,
         [&](std::size_t begin, std::size_t end) {

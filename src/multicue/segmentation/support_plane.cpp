@@ -428,17 +428,18 @@ std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const Point
     sample_cloud.points.reserve(sample.size());
     for (Index i : sample) sample_cloud.points.push_back(cloud.points[i]);
     sample_cloud.SetUnorganized();
-    std::vector<Index> position_of(cloud.size(), 0);
-    for (std::size_t k = 0; k < sample.size(); ++k) position_of[sample[k]] = static_cast<Index>(k);
-
     supported.assign(candidates.size(), 0);
     ParallelFor(
         candidates.size(), params.num_threads,
         [&](std::size_t k) {
+            // The inliers' positions in the sample (both ascending).
             Indices local;
             local.reserve(candidates[k].inliers.size());
-            for (Index i : candidates[k].inliers) local.push_back(position_of[i]);
-            std::sort(local.begin(), local.end());
+            auto at = sample.begin();
+            for (Index i : candidates[k].inliers) {
+                at = std::lower_bound(at, sample.end(), i);
+                local.push_back(static_cast<Index>(at - sample.begin()));
+            }
             supported[k] = CountSupported(sample_cloud, local, candidates[k].plane,
                                           cloud.sensor_origin, params, prism);
         },
