@@ -121,6 +121,31 @@ TEST(Parallel, SelectKeepsTheSerialOrder) {
     EXPECT_TRUE(ParallelSelect(1000, 2, [](std::size_t) { return false; }).empty());
 }
 
+TEST(Parallel, InvokeRunsBothAndOneAfterTheOtherOnOneThread) {
+    for (const int threads : {1, 2}) {
+        std::vector<int> order;
+        std::vector<double> a(50000), b(50000);
+        ParallelInvoke(
+            threads,
+            [&] {
+                if (threads == 1) order.push_back(1);
+                ParallelFor(a.size(), threads, [&](std::size_t i) { a[i] = 2.0 * i; });
+            },
+            [&] {
+                if (threads == 1) order.push_back(2);
+                ParallelFor(b.size(), threads, [&](std::size_t i) { b[i] = 3.0 * i; });
+            });
+        EXPECT_EQ(a[49999], 2.0 * 49999);
+        EXPECT_EQ(b[49999], 3.0 * 49999);
+        if (threads == 1) {
+            EXPECT_EQ(order, (std::vector<int>{1, 2}));
+        }
+    }
+    EXPECT_THROW(ParallelInvoke(
+                     2, [] {}, [] { throw DataError("second"); }),
+                 DataError);
+}
+
 TEST(Parallel, LargestFirstOrdersBySizeThenPosition) {
     const std::vector<std::size_t> sizes = {3, 9, 3, 0, 9, 5};
     const auto size = [&](std::size_t k) { return sizes[k]; };

@@ -724,6 +724,30 @@ TEST(Categorize, WithRegionGrowingParts) {
     }
 }
 
+// The cylinder evidence runs beside the box and sphere evidence when threads allow: every field
+// of the result is the same on one thread and on two.
+TEST(Categorize, TheSameOnAnyThreadCount) {
+    const sim::TableTopScene scene = sim::MakeDemoScene();
+    const Scan& scan = DemoScan();
+    for (std::uint32_t k = 1; k <= scene.boxes.size() + scene.cylinders.size(); ++k) {
+        const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(k));
+        CategoryParams one, two;
+        one.num_threads = 1;
+        two.num_threads = 2;
+        const CategoryResult a = CategorizeObject(scan.cloud, obj, {}, scan.plane, one);
+        const CategoryResult b = CategorizeObject(scan.cloud, obj, {}, scan.plane, two);
+        EXPECT_EQ(a.category, b.category) << "object " << k;
+        EXPECT_EQ(a.probabilities, b.probabilities);
+        EXPECT_EQ(a.box_score, b.box_score);
+        EXPECT_EQ(a.axis_area, b.axis_area);
+        EXPECT_EQ(a.cylinder_radius, b.cylinder_radius);
+        EXPECT_EQ(a.cylinder_axis, b.cylinder_axis);
+        EXPECT_EQ(a.cylinder_coverage, b.cylinder_coverage);
+        EXPECT_EQ(a.sphere_radius, b.sphere_radius);
+        EXPECT_EQ(a.sphere_inlier_ratio, b.sphere_inlier_ratio);
+    }
+}
+
 TEST(Categorize, SphereIsSphere) {
     const Scan scan = ScanShapes({Sphere({0.0f, 0.0f, 0.75f + 0.05f}, 0.05f)});
     const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));

@@ -80,6 +80,14 @@ void ParallelFor(std::size_t n, int num_threads, Body&& body, std::size_t grain 
         grain);
 }
 
+/// Runs first() and second() at the same time when num_threads allows, else one after the other
+/// (first() first). They must not write the same data.
+template <typename First, typename Second>
+void ParallelInvoke(int num_threads, First&& first, Second&& second) {
+    ParallelFor(
+        2, num_threads, [&](std::size_t k) { k == 0 ? first() : second(); }, 1);
+}
+
 /// The i in [0, n) for which keep(i) holds, ascending, whatever the thread count: blocks of
 /// indices are selected in parallel and joined in order.
 template <typename Keep>

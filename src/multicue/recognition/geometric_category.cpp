@@ -14,6 +14,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/recognition/bounding_box.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
 #include "multicue/segmentation/sac_sphere.hpp"
@@ -550,12 +551,22 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
     const float cos_inlier_normal = std::cos(params.inlier_normal_angle_deg * kDeg);
 
     // The geometric evidence (section 5.1.3), then the scores and probabilities.
+    // The cylinder runs beside the box and sphere evidence: they set different fields of r, and
+    // only the sphere reads one the box sets.
     const ObjectBox box = MeasureExtents(cloud, usable, plane, r);
-    MeasureBoxLikeness(cloud, usable, sample, parts, plane, axis_angle, params, r);
     const SacParams sac = ShapeFitSac(params);
-    const CylinderEvidence best_cyl =
-        BestCylinder(cloud, sample, plane, box.box, sac, axis_angle, cos_inlier_normal, params, r);
-    const float sphere_score = SphereScore(cloud, sample, sac, cos_inlier_normal, params, r);
+    CylinderEvidence best_cyl;
+    float sphere_score = 0.0f;
+    ParallelInvoke(
+        params.num_threads,
+        [&] {
+            best_cyl = BestCylinder(cloud, sample, plane, box.box, sac, axis_angle,
+                                    cos_inlier_normal, params, r);
+        },
+        [&] {
+            MeasureBoxLikeness(cloud, usable, sample, parts, plane, axis_angle, params, r);
+            sphere_score = SphereScore(cloud, sample, sac, cos_inlier_normal, params, r);
+        });
     const float plate = PlateScore(r, plane.has_value(), box.thin_axis, params);
     const float flat_share = FlatShare(r.extents, params);
     ScoreCategories(sphere_score, best_cyl.score, plate, flat_share, params.min_evidence, r);
