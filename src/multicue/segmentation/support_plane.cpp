@@ -263,34 +263,56 @@ Indices Subsample(const Indices& finite, std::size_t max_samples) {
 
 // Candidate planes along up, extracted one after another from the subsample (each from the
 // points the previous ones left), while they hold at least min_inlier_fraction of it.
-std::vector<PlaneFit> ExtractCandidates(const PointCloud& cloud, const Indices& sample,
-                                        const UpPrior& up, const SupportPlaneParams& params) {
-    Indices remaining = sample;
-    const auto min_inliers = static_cast<std::size_t>(
-        std::max(3.0f, params.min_inlier_fraction * static_cast<float>(sample.size())));
+class CandidateExtractor {
+  public:
+    CandidateExtractor(const PointCloud& cloud, const Indices& sample, const UpPrior& up,
+                       const SupportPlaneParams& params)
+        : cloud_(cloud),
+          up_(up),
+          params_(params),
+          remaining_(sample),
+          min_inliers_(static_cast<std::size_t>(
+              std::max(3.0f, params.min_inlier_fraction * static_cast<float>(sample.size())))) {}
 
-    std::vector<PlaneFit> candidates;
-    for (int c = 0; c < params.max_candidates && remaining.size() >= min_inliers; ++c) {
+    /// The next candidate appended to `out`; false when there is none (then none follows).
+    bool Next(std::vector<PlaneFit>& out) {
+        if (done_ || extracted_ >= params_.max_candidates || remaining_.size() < min_inliers_) {
+            done_ = true;
+            return false;
+        }
         PlaneFitParams fp;
-        fp.sac.distance_threshold = params.distance_threshold;
-        fp.sac.seed = params.seed + static_cast<std::uint64_t>(c);
-        fp.sac.num_threads = params.num_threads;
-        fp.axis = up.axis;
-        fp.max_angle = up.max_angle;
-        fp.viewpoint = cloud.sensor_origin;
-        PlaneFit fit = FitPlane(cloud, remaining, fp);
-        if (!fit.found || fit.inliers.size() < min_inliers) break;
+        fp.sac.distance_threshold = params_.distance_threshold;
+        fp.sac.seed = params_.seed + static_cast<std::uint64_t>(extracted_);
+        fp.sac.num_threads = params_.num_threads;
+        fp.axis = up_.axis;
+        fp.max_angle = up_.max_angle;
+        fp.viewpoint = cloud_.sensor_origin;
+        PlaneFit fit = FitPlane(cloud_, remaining_, fp);
+        if (!fit.found || fit.inliers.size() < min_inliers_) {
+            done_ = true;
+            return false;
+        }
+        ++extracted_;
         Indices rest;
-        std::set_difference(remaining.begin(), remaining.end(), fit.inliers.begin(),
+        std::set_difference(remaining_.begin(), remaining_.end(), fit.inliers.begin(),
                             fit.inliers.end(), std::back_inserter(rest));
-        remaining = std::move(rest);
+        remaining_ = std::move(rest);
         // Normal towards the viewpoint: objects stand on the side the sensor sees.
-        if (fit.plane.head<3>().dot(cloud.sensor_origin) + fit.plane.w() < 0.0f)
+        if (fit.plane.head<3>().dot(cloud_.sensor_origin) + fit.plane.w() < 0.0f)
             fit.plane = -fit.plane;
-        candidates.push_back(std::move(fit));
+        out.push_back(std::move(fit));
+        return true;
     }
-    return candidates;
-}
+
+  private:
+    const PointCloud& cloud_;
+    const UpPrior& up_;
+    const SupportPlaneParams& params_;
+    Indices remaining_;
+    std::size_t min_inliers_;
+    int extracted_ = 0;
+    bool done_ = false;
+};
 
 // The edges of a convex hull on a plane (counter-clockwise seen from its normal `up`), for
 // signed distances of points from them.
@@ -418,32 +440,71 @@ std::size_t ChooseByView(const std::vector<PlaneFit>& candidates, const PointClo
         size);
 }
 
+// CountSupported of candidates over the subsample, which it holds as a cloud of its own so that
+// hulls and prisms touch only its points.
+class SupportCounter {
+  public:
+    SupportCounter(const PointCloud& cloud, const Indices& sample, const SupportPlaneParams& params,
+                   const PrismParams& prism)
+        : cloud_(cloud), sample_(sample), params_(params), prism_(prism) {
+        sample_cloud_.points.reserve(sample.size());
+        for (Index i : sample) sample_cloud_.points.push_back(cloud.points[i]);
+        sample_cloud_.SetUnorganized();
+    }
+
+    std::size_t Count(const PlaneFit& candidate) const {
+        // The inliers' positions in the sample (both ascending).
+        Indices local;
+        local.reserve(candidate.inliers.size());
+        auto at = sample_.begin();
+        for (Index i : candidate.inliers) {
+            at = std::lower_bound(at, sample_.end(), i);
+            local.push_back(static_cast<Index>(at - sample_.begin()));
+        }
+        return CountSupported(sample_cloud_, local, candidate.plane, cloud_.sensor_origin, params_,
+                              prism_);
+    }
+
+  private:
+    const PointCloud& cloud_;
+    const Indices& sample_;
+    const SupportPlaneParams& params_;
+    const PrismParams& prism_;
+    PointCloud sample_cloud_;
+};
+
+// The candidates and what each supports: while the first (the largest plane) is counted, the
+// others are extracted beside it; then they are counted in parallel.
+std::vector<PlaneFit> CandidatesAndSupport(const PointCloud& cloud, const Indices& sample,
+                                           const UpPrior& up, const SupportPlaneParams& params,
+                                           const PrismParams& prism,
+                                           std::vector<std::size_t>& supported) {
+    CandidateExtractor extractor(cloud, sample, up, params);
+    std::vector<PlaneFit> candidates;
+    supported.clear();
+    if (!extractor.Next(candidates)) return candidates;
+    const SupportCounter counter(cloud, sample, params, prism);
+    std::vector<PlaneFit> others;
+    std::size_t first = 0;
+    ParallelInvoke(
+        params.num_threads, [&] { first = counter.Count(candidates.front()); },
+        [&] {
+            while (extractor.Next(others)) {
+            }
+        });
+    supported.assign(1 + others.size(), first);
+    ParallelFor(
+        others.size(), params.num_threads,
+        [&](std::size_t k) { supported[k + 1] = counter.Count(others[k]); }, 1);
+    for (PlaneFit& fit : others) candidates.push_back(std::move(fit));
+    return candidates;
+}
+
 // The chosen candidate: the one that supports the most points, when any supports at least
 // min_supported of the subsample (ties: the one nearer the viewpoint); else the choice by view.
 std::size_t ChooseCandidate(const std::vector<PlaneFit>& candidates, const PointCloud& cloud,
                             const Indices& sample, const SupportPlaneParams& params,
-                            const PrismParams& prism, std::vector<std::size_t>& supported) {
-    // The subsample as a cloud of its own, so that hulls and prisms touch only its points.
-    PointCloud sample_cloud;
-    sample_cloud.points.reserve(sample.size());
-    for (Index i : sample) sample_cloud.points.push_back(cloud.points[i]);
-    sample_cloud.SetUnorganized();
-    supported.assign(candidates.size(), 0);
-    ParallelFor(
-        candidates.size(), params.num_threads,
-        [&](std::size_t k) {
-            // The inliers' positions in the sample (both ascending).
-            Indices local;
-            local.reserve(candidates[k].inliers.size());
-            auto at = sample.begin();
-            for (Index i : candidates[k].inliers) {
-                at = std::lower_bound(at, sample.end(), i);
-                local.push_back(static_cast<Index>(at - sample.begin()));
-            }
-            supported[k] = CountSupported(sample_cloud, local, candidates[k].plane,
-                                          cloud.sensor_origin, params, prism);
-        },
-        1);
+                            const std::vector<std::size_t>& supported) {
     const std::size_t enough = std::max<std::size_t>(
         1, static_cast<std::size_t>(
                std::ceil(params.min_supported_fraction * static_cast<float>(sample.size()))));
@@ -490,11 +551,12 @@ SupportPlane FindSupportPlane(const PointCloud& cloud, const SupportPlaneParams&
     const UpPrior up = ChooseUp(cloud, params);
     result.up_source = up.source;
     const Indices sample = Subsample(finite, params.max_samples);
-    const std::vector<PlaneFit> candidates = ExtractCandidates(cloud, sample, up, params);
+    std::vector<std::size_t> supported;
+    const std::vector<PlaneFit> candidates =
+        CandidatesAndSupport(cloud, sample, up, params, prism, supported);
     result.candidates = static_cast<int>(candidates.size());
     if (candidates.empty()) return result;
-    std::vector<std::size_t> supported;
-    const std::size_t chosen = ChooseCandidate(candidates, cloud, sample, params, prism, supported);
+    const std::size_t chosen = ChooseCandidate(candidates, cloud, sample, params, supported);
     const Eigen::Vector4f plane = candidates[chosen].plane;
 
     // All points of the full cloud on the plane, then its largest connected patch.
