@@ -4,10 +4,10 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <numeric>
 
 #include <fmt/format.h>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 
 namespace multicue::mapping {
@@ -45,15 +45,6 @@ Hinging HingingOf(const Front& f) {
     return (a.origin - f.center).dot(f.v_axis) < 0 ? Hinging::kBottom : Hinging::kTop;
 }
 
-int Find(std::vector<int>& parent, int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) {
-        parent[static_cast<std::size_t>(i)] =
-            parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
-        i = parent[static_cast<std::size_t>(i)];
-    }
-    return i;
-}
-
 }  // namespace
 
 const std::vector<std::string>& ContainerTypeNames() {
@@ -85,8 +76,7 @@ void GroupFurniture(KitchenMap& map, const ContainerParams& p) {
     map.furniture.clear();
     map.kitchenettes.clear();
     const std::size_t n = map.fronts.size();
-    std::vector<int> parent(n);
-    std::iota(parent.begin(), parent.end(), 0);
+    detail::DisjointSets pieces(n);
     for (std::size_t i = 0; i < n; ++i) {
         for (std::size_t j = i + 1; j < n; ++j) {
             const Front& a = map.fronts[i];
@@ -109,19 +99,17 @@ void GroupFurniture(KitchenMap& map, const ContainerParams& p) {
                        std::abs(l.min.y() - r.min.y()) <= p.pair_tolerance &&
                        std::abs(l.max.y() - r.max.y()) <= p.pair_tolerance;
             }
-            if (link)
-                parent[static_cast<std::size_t>(Find(parent, static_cast<int>(i)))] =
-                    Find(parent, static_cast<int>(j));
+            if (link) pieces.Unite(static_cast<Index>(i), static_cast<Index>(j));
         }
     }
     std::vector<int> piece_of(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
-        const int root = Find(parent, static_cast<int>(i));
-        if (piece_of[static_cast<std::size_t>(root)] < 0) {
-            piece_of[static_cast<std::size_t>(root)] = static_cast<int>(map.furniture.size());
+        const Index root = pieces.Find(static_cast<Index>(i));
+        if (piece_of[root] < 0) {
+            piece_of[root] = static_cast<int>(map.furniture.size());
             map.furniture.emplace_back();
         }
-        const int k = piece_of[static_cast<std::size_t>(root)];
+        const int k = piece_of[root];
         map.furniture[static_cast<std::size_t>(k)].fronts.push_back(static_cast<int>(i));
         map.fronts[i].furniture = k;
     }

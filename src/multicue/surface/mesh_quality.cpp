@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <numeric>
 #include <vector>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/search/kdtree.hpp"
 
@@ -20,11 +20,6 @@ struct HalfEdge {
         return key != o.key ? key < o.key : forward < o.forward;
     }
 };
-
-std::uint32_t Find(std::vector<std::uint32_t>& parent, std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-}
 
 }  // namespace
 
@@ -52,8 +47,7 @@ MeshQuality EvaluateMesh(const TriangleMesh& mesh) {
     }
     q.unreferenced_vertices = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
     std::sort(half.begin(), half.end());
-    std::vector<std::uint32_t> parent(q.vertices);
-    std::iota(parent.begin(), parent.end(), 0u);
+    detail::DisjointSets loops(q.vertices);  // boundary vertices joined along boundary edges
     std::vector<std::uint8_t> on_boundary(q.vertices, 0);
     for (std::size_t i = 0; i < half.size();) {
         std::size_t j = i;
@@ -66,7 +60,7 @@ MeshQuality EvaluateMesh(const TriangleMesh& mesh) {
             const auto lo = static_cast<std::uint32_t>(half[i].key >> 32);
             const auto hi = static_cast<std::uint32_t>(half[i].key & 0xffffffffu);
             on_boundary[lo] = on_boundary[hi] = 1;
-            parent[Find(parent, lo)] = Find(parent, hi);
+            loops.Unite(lo, hi);
         } else if (count == 2) {
             if (fwd != 1) ++q.inconsistent_edges;
         } else {
@@ -75,7 +69,7 @@ MeshQuality EvaluateMesh(const TriangleMesh& mesh) {
         i = j;
     }
     for (std::uint32_t v = 0; v < q.vertices; ++v)
-        if (on_boundary[v] && Find(parent, v) == v) ++q.boundary_loops;
+        if (on_boundary[v] && loops.Find(v) == v) ++q.boundary_loops;
     return q;
 }
 
