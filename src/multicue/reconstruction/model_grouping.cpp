@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <iterator>
 
+#include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
@@ -235,19 +236,15 @@ std::pair<PerceivedObject, PerceivedObject> AssignToBoxes(const PointCloud& clou
     return {std::move(pa), std::move(pb)};
 }
 
-// The merged objects of a union-find forest over `objects` (root[k] = k for unmerged ones):
-// each group takes the place of its first member; `changed` lists the groups that grew.
-GroupingResult MergeGroups(std::vector<PerceivedObject>& objects, std::vector<std::size_t>& root) {
+// The merged objects of the groups of `objects` in `groups`: each group takes the place of its
+// first member; `changed` lists the groups that grew.
+GroupingResult MergeGroups(std::vector<PerceivedObject>& objects, detail::DisjointSets& groups) {
     const std::size_t n = objects.size();
-    auto find = [&](std::size_t k) {
-        while (root[k] != k) k = root[k] = root[root[k]];
-        return k;
-    };
     std::vector<PerceivedObject> merged;
     std::vector<std::size_t> slot(n, n);
     GroupingResult result;
     for (std::size_t k = 0; k < n; ++k) {
-        const std::size_t r = find(k);
+        const std::size_t r = groups.Find(static_cast<Index>(k));
         if (slot[r] == n) {
             slot[r] = merged.size();
             merged.push_back(std::move(objects[k]));
@@ -284,12 +281,7 @@ GroupingResult MergeConcentricObjects(std::vector<PerceivedObject>& objects,
         const auto& m = objects[k].model;
         return m.cylinder && m.cylinder->found ? &*m.cylinder : nullptr;
     };
-    std::vector<std::size_t> root(n);
-    for (std::size_t k = 0; k < n; ++k) root[k] = k;
-    auto find = [&](std::size_t k) {
-        while (root[k] != k) k = root[k] = root[root[k]];
-        return k;
-    };
+    detail::DisjointSets groups(n);
     bool any = false;
     for (std::size_t i = 0; i < n; ++i) {
         const CylinderModel* a = cylinder(i);
@@ -299,12 +291,12 @@ GroupingResult MergeConcentricObjects(std::vector<PerceivedObject>& objects,
             if (b == nullptr || !CoaxialSameRadius(*a, *b, params)) continue;
             const float along = (b->center - a->center).dot(a->axis.normalized());
             if (std::abs(along) > 0.5f * (a->height + b->height)) continue;  // stacked
-            root[find(j)] = find(i);
+            groups.Unite(static_cast<Index>(i), static_cast<Index>(j));
             any = true;
         }
     }
     if (!any) return {};
-    GroupingResult result = MergeGroups(objects, root);
+    GroupingResult result = MergeGroups(objects, groups);
     LogDebug("perceive: {} concentric objects merged", result.merged);
     return result;
 }
