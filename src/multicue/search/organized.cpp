@@ -1,7 +1,6 @@
 #include "multicue/search/organized.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -11,6 +10,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/search/nearest_keys.hpp"
 
 namespace multicue {
 namespace {
@@ -57,12 +57,6 @@ float SquaredRadius(float radius) {
 // Up to this k, k-nearest selection inserts into a sorted array; beyond, it selects with
 // nth_element over all candidates.
 constexpr std::size_t kInsertionMaxK = 32;
-
-// A candidate neighbour packed as (squared distance bits, index): for non-negative floats the bit
-// pattern orders like the value, so sorting the packed words orders by distance, then by index.
-inline std::uint64_t Pack(float d2, Index i) {
-    return (std::uint64_t{std::bit_cast<std::uint32_t>(d2)} << 32) | i;
-}
 
 // Pixel offsets (dv * width + du) of a whole window, by increasing pixel distance from the
 // centre (rings); cached per thread for the last half-size and width.
@@ -142,17 +136,7 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
             if (mask != nullptr && mask[i] == 0) return;
             const float d2 = (cloud.points[i] - c).squaredNorm();
             if (!(d2 <= r2)) return;
-            const std::uint64_t key = Pack(d2, static_cast<Index>(i));
-            std::size_t j = m;
-            if (m < cap) {
-                ++m;
-            } else if (key < top[cap - 1]) {
-                j = cap - 1;
-            } else {
-                return;
-            }
-            for (; j > 0 && top[j - 1] > key; --j) top[j] = top[j - 1];
-            top[j] = key;
+            detail::InsertNearest(detail::PackNeighbour(d2, static_cast<Index>(i)), top, m, cap);
         };
         const auto hw = static_cast<std::size_t>(params.half_window);
         if (win.u1 - win.u0 == 2 * hw && win.v1 - win.v0 == 2 * hw) {
@@ -176,7 +160,8 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
             for (std::size_t u = win.u0; u <= win.u1; ++u) {
                 if (mask != nullptr && mask[v * w + u] == 0) continue;
                 const float d2 = (row[u] - c).squaredNorm();
-                if (d2 <= r2) best.push_back(Pack(d2, static_cast<Index>(v * w + u)));
+                if (d2 <= r2)
+                    best.push_back(detail::PackNeighbour(d2, static_cast<Index>(v * w + u)));
             }
         }
         m = std::min(kk, best.size());
@@ -187,8 +172,8 @@ std::size_t OrganizedKnnSearch(const PointCloud& cloud, Index center, int k,
     indices.resize(m);
     squared_distances.resize(m);
     for (std::size_t j = 0; j < m; ++j) {
-        indices[j] = static_cast<Index>(best[j]);
-        squared_distances[j] = std::bit_cast<float>(static_cast<std::uint32_t>(best[j] >> 32));
+        indices[j] = detail::PackedIndex(best[j]);
+        squared_distances[j] = detail::PackedSquaredDistance(best[j]);
     }
     return m;
 }

@@ -14,6 +14,7 @@
 #include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
+#include "multicue/search/nearest_keys.hpp"
 #include "multicue/search/organized.hpp"
 
 namespace multicue {
@@ -542,19 +543,9 @@ class WindowPlanes {
         for (std::size_t q = 0; q < ring_slot_.size(); ++q) {
             const float d2 = dist[ring_slot_[q]];
             if (!(d2 < radius_sq && d2 <= bound)) continue;
-            const std::uint64_t key =
-                (std::uint64_t{std::bit_cast<std::uint32_t>(d2)} << 32) |
-                static_cast<std::uint32_t>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
-            std::size_t j = m;
-            if (m < k) {
-                ++m;
-            } else if (key < keys[k - 1]) {
-                j = k - 1;
-            } else {
-                continue;
-            }
-            for (; j > 0 && keys[j - 1] > key; --j) keys[j] = keys[j - 1];
-            keys[j] = key;
+            const auto i =
+                static_cast<Index>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
+            detail::InsertNearest(detail::PackNeighbour(d2, i), keys, m, k);
         }
         return m;
     }
@@ -614,9 +605,9 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
                     const std::size_t m =
                         planes.Nearest(points[r], k, radius_sq, dist, keys.data());
                     for (std::size_t j = 0; j < m; ++j) {
-                        table.neighbours[r * table.stride + j] = static_cast<Index>(keys[j]);
+                        table.neighbours[r * table.stride + j] = detail::PackedIndex(keys[j]);
                         table.squared_distances[r * table.stride + j] =
-                            std::bit_cast<float>(static_cast<std::uint32_t>(keys[j] >> 32));
+                            detail::PackedSquaredDistance(keys[j]);
                     }
                     table.count[r] = static_cast<std::uint16_t>(m);
                 }
