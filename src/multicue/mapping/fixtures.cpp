@@ -474,7 +474,6 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 }
             }
             for (std::size_t j = 0; j < fs.size(); ++j) {
-                sample_of[fs.points[j]] = -1;
                 result.point_face[fs.points[j]] = faces[k];
                 result.point_residual[fs.points[j]] = fs.residual[j];
             }

@@ -439,7 +439,7 @@ class WindowPlanes {
   public:
     WindowPlanes(const PointCloud& cloud, const Indices& points,
                  const OrganizedSearchParams& search, int num_threads)
-        : cloud_(cloud), hw_(search.half_window), width_(cloud.width) {
+        : cloud_(cloud), hw_(search.half_window) {
         // The points' pixel rectangle, grown by the window on each side and on the right to a
         // whole number of 4-column blocks.
         std::ptrdiff_t u_lo = std::numeric_limits<std::ptrdiff_t>::max(), u_hi = -1;
@@ -456,15 +456,15 @@ class WindowPlanes {
         u0_ = u_lo - hw_;
         v0_ = v_lo - hw_;
         cols_ = static_cast<std::size_t>(u_hi - u_lo) + window_cols_;
-        rows_ = static_cast<std::size_t>(v_hi - v_lo + 2 * hw_ + 1);
+        const auto rows = static_cast<std::size_t>(v_hi - v_lo + 2 * hw_ + 1);
         const float nan = std::numeric_limits<float>::quiet_NaN();
-        x_.assign(cols_ * rows_, nan);
-        y_.assign(cols_ * rows_, nan);
-        z_.assign(cols_ * rows_, nan);
+        x_.assign(cols_ * rows, nan);
+        y_.assign(cols_ * rows, nan);
+        z_.assign(cols_ * rows, nan);
         const std::uint8_t* mask = search.mask.empty() ? nullptr : search.mask.data();
         const auto h = static_cast<std::ptrdiff_t>(cloud.height);
         ParallelFor(
-            rows_, num_threads,
+            rows, num_threads,
             [&](std::size_t r) {
                 const std::ptrdiff_t v = v0_ + static_cast<std::ptrdiff_t>(r);
                 if (v < 0 || v >= h) return;
@@ -504,7 +504,7 @@ class WindowPlanes {
     /// (ties by index), as packed keys in keys[0, k); their number.
     std::size_t Nearest(Index center, std::size_t k, float radius_sq, std::vector<float>& dist,
                         std::uint64_t* keys) const {
-        const auto w = static_cast<std::ptrdiff_t>(width_);
+        const auto w = static_cast<std::ptrdiff_t>(cloud_.width);
         const std::ptrdiff_t u = center % w, v = center / w;
         const std::size_t base = static_cast<std::size_t>(v - hw_ - v0_) * cols_ +
                                  static_cast<std::size_t>(u - hw_ - u0_);
@@ -553,9 +553,8 @@ class WindowPlanes {
   private:
     const PointCloud& cloud_;
     int hw_;
-    std::size_t width_;
     std::ptrdiff_t u0_ = 0, v0_ = 0;
-    std::size_t cols_ = 0, rows_ = 0, window_cols_ = 0;
+    std::size_t cols_ = 0, window_cols_ = 0;
     std::vector<float> x_, y_, z_;
     std::vector<std::size_t> ring_slot_;
     std::vector<std::ptrdiff_t> ring_offset_;
