@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
@@ -102,7 +103,11 @@ class ProfileObjective {
           inner_(std::move(inner)),
           caps_(caps),
           step_(step),
-          tolerance_(tolerance) {}
+          tolerance_(tolerance) {
+        for (std::size_t i = 0; i < inner_.size(); ++i) {
+            if (inner_[i]) inner_points_.push_back(i);
+        }
+    }
 
     std::size_t size() const { return points_.size(); }
 
@@ -127,60 +132,77 @@ class ProfileObjective {
         const double spacing = extent / static_cast<double>(knots - 1);
         k_.resize(n);
         f_.resize(n);
+        w_.assign(n, 1.0);
+        StartSystem(knots);
         for (std::size_t i = 0; i < n; ++i) {
-            const double s = (h_[i] - h_min) / spacing;
+            const double s = (h_[i] - h_min) / spacing;  // >= 0: truncation is floor
             const std::size_t k = std::min<std::size_t>(
-                knots - 2, static_cast<std::size_t>(std::max(0.0, std::floor(s))));
+                knots - 2, static_cast<std::size_t>(static_cast<std::int64_t>(s)));
             k_[i] = k;
             f_[i] = std::clamp(s - static_cast<double>(k), 0.0, 1.0);
+            AddPoint(i);
         }
-        w_.assign(n, 1.0);
+        // Three reweighted solves; the residuals of one give the weights of the next system,
+        // which is assembled in the same pass.
         double cost = 0.0;
         for (int iteration = 0; iteration < 3; ++iteration) {
             const double thickness = Solve(knots);
+            const bool again = iteration < 2;
+            if (again) StartSystem(knots);
             cost = 0.0;
             for (std::size_t i = 0; i < n; ++i) {
                 const double model = (1.0 - f_[i]) * x_[k_[i]] + f_[i] * x_[k_[i] + 1] -
                                      (inner_[i] ? thickness : 0.0);
                 const double r = std::abs(rho_[i] - model);
-                w_[i] = r <= tolerance_ ? 1.0 : tolerance_ / r;
                 cost += r <= tolerance_ ? r * r : 2.0 * tolerance_ * r - tolerance_ * tolerance_;
+                if (again) {
+                    w_[i] = r <= tolerance_ ? 1.0 : tolerance_ / r;
+                    AddPoint(i);
+                }
             }
         }
         return cost / static_cast<double>(n);
     }
 
   private:
-    /// Weighted least squares for the knot radii x_ and the wall thickness (returned): a
-    /// tridiagonal system bordered by one column, solved by the Thomas algorithm for two right
-    /// hand sides and the Schur complement of the thickness.
-    double Solve(std::size_t knots) const {
+    /// The normal equations of the knot radii x_ and the wall thickness without points: the
+    /// first-difference penalty, tridiagonal (diag_, off_), and a tiny thickness prior.
+    void StartSystem(std::size_t knots) const {
         constexpr double kSmooth = 1e-2;
         diag_.assign(knots, 0.0);
         off_.assign(knots, 0.0);
         rhs_.assign(knots, 0.0);
         border_.assign(knots, 0.0);
-        double corner = 1e-6, corner_rhs = 0.0;
+        corner_ = 1e-6;
+        corner_rhs_ = 0.0;
         for (std::size_t k = 0; k + 1 < knots; ++k) {
             diag_[k] += kSmooth;
             diag_[k + 1] += kSmooth;
             off_[k] -= kSmooth;
         }
-        for (std::size_t i = 0; i < points_.size(); ++i) {
-            const std::size_t k = k_[i];
-            const double f = f_[i], g = 1.0 - f, w = w_[i];
-            diag_[k] += w * g * g;
-            diag_[k + 1] += w * f * f;
-            off_[k] += w * g * f;
-            rhs_[k] += w * g * rho_[i];
-            rhs_[k + 1] += w * f * rho_[i];
-            if (inner_[i]) {  // the model's thickness column is -1 for inner points
-                border_[k] -= w * g;
-                border_[k + 1] -= w * f;
-                corner += w;
-                corner_rhs -= w * rho_[i];
-            }
+    }
+
+    /// Point i with weight w_[i] added to the normal equations (k_ and f_ set).
+    void AddPoint(std::size_t i) const {
+        const std::size_t k = k_[i];
+        const double f = f_[i], g = 1.0 - f, w = w_[i];
+        diag_[k] += w * g * g;
+        diag_[k + 1] += w * f * f;
+        off_[k] += w * g * f;
+        rhs_[k] += w * g * rho_[i];
+        rhs_[k + 1] += w * f * rho_[i];
+        if (inner_[i]) {  // the model's thickness column is -1 for inner points
+            border_[k] -= w * g;
+            border_[k + 1] -= w * f;
+            corner_ += w;
+            corner_rhs_ -= w * rho_[i];
         }
+    }
+
+    /// Weighted least squares for the knot radii x_ and the wall thickness (returned) from the
+    /// assembled system: a tridiagonal system bordered by one column, solved by the Thomas
+    /// algorithm for two right hand sides and the Schur complement of the thickness.
+    double Solve(std::size_t knots) const {
         for (std::size_t k = 1; k < knots; ++k) {
             const double m = off_[k - 1] / diag_[k - 1];
             diag_[k] -= m * off_[k - 1];
@@ -197,25 +219,26 @@ class ProfileObjective {
             y_[k] = (border_[k] - off_[k] * y_[k + 1]) / diag_[k];
         }
         // border^T x + corner * thickness = corner_rhs, with x = x_ - thickness * y_ (the
-        // border here is the original one: recompute it from the points).
+        // border here is the original one: recompute it from the inner points).
         double bx = 0.0, by = 0.0;
-        for (std::size_t i = 0; i < points_.size(); ++i) {
-            if (!inner_[i]) continue;
+        for (const std::size_t i : inner_points_) {
             const std::size_t k = k_[i];
             const double f = f_[i], g = 1.0 - f, w = w_[i];
             bx -= w * (g * x_[k] + f * x_[k + 1]);
             by -= w * (g * y_[k] + f * y_[k + 1]);
         }
-        const double thickness = (corner_rhs - bx) / (corner - by);
+        const double thickness = (corner_rhs_ - bx) / (corner_ - by);
         for (std::size_t k = 0; k < knots; ++k) x_[k] -= thickness * y_[k];
         return thickness;
     }
 
     std::vector<Eigen::Vector3d> points_;
     std::vector<char> inner_;
+    std::vector<std::size_t> inner_points_;  // the indices of the inner points
     bool caps_;
     double step_, tolerance_;
     mutable std::vector<double> h_, rho_, f_, w_, x_, y_, diag_, off_, rhs_, border_;
+    mutable double corner_ = 0.0, corner_rhs_ = 0.0;
     mutable std::vector<std::size_t> k_;
 };
 
