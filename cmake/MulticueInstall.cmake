@@ -76,8 +76,8 @@ if(BUILD_SHARED_LIBS)
 else()
   # What the static libraries need from their private dependencies.
   set(MULTICUE_PC_LIBS_PRIVATE
-      "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_features2d -lopencv_imgcodecs \
--lopencv_imgproc -lopencv_flann -lopencv_core -lsvm -lurdfdom_model -ltinyxml -lconsole_bridge \
+      "-llzf -lsqlite3 -lembree3 -lassimp -lopencv_ml -lopencv_features2d -lopencv_imgproc \
+-lopencv_flann -lopencv_core -lpng16 -ljpeg -lsvm -lurdfdom_model -ltinyxml -lconsole_bridge \
 -loctomap -loctomath")
   # MCAP chunk decompression in multicue::io (optional, see src/multicue/io/CMakeLists.txt).
   if(MULTICUE_ZSTD_LIBRARY)

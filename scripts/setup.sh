@@ -22,6 +22,8 @@ packages=(
     libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
     libembree-dev libassimp-dev libopencv-dev libsvm-dev libsqlite3-dev
     libyaml-cpp-dev
+    # Mesh textures.
+    libpng-dev libjpeg-dev
     # ROS 2 bags: zstd and lz4 compressed MCAP chunks.
     libzstd-dev liblz4-dev
     # URDF models (kitchen models and kitchen maps); check_urdf for the export tests.

@@ -6,7 +6,6 @@
 
 #include "cli_runner.hpp"
 #include "multicue/core/exceptions.hpp"
-#include "multicue/io/image.hpp"
 #include "multicue/io/urdf.hpp"
 #include "test_util.hpp"
 
@@ -137,25 +136,6 @@ TEST(Urdf, WriteIsAtomic) {
     EXPECT_THROW(io::WriteUrdf(path, bad), InvalidArgument);
     EXPECT_EQ(test::ReadTextFile(path), before);
     EXPECT_NO_THROW(io::ReadUrdf(path));
-}
-
-TEST(Image, ShrinkAveragesAndBadFilesThrow) {
-    io::RgbImage img;
-    img.width = 4;
-    img.height = 2;
-    for (int i = 0; i < 8; ++i) {
-        img.pixels.push_back(i % 2 == 0 ? Color{200, 0, 0, 255} : Color{0, 0, 200, 255});
-    }
-    const io::RgbImage s = io::ShrinkImage(img, 1);
-    ASSERT_EQ(s.width, 1u);
-    ASSERT_EQ(s.height, 1u);
-    EXPECT_NEAR(s.pixels[0].r, 100, 2);
-    EXPECT_NEAR(s.pixels[0].b, 100, 2);
-    EXPECT_THROW(io::ShrinkImage(img, 0), InvalidArgument);
-    test::TempDir dir;
-    EXPECT_THROW(io::ReadRgbImage(dir / "none.png"), IoError);
-    { std::ofstream(dir / "junk.png") << "not an image"; }
-    EXPECT_THROW(io::ReadRgbImage(dir / "junk.png"), FormatError);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 #pragma once
-/// \file Colour images (PNG, JPEG and the other formats of OpenCV's imgcodecs): the textures that
+/// \file Colour images (PNG through libpng, JPEG through libjpeg): the textures that
 /// mesh materials name.
 
 #include <cstdint>

@@ -89,7 +89,7 @@ struct ArticulatedLoadParams {
 
 /// Loads a PartNet-Mobility folder. Visual meshes are read with Assimp, scaled and placed by the
 /// visual origins; each vertex gets its material's diffuse colour times the texture colour at its
-/// texture coordinate (textures from OpenCV's imgcodecs) and a reflectance for the laser's
+/// texture coordinate (PNG and JPEG textures, io::ReadRgbImage) and a reflectance for the laser's
 /// intensity (the colour's luminance, lowered for specular and transparent materials). Links
 /// without a semantics.txt line get joint_kind and semantic "unknown".
 /// Throws IoError / FormatError naming the file (missing or malformed mobility.urdf, semantics.txt
