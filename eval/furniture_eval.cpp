@@ -63,6 +63,7 @@ struct Options {
     std::string frame = "part";
     bool cross_class = false;
     bool fit_cross_class = true;
+    bool cross_class_surfaces = true;
     float max_overlap = 0.3f;
     std::size_t words = 0;
     int probe = 0;
@@ -266,6 +267,7 @@ int Run(const Options& o) {
     dp.voting.normalization = ParseFurnitureVoteNormalization(o.normalization);
     dp.selection.cross_class = o.cross_class;
     dp.cross_class = o.fit_cross_class;
+    dp.cross_class_surfaces = o.cross_class_surfaces;
     dp.max_overlap = o.max_overlap;
     dp.class_by_fit = o.class_by_fit;
     dp.voting.activations = o.activations;
@@ -561,6 +563,8 @@ int main(int argc, char** argv) {
                  "hypotheses of different classes exclude each other");
     app.add_flag("!--no-fit-cross-class", o.fit_cross_class,
                  "overlapping fitted footprints of different classes may both stay");
+    app.add_flag("!--cross-class-footprints", o.cross_class_surfaces,
+                 "fits of different classes overlap by their footprints, not their surfaces");
     app.add_option("--max-overlap", o.max_overlap,
                    "fitted footprints overlapping more are one piece")
         ->capture_default_str();

@@ -212,6 +212,71 @@ TEST(FurnitureFreeSpace, PointsBetweenTheSensorAndTheFloorAreFreeAndBelowItAreNo
     EXPECT_EQ(fs.FreeShare(below), 0.0f);
 }
 
+// Points every 1 cm on the faces of the axis-aligned box [lo, hi].
+void AddBoxSurface(PointCloud& cloud, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+    const float step = 0.01f;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (float side : {lo[axis], hi[axis]}) {
+            for (float a = lo[u]; a <= hi[u] + 1e-6f; a += step) {
+                for (float b = lo[v]; b <= hi[v] + 1e-6f; b += step) {
+                    Eigen::Vector3f p;
+                    p[axis] = side;
+                    p[u] = a;
+                    p[v] = b;
+                    cloud.points.push_back(p);
+                }
+            }
+            if (hi[axis] == lo[axis]) break;
+        }
+    }
+    cloud.width = static_cast<std::uint32_t>(cloud.points.size());
+    cloud.height = 1;
+}
+
+TEST(FurnitureDetection, ASurfaceSharedAcrossClassesIsOnePieceAChairUnderATableIsNot) {
+    // A table (1.2 x 0.8 m top at 0.72-0.75 m, four legs) and, in model frames centred on their
+    // footprints, a chair (0.45 m seat at 0.45 m, legs, a back to 0.9 m) and a cabinet of the
+    // table's size.
+    PointCloud table, chair, cabinet;
+    AddBoxSurface(table, {-0.6f, -0.4f, 0.72f}, {0.6f, 0.4f, 0.75f});
+    for (float x : {-0.55f, 0.55f}) {
+        for (float y : {-0.35f, 0.35f}) {
+            AddBoxSurface(table, {x - 0.02f, y - 0.02f, 0.0f}, {x + 0.02f, y + 0.02f, 0.72f});
+        }
+    }
+    AddBoxSurface(chair, {-0.225f, -0.225f, 0.43f}, {0.225f, 0.225f, 0.45f});
+    for (float x : {-0.2f, 0.2f}) {
+        for (float y : {-0.2f, 0.2f}) {
+            AddBoxSurface(chair, {x - 0.015f, y - 0.015f, 0.0f}, {x + 0.015f, y + 0.015f, 0.43f});
+        }
+    }
+    AddBoxSurface(chair, {0.2f, -0.225f, 0.45f}, {0.225f, 0.225f, 0.9f});
+    AddBoxSurface(cabinet, {-0.6f, -0.4f, 0.0f}, {0.6f, 0.4f, 0.75f});
+    const Eigen::Isometry3f at_table(Eigen::Translation3f(2.0f, 1.0f, 0.0f));
+    // The chair pushed two thirds under the table's long side, its back outside the edge.
+    const Eigen::Isometry3f under(Eigen::Translation3f(2.0f + 0.5f, 1.0f, 0.0f));
+    const float with_chair = SharedSurfaceShare(table, at_table, chair, under, 0.05f);
+    EXPECT_LT(with_chair, 0.15f);
+    EXPECT_LT(SharedSurfaceShare(chair, under, table, at_table, 0.05f), 0.15f);
+    // A cabinet model fitted where a table model was: one piece.
+    EXPECT_GT(SharedSurfaceShare(table, at_table, cabinet, at_table, 0.05f), 0.6f);
+    EXPECT_GT(SharedSurfaceShare(cabinet, at_table, table, at_table, 0.05f), 0.6f);
+    // Moved apart, nothing is shared; a model shares all of its surface with itself.
+    const Eigen::Isometry3f far(Eigen::Translation3f(6.0f, 1.0f, 0.0f));
+    EXPECT_EQ(SharedSurfaceShare(table, at_table, cabinet, far, 0.05f), 0.0f);
+    EXPECT_EQ(SharedSurfaceShare(chair, under, chair, under, 0.05f), 1.0f);
+    // Bad input.
+    EXPECT_EQ(SharedSurfaceShare(table, at_table, PointCloud{}, at_table, 0.05f), 0.0f);
+    EXPECT_THROW(SharedSurfaceShare(table, at_table, chair, under, 0.0f), InvalidArgument);
+    Eigen::Isometry3f bad = at_table;
+    bad.translation().x() = std::nanf("");
+    EXPECT_THROW(SharedSurfaceShare(table, bad, chair, under, 0.05f), InvalidArgument);
+    FurnitureDetectionParams dp;
+    dp.surface_overlap_distance = 0.0f;
+    EXPECT_THROW(dp.Validate(), InvalidArgument);
+}
+
 TEST(FurnitureDetection, BadParametersAndInputAreRefused) {
     FurnitureDetectionParams dp;
     dp.max_overlap = 0.0f;

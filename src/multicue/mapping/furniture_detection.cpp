@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <unordered_set>
 
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
@@ -57,6 +59,50 @@ Polygon Footprint(const FurnitureCad& cad, const Eigen::Isometry3f& T) {
     for (std::size_t i = 0; i < cad.cloud.size(); i += step)
         pts.push_back((T * cad.cloud.points[i]).head<2>());
     return Hull(std::move(pts));
+}
+
+// A fitted model's surface in the world: about 2000 of its points and the cells (of the given
+// size) that hold them.
+struct PlacedSurface {
+    std::vector<Eigen::Vector3i> cells;  // one per point
+    std::unordered_set<std::uint64_t> occupied;
+};
+
+std::uint64_t CellKey(const Eigen::Vector3i& c) {
+    const auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & 0x1fffff; };
+    return field(c.x()) | field(c.y()) << 21 | field(c.z()) << 42;
+}
+
+PlacedSurface PlaceSurface(const PointCloud& model, const Eigen::Isometry3f& T, float cell) {
+    PlacedSurface s;
+    const std::size_t step = std::max<std::size_t>(1, model.size() / 2000);
+    for (std::size_t i = 0; i < model.size(); i += step) {
+        if (!model.points[i].allFinite()) continue;
+        const Eigen::Vector3i c =
+            ((T * model.points[i]) / cell).array().floor().cast<int>().matrix();
+        s.cells.push_back(c);
+        s.occupied.insert(CellKey(c));
+    }
+    return s;
+}
+
+// The share of a's points with a point of b in their cell or a neighbouring one (within about
+// one to two cells).
+float SharedSurface(const PlacedSurface& a, const PlacedSurface& b) {
+    if (a.cells.empty()) return 0.0f;
+    std::size_t shared = 0;
+    for (const Eigen::Vector3i& c : a.cells) {
+        bool near = false;
+        for (int dz = -1; dz <= 1 && !near; ++dz) {
+            for (int dy = -1; dy <= 1 && !near; ++dy) {
+                for (int dx = -1; dx <= 1 && !near; ++dx) {
+                    near = b.occupied.count(CellKey(c + Eigen::Vector3i(dx, dy, dz))) > 0;
+                }
+            }
+        }
+        shared += near ? 1 : 0;
+    }
+    return static_cast<float>(shared) / static_cast<float>(a.cells.size());
 }
 
 // The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
@@ -147,10 +193,28 @@ void FurnitureDetectionParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture detection: max_overlap must be in (0, 1], got {}", max_overlap));
     }
+    if (!(surface_overlap_distance > 0.0f) || !std::isfinite(surface_overlap_distance)) {
+        throw InvalidArgument(
+            fmt::format("furniture detection: surface_overlap_distance must be > 0, got {}",
+                        surface_overlap_distance));
+    }
     if (num_threads < 0) {
         throw InvalidArgument(
             fmt::format("furniture detection: num_threads must be >= 0, got {}", num_threads));
     }
+}
+
+float SharedSurfaceShare(const PointCloud& a, const Eigen::Isometry3f& T_a, const PointCloud& b,
+                         const Eigen::Isometry3f& T_b, float distance) {
+    if (!(distance > 0.0f) || !std::isfinite(distance)) {
+        throw InvalidArgument(
+            fmt::format("shared surface: distance must be > 0 [m], got {}", distance));
+    }
+    if (!T_a.matrix().allFinite() || !T_b.matrix().allFinite()) {
+        throw InvalidArgument("shared surface: the poses must be finite");
+    }
+    const PlacedSurface sa = PlaceSurface(a, T_a, distance), sb = PlaceSurface(b, T_b, distance);
+    return std::max(SharedSurface(sa, sb), SharedSurface(sb, sa));
 }
 
 FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
@@ -283,16 +347,27 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         // scan best (coverage minus free space and space behind walls) stays, with the group's
         // best vote score, else the strongest stays.
         std::vector<Polygon> feet(all.size());
+        std::vector<PlacedSurface> surfaces(all.size());
         std::vector<float> areas(all.size(), 0.0f), vote(all.size(), 0.0f);
         for (std::size_t i = 0; i < all.size(); ++i) {
             vote[i] = all[i].hypothesis.normalized;
             if (!all[i].accepted) continue;
-            feet[i] = Footprint(model.cads()[static_cast<std::size_t>(all[i].fit.cad)],
-                                all[i].fit.T_world_model);
+            const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(all[i].fit.cad)];
+            feet[i] = Footprint(cad, all[i].fit.T_world_model);
             areas[i] = Area(feet[i]);
+            if (params.cross_class && params.cross_class_surfaces) {
+                surfaces[i] = PlaceSurface(cad.cloud, all[i].fit.T_world_model,
+                                           params.surface_overlap_distance);
+            }
         }
         auto overlaps = [&](std::size_t i, std::size_t k) {
-            if (!params.cross_class && all[i].cls != all[k].cls) return false;
+            if (all[i].cls != all[k].cls) {
+                if (!params.cross_class) return false;
+                if (params.cross_class_surfaces) {
+                    return std::max(SharedSurface(surfaces[i], surfaces[k]),
+                                    SharedSurface(surfaces[k], surfaces[i])) > params.max_overlap;
+                }
+            }
             return ConvexIntersectionArea(feet[i], feet[k]) >
                    params.max_overlap * std::min(areas[i], areas[k]);
         };

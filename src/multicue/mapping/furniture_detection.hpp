@@ -43,6 +43,12 @@ struct FurnitureDetectionParams {
     /// smaller one are inconsistent: the weaker goes, (0, 1]
     float max_overlap = 0.3f;
     bool cross_class = true;  ///< apply max_overlap across classes too (one piece, one class)
+    /// Across classes, the share of one fitted model's surface lying within
+    /// surface_overlap_distance of the other's (the larger of the two shares) is compared with
+    /// max_overlap instead of the footprints: a chair pushed under a table shares its footprint
+    /// but no surface with it; two models of one piece share theirs
+    bool cross_class_surfaces = true;
+    float surface_overlap_distance = 0.05f;  ///< [m], > 0
     /// Of overlapping fitted detections, keep the one whose model explains the scan best rather
     /// than the one with the strongest votes (the votes find the piece, the models name it)
     bool class_by_fit = true;
@@ -57,6 +63,14 @@ struct FurnitureDetectionParams {
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
+
+/// How much two fitted models are one surface: the larger of the shares of one model's points
+/// (CAD point clouds `a` and `b` placed by T_a and T_b; about 2000 of each) that have a point of
+/// the other in their cell or a neighbouring one (cells of `distance`, so within one to two
+/// distances). 0 when either has no finite points. Throws InvalidArgument for distance <= 0 or
+/// poses that are not finite.
+float SharedSurfaceShare(const PointCloud& a, const Eigen::Isometry3f& T_a, const PointCloud& b,
+                         const Eigen::Isometry3f& T_b, float distance);
 
 /// The views after the per-view work: their parts and, when wanted, occupancy maps.
 struct FurnitureScene {
