@@ -568,12 +568,14 @@ std::vector<std::size_t> BestCoarseDirections(const std::vector<Sample>& samples
     return order;
 }
 
-/// Local refinement of one coarse direction on all samples: the best of its 8 neighbours `step`
-/// away is taken while it lowers the cost, else the step halves, down to half a milliradian.
-AxisFit DescendLocalGrid(const std::vector<Sample>& samples, const Eigen::Vector3d& start,
-                         double spacing, const AxisSearch& search) {
-    AxisFit current = EvaluateDirection(samples, 1, start, search.t, search.sin_parallel);
-    for (double step = spacing; step > 0.0005;) {
+/// Local refinement of a direction on every `stride`-th sample: the best of its 8 neighbours
+/// `step` away is taken while it lowers the cost, else the step halves, from `spacing` down to
+/// `min_step`.
+AxisFit DescendLocalGrid(const std::vector<Sample>& samples, std::size_t stride,
+                         const Eigen::Vector3d& start, double spacing, double min_step,
+                         const AxisSearch& search) {
+    AxisFit current = EvaluateDirection(samples, stride, start, search.t, search.sin_parallel);
+    for (double step = spacing; step > min_step;) {
         Eigen::Vector3d e1, e2;
         OrthonormalBasis(current.direction, e1, e2);
         AxisFit next = current;
@@ -582,7 +584,8 @@ AxisFit DescendLocalGrid(const std::vector<Sample>& samples, const Eigen::Vector
                 if (i == 0 && j == 0) continue;
                 Eigen::Vector3d a = (current.direction + step * (i * e1 + j * e2)).normalized();
                 if (search.TooTilted(a)) continue;
-                const AxisFit fit = EvaluateDirection(samples, 1, a, search.t, search.sin_parallel);
+                const AxisFit fit =
+                    EvaluateDirection(samples, stride, a, search.t, search.sin_parallel);
                 if (fit.cost < next.cost) next = fit;
             }
         }
@@ -594,6 +597,10 @@ AxisFit DescendLocalGrid(const std::vector<Sample>& samples, const Eigen::Vector
     }
     return current;
 }
+
+/// Where the descents on the coarse subset stop and where those on all samples stop [rad].
+constexpr double kCoarseDescentStep = 0.004;
+constexpr double kFineDescentStep = 0.0005;
 
 /// The best normal-line axis (section 5.4.2.2): a coarse grid of directions over the cap around
 /// up, the best few refined by successively finer local grids.
@@ -610,19 +617,33 @@ AxisFit SearchNormalLineAxis(const std::vector<Sample>& samples, const AxisSearc
         samples, directions, search, params.refine_candidates, params.num_threads);
     const double spacing =
         std::sqrt(2.0 * kPi * (1.0 - std::cos(search.max_tilt)) / directions.size());
-    // The candidates descend in parallel; the first of the lowest cost wins.
+    // The candidates descend in parallel to half a milliradian, the first of the lowest cost wins.
+    // With many samples they descend on the coarse subset to a few milliradians, and only the
+    // best of them (on all samples) goes on with all samples.
+    const std::size_t coarse_stride = std::max<std::size_t>(1, samples.size() / 300);
+    const bool two_stage = coarse_stride > 1;
     std::vector<AxisFit> ends(candidates.size());
     ParallelFor(
         candidates.size(), params.num_threads,
         [&](std::size_t k) {
-            ends[k] = DescendLocalGrid(samples, directions[candidates[k]], spacing, search);
+            const Eigen::Vector3d& start = directions[candidates[k]];
+            if (!two_stage) {
+                ends[k] = DescendLocalGrid(samples, 1, start, spacing, kFineDescentStep, search);
+                return;
+            }
+            const AxisFit coarse = DescendLocalGrid(samples, coarse_stride, start, spacing,
+                                                    kCoarseDescentStep, search);
+            ends[k] =
+                EvaluateDirection(samples, 1, coarse.direction, search.t, search.sin_parallel);
         },
         1);
     AxisFit best;
     for (const AxisFit& end : ends) {
         if (end.cost < best.cost) best = end;
     }
-    return best;
+    if (!two_stage || !std::isfinite(best.cost)) return best;
+    return DescendLocalGrid(samples, 1, best.direction, 2.0 * kCoarseDescentStep, kFineDescentStep,
+                            search);
 }
 
 /// The point sets of the contour refinement, fixed by the normal-line axis so that the cost of
