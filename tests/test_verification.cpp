@@ -3,6 +3,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/reconstruction/primitive_models.hpp"
 #include "multicue/reconstruction/verification.hpp"
+#include "multicue/search/voxel_traversal.hpp"
 #include "multicue/sim/tabletop_scene.hpp"
 
 namespace multicue {
@@ -78,6 +79,78 @@ TEST(Verification, TheSameStatesOnAnyThreadCount) {
             const auto many = VerifyModel(BoxMesh(model), s.scan, Eigen::Vector3f::Zero(), p);
             EXPECT_EQ(many.states, one.states) << threads << " threads";
             EXPECT_EQ(many.invalid_ratio, one.invalid_ratio);
+        }
+    }
+}
+
+// The states by the definition: every ray walked through the whole grid (the model's bounds grown
+// by the margin), a cell occupied when a ray ends in it, else free when one crosses it; a sample is
+// verified with an occupied cell within tolerance_voxels, invalid in a free cell, else occluded.
+std::vector<SurfaceState> StatesByFullWalks(const VerificationResult& v, const PointCloud& scan,
+                                            const VerificationParams& p) {
+    Eigen::Vector3f lo = v.samples.front(), hi = lo;
+    for (const auto& q : v.samples) {
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+    }
+    lo.array() -= p.margin;
+    hi.array() += p.margin;
+    const Eigen::Vector3i dims =
+        ((hi - lo) / p.voxel_size).array().ceil().cast<int>().cwiseMax(1).matrix();
+    std::vector<int> cells(static_cast<std::size_t>(dims.prod()), 0);  // 0 unknown, 1 free, 2 occ.
+    const auto inside = [&](const Eigen::Vector3i& c) {
+        return (c.array() >= 0).all() && (c.array() < dims.array()).all();
+    };
+    const auto at = [&](const Eigen::Vector3i& c) -> int& {
+        return cells[static_cast<std::size_t>((c.z() * dims.y() + c.y()) * dims.x() + c.x())];
+    };
+    for (const auto& point : scan.points) {
+        if (!point.allFinite()) continue;
+        Eigen::Vector3d s = ((Eigen::Vector3f::Zero() - lo) / p.voxel_size).cast<double>();
+        const Eigen::Vector3d e = ((point - lo) / p.voxel_size).cast<double>();
+        if (!ClipSegmentToBox(s, e, dims.cast<double>())) continue;
+        const Eigen::Vector3i end = e.array().floor().cast<int>();
+        const auto mark = [&](const Eigen::Vector3i& c) {
+            if (c == end || !inside(c)) return false;
+            at(c) = std::max(at(c), 1);
+            return true;
+        };
+        if (mark(s.array().floor().cast<int>())) WalkCells(s, e, mark);
+        if (inside(end)) at(end) = 2;
+    }
+    std::vector<SurfaceState> states;
+    const int r = p.tolerance_voxels;
+    for (const auto& q : v.samples) {
+        const Eigen::Vector3i c = ((q - lo) / p.voxel_size).array().floor().cast<int>();
+        bool near = false;
+        for (int dz = -r; dz <= r; ++dz) {
+            for (int dy = -r; dy <= r; ++dy) {
+                for (int dx = -r; dx <= r; ++dx) {
+                    const Eigen::Vector3i n = c + Eigen::Vector3i(dx, dy, dz);
+                    near = near || (inside(n) && at(n) == 2);
+                }
+            }
+        }
+        states.push_back(near                      ? SurfaceState::kVerified
+                         : inside(c) && at(c) == 1 ? SurfaceState::kInvalid
+                                                   : SurfaceState::kOccluded);
+    }
+    return states;
+}
+
+TEST(Verification, StatesAreThoseOfWalkingEveryRayThroughTheWholeGrid) {
+    const ScannedBox s = ScanOneBox();
+    for (float shift : {0.0f, 0.04f, -0.05f, 0.1f}) {
+        for (float margin : {0.0f, 0.05f, 0.12f}) {
+            BoxModel model = s.truth;
+            model.center += shift * s.toward_camera;
+            model.extents *= 1.0f + shift;
+            VerificationParams p;
+            p.margin = margin;
+            const VerificationResult v =
+                VerifyModel(BoxMesh(model), s.scan, Eigen::Vector3f::Zero(), p);
+            ASSERT_FALSE(v.samples.empty());
+            EXPECT_EQ(v.states, StatesByFullWalks(v, s.scan, p)) << shift << " " << margin;
         }
     }
 }

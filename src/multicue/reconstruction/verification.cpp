@@ -19,6 +19,7 @@ struct Grid {
     Eigen::Vector3f origin;  // corner of cell (0, 0, 0)
     float size = 0.0f;
     Eigen::Vector3i dims;
+    Eigen::Vector3d extent, inside;  // dims, and the largest coordinates inside them
     std::vector<std::uint8_t> cells;
 
     bool Inside(const Eigen::Vector3i& c) const {
@@ -35,20 +36,56 @@ struct Grid {
     }
 };
 
+/// The cells whose free state is read: those holding a sample, grown by one cell (so that the
+/// walks' rounding at cell boundaries cannot matter), [lo, hi] inclusive.
+struct ReadCells {
+    Eigen::Vector3i lo, hi;
+};
+
+/// Whether the segment s -> e (grid units) meets the box [lo, hi + 1).
+bool SegmentMeetsCells(const Eigen::Vector3d& s, const Eigen::Vector3d& e, const ReadCells& box) {
+    const Eigen::Vector3d d = e - s;
+    double t0 = 0.0, t1 = 1.0;
+    for (int a = 0; a < 3; ++a) {
+        const double lo = box.lo[a], hi = box.hi[a] + 1.0;
+        if (d[a] == 0.0) {
+            if (s[a] < lo || s[a] > hi) return false;
+            continue;
+        }
+        double ta = (lo - s[a]) / d[a], tb = (hi - s[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
 /// Marks the cells the ray from o to p crosses (within the grid) free, the cell of p occupied.
-void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p) {
+/// Only the free state of the `read` cells is ever looked at, so a ray that misses them is not
+/// walked and a walk stops once it has passed them (it moves monotonically along each axis): the
+/// cells that matter get the marks a whole walk would give them.
+void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p,
+             const ReadCells& read) {
     // Grid units: cell c covers [c, c + 1).
     Eigen::Vector3d s = ((o - grid.origin) / grid.size).cast<double>();
     const Eigen::Vector3d e = ((p - grid.origin) / grid.size).cast<double>();
-    if (!ClipSegmentToBox(s, e, grid.dims.cast<double>())) return;
+    if (!ClipSegmentToBox(s, e, grid.extent, grid.inside)) return;
     const Eigen::Vector3i end = e.array().floor().cast<int>();
-    auto mark_free = [&](const Eigen::Vector3i& cell) {
-        if (cell == end || !grid.Inside(cell)) return false;
-        auto& c = grid.cells[grid.Index(cell)];
-        if (c == kUnknown) c = kFree;
-        return true;
-    };
-    if (mark_free(s.array().floor().cast<int>())) WalkCells(s, e, mark_free);
+    if (SegmentMeetsCells(s, e, read)) {
+        const Eigen::Vector3d d = e - s;
+        auto mark_free = [&](const Eigen::Vector3i& cell) {
+            if (cell == end || !grid.Inside(cell)) return false;
+            auto& c = grid.cells[grid.Index(cell)];
+            if (c == kUnknown) c = kFree;
+            for (int a = 0; a < 3; ++a) {
+                if ((d[a] > 0.0 && cell[a] > read.hi[a]) || (d[a] < 0.0 && cell[a] < read.lo[a]))
+                    return false;
+            }
+            return true;
+        };
+        if (mark_free(s.array().floor().cast<int>())) WalkCells(s, e, mark_free);
+    }
     if (grid.Inside(end)) grid.cells[grid.Index(end)] = kOccupied;
 }
 
@@ -144,6 +181,16 @@ VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan
             grid.dims.x(), grid.dims.y(), grid.dims.z(), params.max_cells));
     }
     grid.cells.assign(static_cast<std::size_t>(cells), kUnknown);
+    grid.extent = grid.dims.cast<double>();
+    for (int a = 0; a < 3; ++a) grid.inside[a] = std::nextafter(grid.extent[a], 0.0);
+    ReadCells read{grid.Cell(result.samples.front()), grid.Cell(result.samples.front())};
+    for (const auto& sample : result.samples) {
+        const Eigen::Vector3i c = grid.Cell(sample);
+        read.lo = read.lo.cwiseMin(c);
+        read.hi = read.hi.cwiseMax(c);
+    }
+    read.lo.array() -= 1;
+    read.hi.array() += 1;
     // A cell ends occupied when some ray ends in it, else free when some ray crosses it, whatever
     // the order of the rays: blocks of rays are cast into grids of their own, joined by taking
     // each cell's highest state (unknown < free < occupied).
@@ -156,7 +203,7 @@ VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan
             Grid& g = b == 0 ? grid : grids[b - 1];
             const std::size_t end = scan.size() * (b + 1) / blocks;
             for (std::size_t i = scan.size() * b / blocks; i < end; ++i) {
-                if (scan.points[i].allFinite()) CastRay(g, sensor_origin, scan.points[i]);
+                if (scan.points[i].allFinite()) CastRay(g, sensor_origin, scan.points[i], read);
             }
         },
         1);

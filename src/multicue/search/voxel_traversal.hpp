@@ -46,10 +46,10 @@ void WalkCells(const Eigen::Vector3d& s, const Eigen::Vector3d& e, Visit&& visit
     }
 }
 
-/// Moves s along s -> e to where the segment enters the box [0, dims] (a hair inside, so that
-/// floor() lands in the box); false if the segment misses the box.
+/// ClipSegmentToBox with the box's largest coordinates inside it, `inside` = nextafter(dims, 0)
+/// per axis, computed once for many segments.
 inline bool ClipSegmentToBox(Eigen::Vector3d& s, const Eigen::Vector3d& e,
-                             const Eigen::Vector3d& dims) {
+                             const Eigen::Vector3d& dims, const Eigen::Vector3d& inside) {
     const Eigen::Vector3d d = e - s;
     double t0 = 0.0, t1 = 1.0;
     for (int a = 0; a < 3; ++a) {
@@ -65,8 +65,17 @@ inline bool ClipSegmentToBox(Eigen::Vector3d& s, const Eigen::Vector3d& e,
         if (t0 > t1) return false;
     }
     s += d * std::min(1.0, t0 + 1e-9);
-    for (int a = 0; a < 3; ++a) s[a] = std::clamp(s[a], 0.0, std::nextafter(dims[a], 0.0));
+    for (int a = 0; a < 3; ++a) s[a] = std::clamp(s[a], 0.0, inside[a]);
     return true;
+}
+
+/// Moves s along s -> e to where the segment enters the box [0, dims] (a hair inside, so that
+/// floor() lands in the box); false if the segment misses the box.
+inline bool ClipSegmentToBox(Eigen::Vector3d& s, const Eigen::Vector3d& e,
+                             const Eigen::Vector3d& dims) {
+    const Eigen::Vector3d inside(std::nextafter(dims[0], 0.0), std::nextafter(dims[1], 0.0),
+                                 std::nextafter(dims[2], 0.0));
+    return ClipSegmentToBox(s, e, dims, inside);
 }
 
 }  // namespace multicue
