@@ -188,6 +188,14 @@ TEST(OcclusionMerge, DeterministicAndOrderIndependentGroups) {
     const auto b = MergeOccludedFragments(s.cloud, objects, parts, s.plane);
     EXPECT_EQ(a.groups, b.groups);
     EXPECT_EQ(a.groups, (std::vector<std::vector<std::size_t>>{{0, 2}, {1}}));
+    // The pairs are tested in parallel; the result is that of one thread.
+    for (int threads : {2, 3, 0}) {
+        const auto c = MergeOccludedFragments(s.cloud, objects, parts, s.plane,
+                                              OcclusionMergeParams{.num_threads = threads});
+        EXPECT_EQ(c.groups, a.groups) << threads;
+        EXPECT_EQ(c.candidate_pairs, a.candidate_pairs) << threads;
+        EXPECT_EQ(c.merges, a.merges) << threads;
+    }
 }
 
 TEST(OcclusionMerge, EmptyAndTrivialInputs) {
@@ -237,6 +245,7 @@ TEST(OcclusionMerge, Contract) {
     EXPECT_THROW(call({.min_explained_share = 0.0f}), InvalidArgument);
     EXPECT_THROW(call({.min_cylinder_radius = 0.3f, .max_cylinder_radius = 0.2f}), InvalidArgument);
     EXPECT_THROW(call({.cylinder_iterations = 0}), InvalidArgument);
+    EXPECT_THROW(call({.num_threads = -1}), InvalidArgument);
     // One parts list per hypothesis.
     EXPECT_THROW(MergeOccludedFragments(s.cloud, back, {{}}, s.plane), InvalidArgument);
     // Indices inside the cloud.

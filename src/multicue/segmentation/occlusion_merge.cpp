@@ -9,6 +9,7 @@
 
 #include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
+#include "multicue/core/parallel.hpp"
 #include "multicue/segmentation/sac_cylinder.hpp"
 
 namespace multicue {
@@ -60,6 +61,7 @@ void CheckParams(const OcclusionMergeParams& p) {
         throw InvalidArgument(
             fmt::format("cylinder_iterations must be >= 1, got {}", p.cylinder_iterations));
     }
+    ResolveThreadCount(p.num_threads);  // throws on negative values
 }
 
 // What the image and height tests need of one hypothesis.
@@ -234,32 +236,47 @@ OcclusionMergeResult MergeOccludedFragments(const PointCloud& cloud,
     if (n >= 2 && cloud.IsOrganized()) {
         if (!cloud.HasNormals()) throw DataError("occlusion merge needs normals");
         const bool has_plane = support_plane.head<3>().norm() > 0.5f;
-        std::vector<Fragment> fragments;
-        fragments.reserve(n);
-        for (const auto& object : objects) {
-            fragments.push_back(Describe(cloud, object, support_plane));
-        }
+        std::vector<Fragment> fragments(n);
+        ParallelFor(
+            n, params.num_threads,
+            [&](std::size_t k) { fragments[k] = Describe(cloud, objects[k], support_plane); }, 1);
+        // Every pair's tests in parallel (they do not depend on the merges), the merges in pair
+        // order: a pair already joined through others is skipped as before.
+        struct Pair {
+            std::size_t a, b;
+            float gap = std::numeric_limits<float>::infinity();
+            bool continues = false;
+        };
+        std::vector<Pair> pairs;
         for (std::size_t a = 0; a < n; ++a) {
             for (std::size_t b = a + 1; b < n; ++b) {
-                const Fragment& fa = fragments[a];
-                const Fragment& fb = fragments[b];
-                if (fa.points.empty() || fb.points.empty()) continue;
-                if (sets.Find(static_cast<Index>(a)) == sets.Find(static_cast<Index>(b))) continue;
-                const bool a_left = fa.mean_column <= fb.mean_column;
-                const float gap = OccludedGap(cloud, a_left ? fa : fb, a_left ? fb : fa, params);
-                if (!std::isfinite(gap)) continue;
-                ++result.candidate_pairs;
-                if (gap > params.max_gap) continue;
-                if (has_plane && !HeightsOverlap(fa, fb, params)) continue;
-                if (!PlaneContinues(cloud, parts[a], fb.points, params) &&
-                    !PlaneContinues(cloud, parts[b], fa.points, params) &&
-                    !CylinderContinues(cloud, fa.points, fb.points, params) &&
-                    !CylinderContinues(cloud, fb.points, fa.points, params)) {
-                    continue;
-                }
-                sets.Unite(static_cast<Index>(a), static_cast<Index>(b));
-                ++result.merges;
+                if (!fragments[a].points.empty() && !fragments[b].points.empty())
+                    pairs.push_back({a, b});
             }
+        }
+        ParallelFor(
+            pairs.size(), params.num_threads,
+            [&](std::size_t k) {
+                Pair& pair = pairs[k];
+                const Fragment& fa = fragments[pair.a];
+                const Fragment& fb = fragments[pair.b];
+                const bool a_left = fa.mean_column <= fb.mean_column;
+                pair.gap = OccludedGap(cloud, a_left ? fa : fb, a_left ? fb : fa, params);
+                if (!(pair.gap <= params.max_gap)) return;
+                if (has_plane && !HeightsOverlap(fa, fb, params)) return;
+                pair.continues = PlaneContinues(cloud, parts[pair.a], fb.points, params) ||
+                                 PlaneContinues(cloud, parts[pair.b], fa.points, params) ||
+                                 CylinderContinues(cloud, fa.points, fb.points, params) ||
+                                 CylinderContinues(cloud, fb.points, fa.points, params);
+            },
+            1);
+        for (const Pair& pair : pairs) {
+            const auto a = static_cast<Index>(pair.a), b = static_cast<Index>(pair.b);
+            if (sets.Find(a) == sets.Find(b) || !std::isfinite(pair.gap)) continue;
+            ++result.candidate_pairs;
+            if (!pair.continues) continue;
+            sets.Unite(a, b);
+            ++result.merges;
         }
     }
     std::vector<long> group_of(n, -1);

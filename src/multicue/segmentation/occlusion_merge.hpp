@@ -38,6 +38,7 @@ struct OcclusionMergeParams {
     float min_cylinder_radius = 0.01f;  ///< cylinder continuation: smallest radius [m]
     float max_cylinder_radius = 0.2f;   ///< cylinder continuation: largest radius [m]
     int cylinder_iterations = 300;      ///< cylinder RANSAC sample cap [samples]; >= 1
+    int num_threads = 1;  ///< pairs tested in parallel (0 = all cores); never changes the result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A

@@ -83,6 +83,7 @@ PerceiveParams ApplyThreadCount(PerceiveParams p) {
     p.parts.num_threads = p.num_threads;
     p.category.num_threads = p.num_threads;
     p.models.num_threads = p.num_threads;
+    p.occlusion.num_threads = p.num_threads;
     return p;
 }
 
