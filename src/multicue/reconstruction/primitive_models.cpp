@@ -312,12 +312,19 @@ UprightFrame MakeUprightFrame(const PointCloud& cloud, const Indices& finite,
 Eigen::Vector2d InitialOrientation(const PointCloud& cloud, const Indices& finite,
                                    const Eigen::Vector4f& plane, const UprightFrame& f,
                                    const BoxFitParams& params) {
-    const OrientedBox hull_box = UprightBoundingBox(cloud, finite, plane);
-    Eigen::Vector2d dir(hull_box.axes.col(0).dot(f.u), hull_box.axes.col(0).dot(f.v));
+    Eigen::Vector2d dir;
+    bool aligned = false;
     if (f.normals) {
         const FaceAlignment fa =
             AlignUprightAxes(cloud, finite, f.up, f.face_angle, params.min_face_points);
-        if (fa.found) dir = Eigen::Vector2d(fa.axes.col(0).dot(f.u), fa.axes.col(0).dot(f.v));
+        if (fa.found) {
+            dir = Eigen::Vector2d(fa.axes.col(0).dot(f.u), fa.axes.col(0).dot(f.v));
+            aligned = true;
+        }
+    }
+    if (!aligned) {
+        const OrientedBox hull_box = UprightBoundingBox(cloud, finite, plane);
+        dir = Eigen::Vector2d(hull_box.axes.col(0).dot(f.u), hull_box.axes.col(0).dot(f.v));
     }
     dir.normalize();
     return dir;
@@ -392,23 +399,31 @@ void RefineOrientationBySides(const PointCloud& cloud, const Indices& finite, co
                               std::vector<int>& face) {
     const auto& q = f.q;
     for (int round = 0; f.normals && round < 3; ++round) {
+        // Every face's mean, then its scatter about it, each summed in point order (as one pass
+        // per face would).
+        Eigen::Vector2d means[4] = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(),
+                                    Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+        std::size_t counts[4] = {0, 0, 0, 0};
+        for (std::size_t j = 0; j < q.size(); ++j) {
+            if (face[j] < 0) continue;
+            means[face[j]] += q[j];
+            ++counts[face[j]];
+        }
+        for (int k = 0; k < 4; ++k) {
+            if (counts[k] > 0) means[k] /= static_cast<double>(counts[k]);
+        }
+        Eigen::Matrix2d scatters[4] = {Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero(),
+                                       Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero()};
+        for (std::size_t j = 0; j < q.size(); ++j) {
+            const int k = face[j];
+            if (k < 0 || counts[k] < min_face_points) continue;
+            scatters[k] += (q[j] - means[k]) * (q[j] - means[k]).transpose();
+        }
         Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
         bool any = false;
         for (int k = 0; k < 4; ++k) {
-            Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-            std::size_t count = 0;
-            for (std::size_t j = 0; j < q.size(); ++j) {
-                if (face[j] == k) {
-                    mean += q[j];
-                    ++count;
-                }
-            }
-            if (count < min_face_points) continue;
-            mean /= static_cast<double>(count);
-            Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-            for (std::size_t j = 0; j < q.size(); ++j) {
-                if (face[j] == k) scatter += (q[j] - mean) * (q[j] - mean).transpose();
-            }
+            if (counts[k] < min_face_points) continue;
+            Eigen::Matrix2d scatter = scatters[k];
             if (k >= 2) {
                 Eigen::Matrix2d r90;
                 r90 << 0.0, -1.0, 1.0, 0.0;
