@@ -285,6 +285,8 @@ struct UprightFrame {
     bool normals = false;
     float face_angle = 0.0f;
     float cos_face = 0.0f;
+    /// With normals: each point's unit normal, zero where it has none (not finite or zero).
+    std::vector<Eigen::Vector3f> unit;
 };
 
 UprightFrame MakeUprightFrame(const PointCloud& cloud, const Indices& finite,
@@ -304,6 +306,14 @@ UprightFrame MakeUprightFrame(const PointCloud& cloud, const Indices& finite,
     f.normals = params.use_normals && cloud.normals.size() == cloud.size();
     f.face_angle = params.face_angle_deg * kDeg;
     f.cos_face = std::cos(f.face_angle);
+    if (f.normals) {
+        f.unit.resize(finite.size());
+        for (std::size_t j = 0; j < finite.size(); ++j) {
+            const Eigen::Vector3f& n = cloud.normals[finite[j]];
+            f.unit[j] =
+                n.allFinite() && n.squaredNorm() > 0.0f ? n.normalized() : Eigen::Vector3f::Zero();
+        }
+    }
     return f;
 }
 
@@ -361,8 +371,8 @@ void PreferRectangleOrientation(const PointCloud& cloud, const Indices& finite,
 // Face membership of every point for orientation a1: 0/1 = faces across the first axis
 // (low/high side), 2/3 = across the second, -1 = none; the side is taken from the position
 // relative to the middle, so the normals' sign does not matter.
-void ClassifyFaces(const PointCloud& cloud, const Indices& finite, const UprightFrame& f,
-                   const Eigen::Vector2d& a1, std::vector<int>& face) {
+void ClassifyFaces(const Indices& finite, const UprightFrame& f, const Eigen::Vector2d& a1,
+                   std::vector<int>& face) {
     const Eigen::Vector2d a2(-a1.y(), a1.x());
     double lo[2] = {std::numeric_limits<double>::infinity(),
                     std::numeric_limits<double>::infinity()};
@@ -378,9 +388,8 @@ void ClassifyFaces(const PointCloud& cloud, const Indices& finite, const Upright
     for (std::size_t j = 0; j < finite.size(); ++j) {
         face[j] = -1;
         if (!f.normals) continue;
-        const Eigen::Vector3f& n = cloud.normals[finite[j]];
-        if (!n.allFinite() || !(n.squaredNorm() > 0.0f)) continue;
-        const Eigen::Vector3f nn = n.normalized();
+        const Eigen::Vector3f& nn = f.unit[j];
+        if (nn.isZero(0.0f)) continue;
         if (std::abs(nn.dot(a13)) >= f.cos_face) {
             face[j] = f.q[j].dot(a1) >= 0.5 * (lo[0] + hi[0]) ? 1 : 0;
         } else if (std::abs(nn.dot(a23)) >= f.cos_face) {
@@ -394,7 +403,7 @@ void ClassifyFaces(const PointCloud& cloud, const Indices& finite, const Upright
 // scatter about its mean); one across a2 = R90 a1 costs a1^T R90^T S R90 a1; the sum is smallest
 // for the eigenvector of the smallest eigenvalue of the summed matrices. Up to 3 rounds, each
 // reclassifying the faces.
-void RefineOrientationBySides(const PointCloud& cloud, const Indices& finite, const UprightFrame& f,
+void RefineOrientationBySides(const Indices& finite, const UprightFrame& f,
                               std::size_t min_face_points, Eigen::Vector2d& dir,
                               std::vector<int>& face) {
     const auto& q = f.q;
@@ -438,7 +447,7 @@ void RefineOrientationBySides(const PointCloud& cloud, const Indices& finite, co
         if (next.dot(dir) < 0.0) next = -next;
         const bool stable = std::abs(next.dot(dir)) > 1.0 - 1e-12;
         dir = next;
-        ClassifyFaces(cloud, finite, f, dir, face);
+        ClassifyFaces(finite, f, dir, face);
         if (stable) break;
     }
 }
@@ -465,15 +474,13 @@ void SideIntervals(const UprightFrame& f, const std::vector<int>& face, const Ei
 }
 
 // The box's top: the median height of the top face's points, else the highest point.
-float TopHeight(const PointCloud& cloud, const Indices& finite, const UprightFrame& f,
-                std::size_t min_face_points) {
+float TopHeight(const Indices& finite, const UprightFrame& f, std::size_t min_face_points) {
     float top = *std::max_element(f.heights.begin(), f.heights.end());
     if (f.normals) {
         std::vector<float> top_heights;
         for (std::size_t j = 0; j < finite.size(); ++j) {
-            const Eigen::Vector3f& n = cloud.normals[finite[j]];
-            if (n.allFinite() && n.squaredNorm() > 0.0f &&
-                std::abs(n.normalized().dot(f.up)) >= f.cos_face) {
+            const Eigen::Vector3f& nn = f.unit[j];
+            if (!nn.isZero(0.0f) && std::abs(nn.dot(f.up)) >= f.cos_face) {
                 top_heights.push_back(f.heights[j]);
             }
         }
@@ -710,11 +717,11 @@ BoxModel FitUprightBox(const PointCloud& cloud, const Indices& indices,
         PreferRectangleOrientation(cloud, finite, f, params, guidance, dir);
     }
     std::vector<int> face(finite.size(), -1);
-    ClassifyFaces(cloud, finite, f, dir, face);
-    RefineOrientationBySides(cloud, finite, f, params.min_face_points, dir, face);
+    ClassifyFaces(finite, f, dir, face);
+    RefineOrientationBySides(finite, f, params.min_face_points, dir, face);
     float lo[2] = {0.0f, 0.0f}, hi[2] = {0.0f, 0.0f};
     SideIntervals(f, face, dir, params, lo, hi);
-    const float top = TopHeight(cloud, finite, f, params.min_face_points);
+    const float top = TopHeight(finite, f, params.min_face_points);
     SetUprightBox(f, dir, lo, hi, top, box);
     box.found = true;
     box.inlier_ratio = BoxInlierRatio(cloud, finite, box, params.inlier_threshold);
