@@ -30,7 +30,7 @@ struct NodeCore::Impl {
     std::string last_name;
 
     FrameOutput Run(PointCloud cloud, const std::string& name) {
-        if (cloud.CountFinite() == 0) {
+        if (!cloud.HasFinite()) {
             throw DataError(fmt::format("{}: no finite point among {}", name, cloud.size()));
         }
         const PerceiveResult result = multicue::Perceive(cloud, params, models);

@@ -41,6 +41,11 @@ TEST(PointCloud, HasChecksAndOrganization) {
 TEST(PointCloud, CountFiniteAndBounds) {
     PointCloud c({{0, 0, 0}, {1, 2, 3}, {std::numeric_limits<float>::quiet_NaN(), 0, 0}});
     EXPECT_EQ(c.CountFinite(), 2u);
+    EXPECT_TRUE(c.HasFinite());
+    EXPECT_FALSE(PointCloud{}.HasFinite());
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_FALSE(
+        PointCloud({{nan, 0, 0}, {0, std::numeric_limits<float>::infinity(), 0}}).HasFinite());
     Eigen::Vector3f lo, hi;
     ASSERT_TRUE(ComputeBounds(c, lo, hi));
     EXPECT_EQ(lo, Eigen::Vector3f(0, 0, 0));

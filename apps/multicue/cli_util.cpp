@@ -12,7 +12,7 @@ namespace multicue::cli {
 PointCloud ReadNonEmptyCloud(const std::filesystem::path& path) {
     PointCloud cloud = io::ReadPointCloud(path);
     if (cloud.empty()) throw DataError(fmt::format("{}: cloud has no points", path.string()));
-    if (cloud.CountFinite() == 0) {
+    if (!cloud.HasFinite()) {
         throw DataError(fmt::format("{}: all {} points are NaN", path.string(), cloud.size()));
     }
     return cloud;

@@ -43,6 +43,10 @@ std::size_t PointCloud::CountFinite() const {
         std::count_if(points.begin(), points.end(), [](const auto& p) { return p.allFinite(); }));
 }
 
+bool PointCloud::HasFinite() const {
+    return std::any_of(points.begin(), points.end(), [](const auto& p) { return p.allFinite(); });
+}
+
 void PointCloud::SetUnorganized() {
     width = static_cast<std::uint32_t>(points.size());
     height = 1;

@@ -75,6 +75,8 @@ struct PointCloud {
     bool IsFinite(std::size_t i) const { return points[i].allFinite(); }
     /// Number of points with finite coordinates.
     std::size_t CountFinite() const;
+    /// Whether any point has finite coordinates (stops at the first).
+    bool HasFinite() const;
 
     /// Makes the cloud unorganized (width = size(), height = 1).
     void SetUnorganized();

@@ -204,7 +204,7 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     };
     // Normals per scan, scans merged.
     r.cloud = MergeScansWithNormals(scans, p, r.scan_offsets, r.ranges);
-    if (r.cloud.CountFinite() == 0) throw DataError("map kitchen: the scans hold no finite point");
+    if (!r.cloud.HasFinite()) throw DataError("map kitchen: the scans hold no finite point");
     stage("normals");
     KitchenMap& map = r.map;
     // The room's main axes (RANSAC on the normal sphere).

@@ -335,7 +335,7 @@ RegistrationResult RegisterIcp(const PointCloud& source, const PointCloud& targe
         UsableSource(source, params.method == IcpMethod::kSymmetric, params.max_source_points);
     if (subset.empty())
         return finish(RegistrationStatus::kEmptyInput, "source has no usable point");
-    if (target.CountFinite() == 0) {
+    if (!target.HasFinite()) {
         return finish(RegistrationStatus::kEmptyInput, "target has no finite point");
     }
     const CorrespondenceSearcher searcher(target, target_tree, params.correspondences);

@@ -174,7 +174,7 @@ RegistrationResult RegisterPlanesGlobal(const PointCloud& source, const PointClo
                 .count();
         return result;
     };
-    if (source.CountFinite() == 0 || target.CountFinite() == 0) {
+    if (!source.HasFinite() || !target.HasFinite()) {
         result.status = RegistrationStatus::kEmptyInput;
         result.reason = "a cloud has no finite point";
         return result;

@@ -100,7 +100,7 @@ MeshDistance DistanceToSurface(const TriangleMesh& mesh,
 }
 
 MeshDistance DistanceToCloud(const TriangleMesh& mesh, const PointCloud& reference) {
-    if (reference.CountFinite() == 0) throw DataError("the reference cloud has no finite point");
+    if (!reference.HasFinite()) throw DataError("the reference cloud has no finite point");
     const KdTree tree(reference);
     return DistanceToSurface(mesh, [&](const Eigen::Vector3f& p) {
         Index i;

@@ -35,7 +35,7 @@ void CheckInputs(const PointCloud& cloud, const PerceiveParams& params,
     params.Validate();
     CheckCategorizationModel(params.category, models.part_graph.get());
     cloud.Validate();
-    if (cloud.CountFinite() == 0) {
+    if (!cloud.HasFinite()) {
         throw DataError(fmt::format("no valid points: all {} points are NaN or the cloud is empty",
                                     cloud.size()));
     }
