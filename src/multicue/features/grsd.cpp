@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/cell_key.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/search/voxel_traversal.hpp"
 
@@ -25,8 +26,7 @@ std::uint64_t Key(const Eigen::Vector3i& c) {
                 "voxel coordinate {} is outside the +-2^20 range of GRSD; crop the cloud", c[a]));
         }
     }
-    auto u = [](int v) { return static_cast<std::uint64_t>(v + kCoordinateLimit); };
-    return (u(c.x()) << 42) | (u(c.y()) << 21) | u(c.z());
+    return detail::PackCellKey(c);
 }
 
 const std::array<Eigen::Vector3i, 26>& NeighbourOffsets() {

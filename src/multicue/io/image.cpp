@@ -32,11 +32,8 @@ bool IsJpeg(const std::string& bytes) {
            static_cast<unsigned char>(bytes[2]) == 0xFF;
 }
 
-void CheckSize(const std::filesystem::path& path, std::uint64_t width, std::uint64_t height) {
-    if (width == 0 || height == 0 || width * height > kMaxPixels) {
-        throw FormatError(
-            fmt::format("{}: cannot decode image: {} x {} pixels", path.string(), width, height));
-    }
+bool DecodableSize(std::uint64_t width, std::uint64_t height) {
+    return width > 0 && height > 0 && width * height <= kMaxPixels;
 }
 
 // libpng's simplified API: every colour type and bit depth converted to 8-bit RGBA; the alpha
@@ -50,11 +47,10 @@ RgbImage DecodePng(const std::filesystem::path& path, const std::string& bytes) 
         png_image_free(&png);
         throw FormatError(fmt::format("{}: cannot decode PNG: {}", path.string(), message));
     }
-    try {
-        CheckSize(path, png.width, png.height);
-    } catch (...) {
+    if (!DecodableSize(png.width, png.height)) {
         png_image_free(&png);
-        throw;
+        throw FormatError(fmt::format("{}: cannot decode PNG: {} x {} pixels", path.string(),
+                                      png.width, png.height));
     }
     png.format = PNG_FORMAT_RGBA;
     std::vector<std::uint8_t> rgba(PNG_IMAGE_SIZE(png));
@@ -112,8 +108,7 @@ bool DecodeJpegInto(const std::string& bytes, JpegError& error, std::vector<std:
                  static_cast<unsigned long>(bytes.size()));
     jpeg_read_header(&info, TRUE);
     const bool cmyk = info.jpeg_color_space == JCS_CMYK || info.jpeg_color_space == JCS_YCCK;
-    const std::uint64_t pixels = std::uint64_t{info.image_width} * info.image_height;
-    if (cmyk || pixels == 0 || pixels > kMaxPixels) {
+    if (cmyk || !DecodableSize(info.image_width, info.image_height)) {
         if (cmyk) {
             std::snprintf(error.message, sizeof(error.message), "CMYK images are not supported");
         } else {

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
 
+#include "multicue/core/cell_key.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/filters/voxel_grid.hpp"
@@ -68,11 +69,6 @@ struct PlacedSurface {
     std::unordered_set<std::uint64_t> occupied;
 };
 
-std::uint64_t CellKey(const Eigen::Vector3i& c) {
-    const auto field = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & 0x1fffff; };
-    return field(c.x()) | field(c.y()) << 21 | field(c.z()) << 42;
-}
-
 PlacedSurface PlaceSurface(const PointCloud& model, const Eigen::Isometry3f& T, float cell) {
     PlacedSurface s;
     const std::size_t step = std::max<std::size_t>(1, model.size() / 2000);
@@ -81,7 +77,7 @@ PlacedSurface PlaceSurface(const PointCloud& model, const Eigen::Isometry3f& T, 
         const Eigen::Vector3i c =
             ((T * model.points[i]) / cell).array().floor().cast<int>().matrix();
         s.cells.push_back(c);
-        s.occupied.insert(CellKey(c));
+        s.occupied.insert(detail::PackCellKey(c));
     }
     return s;
 }
@@ -96,13 +92,19 @@ float SharedSurface(const PlacedSurface& a, const PlacedSurface& b) {
         for (int dz = -1; dz <= 1 && !near; ++dz) {
             for (int dy = -1; dy <= 1 && !near; ++dy) {
                 for (int dx = -1; dx <= 1 && !near; ++dx) {
-                    near = b.occupied.count(CellKey(c + Eigen::Vector3i(dx, dy, dz))) > 0;
+                    near =
+                        b.occupied.count(detail::PackCellKey(c + Eigen::Vector3i(dx, dy, dz))) > 0;
                 }
             }
         }
         shared += near ? 1 : 0;
     }
     return static_cast<float>(shared) / static_cast<float>(a.cells.size());
+}
+
+// The larger of the two shares: how much the two surfaces are one.
+float SharedEitherWay(const PlacedSurface& a, const PlacedSurface& b) {
+    return std::max(SharedSurface(a, b), SharedSurface(b, a));
 }
 
 // The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
@@ -214,7 +216,7 @@ float SharedSurfaceShare(const PointCloud& a, const Eigen::Isometry3f& T_a, cons
         throw InvalidArgument("shared surface: the poses must be finite");
     }
     const PlacedSurface sa = PlaceSurface(a, T_a, distance), sb = PlaceSurface(b, T_b, distance);
-    return std::max(SharedSurface(sa, sb), SharedSurface(sb, sa));
+    return SharedEitherWay(sa, sb);
 }
 
 FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
@@ -364,8 +366,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             if (all[i].cls != all[k].cls) {
                 if (!params.cross_class) return false;
                 if (params.cross_class_surfaces) {
-                    return std::max(SharedSurface(surfaces[i], surfaces[k]),
-                                    SharedSurface(surfaces[k], surfaces[i])) > params.max_overlap;
+                    return SharedEitherWay(surfaces[i], surfaces[k]) > params.max_overlap;
                 }
             }
             return ConvexIntersectionArea(feet[i], feet[k]) >

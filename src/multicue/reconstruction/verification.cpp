@@ -19,7 +19,7 @@ struct Grid {
     Eigen::Vector3f origin;  // corner of cell (0, 0, 0)
     float size = 0.0f;
     Eigen::Vector3i dims;
-    Eigen::Vector3d extent, inside;  // dims, and the largest coordinates inside them
+    Eigen::Vector3d inside;  // per axis the largest coordinate inside the grid (grid units)
     std::vector<std::uint8_t> cells;
 
     bool Inside(const Eigen::Vector3i& c) const {
@@ -42,23 +42,10 @@ struct ReadCells {
     Eigen::Vector3i lo, hi;
 };
 
-/// Whether the segment s -> e (grid units) meets the box [lo, hi + 1).
+/// Whether the segment s -> e (grid units) meets the cells [lo, hi] (the box [lo, hi + 1]).
 bool SegmentMeetsCells(const Eigen::Vector3d& s, const Eigen::Vector3d& e, const ReadCells& box) {
-    const Eigen::Vector3d d = e - s;
     double t0 = 0.0, t1 = 1.0;
-    for (int a = 0; a < 3; ++a) {
-        const double lo = box.lo[a], hi = box.hi[a] + 1.0;
-        if (d[a] == 0.0) {
-            if (s[a] < lo || s[a] > hi) return false;
-            continue;
-        }
-        double ta = (lo - s[a]) / d[a], tb = (hi - s[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) return false;
-    }
-    return true;
+    return SegmentInBox(s, e, box.lo.cast<double>(), box.hi.cast<double>().array() + 1.0, t0, t1);
 }
 
 /// Marks the cells the ray from o to p crosses (within the grid) free, the cell of p occupied.
@@ -70,7 +57,7 @@ void CastRay(Grid& grid, const Eigen::Vector3f& o, const Eigen::Vector3f& p,
     // Grid units: cell c covers [c, c + 1).
     Eigen::Vector3d s = ((o - grid.origin) / grid.size).cast<double>();
     const Eigen::Vector3d e = ((p - grid.origin) / grid.size).cast<double>();
-    if (!ClipSegmentToBox(s, e, grid.extent, grid.inside)) return;
+    if (!ClipSegmentToBox(s, e, grid.dims.cast<double>(), grid.inside)) return;
     const Eigen::Vector3i end = e.array().floor().cast<int>();
     if (SegmentMeetsCells(s, e, read)) {
         const Eigen::Vector3d d = e - s;
@@ -181,8 +168,8 @@ VerificationResult VerifyModel(const TriangleMesh& model, const PointCloud& scan
             grid.dims.x(), grid.dims.y(), grid.dims.z(), params.max_cells));
     }
     grid.cells.assign(static_cast<std::size_t>(cells), kUnknown);
-    grid.extent = grid.dims.cast<double>();
-    for (int a = 0; a < 3; ++a) grid.inside[a] = std::nextafter(grid.extent[a], 0.0);
+    for (int a = 0; a < 3; ++a)
+        grid.inside[a] = std::nextafter(static_cast<double>(grid.dims[a]), 0.0);
     ReadCells read{grid.Cell(result.samples.front()), grid.Cell(result.samples.front())};
     for (const auto& sample : result.samples) {
         const Eigen::Vector3i c = grid.Cell(sample);

@@ -46,24 +46,36 @@ void WalkCells(const Eigen::Vector3d& s, const Eigen::Vector3d& e, Visit&& visit
     }
 }
 
-/// ClipSegmentToBox with the box's largest coordinates inside it, `inside` = nextafter(dims, 0)
-/// per axis, computed once for many segments.
-inline bool ClipSegmentToBox(Eigen::Vector3d& s, const Eigen::Vector3d& e,
-                             const Eigen::Vector3d& dims, const Eigen::Vector3d& inside) {
+/// Where the segment s -> e lies in the box [lo, hi]: its parameter range [t0, t1] within [0, 1]
+/// (s + t (e - s)); false if it misses the box.
+inline bool SegmentInBox(const Eigen::Vector3d& s, const Eigen::Vector3d& e,
+                         const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double& t0,
+                         double& t1) {
     const Eigen::Vector3d d = e - s;
-    double t0 = 0.0, t1 = 1.0;
+    t0 = 0.0;
+    t1 = 1.0;
     for (int a = 0; a < 3; ++a) {
         if (d[a] == 0.0) {
-            if (s[a] < 0.0 || s[a] > dims[a]) return false;
+            if (s[a] < lo[a] || s[a] > hi[a]) return false;
             continue;
         }
-        double ta = (0.0 - s[a]) / d[a];
-        double tb = (dims[a] - s[a]) / d[a];
+        double ta = (lo[a] - s[a]) / d[a];
+        double tb = (hi[a] - s[a]) / d[a];
         if (ta > tb) std::swap(ta, tb);
         t0 = std::max(t0, ta);
         t1 = std::min(t1, tb);
         if (t0 > t1) return false;
     }
+    return true;
+}
+
+/// ClipSegmentToBox with the box's largest coordinates inside it, `inside` = nextafter(dims, 0)
+/// per axis, computed once for many segments.
+inline bool ClipSegmentToBox(Eigen::Vector3d& s, const Eigen::Vector3d& e,
+                             const Eigen::Vector3d& dims, const Eigen::Vector3d& inside) {
+    double t0 = 0.0, t1 = 1.0;
+    if (!SegmentInBox(s, e, Eigen::Vector3d::Zero(), dims, t0, t1)) return false;
+    const Eigen::Vector3d d = e - s;
     s += d * std::min(1.0, t0 + 1e-9);
     for (int a = 0; a < 3; ++a) s[a] = std::clamp(s[a], 0.0, inside[a]);
     return true;

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "multicue/core/cell_key.hpp"
 #include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
 
@@ -19,13 +20,6 @@ constexpr std::size_t kMaxSample = 1500;  // normals per part for the mode test
 
 float AngleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
     return std::acos(std::clamp(a.dot(b), -1.0f, 1.0f)) * kRadToDeg;
-}
-
-std::uint64_t CellKey(const Eigen::Vector3i& c) {
-    constexpr std::int64_t kBias = 1 << 20;
-    return (static_cast<std::uint64_t>(c.x() + kBias) << 42) |
-           (static_cast<std::uint64_t>(c.y() + kBias) << 21) |
-           static_cast<std::uint64_t>(c.z() + kBias);
 }
 
 // Two modes of a set of unit normals (spherical 2-means from the two most distant directions).
@@ -96,8 +90,8 @@ std::vector<Indices> FoldPieces(const PointCloud& cloud, const Indices& object,
     std::vector<std::pair<std::size_t, int>> keys;
     std::unordered_map<std::uint64_t, std::array<int, 2>> node_at;  // cell -> node per mode
     for (const auto& [key, pts] : nodes) {
-        auto [it, inserted] = node_at.try_emplace(CellKey(borders.patch_cells[key.first]),
-                                                  std::array<int, 2>{-1, -1});
+        auto [it, inserted] = node_at.try_emplace(
+            detail::PackCellKey(borders.patch_cells[key.first]), std::array<int, 2>{-1, -1});
         it->second[key.second] = static_cast<int>(keys.size());
         keys.push_back(key);
     }
@@ -109,7 +103,8 @@ std::vector<Indices> FoldPieces(const PointCloud& cloud, const Indices& object,
         for (int dx = -1; dx <= 1; ++dx) {
             for (int dy = -1; dy <= 1; ++dy) {
                 for (int dz = -1; dz <= 1; ++dz) {
-                    const auto it = node_at.find(CellKey(c + Eigen::Vector3i(dx, dy, dz)));
+                    const auto it =
+                        node_at.find(detail::PackCellKey(c + Eigen::Vector3i(dx, dy, dz)));
                     if (it == node_at.end()) continue;
                     for (int mode = 0; mode < 2; ++mode) {
                         const int j = it->second[mode];

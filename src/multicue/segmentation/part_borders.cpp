@@ -9,17 +9,11 @@
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
 
+#include "multicue/core/cell_key.hpp"
 #include "multicue/core/exceptions.hpp"
 
 namespace multicue {
 namespace {
-
-std::uint64_t PackKey(const Eigen::Vector3i& c) {
-    constexpr std::int64_t kBias = 1 << 20;
-    return (static_cast<std::uint64_t>(c.x() + kBias) << 42) |
-           (static_cast<std::uint64_t>(c.y() + kBias) << 21) |
-           static_cast<std::uint64_t>(c.z() + kBias);
-}
 
 float Median(std::vector<float> values) {
     if (values.empty()) return 0.0f;
@@ -80,7 +74,8 @@ Grid BuildPatches(const PointCloud& cloud, const Indices& object, float patch_si
         const Eigen::Vector3f& nv = cloud.normals[i];
         if (!p.allFinite() || !nv.allFinite()) continue;
         const Eigen::Vector3i c = (p * inv).array().floor().cast<int>();
-        auto [it, inserted] = grid.patch_of_key.try_emplace(PackKey(c), out.patches.size());
+        auto [it, inserted] =
+            grid.patch_of_key.try_emplace(detail::PackCellKey(c), out.patches.size());
         if (inserted) {
             out.patches.emplace_back();
             grid.coords.push_back(c);
@@ -176,7 +171,7 @@ PartBorders ComputePartBorders(const PointCloud& cloud, const Indices& object,
             for (int dy = -1; dy <= 1; ++dy) {
                 for (int dz = -1; dz <= 1; ++dz) {
                     const auto it = grid.patch_of_key.find(
-                        PackKey(grid.coords[v] + Eigen::Vector3i(dx, dy, dz)));
+                        detail::PackCellKey(grid.coords[v] + Eigen::Vector3i(dx, dy, dz)));
                     if (it == grid.patch_of_key.end() || it->second <= v) continue;
                     const SurfacePatch& b = patches[it->second];
                     if (b.part < 0) continue;
