@@ -503,7 +503,7 @@ class WindowPlanes {
     /// The up to k nearest candidates of `center` strictly within radius_sq, nearest first
     /// (ties by index), as packed keys in keys[0, k); their number.
     std::size_t Nearest(Index center, std::size_t k, float radius_sq, std::vector<float>& dist,
-                        std::uint64_t* keys) const {
+                        std::vector<std::uint32_t>& listed_slots, std::uint64_t* keys) const {
         const auto w = static_cast<std::ptrdiff_t>(cloud_.width);
         const std::ptrdiff_t u = center % w, v = center / w;
         const std::size_t base = static_cast<std::size_t>(v - hw_ - v0_) * cols_ +
@@ -533,19 +533,28 @@ class WindowPlanes {
         std::size_t found = 0;
         for (std::size_t q = 0; q < ring_slot_.size() && found < k; ++q) {
             const float d2 = dist[ring_slot_[q]];
-            if (!(d2 < radius_sq)) continue;  // NaN: no candidate
-            ++found;
-            bound = std::max(bound, d2);
+            const bool candidate = d2 < radius_sq;  // NaN: no candidate
+            found += static_cast<std::size_t>(candidate);
+            bound = std::max(bound, candidate ? d2 : -1.0f);
         }
         if (found < k) bound = radius_sq;
-        // The k best of them kept sorted by insertion.
-        std::size_t m = 0;
+        // The candidates within the bound, listed without a branch per pixel (whether a pixel
+        // passes is hard to predict), then the k best of them kept sorted by insertion; the
+        // keys are distinct, so the order of insertion does not matter.
+        listed_slots.resize(ring_slot_.size());
+        std::size_t listed = 0;
         for (std::size_t q = 0; q < ring_slot_.size(); ++q) {
             const float d2 = dist[ring_slot_[q]];
-            if (!(d2 < radius_sq && d2 <= bound)) continue;
+            listed_slots[listed] = static_cast<std::uint32_t>(q);
+            listed += static_cast<std::size_t>(static_cast<int>(d2 < radius_sq) &
+                                               static_cast<int>(d2 <= bound));
+        }
+        std::size_t m = 0;
+        for (std::size_t j = 0; j < listed; ++j) {
+            const std::size_t q = listed_slots[j];
             const auto i =
                 static_cast<Index>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
-            detail::InsertNearest(detail::PackNeighbour(d2, i), keys, m, k);
+            detail::InsertNearest(detail::PackNeighbour(dist[ring_slot_[q]], i), keys, m, k);
         }
         return m;
     }
@@ -599,10 +608,11 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
             points.size(), num_threads,
             [&](std::size_t begin, std::size_t end) {
                 std::vector<float> dist;
+                std::vector<std::uint32_t> listed;
                 std::vector<std::uint64_t> keys(k);
                 for (std::size_t r = begin; r < end; ++r) {
                     const std::size_t m =
-                        planes.Nearest(points[r], k, radius_sq, dist, keys.data());
+                        planes.Nearest(points[r], k, radius_sq, dist, listed, keys.data());
                     for (std::size_t j = 0; j < m; ++j) {
                         table.neighbours[r * table.stride + j] = detail::PackedIndex(keys[j]);
                         table.squared_distances[r * table.stride + j] =

@@ -30,6 +30,54 @@ struct Score {
     double drawn_mass = 0.0;  // sampling weight of the inliers (only with sample weights)
 };
 
+// Adds min(d^2, t^2) of every distance to the sum (in order; t^2 for NaN) and counts those
+// <= t. The squares of floats are exact in double, so d <= t exactly when d^2 <= t^2 and the
+// minimum is the inlier's square or the threshold's, with no branch per point.
+struct TruncatedSum {
+    double sum = 0.0;
+    std::size_t within = 0;
+};
+[[gnu::noinline]] TruncatedSum TruncatedSquares(const float* d, std::size_t n, float t, double t2,
+                                                TruncatedSum start) {
+    double sum = start.sum;
+    std::size_t within = start.within;
+    for (std::size_t k = 0; k < n; ++k) {
+        const double dd = double{d[k]} * d[k];
+        sum += std::min(t2, dd);  // NaN: t2
+        within += static_cast<std::size_t>(d[k] <= t);
+    }
+    return {sum, within};
+}
+
+// The same for weighted points and for outlier counts (RANSAC): with `score_w` each point's
+// cost is weighted (MSAC) or its weight is the cost of an outlier (RANSAC); with `sample_w` the
+// inliers' sampling weights are summed. Adding 0 where the serial sums skip a point leaves them
+// unchanged, so the sums are those of a branch per point.
+struct WeightedSum {
+    double cost = 0.0;
+    double drawn_mass = 0.0;
+    std::size_t within = 0;
+};
+[[gnu::noinline]] WeightedSum WeightedCosts(const float* d, std::size_t n, float t, double t2,
+                                            bool msac, const float* score_w, const float* sample_w,
+                                            WeightedSum start) {
+    double cost = start.cost;
+    double drawn_mass = start.drawn_mass;
+    std::size_t within = start.within;
+    for (std::size_t k = 0; k < n; ++k) {
+        const bool inlier = d[k] <= t;
+        within += static_cast<std::size_t>(inlier);
+        if (sample_w != nullptr) drawn_mass += inlier ? double{sample_w[k]} : 0.0;
+        const double w = score_w != nullptr ? double{score_w[k]} : 1.0;
+        if (msac) {
+            cost += w * std::min(t2, double{d[k]} * d[k]);  // NaN: t2
+        } else if (score_w != nullptr) {
+            cost += inlier ? 0.0 : w;
+        }
+    }
+    return {cost, drawn_mass, within};
+}
+
 // Distances d of the usable points to one model, blended with the normal deviation when used.
 class Evaluator {
   public:
@@ -45,16 +93,19 @@ class Evaluator {
           score_w_(score_w),
           sample_w_(sample_w) {}
 
-    // Calls visit(k, d, euclidean) for the k-th usable point, in order; after each chunk, stops
-    // early when stop() says so. Returns whether every point was visited.
+    // Calls visit(begin, n, d, e) for the usable points [begin, begin + n), chunk by chunk in
+    // order, with their distances d (blended with the normal's deviation when used) and their
+    // Euclidean distances e; after each chunk, stops early when stop() says so. Returns whether
+    // every point was visited.
     template <typename Visit, typename Stop>
-    bool ForEach(const SacCoefficients& c, Visit&& visit, Stop&& stop) const {
+    bool ForEachChunk(const SacCoefficients& c, Visit&& visit, Stop&& stop) const {
         std::array<float, kChunk> dist{};
-        std::array<float, kChunk> angle{};
+        std::array<float, kChunk> blended{};
         for (std::size_t begin = 0; begin < points_.size(); begin += kChunk) {
             const std::size_t n = std::min(kChunk, points_.size() - begin);
             const std::span<const Index> idx(points_.data() + begin, n);
             model_.distances(cloud_, c, idx, std::span<float>(dist.data(), n));
+            for (std::size_t k = 0; k < n; ++k) dist[k] = std::abs(dist[k]);
             if (weight_ > 0.0f) {
                 // The normal's angle (an acos) only where it can still make an inlier: adding
                 // the non-negative angle term never brings a point back under the threshold.
@@ -62,7 +113,7 @@ class Evaluator {
                 std::array<std::uint16_t, kChunk> slot{};
                 std::size_t m = 0;
                 for (std::size_t k = 0; k < n; ++k) {
-                    if ((1.0f - weight_) * std::abs(dist[k]) <= threshold_) {
+                    if ((1.0f - weight_) * dist[k] <= threshold_) {
                         near[m] = idx[k];
                         slot[m++] = static_cast<std::uint16_t>(k);
                     }
@@ -70,25 +121,18 @@ class Evaluator {
                 std::array<float, kChunk> near_angle{};
                 model_.normal_angles(cloud_, c, std::span<const Index>(near.data(), m),
                                      std::span<float>(near_angle.data(), m));
-                std::fill_n(angle.begin(), n, 0.0f);
+                std::array<float, kChunk> angle{};
                 for (std::size_t j = 0; j < m; ++j) angle[slot[j]] = near_angle[j];
                 for (std::size_t k = 0; k < n; ++k) {
-                    const float e = std::abs(dist[k]);
-                    visit(begin + k, (1.0f - weight_) * e + weight_ * angle[k], e);
+                    blended[k] = (1.0f - weight_) * dist[k] + weight_ * angle[k];
                 }
+                visit(begin, n, blended.data(), dist.data());
             } else {
-                for (std::size_t k = 0; k < n; ++k) {
-                    const float e = std::abs(dist[k]);
-                    visit(begin + k, e, e);
-                }
+                visit(begin, n, dist.data(), dist.data());
             }
             if (begin + n < points_.size() && stop()) return false;
         }
         return true;
-    }
-    template <typename Visit>
-    void ForEach(const SacCoefficients& c, Visit&& visit) const {
-        ForEach(c, visit, [] { return false; });
     }
 
     // The score of a hypothesis. Every point adds a non-negative amount to the cost, so once the
@@ -98,26 +142,30 @@ class Evaluator {
                    double bound = std::numeric_limits<double>::infinity()) const {
         Score s;
         const double t2 = double{threshold_} * threshold_;
+        const float t = threshold_;
         const bool weighted = !score_w_.empty();
         const bool drawn = !sample_w_.empty();
         const bool count_outliers = method == SacMethod::kRansac && !weighted;
+        const bool msac = method == SacMethod::kMsac;
         std::size_t seen = 0;
-        const bool complete = ForEach(
+        const bool complete = ForEachChunk(
             c,
-            [&](std::size_t k, float d, float) {
+            [&](std::size_t begin, std::size_t n, const float* d, const float*) {
                 // NaN distances (a model gone bad) count as outliers.
-                const bool inlier = d <= threshold_;
-                ++seen;
-                if (inlier) {
-                    ++s.inliers;
-                    if (drawn) s.drawn_mass += sample_w_[k];
+                if (msac && !weighted && !drawn) {
+                    const TruncatedSum r = TruncatedSquares(d, n, t, t2, {s.cost, s.inliers});
+                    s.cost = r.sum;
+                    s.inliers = r.within;
+                } else {
+                    const WeightedSum r = WeightedCosts(
+                        d, n, t, t2, msac, weighted ? score_w_.data() + begin : nullptr,
+                        drawn ? sample_w_.data() + begin : nullptr,
+                        {s.cost, s.drawn_mass, s.inliers});
+                    s.cost = r.cost;
+                    s.drawn_mass = r.drawn_mass;
+                    s.inliers = r.within;
                 }
-                const double w = weighted ? double{score_w_[k]} : 1.0;
-                if (method == SacMethod::kMsac) {
-                    s.cost += w * (inlier ? double{d} * d : t2);
-                } else if (weighted && !inlier) {
-                    s.cost += w;
-                }
+                seen += n;
             },
             [&] {
                 const double partial =
@@ -142,17 +190,22 @@ class Evaluator {
         inlier_weight = 0.0;
         const double t2 = double{threshold_} * threshold_;
         const bool weighted = !score_w_.empty();
-        ForEach(c, [&](std::size_t k, float d, float e) {
-            const double w = weighted ? double{score_w_[k]} : 1.0;
-            if (d <= threshold_) {
-                inliers.push_back(points_[k]);
-                sum_sq += double{e} * e;
-                truncated += w * d * d;
-                inlier_weight += w;
-            } else {
-                truncated += w * t2;
-            }
-        });
+        ForEachChunk(
+            c,
+            [&](std::size_t begin, std::size_t n, const float* d, const float* e) {
+                for (std::size_t k = 0; k < n; ++k) {
+                    const double w = weighted ? double{score_w_[begin + k]} : 1.0;
+                    if (d[k] <= threshold_) {
+                        inliers.push_back(points_[begin + k]);
+                        sum_sq += double{e[k]} * e[k];
+                        truncated += w * d[k] * d[k];
+                        inlier_weight += w;
+                    } else {
+                        truncated += w * t2;
+                    }
+                }
+            },
+            [] { return false; });
     }
 
   private:
