@@ -527,12 +527,24 @@ class WindowPlanes {
                     dx.square() + (dy.square() + dz.square());
             }
         }
+        listed_slots.resize(ring_slot_.size());
+        return SelectNearest(dist.data(), center, k, radius_sq, listed_slots.data(), keys);
+    }
+
+  private:
+    // The k nearest of the window's squared distances `dist` (nearest first, ties by index) as
+    // packed keys in keys[0, k); their number. `listed` has room for the window.
+    [[gnu::noinline]] std::size_t SelectNearest(const float* dist, Index center, std::size_t k,
+                                                float radius_sq, std::uint32_t* listed,
+                                                std::uint64_t* keys) const {
+        const std::size_t* slot = ring_slot_.data();
+        const std::size_t ring = ring_slot_.size();
         // The first k candidates in ring order bound the k-th nearest distance from above; only
         // candidates within that bound are ranked.
         float bound = -1.0f;
         std::size_t found = 0;
-        for (std::size_t q = 0; q < ring_slot_.size() && found < k; ++q) {
-            const float d2 = dist[ring_slot_[q]];
+        for (std::size_t q = 0; q < ring && found < k; ++q) {
+            const float d2 = dist[slot[q]];
             const bool candidate = d2 < radius_sq;  // NaN: no candidate
             found += static_cast<std::size_t>(candidate);
             bound = std::max(bound, candidate ? d2 : -1.0f);
@@ -541,25 +553,23 @@ class WindowPlanes {
         // The candidates within the bound, listed without a branch per pixel (whether a pixel
         // passes is hard to predict), then the k best of them kept sorted by insertion; the
         // keys are distinct, so the order of insertion does not matter.
-        listed_slots.resize(ring_slot_.size());
-        std::size_t listed = 0;
-        for (std::size_t q = 0; q < ring_slot_.size(); ++q) {
-            const float d2 = dist[ring_slot_[q]];
-            listed_slots[listed] = static_cast<std::uint32_t>(q);
-            listed += static_cast<std::size_t>(static_cast<int>(d2 < radius_sq) &
-                                               static_cast<int>(d2 <= bound));
+        std::size_t n = 0;
+        for (std::size_t q = 0; q < ring; ++q) {
+            const float d2 = dist[slot[q]];
+            listed[n] = static_cast<std::uint32_t>(q);
+            n += static_cast<std::size_t>(static_cast<int>(d2 < radius_sq) &
+                                          static_cast<int>(d2 <= bound));
         }
         std::size_t m = 0;
-        for (std::size_t j = 0; j < listed; ++j) {
-            const std::size_t q = listed_slots[j];
+        for (std::size_t j = 0; j < n; ++j) {
+            const std::size_t q = listed[j];
             const auto i =
                 static_cast<Index>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
-            detail::InsertNearest(detail::PackNeighbour(dist[ring_slot_[q]], i), keys, m, k);
+            detail::InsertNearest(detail::PackNeighbour(dist[slot[q]], i), keys, m, k);
         }
         return m;
     }
 
-  private:
     const PointCloud& cloud_;
     int hw_;
     std::ptrdiff_t u0_ = 0, v0_ = 0;
