@@ -150,13 +150,18 @@ class ProfileObjective {
             const bool again = iteration < 2;
             if (again) StartSystem(knots);
             cost = 0.0;
+            const double t = tolerance_;
             for (std::size_t i = 0; i < n; ++i) {
                 const double model = (1.0 - f_[i]) * x_[k_[i]] + f_[i] * x_[k_[i] + 1] -
                                      (inner_[i] ? thickness : 0.0);
                 const double r = std::abs(rho_[i] - model);
-                cost += r <= tolerance_ ? r * r : 2.0 * tolerance_ * r - tolerance_ * tolerance_;
+                // Both sides computed and one chosen: no branch on the residual.
+                const bool near = r <= t;
+                const double quadratic = r * r, linear = 2.0 * t * r - t * t;
+                cost += near ? quadratic : linear;
                 if (again) {
-                    w_[i] = r <= tolerance_ ? 1.0 : tolerance_ / r;
+                    const double down = t / r;
+                    w_[i] = near ? 1.0 : down;
                     AddPoint(i);
                 }
             }
