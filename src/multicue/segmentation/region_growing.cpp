@@ -503,7 +503,7 @@ class WindowPlanes {
     /// The up to k nearest candidates of `center` strictly within radius_sq, nearest first
     /// (ties by index), as packed keys in keys[0, k); their number.
     std::size_t Nearest(Index center, std::size_t k, float radius_sq, std::vector<float>& dist,
-                        std::vector<std::uint32_t>& listed_slots, std::uint64_t* keys) const {
+                        std::vector<std::int32_t>& listed_slots, std::uint64_t* keys) const {
         const auto w = static_cast<std::ptrdiff_t>(cloud_.width);
         const std::ptrdiff_t u = center % w, v = center / w;
         const std::size_t base = static_cast<std::size_t>(v - hw_ - v0_) * cols_ +
@@ -527,15 +527,16 @@ class WindowPlanes {
                     dx.square() + (dy.square() + dz.square());
             }
         }
-        listed_slots.resize(ring_slot_.size());
+        listed_slots.resize(2 * ring_slot_.size());
         return SelectNearest(dist.data(), center, k, radius_sq, listed_slots.data(), keys);
     }
 
   private:
     // The k nearest of the window's squared distances `dist` (nearest first, ties by index) as
-    // packed keys in keys[0, k); their number. `listed` has room for the window.
+    // packed keys in keys[0, k); their number. `listed` has room for two windows, `keys` for
+    // k + 1 keys.
     [[gnu::noinline]] std::size_t SelectNearest(const float* dist, Index center, std::size_t k,
-                                                float radius_sq, std::uint32_t* listed,
+                                                float radius_sq, std::int32_t* listed,
                                                 std::uint64_t* keys) const {
         const std::size_t* slot = ring_slot_.data();
         const std::size_t ring = ring_slot_.size();
@@ -551,23 +552,33 @@ class WindowPlanes {
         }
         if (found < k) bound = radius_sq;
         // The candidates within the bound, listed without a branch per pixel (whether a pixel
-        // passes is hard to predict), then the k best of them kept sorted by insertion; the
-        // keys are distinct, so the order of insertion does not matter.
+        // passes is hard to predict) as their distances' bit patterns (which order like the
+        // distances) and their pixels.
+        std::int32_t* bits = listed;
+        std::int32_t* pixel = listed + ring;
         std::size_t n = 0;
         for (std::size_t q = 0; q < ring; ++q) {
             const float d2 = dist[slot[q]];
-            listed[n] = static_cast<std::uint32_t>(q);
+            bits[n] = std::bit_cast<std::int32_t>(d2);
+            pixel[n] =
+                static_cast<std::int32_t>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
             n += static_cast<std::size_t>(static_cast<int>(d2 < radius_sq) &
                                           static_cast<int>(d2 <= bound));
         }
-        std::size_t m = 0;
-        for (std::size_t j = 0; j < n; ++j) {
-            const std::size_t q = listed[j];
-            const auto i =
-                static_cast<Index>(static_cast<std::ptrdiff_t>(center) + ring_offset_[q]);
-            detail::InsertNearest(detail::PackNeighbour(dist[slot[q]], i), keys, m, k);
+        // Each candidate's rank among them by distance, then pixel (the keys' order; no two are
+        // equal) is its place; ranks from k on go to the spare slot keys[k].
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::int32_t b = bits[i], p = pixel[i];
+            std::int32_t rank = 0;
+            for (std::size_t j = 0; j < n; ++j) {
+                rank += static_cast<std::int32_t>(bits[j] < b) |
+                        (static_cast<std::int32_t>(bits[j] == b) &
+                         static_cast<std::int32_t>(pixel[j] < p));
+            }
+            keys[std::min(static_cast<std::size_t>(rank), k)] =
+                detail::PackNeighbour(std::bit_cast<float>(b), static_cast<Index>(p));
         }
-        return m;
+        return std::min(n, k);
     }
 
     const PointCloud& cloud_;
@@ -618,8 +629,8 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
             points.size(), num_threads,
             [&](std::size_t begin, std::size_t end) {
                 std::vector<float> dist;
-                std::vector<std::uint32_t> listed;
-                std::vector<std::uint64_t> keys(k);
+                std::vector<std::int32_t> listed;
+                std::vector<std::uint64_t> keys(k + 1);
                 for (std::size_t r = begin; r < end; ++r) {
                     const std::size_t m =
                         planes.Nearest(points[r], k, radius_sq, dist, listed, keys.data());
