@@ -159,6 +159,40 @@ TEST(ModelGrouping, TouchingRoundObjectsGetACylinderEach) {
     EXPECT_TRUE(SplitTouchingRound(f.cloud, again, f.plane, p, 150).changed.empty());
 }
 
+TEST(ModelGrouping, TouchingRoundSplitsDoNotDependOnTheThreadCount) {
+    // Several objects judged in parallel: the split pair takes its place among the others.
+    const auto f = test::ScanShapes({{Shape::kCylinder, {0.065f, 0.065f, 0.06f}, {0, 0, 0}},
+                                     {Shape::kCylinder, {0.03f, 0.03f, 0.15f}, {0.115f, 0, 0}},
+                                     {Shape::kCylinder, {0.04f, 0.04f, 0.12f}, {-0.2f, 0.1f, 0}},
+                                     {Shape::kBox, {0.08f, 0.1f, 0.06f}, {0.2f, 0.2f, 0}}});
+    auto objects_for = [&] {
+        return std::vector<PerceivedObject>{test::MergedObject(f, {2}, Category::kCylinder),
+                                            test::MergedObject(f, {0, 1}, Category::kCylinder),
+                                            test::MergedObject(f, {3}, Category::kBox)};
+    };
+    std::vector<std::vector<PerceivedObject>> results;
+    std::vector<GroupingResult> groupings;
+    for (int threads : {1, 2, 0}) {
+        ModelParams p = Models();
+        p.several_min_ratio = 0.0f;
+        p.num_threads = threads;
+        std::vector<PerceivedObject> objects = objects_for();
+        groupings.push_back(SplitTouchingRound(f.cloud, objects, f.plane, p, 150));
+        results.push_back(std::move(objects));
+    }
+    ASSERT_EQ(results[0].size(), 4u);
+    EXPECT_EQ(results[0][0].indices, objects_for()[0].indices);
+    EXPECT_EQ(results[0].back().indices, objects_for()[2].indices);
+    for (std::size_t r = 1; r < results.size(); ++r) {
+        EXPECT_EQ(groupings[r].changed, groupings[0].changed);
+        ASSERT_EQ(results[r].size(), results[0].size());
+        for (std::size_t k = 0; k < results[0].size(); ++k) {
+            EXPECT_EQ(results[r][k].indices, results[0][k].indices);
+            EXPECT_EQ(results[r][k].parts, results[0][k].parts);
+        }
+    }
+}
+
 // An object whose model is the cylinder (center, radius, height) along z.
 PerceivedObject WithCylinder(Indices indices, const Eigen::Vector3f& center, float radius,
                              float height, bool accepted = true) {

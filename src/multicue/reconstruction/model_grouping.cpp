@@ -486,41 +486,37 @@ GroupingResult SplitTouchingRound(const PointCloud& cloud, std::vector<Perceived
         std::sort(all.begin(), all.end());
         return all;
     };
-    Regrouped out;
-    for (auto& o : objects) {
-        const Category c = o.category.category;
-        const bool round =
-            c == Category::kSphere || c == Category::kCylinder || c == Category::kOther;
-        const double several =
-            TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
-        if (!round || o.parts.size() < 2 || several < params.several_min_ratio) {
-            out.Keep(std::move(o));
-            continue;
-        }
-        const CylinderModel one = FitObjectCylinder(cloud, o.indices, plane, params.cylinder);
-        const float one_ratio = one.found ? explained(one, o.indices) : 0.0f;
-        if (!one.found || one_ratio >= params.min_inlier_ratio) {
-            out.Keep(std::move(o));
-            continue;
-        }
-        std::vector<Indices> pa, pb;
-        for (auto& part : o.parts) {
-            (2.0f * explained(one, part) >= 1.0f ? pa : pb).push_back(part);
-        }
-        const Indices ga = gather(pa), gb = gather(pb);
-        if (ga.size() < min_object_points || gb.size() < min_object_points) {
-            out.Keep(std::move(o));
-            continue;
-        }
-        // The second group's cylinder only when the first one's explains its group.
-        const CylinderModel a = FitObjectCylinder(cloud, ga, plane, params.cylinder);
-        bool keep = !a.found || explained(a, ga) < params.min_inlier_ratio;
-        CylinderModel b;
-        if (!keep) {
-            b = FitObjectCylinder(cloud, gb, plane, params.cylinder);
-            keep = !b.found || explained(b, gb) < params.min_inlier_ratio;
-        }
-        if (!keep) {
+    // Each object is judged on its own, the objects in parallel; the regrouping follows in
+    // their order.
+    struct Split {
+        bool done = false;
+        PerceivedObject a, b;
+    };
+    std::vector<Split> splits(objects.size());
+    ParallelFor(
+        objects.size(), params.num_threads,
+        [&](std::size_t k) {
+            const PerceivedObject& o = objects[k];
+            const Category c = o.category.category;
+            const bool round =
+                c == Category::kSphere || c == Category::kCylinder || c == Category::kOther;
+            const double several =
+                TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
+            if (!round || o.parts.size() < 2 || several < params.several_min_ratio) return;
+            const CylinderModel one = FitObjectCylinder(cloud, o.indices, plane, params.cylinder);
+            const float one_ratio = one.found ? explained(one, o.indices) : 0.0f;
+            if (!one.found || one_ratio >= params.min_inlier_ratio) return;
+            std::vector<Indices> pa, pb;
+            for (const auto& part : o.parts) {
+                (2.0f * explained(one, part) >= 1.0f ? pa : pb).push_back(part);
+            }
+            const Indices ga = gather(pa), gb = gather(pb);
+            if (ga.size() < min_object_points || gb.size() < min_object_points) return;
+            // The second group's cylinder only when the first one's explains its group.
+            const CylinderModel a = FitObjectCylinder(cloud, ga, plane, params.cylinder);
+            if (!a.found || explained(a, ga) < params.min_inlier_ratio) return;
+            const CylinderModel b = FitObjectCylinder(cloud, gb, plane, params.cylinder);
+            if (!b.found || explained(b, gb) < params.min_inlier_ratio) return;
             std::size_t n = 0;
             for (Index i : o.indices) {
                 n += std::min(CylinderSurfaceDistance(a, cloud.points[i]),
@@ -530,25 +526,29 @@ GroupingResult SplitTouchingRound(const PointCloud& cloud, std::vector<Perceived
             const bool concentric = CoaxialSameRadius(a, b, params.concentric);
             LogDebug("perceive: touching round {} | {}: {:.2f} (one cylinder {:.2f}){}", ga.size(),
                      gb.size(), both, one_ratio, concentric ? ", concentric" : "");
-            keep = concentric || both < one_ratio + t.min_gain;
-        }
-        if (keep) {
-            out.Keep(std::move(o));
+            if (concentric || both < one_ratio + t.min_gain) return;
+            // Points outside the parts go to the nearer cylinder.
+            Split& split = splits[k];
+            split.done = true;
+            split.a.parts = std::move(pa);
+            split.b.parts = std::move(pb);
+            for (Index i : o.indices) {
+                const bool to_a = std::binary_search(ga.begin(), ga.end(), i) ||
+                                  (!std::binary_search(gb.begin(), gb.end(), i) &&
+                                   CylinderSurfaceDistance(a, cloud.points[i]) <=
+                                       CylinderSurfaceDistance(b, cloud.points[i]));
+                (to_a ? split.a : split.b).indices.push_back(i);
+            }
+        },
+        1);
+    Regrouped out;
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        if (!splits[k].done) {
+            out.Keep(std::move(objects[k]));
             continue;
         }
-        // Points outside the parts go to the nearer cylinder.
-        PerceivedObject oa, ob;
-        oa.parts = std::move(pa);
-        ob.parts = std::move(pb);
-        for (Index i : o.indices) {
-            const bool to_a = std::binary_search(ga.begin(), ga.end(), i) ||
-                              (!std::binary_search(gb.begin(), gb.end(), i) &&
-                               CylinderSurfaceDistance(a, cloud.points[i]) <=
-                                   CylinderSurfaceDistance(b, cloud.points[i]));
-            (to_a ? oa : ob).indices.push_back(i);
-        }
-        out.Add(std::move(oa));
-        out.Add(std::move(ob));
+        out.Add(std::move(splits[k].a));
+        out.Add(std::move(splits[k].b));
     }
     return Finish(out, objects, {}, "touching round objects");
 }
