@@ -476,6 +476,9 @@ GroupingResult SplitTouchingRound(const PointCloud& cloud, std::vector<Perceived
     params.part_counts.Validate();
     if (!t.round_enabled || objects.empty() || !cloud.HasNormals()) return {};
     const float threshold = params.cylinder.inlier_threshold;
+    // The cylinders' consensus scoring stays within the threads the objects are given.
+    CylinderModelParams cylinder = params.cylinder;
+    cylinder.sac.num_threads = params.num_threads;
     auto explained = [&](const CylinderModel& m, const Indices& points) {
         return Explained(cloud, points, threshold,
                          [&](const Eigen::Vector3f& p) { return CylinderSurfaceDistance(m, p); });
@@ -503,7 +506,7 @@ GroupingResult SplitTouchingRound(const PointCloud& cloud, std::vector<Perceived
             const double several =
                 TwoObjectsLikelihoodRatio(ObjectTypeOf(c), o.parts.size(), params.part_counts);
             if (!round || o.parts.size() < 2 || several < params.several_min_ratio) return;
-            const CylinderModel one = FitObjectCylinder(cloud, o.indices, plane, params.cylinder);
+            const CylinderModel one = FitObjectCylinder(cloud, o.indices, plane, cylinder);
             const float one_ratio = one.found ? explained(one, o.indices) : 0.0f;
             if (!one.found || one_ratio >= params.min_inlier_ratio) return;
             std::vector<Indices> pa, pb;
@@ -513,9 +516,9 @@ GroupingResult SplitTouchingRound(const PointCloud& cloud, std::vector<Perceived
             const Indices ga = gather(pa), gb = gather(pb);
             if (ga.size() < min_object_points || gb.size() < min_object_points) return;
             // The second group's cylinder only when the first one's explains its group.
-            const CylinderModel a = FitObjectCylinder(cloud, ga, plane, params.cylinder);
+            const CylinderModel a = FitObjectCylinder(cloud, ga, plane, cylinder);
             if (!a.found || explained(a, ga) < params.min_inlier_ratio) return;
-            const CylinderModel b = FitObjectCylinder(cloud, gb, plane, params.cylinder);
+            const CylinderModel b = FitObjectCylinder(cloud, gb, plane, cylinder);
             if (!b.found || explained(b, gb) < params.min_inlier_ratio) return;
             std::size_t n = 0;
             for (Index i : o.indices) {
