@@ -1071,6 +1071,13 @@ TEST(RegionGrowingOrganized, OneNeighbourTableForSeveralGrowings) {
         EXPECT_EQ(got.parts, expected.parts);
         EXPECT_EQ(got.part_ids, expected.part_ids);
         EXPECT_FALSE(got.parts.empty());
+        // The same subset reversed and with repeats: the same parts and ids.
+        p.subset.assign(object.rbegin(), object.rend());
+        p.subset.insert(p.subset.end(), object.begin(), object.begin() + 25);
+        const auto repeated = RegionGrowing(c, one, p);
+        EXPECT_EQ(repeated.parts, expected.parts);
+        EXPECT_EQ(repeated.part_ids, expected.part_ids);
+        EXPECT_EQ(repeated.num_points, expected.num_points);
     }
     // A point without a row cannot be segmented with the table.
     const NeighbourTable first = OrganizedNeighbourTable(c, objects[0], params, search, 1);

@@ -162,13 +162,20 @@ std::size_t MarkPoints(const PointCloud& cloud, const Indices& subset,
 }
 
 // Seeds by lowest curvature, so that flat parts are found first (section 4.2.1); ties by index.
+// The marked points are looked for in `subset` when one is given (not in the whole cloud).
 Indices SeedOrder(const PointCloud& cloud, const std::vector<std::uint8_t>& active,
-                  std::size_t num_points) {
+                  const Indices& subset, std::size_t num_points) {
     const std::size_t n = cloud.size();
     Indices order;
     order.reserve(num_points);
-    for (std::size_t i = 0; i < n; ++i) {
-        if (active[i] != 0) order.push_back(static_cast<Index>(i));
+    if (subset.empty()) {
+        for (std::size_t i = 0; i < n; ++i) {
+            if (active[i] != 0) order.push_back(static_cast<Index>(i));
+        }
+    } else {
+        for (Index i : subset) {
+            if (active[i] != 0) order.push_back(i);
+        }
     }
     // Sorted as 64-bit keys (curvature bits made order-preserving, then the index): no
     // indirection in the comparisons.
@@ -180,6 +187,8 @@ Indices SeedOrder(const PointCloud& cloud, const std::vector<std::uint8_t>& acti
         keys[k] = (std::uint64_t{key} << 32) | order[k];
     }
     std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());  // a subset may repeat points
+    order.resize(keys.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<Index>(keys[k]);
     return order;
 }
@@ -311,8 +320,9 @@ void DiscardSmallGroups(const std::vector<std::int32_t>& pending, std::size_t mi
     }
 }
 
-// Compaction: surviving parts in seed order, points ascending; part ids renumbered to match.
-void CompactParts(GrownParts& grown, RegionGrowingResult& result) {
+// Compaction: surviving parts in seed order, points ascending; part ids renumbered to match
+// (only the segmented points, `points`, have one).
+void CompactParts(GrownParts& grown, const Indices& points, RegionGrowingResult& result) {
     std::vector<Indices>& parts = grown.parts;
     const std::size_t num_parts = parts.size();
     std::vector<std::int32_t> new_id(num_parts, kNoPart);
@@ -323,7 +333,8 @@ void CompactParts(GrownParts& grown, RegionGrowingResult& result) {
         result.parts.push_back(std::move(parts[p]));
         result.seeds.push_back(grown.seeds[p]);
     }
-    for (auto& id : result.part_ids) {
+    for (Index i : points) {
+        std::int32_t& id = result.part_ids[i];
         if (id != kNoPart) id = new_id[static_cast<std::size_t>(id)];
     }
 }
@@ -339,7 +350,7 @@ void GrowAndMerge(const PointCloud& cloud, const std::vector<std::uint8_t>& acti
                   const RegionGrowingParams& params, Neighborhoods& neighborhoods,
                   RegionGrowingResult& result) {
     std::vector<std::int32_t>& part_of = result.part_ids;
-    const Indices order = SeedOrder(cloud, active, result.num_points);
+    const Indices order = SeedOrder(cloud, active, params.subset, result.num_points);
     GrownParts grown = GrowParts(cloud, active, order, params, neighborhoods, part_of);
     result.num_grown_parts = grown.parts.size();
 
@@ -357,7 +368,7 @@ void GrowAndMerge(const PointCloud& cloud, const std::vector<std::uint8_t>& acti
     MergeIntoLargeParts(is_large, neighborhoods, grown.parts, pending, part_of, result);
     GroupSmallParts(is_large, pending, neighborhoods, grown.parts, part_of, result);
     DiscardSmallGroups(pending, min_size, params.discard_small_parts, grown.parts, part_of, result);
-    CompactParts(grown, result);
+    CompactParts(grown, order, result);
 }
 
 }  // namespace
@@ -672,11 +683,16 @@ RegionGrowingResult RegionGrowing(const PointCloud& cloud, const NeighbourTable&
         throw InvalidArgument(fmt::format("the neighbour table is for a cloud of {} points, not {}",
                                           table.row_of.size(), n));
     }
-    for (std::size_t i = 0; i < n; ++i) {
+    auto check_row = [&](std::size_t i) {
         if (active[i] != 0 && table.row_of[i] == NeighbourTable::kNoRow) {
             throw InvalidArgument(fmt::format(
                 "point {} is to be segmented but the neighbour table has no row for it", i));
         }
+    };
+    if (params.subset.empty()) {
+        for (std::size_t i = 0; i < n; ++i) check_row(i);
+    } else {
+        for (Index i : params.subset) check_row(i);  // only they can be marked
     }
     TableNeighborhoods neighborhoods(table);
     GrowAndMerge(cloud, active, params, neighborhoods, result);
