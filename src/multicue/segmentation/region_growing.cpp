@@ -619,6 +619,11 @@ NeighbourTable OrganizedNeighbourTable(const PointCloud& organized, const Indice
                         "window of {} pixels more",
                         search.half_window));
     }
+    if (n > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
+        // The k-nearest selection ranks pixels as 31-bit numbers.
+        throw InvalidArgument(
+            fmt::format("a neighbour table is for frames of at most 2^31 - 1 pixels, got {}", n));
+    }
     table.row_of.assign(n, NeighbourTable::kNoRow);
     for (std::size_t r = 0; r < points.size(); ++r) {
         if (points[r] >= n) {
