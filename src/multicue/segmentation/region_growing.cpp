@@ -512,9 +512,10 @@ class WindowPlanes {
     }
 
     /// The up to k nearest candidates of `center` strictly within radius_sq, nearest first
-    /// (ties by index), as packed keys in keys[0, k); their number.
+    /// (ties by index), as packed keys in keys[0, k) (`keys` has room for k + 1); their number.
+    /// `dist` and `listed` are scratch buffers of the calling thread.
     std::size_t Nearest(Index center, std::size_t k, float radius_sq, std::vector<float>& dist,
-                        std::vector<std::int32_t>& listed_slots, std::uint64_t* keys) const {
+                        std::vector<std::int32_t>& listed, std::uint64_t* keys) const {
         const auto w = static_cast<std::ptrdiff_t>(cloud_.width);
         const std::ptrdiff_t u = center % w, v = center / w;
         const std::size_t base = static_cast<std::size_t>(v - hw_ - v0_) * cols_ +
@@ -538,8 +539,8 @@ class WindowPlanes {
                     dx.square() + (dy.square() + dz.square());
             }
         }
-        listed_slots.resize(2 * ring_slot_.size());
-        return SelectNearest(dist.data(), center, k, radius_sq, listed_slots.data(), keys);
+        listed.resize(2 * ring_slot_.size());
+        return SelectNearest(dist.data(), center, k, radius_sq, listed.data(), keys);
     }
 
   private:
