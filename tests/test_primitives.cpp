@@ -776,6 +776,23 @@ TEST(Categorize, ThinDiscIsPlate) {
                 r.thickness_ratio);
 }
 
+TEST(Categorize, DiscWiderThanTheLargestRadiusIsNoPlate) {
+    // As thin, round and low as a plate, but 70 cm across: a piece of another surface, not a
+    // dish. The same disc is a plate once the largest radius considered admits it.
+    sim::TableTopScene scene;
+    scene.cylinders = {{{0.0f, 0.0f}, 0.35f, 0.02f, {}}};
+    const Scan scan = ScanScene(scene);
+    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(obj.size(), 300u);
+    const CategoryResult r = CategorizeObject(scan.cloud, obj, {}, scan.plane, {});
+    EXPECT_NE(r.category, Category::kPlate) << CategoryName(r.category);
+    EXPECT_EQ(r.probabilities[static_cast<std::size_t>(Category::kPlate)], 0.0f);
+    CategoryParams wide;
+    wide.max_radius = 0.4f;
+    const CategoryResult w = CategorizeObject(scan.cloud, obj, {}, scan.plane, wide);
+    EXPECT_EQ(w.category, Category::kPlate) << CategoryName(w.category);
+}
+
 TEST(Categorize, WideLowTinIsNoPlate) {
     // As thin and round as a plate relative to its size, but 6 cm high: plates are 1.5-3 cm.
     sim::TableTopScene scene;

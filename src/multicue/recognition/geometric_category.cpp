@@ -397,10 +397,11 @@ float SphereScore(const PointCloud& cloud, const Indices& sample, const SacParam
     return sphere_score;
 }
 
-/// Plate: thin and round, and with a support plane low and lying (thin axis along up, see the
-/// header).
+/// Plate: thin and round, no wider than the largest round object considered, and with a support
+/// plane low and lying (thin axis along up, see the header).
 float PlateScore(const CategoryResult& r, bool has_plane, int thin_axis,
                  const CategoryParams& params) {
+    if (r.extents[0] > 2.0f * params.max_radius) return 0.0f;
     const float thin =
         1.0f - Ramp(r.thickness_ratio, params.plate_thin_ratio, params.plate_thick_ratio);
     const float round = 1.0f - Ramp(r.footprint_fill, params.round_fill, params.square_fill);

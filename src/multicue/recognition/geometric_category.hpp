@@ -23,7 +23,9 @@
 ///   sphere_box_axis_area_max (the faces of a large box fit a large sphere within the
 ///   threshold); from there on no sphere is fitted;
 /// - plate: thin (thickness / largest extent) and round (hull area / minimum rectangle area
-///   across the thin axis: pi/4 for a disc, 1 for a slab). With a support plane only objects
+///   across the thin axis: pi/4 for a disc, 1 for a slab), and no wider than 2 max_radius (the
+///   largest round object considered; a flat piece of another surface can look round and thin
+///   but is far wider than a dish). With a support plane only objects
 ///   whose thin axis is up (lying plates) qualify: across a horizontal axis a single view shows
 ///   too little of the outline to judge roundness; and not higher than plate_low_height ..
 ///   plate_high_height above the plane (a flat box under another one shows a round-looking,
@@ -79,7 +81,8 @@ struct CategoryParams {
                                             ///< normal this close to the surface normal, (0, 90]
                                             ///< [deg]
     float min_radius = 0.01f;               ///< smallest cylinder / sphere radius considered [m]
-    float max_radius = 0.25f;               ///< largest cylinder / sphere radius considered [m]
+    float max_radius = 0.25f;               ///< largest cylinder / sphere / plate radius considered
+                                            ///< [m]
     float upright_angle_deg = 15.0f;  ///< upright cylinder: axis within this angle of up [deg]
     float lying_angle_deg = 20.0f;    ///< lying cylinder: axis within this angle of the plane
                                       ///< [deg]
@@ -126,7 +129,7 @@ struct CategoryParams {
         v("fit_threshold", fit_threshold, "cylinder and sphere inlier distance [m]");
         v("normal_weight", normal_weight, "normal distance weight of those fits");
         v("min_radius", min_radius, "smallest cylinder or sphere radius [m]");
-        v("max_radius", max_radius, "largest cylinder or sphere radius [m]");
+        v("max_radius", max_radius, "largest cylinder, sphere or plate radius [m]");
         v("upright_angle_deg", upright_angle_deg, "upright cylinder axis tolerance [deg]");
         v("lying_angle_deg", lying_angle_deg, "lying cylinder axis tolerance [deg]");
         v("max_iterations", max_iterations, "RANSAC sample cap");
