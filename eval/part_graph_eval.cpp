@@ -943,12 +943,13 @@ void WriteDumpRow(const Evaluator& ev, const FrameId& id, const Frame& f, const 
     for (std::size_t q = 1; q < kNumCategories; ++q)
         std::fprintf(dump, ",%g", double(p.cluster[ob][q]));
     for (std::size_t q = 1; q < kNumCategories; ++q) std::fprintf(dump, ",%g", double(c.scores[q]));
-    std::fprintf(dump, ",%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%d\n", double(c.extents[0]),
-                 double(c.extents[1]), double(c.extents[2]), double(c.height), double(c.box_score),
-                 double(c.axis_area), double(c.planar_part_ratio), double(c.cylinder_inlier_ratio),
-                 double(c.cylinder_cap_ratio), double(c.cylinder_coverage),
-                 double(c.cylinder_radius), double(c.sphere_inlier_ratio), double(c.sphere_radius),
-                 double(c.footprint_fill), double(c.side_face_ratio), int(c.upright));
+    std::fprintf(dump, ",%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%d,%g\n",
+                 double(c.extents[0]), double(c.extents[1]), double(c.extents[2]), double(c.height),
+                 double(c.box_score), double(c.axis_area), double(c.planar_part_ratio),
+                 double(c.cylinder_inlier_ratio), double(c.cylinder_cap_ratio),
+                 double(c.cylinder_coverage), double(c.cylinder_radius),
+                 double(c.sphere_inlier_ratio), double(c.sphere_radius), double(c.footprint_fill),
+                 double(c.side_face_ratio), int(c.upright), double(c.footprint_cover));
 }
 
 // Per-point and per-object counts of every method, the ceiling, and the --dump rows.

@@ -776,6 +776,93 @@ TEST(Categorize, ThinDiscIsPlate) {
                 r.thickness_ratio);
 }
 
+TEST(Categorize, FootprintCoverSeparatesASolidDiscFromOpenShapes) {
+    // A lying disc covers its hull; two thin bars in a V (a clamp, open scissors) leave most of
+    // theirs empty, although the V's hull is as round as the disc's by the fill measure.
+    sim::TableTopScene disc;
+    disc.cylinders = {{{0.0f, 0.0f}, 0.1f, 0.02f, {}}};
+    const Scan a = ScanScene(disc);
+    const Indices da = WithLabel(a.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(da.size(), 300u);
+    const CategoryResult d = CategorizeObject(a.cloud, da, {}, a.plane, {});
+    EXPECT_GT(d.footprint_cover, 0.8f);
+    EXPECT_LE(d.footprint_cover, 1.0f);
+
+    sim::TableTopScene vee;
+    vee.boxes = {{{0.0f, 0.08f}, 0.6f, {0.2f, 0.015f, 0.015f}, {}},
+                 {{0.0f, -0.08f}, -0.6f, {0.2f, 0.015f, 0.015f}, {}}};
+    const Scan b = ScanScene(vee);
+    Indices bars = WithLabel(b.cloud, sim::ObjectLabel(1));
+    const Indices second = WithLabel(b.cloud, sim::ObjectLabel(2));
+    bars.insert(bars.end(), second.begin(), second.end());
+    ASSERT_GT(bars.size(), 200u);
+    const CategoryResult v = CategorizeObject(b.cloud, bars, {}, b.plane, {});
+    EXPECT_LT(v.footprint_cover, 0.5f);
+    EXPECT_GE(v.footprint_cover, 0.0f);
+    std::printf("[ category ] footprint cover: disc %.2f, two bars %.2f\n", d.footprint_cover,
+                v.footprint_cover);
+
+    CategoryParams bad;
+    bad.footprint_cell = 0.0f;
+    EXPECT_THROW(CategorizeObject(a.cloud, da, {}, a.plane, bad), InvalidArgument);
+}
+
+TEST(Categorize, PlateSeenAsItsRimAndSquareDish) {
+    // A real plate's bottom goes with the table's band, leaving its rim: the same disc's points
+    // without their middle cover little of the hull and score as a plate fully, the solid disc
+    // solid_plate times less.
+    sim::TableTopScene scene;
+    scene.cylinders = {{{0.0f, 0.0f}, 0.11f, 0.02f, {}}};
+    const Scan scan = ScanScene(scene);
+    const Indices disc = WithLabel(scan.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(disc.size(), 300u);
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+    for (Index i : disc) centre += scan.cloud.points[i];
+    centre /= static_cast<float>(disc.size());
+    const Eigen::Vector3f up = scan.plane.head<3>().normalized();
+    Indices rim;
+    for (Index i : disc) {
+        const Eigen::Vector3f d = scan.cloud.points[i] - centre;
+        if ((d - d.dot(up) * up).norm() > 0.085f) rim.push_back(i);
+    }
+    ASSERT_GT(rim.size(), 100u);
+    const auto plate = static_cast<std::size_t>(Category::kPlate);
+    const CategoryResult solid = CategorizeObject(scan.cloud, disc, {}, scan.plane, {});
+    const CategoryResult ring = CategorizeObject(scan.cloud, rim, {}, scan.plane, {});
+    EXPECT_GT(solid.footprint_cover, 0.9f);
+    EXPECT_LT(ring.footprint_cover, 0.6f);
+    EXPECT_EQ(ring.category, Category::kPlate) << CategoryName(ring.category);
+    EXPECT_NEAR(solid.scores[plate], 0.5f * ring.scores[plate], 0.1f);
+    EXPECT_GT(ring.probabilities[plate], solid.probabilities[plate] + 0.2f);
+
+    // A thin, low square slab is flat by its outline; counted as a dish (box score below
+    // dish_box_score), the outline no longer matters.
+    sim::TableTopScene slab;
+    slab.boxes = {{{0.0f, 0.0f}, 0.3f, {0.15f, 0.15f, 0.02f}, {}}};
+    const Scan s2 = ScanScene(slab);
+    const Indices sq = WithLabel(s2.cloud, sim::ObjectLabel(1));
+    ASSERT_GT(sq.size(), 300u);
+    const CategoryResult as_slab = CategorizeObject(s2.cloud, sq, {}, s2.plane, {});
+    EXPECT_GT(as_slab.footprint_fill, 0.94f);
+    EXPECT_EQ(as_slab.scores[plate], 0.0f);
+    CategoryParams dishes;
+    dishes.dish_box_score = 0.99f;
+    dishes.slab_box_score = 1.0f;
+    const CategoryResult as_dish = CategorizeObject(s2.cloud, sq, {}, s2.plane, dishes);
+    EXPECT_GT(as_dish.scores[plate], 0.3f);
+    for (float bad : {-0.1f, 0.5f}) {
+        CategoryParams p;
+        p.dish_box_score = bad;  // 0.5 is not below slab_box_score
+        EXPECT_THROW(CategorizeObject(s2.cloud, sq, {}, s2.plane, p), InvalidArgument);
+    }
+    CategoryParams p;
+    p.solid_plate = 1.5f;
+    EXPECT_THROW(CategorizeObject(s2.cloud, sq, {}, s2.plane, p), InvalidArgument);
+    p = {};
+    p.rim_cover = 0.9f;  // above solid_cover
+    EXPECT_THROW(CategorizeObject(s2.cloud, sq, {}, s2.plane, p), InvalidArgument);
+}
+
 TEST(Categorize, DiscWiderThanTheLargestRadiusIsNoPlate) {
     // As thin, round and low as a plate, but 70 cm across: a piece of another surface, not a
     // dish. The same disc is a plate once the largest radius considered admits it.
@@ -807,6 +894,7 @@ TEST(Categorize, WideLowTinIsNoPlate) {
     CategoryParams high_plates;
     high_plates.plate_low_height = 0.1f;
     high_plates.plate_high_height = 0.2f;
+    high_plates.solid_plate = 1.0f;  // the tin's top is solid; only the height is under test
     const CategoryResult old = CategorizeObject(scan.cloud, obj, {}, scan.plane, high_plates);
     EXPECT_GT(old.probabilities[static_cast<std::size_t>(Category::kPlate)],
               r.probabilities[static_cast<std::size_t>(Category::kPlate)] + 0.1f);

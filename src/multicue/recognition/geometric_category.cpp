@@ -76,10 +76,17 @@ float PlanarPartRatio(const PointCloud& cloud, const std::vector<Indices>& parts
 }
 
 // Hull area over rectangle area of the points projected along box axis `k`.
-float FootprintFill(const PointCloud& cloud, const Indices& usable, const OrientedBox& box, int k) {
+struct Footprint {
+    float fill = 1.0f;  // hull area / minimum rectangle area
+    float area = 0.0f;  // hull area [m^2]
+};
+
+// The footprint across box axis k: its hull's area and how round it is.
+Footprint MeasureFootprint(const PointCloud& cloud, const Indices& usable, const OrientedBox& box,
+                           int k) {
     const int i = (k + 1) % 3, j = (k + 2) % 3;
     const float rect = box.extents[i] * box.extents[j];
-    if (!(rect > 0.0f)) return 1.0f;
+    if (!(rect > 0.0f)) return {};
     std::vector<Eigen::Vector2f> proj;
     proj.reserve(usable.size());
     for (Index p : usable) {
@@ -91,7 +98,34 @@ float FootprintFill(const PointCloud& cloud, const Indices& usable, const Orient
     // (PCA boxes); the minimum-area one is the fair reference for roundness.
     const float min_rect = MinAreaRectangle(hull).Area();
     const float ref = min_rect > 0.0f ? min_rect : rect;
-    return std::clamp(PolygonArea(hull) / ref, 0.0f, 1.0f);
+    Footprint f;
+    f.area = PolygonArea(hull);
+    f.fill = std::clamp(f.area / ref, 0.0f, 1.0f);
+    return f;
+}
+
+// Area of the grid cells (`cell` metres across box axis k) that hold points, over the hull's
+// area `hull_area`, at most 1.
+float FootprintCover(const PointCloud& cloud, const Indices& usable, const OrientedBox& box, int k,
+                     float hull_area, float cell) {
+    if (!(hull_area > 0.0f) || usable.empty()) return 1.0f;
+    const Eigen::Vector3f u = box.axes.col((k + 1) % 3), v = box.axes.col((k + 2) % 3);
+    const Eigen::Vector3f& origin = cloud.points[usable.front()];
+    // Cell keys relative to the first point, offset so that both halves stay positive (objects
+    // are far smaller than 2^20 cells).
+    constexpr std::int64_t kOffset = std::int64_t{1} << 20;
+    std::vector<std::uint64_t> cells;
+    cells.reserve(usable.size());
+    for (Index p : usable) {
+        const Eigen::Vector3f d = cloud.points[p] - origin;
+        const auto a = static_cast<std::int64_t>(std::floor(d.dot(u) / cell)) + kOffset;
+        const auto b = static_cast<std::int64_t>(std::floor(d.dot(v) / cell)) + kOffset;
+        cells.push_back((static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint64_t>(b));
+    }
+    std::sort(cells.begin(), cells.end());
+    const auto occupied =
+        static_cast<float>(std::unique(cells.begin(), cells.end()) - cells.begin());
+    return std::min(occupied * cell * cell / hull_area, 1.0f);
 }
 
 // Soft share of "flat" for sorted extents e1 >= e2 >= e3: > 0.5 exactly where the data README's
@@ -261,10 +295,11 @@ Indices UsablePoints(const PointCloud& cloud, const Indices& object) {
 struct ObjectBox {
     OrientedBox box;
     int thin_axis = 0;
+    float hull_area = 0.0f;  ///< of the footprint across the thin axis [m^2]
 };
 
 /// Extents: the upright box on the support plane, else an approximate minimum-volume box; sets
-/// the result's height, sorted extents, thickness ratio and footprint fill.
+/// the result's height, sorted extents, thickness ratio, footprint fill and cover.
 ObjectBox MeasureExtents(const PointCloud& cloud, const Indices& usable,
                          const std::optional<Eigen::Vector4f>& plane, CategoryResult& r) {
     r.upright = plane.has_value();
@@ -276,7 +311,9 @@ ObjectBox MeasureExtents(const PointCloud& cloud, const Indices& usable,
     std::sort(r.extents.data(), r.extents.data() + 3, std::greater<float>());
     box.extents.minCoeff(&out.thin_axis);
     r.thickness_ratio = r.extents[0] > 0.0f ? r.extents[2] / r.extents[0] : 1.0f;
-    r.footprint_fill = FootprintFill(cloud, usable, box, out.thin_axis);
+    const Footprint footprint = MeasureFootprint(cloud, usable, box, out.thin_axis);
+    r.footprint_fill = footprint.fill;
+    out.hull_area = footprint.area;
     return out;
 }
 
@@ -397,17 +434,24 @@ float SphereScore(const PointCloud& cloud, const Indices& sample, const SacParam
     return sphere_score;
 }
 
-/// Plate: thin and round, no wider than the largest round object considered, and with a support
-/// plane low and lying (thin axis along up, see the header).
-float PlateScore(const CategoryResult& r, bool has_plane, int thin_axis,
-                 const CategoryParams& params) {
+/// Plate: thin, no wider than the largest round object considered, and with a support plane
+/// low and lying (thin axis along up, see the header); then round or dish-like, and seen as a
+/// rim rather than a solid top (sets r.footprint_cover for such candidates).
+float PlateScore(const PointCloud& cloud, const Indices& usable, const ObjectBox& box,
+                 bool has_plane, const CategoryParams& params, CategoryResult& r) {
     if (r.extents[0] > 2.0f * params.max_radius) return 0.0f;
+    if (has_plane && box.thin_axis != 2) return 0.0f;
     const float thin =
         1.0f - Ramp(r.thickness_ratio, params.plate_thin_ratio, params.plate_thick_ratio);
-    const float round = 1.0f - Ramp(r.footprint_fill, params.round_fill, params.square_fill);
     const float low =
         has_plane ? 1.0f - Ramp(r.height, params.plate_low_height, params.plate_high_height) : 1.0f;
-    return (has_plane && thin_axis != 2) ? 0.0f : thin * round * low;
+    if (!(thin * low > 0.0f)) return 0.0f;
+    const float round = 1.0f - Ramp(r.footprint_fill, params.round_fill, params.square_fill);
+    const float dish = 1.0f - Ramp(r.box_score, params.dish_box_score, params.slab_box_score);
+    r.footprint_cover =
+        FootprintCover(cloud, usable, box.box, box.thin_axis, box.hull_area, params.footprint_cell);
+    const float solid = Ramp(r.footprint_cover, params.rim_cover, params.solid_cover);
+    return thin * low * std::max(round, dish) * (1.0f - (1.0f - params.solid_plate) * solid);
 }
 
 /// The category scores: box-likeness shared between box and flat, a plate taking precedence over
@@ -518,6 +562,17 @@ void CategoryParams::Validate() const {
             "sphere axis areas must satisfy 0 <= sphere_box_axis_area < sphere_box_axis_area_max "
             "<= 1, got {} and {}",
             p.sphere_box_axis_area, p.sphere_box_axis_area_max);
+    Require(p.footprint_cell > 0.0f && std::isfinite(p.footprint_cell),
+            "footprint_cell must be positive and finite, got {}", p.footprint_cell);
+    Require(
+        p.dish_box_score >= 0.0f && p.slab_box_score > p.dish_box_score && p.slab_box_score <= 1.0f,
+        "box scores must satisfy 0 <= dish_box_score < slab_box_score <= 1, got {} and {}",
+        p.dish_box_score, p.slab_box_score);
+    Require(p.rim_cover >= 0.0f && p.solid_cover > p.rim_cover && p.solid_cover <= 1.0f,
+            "covers must satisfy 0 <= rim_cover < solid_cover <= 1, got {} and {}", p.rim_cover,
+            p.solid_cover);
+    Require(p.solid_plate >= 0.0f && p.solid_plate <= 1.0f,
+            "solid_plate must lie in [0, 1], got {}", p.solid_plate);
     Require(p.round_fill > 0.0f && p.square_fill > p.round_fill && p.square_fill <= 1.0f,
             "fills must satisfy 0 < round_fill < square_fill <= 1, got {} and {}", p.round_fill,
             p.square_fill);
@@ -568,7 +623,7 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
             MeasureBoxLikeness(cloud, usable, sample, parts, plane, axis_angle, params, r);
             sphere_score = SphereScore(cloud, sample, sac, cos_inlier_normal, params, r);
         });
-    const float plate = PlateScore(r, plane.has_value(), box.thin_axis, params);
+    const float plate = PlateScore(cloud, usable, box, plane.has_value(), params, r);
     const float flat_share = FlatShare(r.extents, params);
     ScoreCategories(sphere_score, best_cyl.score, plate, flat_share, params.min_evidence, r);
     SetProbabilities(params.sharpness, r);

@@ -22,10 +22,13 @@
 ///   object's largest extent, fading out as axis_area rises from sphere_box_axis_area to
 ///   sphere_box_axis_area_max (the faces of a large box fit a large sphere within the
 ///   threshold); from there on no sphere is fitted;
-/// - plate: thin (thickness / largest extent) and round (hull area / minimum rectangle area
-///   across the thin axis: pi/4 for a disc, 1 for a slab), and no wider than 2 max_radius (the
-///   largest round object considered; a flat piece of another surface can look round and thin
-///   but is far wider than a dish). With a support plane only objects
+/// - plate: thin (thickness / largest extent), round (hull area / minimum rectangle area across
+///   the thin axis: pi/4 for a disc, 1 for a slab) or a dish (box score below dish_box_score ..
+///   slab_box_score: a square plate), and no wider than 2 max_radius (the largest round object
+///   considered; a flat piece of another surface can look round and thin but is far wider than
+///   a dish); seen as a rim: a plate's bottom lies within the table's band, so its points cover
+///   little of their hull (footprint_cover), while a solid top of the same outline (a lid, a
+///   tool lying flat) scores solid_plate times less. With a support plane only objects
 ///   whose thin axis is up (lying plates) qualify: across a horizontal axis a single view shows
 ///   too little of the outline to judge roundness; and not higher than plate_low_height ..
 ///   plate_high_height above the plane (a flat box under another one shows a round-looking,
@@ -108,14 +111,24 @@ struct CategoryParams {
                                         ///< ball: 0.07, a bowl: 0.01); the sphere score fades
                                         ///< from this axis_area [-]
     float sphere_box_axis_area_max = 0.6f;  ///< ... to 0 at this one [-]
-    float round_fill = 0.86f;    ///< hull / rectangle area up to this is fully round (disc: 0.785)
-                                 ///< [-]
-    float square_fill = 0.94f;   ///< ... and from this on not round at all (rectangle: 1) [-]
-    float min_evidence = 0.45f;  ///< "other" wins when no other score reaches this, (0, 1) [-]
-    float sharpness = 2.0f;      ///< exponent applied to the scores before normalising [-]; > 0
-    std::uint64_t seed = 1;      ///< RANSAC seed; equal seeds give identical results [-]
-    int num_threads = 0;         ///< threads of the RANSAC fits (0 = all cores); never changes the
-                                 ///< result
+    float round_fill = 0.86f;     ///< hull / rectangle area up to this is fully round (disc: 0.785)
+                                  ///< [-]
+    float square_fill = 0.94f;    ///< ... and from this on not round at all (rectangle: 1) [-]
+    float dish_box_score = 0.3f;  ///< a plate candidate with a box score up to this counts as
+                                  ///< round whatever its outline (a square plate's dish has no
+                                  ///< box faces) [-]
+    float slab_box_score = 0.5f;  ///< ... and from this box score on its outline decides [-]
+    float footprint_cell = 0.01f;  ///< grid cell of the footprint cover [m]; > 0
+    float rim_cover = 0.6f;        ///< a plate candidate whose points cover up to this share of its
+                                   ///< footprint's hull is seen as a rim: a plate's bottom lies
+                                   ///< within the table's band and goes with the table [-]
+    float solid_cover = 0.8f;      ///< ... from this share on as a solid top [-]
+    float solid_plate = 0.5f;      ///< factor on the plate score of a solid top, [0, 1] [-]
+    float min_evidence = 0.45f;    ///< "other" wins when no other score reaches this, (0, 1) [-]
+    float sharpness = 2.0f;        ///< exponent applied to the scores before normalising [-]; > 0
+    std::uint64_t seed = 1;        ///< RANSAC seed; equal seeds give identical results [-]
+    int num_threads = 0;  ///< threads of the RANSAC fits (0 = all cores); never changes the
+                          ///< result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
@@ -148,6 +161,12 @@ struct CategoryParams {
         v("sphere_box_axis_area_max", sphere_box_axis_area_max, "... to 0 at this axis_area");
         v("round_fill", round_fill, "footprint fill up to this is round");
         v("square_fill", square_fill, "footprint fill from this is square");
+        v("dish_box_score", dish_box_score, "plate candidates up to this box score are dishes");
+        v("slab_box_score", slab_box_score, "from this box score the outline decides");
+        v("footprint_cell", footprint_cell, "grid cell of the footprint cover [m]");
+        v("rim_cover", rim_cover, "footprint cover up to this is a plate's rim");
+        v("solid_cover", solid_cover, "footprint cover from this is a solid top");
+        v("solid_plate", solid_plate, "factor on the plate score of a solid top");
         v("min_evidence", min_evidence, "other wins below this score");
         v("sharpness", sharpness, "exponent on scores before normalising");
         v("seed", seed, "RANSAC seed");
@@ -183,10 +202,14 @@ struct CategoryResult {
     float sphere_inlier_ratio = 0.0f;  ///< share of points on the best sphere, 0 if none [-]
     float sphere_radius = 0.0f;        ///< its radius, 0 if none (or box-like: not fitted) [m]
     float thickness_ratio = 0.0f;      ///< e3 / e1 [-]
-    float footprint_fill = 0.0f;   ///< convex hull area / rectangle area across the thinnest box
-                                   ///< axis: 1 rectangle, pi/4 disc [-]
-    float side_face_ratio = 0.0f;  ///< share of normals within axis_angle_deg of a horizontal
-                                   ///< axis of the upright box (its vertical faces) [-]
+    float footprint_fill = 0.0f;    ///< convex hull area / rectangle area across the thinnest box
+                                    ///< axis: 1 rectangle, pi/4 disc [-]
+    float footprint_cover = -1.0f;  ///< area of the footprint_cell cells holding points / hull
+                                    ///< area across that axis, near 1 for a solid top view;
+                                    ///< measured for plate candidates only (thin, low, lying),
+                                    ///< else -1 [-]
+    float side_face_ratio = 0.0f;   ///< share of normals within axis_angle_deg of a horizontal
+                                    ///< axis of the upright box (its vertical faces) [-]
 };
 
 /// Categorises one object: the points `object` of `cloud` (which needs one normal per point;
