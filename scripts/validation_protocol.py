@@ -13,7 +13,8 @@ Splits (see eval/README.md, "Validation protocol"):
 
 usage: validation_protocol.py [--build build] [--data ../shared/data] [--out DIR]
            [--splits tune,validate,samples] [--peers build-peer/eval/mosd_peers]
-           [--config FILE] [--sim-modes complex,mixed] [--sim-scenes 10] [--mesh-split test]
+           [--config FILE] [--sim-modes complex,mixed] [--sim-scenes 10] [--sim-seed 1000]
+           [--sim-objects MIN,MAX] [--mesh-split test]
            [--json FILE]
 Needs numpy and scipy (run with /usr/bin/python3) and the shared tools/osd_eval.py scorer.
 Exit code 0 when every run finished, 1 when a run failed, 2 on bad arguments.
@@ -191,6 +192,8 @@ def sim_split(args, osd_eval, mode):
     sim_dir = os.path.join(args.out, name, "scenes")
     cmd = [args.cli, "simulate", "scenes", "--out", sim_dir, "--scenes", str(args.sim_scenes),
            "--mode", mode, "--seed", str(args.sim_seed), "-q"]
+    if args.sim_objects:
+        cmd += ["--objects", args.sim_objects]
     meshes = os.path.join(args.data, "meshes", "tabletop")
     if args.mesh_split != "procedural":
         cmd += ["--meshes", meshes, "--mesh-split", args.mesh_split]
@@ -280,6 +283,8 @@ def main():
     ap.add_argument("--sim-modes", default="complex,mixed,stacked")
     ap.add_argument("--sim-scenes", type=int, default=10)
     ap.add_argument("--sim-seed", type=int, default=1000)
+    ap.add_argument("--sim-objects", default=None,
+                    help="objects per simulated scene MIN,MAX (default: each mode's range)")
     ap.add_argument("--mesh-split", default="test", choices=["tune", "test", "all", "procedural"])
     ap.add_argument("--json", default=None, help="also write the whole report here")
     args = ap.parse_args()
