@@ -114,6 +114,18 @@ Indices WithLabel(const PointCloud& cloud, std::uint32_t label) {
     return out;
 }
 
+/// A scan of `scene` and the points of its first object (at least 300 of them).
+struct FirstObject {
+    Scan scan;
+    Indices points;
+};
+FirstObject ScanFirstObject(const sim::TableTopScene& scene) {
+    FirstObject f{ScanScene(scene), {}};
+    f.points = WithLabel(f.scan.cloud, sim::ObjectLabel(1));
+    EXPECT_GT(f.points.size(), 300u);
+    return f;
+}
+
 // A shape for the ray caster: ray origin o and direction d (world frame) -> the nearest hit
 // parameter t > 0 with its outward normal, or false.
 using Shape = std::function<bool(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float& t,
@@ -764,9 +776,7 @@ TEST(Categorize, SphereIsSphere) {
 TEST(Categorize, ThinDiscIsPlate) {
     sim::TableTopScene scene;
     scene.cylinders = {{{0.0f, 0.0f}, 0.11f, 0.02f, {}}};
-    const Scan scan = ScanScene(scene);
-    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
-    ASSERT_GT(obj.size(), 300u);
+    const auto [scan, obj] = ScanFirstObject(scene);
     const CategoryResult r = CategorizeObject(scan.cloud, obj, {}, scan.plane, {});
     EXPECT_EQ(r.category, Category::kPlate) << CategoryName(r.category);
     EXPECT_LT(r.footprint_fill, 0.86f);
@@ -781,9 +791,7 @@ TEST(Categorize, FootprintCoverSeparatesASolidDiscFromOpenShapes) {
     // theirs empty, although the V's hull is as round as the disc's by the fill measure.
     sim::TableTopScene disc;
     disc.cylinders = {{{0.0f, 0.0f}, 0.1f, 0.02f, {}}};
-    const Scan a = ScanScene(disc);
-    const Indices da = WithLabel(a.cloud, sim::ObjectLabel(1));
-    ASSERT_GT(da.size(), 300u);
+    const auto [a, da] = ScanFirstObject(disc);
     const CategoryResult d = CategorizeObject(a.cloud, da, {}, a.plane, {});
     EXPECT_GT(d.footprint_cover, 0.8f);
     EXPECT_LE(d.footprint_cover, 1.0f);
@@ -813,9 +821,7 @@ TEST(Categorize, PlateSeenAsItsRimAndSquareDish) {
     // solid_plate times less.
     sim::TableTopScene scene;
     scene.cylinders = {{{0.0f, 0.0f}, 0.11f, 0.02f, {}}};
-    const Scan scan = ScanScene(scene);
-    const Indices disc = WithLabel(scan.cloud, sim::ObjectLabel(1));
-    ASSERT_GT(disc.size(), 300u);
+    const auto [scan, disc] = ScanFirstObject(scene);
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     for (Index i : disc) centre += scan.cloud.points[i];
     centre /= static_cast<float>(disc.size());
@@ -839,9 +845,7 @@ TEST(Categorize, PlateSeenAsItsRimAndSquareDish) {
     // dish_box_score), the outline no longer matters.
     sim::TableTopScene slab;
     slab.boxes = {{{0.0f, 0.0f}, 0.3f, {0.15f, 0.15f, 0.02f}, {}}};
-    const Scan s2 = ScanScene(slab);
-    const Indices sq = WithLabel(s2.cloud, sim::ObjectLabel(1));
-    ASSERT_GT(sq.size(), 300u);
+    const auto [s2, sq] = ScanFirstObject(slab);
     const CategoryResult as_slab = CategorizeObject(s2.cloud, sq, {}, s2.plane, {});
     EXPECT_GT(as_slab.footprint_fill, 0.94f);
     EXPECT_EQ(as_slab.scores[plate], 0.0f);
@@ -868,9 +872,7 @@ TEST(Categorize, DiscWiderThanTheLargestRadiusIsNoPlate) {
     // dish. The same disc is a plate once the largest radius considered admits it.
     sim::TableTopScene scene;
     scene.cylinders = {{{0.0f, 0.0f}, 0.35f, 0.02f, {}}};
-    const Scan scan = ScanScene(scene);
-    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
-    ASSERT_GT(obj.size(), 300u);
+    const auto [scan, obj] = ScanFirstObject(scene);
     const CategoryResult r = CategorizeObject(scan.cloud, obj, {}, scan.plane, {});
     EXPECT_NE(r.category, Category::kPlate) << CategoryName(r.category);
     EXPECT_EQ(r.probabilities[static_cast<std::size_t>(Category::kPlate)], 0.0f);
@@ -884,9 +886,7 @@ TEST(Categorize, WideLowTinIsNoPlate) {
     // As thin and round as a plate relative to its size, but 6 cm high: plates are 1.5-3 cm.
     sim::TableTopScene scene;
     scene.cylinders = {{{0.0f, 0.0f}, 0.13f, 0.06f, {}}};
-    const Scan scan = ScanScene(scene);
-    const Indices obj = WithLabel(scan.cloud, sim::ObjectLabel(1));
-    ASSERT_GT(obj.size(), 300u);
+    const auto [scan, obj] = ScanFirstObject(scene);
     const CategoryResult r = CategorizeObject(scan.cloud, obj, {}, scan.plane, {});
     EXPECT_NE(r.category, Category::kPlate);
     EXPECT_LT(r.probabilities[static_cast<std::size_t>(Category::kPlate)], 0.05f);
