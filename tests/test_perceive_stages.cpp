@@ -2,6 +2,9 @@
 // region, frame normals, object hypotheses, parts and the concave split, occlusion merging,
 // categories, models, point labels; and the parameter tree, checked whole before any work.
 
+#include <algorithm>
+#include <iterator>
+
 #include <gtest/gtest.h>
 
 #include "multicue/core/exceptions.hpp"
@@ -406,6 +409,54 @@ TEST(PerceiveStages, LabelPointsNumbersObjectsAndLabelsTheirPoints) {
     PerceiveResult empty;
     LabelPoints(cloud, empty);
     EXPECT_EQ(empty.point_objects, std::vector<std::uint32_t>(4, 0));
+}
+
+TEST(PerceiveStages, ADishGetsItsFloorBackFromTheTable) {
+    // A plate 2 cm high whose floor lies 4 mm above the table, below the prism's 8 mm, beside a
+    // box 2.5 cm high whose sides' lowest 8 mm are cut the same way.
+    const test::SimulatedFrame f =
+        test::ScanShapes({{Shape::kDish, {0.12f, 0.12f, 0.02f}, {-0.12f, 0.05f, 0.0f}},
+                          {Shape::kBox, {0.15f, 0.1f, 0.025f}, {0.15f, 0.05f, 0.0f}}});
+    ASSERT_GT(f.truth[0].size(), 2000u);
+    PerceiveParams off;
+    off.floors.enabled = false;
+    const PerceiveResult with = Perceive(f.cloud, PerceiveParams{});
+    const PerceiveResult without = Perceive(f.cloud, off);
+    // The object holding most of the dish's points, and its share of them / of its own points.
+    auto dish = [&](const PerceiveResult& r) {
+        std::pair<double, double> best{0.0, 0.0};
+        for (const PerceivedObject& o : r.objects) {
+            Indices common;
+            std::set_intersection(o.indices.begin(), o.indices.end(), f.truth[0].begin(),
+                                  f.truth[0].end(), std::back_inserter(common));
+            const double recall = double(common.size()) / double(f.truth[0].size());
+            if (recall > best.first)
+                best = {recall, double(common.size()) / double(o.indices.size())};
+        }
+        return best;
+    };
+    const auto [recall_with, precision_with] = dish(with);
+    const auto [recall_without, precision_without] = dish(without);
+    std::printf("[ floors ] dish recall %.3f precision %.3f; without floors %.3f %.3f\n", recall_with,
+                precision_with, recall_without, precision_without);
+    EXPECT_LT(recall_without, 0.7);  // its rim
+    EXPECT_GT(recall_with, 0.9);
+    EXPECT_GT(precision_with, 0.97);  // no table around it
+    // The table's inliers gave the floor up; every object keeps its category and model.
+    EXPECT_LT(with.support.inliers.size(), without.support.inliers.size());
+    ASSERT_EQ(with.objects.size(), without.objects.size());
+    for (std::size_t k = 0; k < with.objects.size(); ++k) {
+        EXPECT_EQ(with.objects[k].category.category, without.objects[k].category.category);
+        EXPECT_EQ(with.objects[k].model.box.has_value(), without.objects[k].model.box.has_value());
+        EXPECT_EQ(with.objects[k].model.cylinder.has_value(),
+                  without.objects[k].model.cylinder.has_value());
+        EXPECT_EQ(with.objects[k].model.mesh.vertices.size(),
+                  without.objects[k].model.mesh.vertices.size());
+        EXPECT_GE(with.objects[k].indices.size(), without.objects[k].indices.size());
+    }
+    PerceiveParams bad;
+    bad.floors.cell = 0.0f;
+    EXPECT_THROW(Perceive(f.cloud, bad), ParameterError);
 }
 
 TEST(PerceiveStages, ThreadCountReachesEveryParallelStage) {

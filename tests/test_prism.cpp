@@ -1,9 +1,12 @@
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/segmentation/enclosed_floors.hpp"
 #include "multicue/segmentation/polygonal_prism.hpp"
 #include "test_util.hpp"
 
@@ -98,6 +101,95 @@ TEST(PolygonalPrism, ContractAndEmpty) {
     EXPECT_TRUE(PolygonalPrism(PointCloud{}, kTable, hull, {}).empty());
     EXPECT_TRUE(PlaneConvexHull(PointCloud{}, {}, kTable).empty());
     EXPECT_THROW(PlaneConvexHull(Square(0.5f, 2), {99}, kTable), InvalidArgument);
+}
+
+// A synthetic dish on the table z = 0.75: a ring of rim points 1-2 cm up (radius 9-12 cm around
+// (cx, 0)), its floor 3 mm up inside radius 8 cm, the table all around out to 25 cm. Indices:
+// rim first, then floor, then table.
+struct Dish {
+    PointCloud cloud;
+    Indices rim, floor, table;
+};
+Dish MakeDish(float cx = 0.0f, float open_from_deg = 360.0f) {
+    Dish d;
+    auto add = [&](Indices& to, float x, float y, float z) {
+        to.push_back(static_cast<Index>(d.cloud.points.size()));
+        d.cloud.points.emplace_back(x, y, z);
+    };
+    for (float r = 0.09f; r <= 0.12f; r += 0.005f) {
+        for (float a = 0.0f; a < 360.0f; a += 2.0f) {
+            if (a >= open_from_deg) continue;  // an open outline (a C) when below 360
+            const float t = a * 3.14159265f / 180.0f;
+            add(d.rim, cx + r * std::cos(t), r * std::sin(t), 0.75f + 0.01f + (r - 0.09f) / 3);
+        }
+    }
+    for (float x = -0.25f; x <= 0.25f; x += 0.005f) {
+        for (float y = -0.25f; y <= 0.25f; y += 0.005f) {
+            const float r = std::hypot(x, y);
+            if (r < 0.08f)
+                add(d.floor, cx + x, y, 0.753f);
+            else if (r > 0.125f)
+                add(d.table, cx + x, y, 0.75f + (x > 0 ? 0.002f : -0.002f));
+        }
+    }
+    d.cloud.SetUnorganized();
+    return d;
+}
+
+TEST(EnclosedFloors, ADishGetsItsFloorAndNoTable) {
+    const Dish d = MakeDish();
+    const auto floors = EnclosedFloors(d.cloud, kTable, {d.rim}, 0.008f);
+    ASSERT_EQ(floors.size(), 1u);
+    // Every floor point, no table point.
+    EXPECT_EQ(floors[0], d.floor);
+    // The same with the plane's normal scaled: only its direction counts.
+    EXPECT_EQ(EnclosedFloors(d.cloud, 3.0f * kTable, {d.rim}, 0.008f)[0], d.floor);
+}
+
+TEST(EnclosedFloors, OpenOutlinesHighObjectsAndTakenPointsGetNothing) {
+    // A C-shaped outline (a banana's hollow side, a clamp) does not enclose the table it frames.
+    const Dish c = MakeDish(0.0f, 270.0f);
+    const auto open = EnclosedFloors(c.cloud, kTable, {c.rim}, 0.008f)[0];
+    EXPECT_LT(open.size(), c.floor.size() / 2);
+    for (Index i : open) EXPECT_TRUE(std::binary_search(c.floor.begin(), c.floor.end(), i));
+    // A rim 10 cm up is no dish: objects higher than max_object_height keep what they have.
+    Dish high = MakeDish();
+    for (Index i : high.rim) high.cloud.points[i].z() += 0.1f;
+    EXPECT_TRUE(EnclosedFloors(high.cloud, kTable, {high.rim}, 0.008f)[0].empty());
+    // Points of another object stay its own; the first enclosing object takes the rest.
+    const Dish d = MakeDish();
+    Indices half(d.floor.begin(), d.floor.begin() + d.floor.size() / 2);
+    const auto two = EnclosedFloors(d.cloud, kTable, {d.rim, half, d.rim}, 0.008f);
+    ASSERT_EQ(two.size(), 3u);
+    EXPECT_EQ(two[0], Indices(d.floor.begin() + d.floor.size() / 2, d.floor.end()));
+    EXPECT_TRUE(two[1].empty());  // half lies at the floor's height, but encloses little
+    EXPECT_TRUE(two[2].empty());
+    // No plane, no objects, an empty object: nothing.
+    EXPECT_TRUE(EnclosedFloors(d.cloud, Eigen::Vector4f::Zero(), {d.rim}, 0.008f)[0].empty());
+    EXPECT_TRUE(EnclosedFloors(d.cloud, kTable, {}, 0.008f).empty());
+    EXPECT_TRUE(EnclosedFloors(d.cloud, kTable, {Indices{}}, 0.008f)[0].empty());
+    // A floor at the prism's lowest height is the object's already (the band ends below it).
+    EXPECT_TRUE(EnclosedFloors(d.cloud, kTable, {d.rim}, 0.002f)[0].empty());
+}
+
+TEST(EnclosedFloors, BadInputIsRefused) {
+    const Dish d = MakeDish();
+    EXPECT_THROW(EnclosedFloors(d.cloud, kTable, {{static_cast<Index>(d.cloud.size())}}, 0.008f),
+                 InvalidArgument);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(EnclosedFloors(d.cloud, Eigen::Vector4f(0, 0, nan, 1), {d.rim}, 0.008f),
+                 InvalidArgument);
+    EXPECT_THROW(EnclosedFloors(d.cloud, kTable, {d.rim}, nan), InvalidArgument);
+    for (const EnclosedFloorParams& p :
+         {EnclosedFloorParams{.max_object_height = 0.0f}, EnclosedFloorParams{.below = -1.0f},
+          EnclosedFloorParams{.cell = 0.0f}, EnclosedFloorParams{.max_object_width = nan}}) {
+        EXPECT_THROW(EnclosedFloors(d.cloud, kTable, {d.rim}, 0.008f, p), InvalidArgument);
+    }
+    // NaN points are never floor points, and do not stop the others.
+    Dish holes = MakeDish();
+    holes.cloud.points[holes.floor[0]] = Eigen::Vector3f::Constant(nan);
+    const auto f = EnclosedFloors(holes.cloud, kTable, {holes.rim}, 0.008f)[0];
+    EXPECT_EQ(f, Indices(holes.floor.begin() + 1, holes.floor.end()));
 }
 
 }  // namespace

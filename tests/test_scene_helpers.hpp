@@ -21,10 +21,11 @@
 
 namespace multicue::test {
 
-/// An upright box (extents x, y, z) or cylinder (radius, height) whose base centre is `base`
-/// (x, y on the table, z above the table top) [m].
+/// An upright box (extents x, y, z), cylinder (radius, height) or dish (radius, height: a plate
+/// whose floor, 4 mm thick, spans 0.6 of its radius) whose base centre is `base` (x, y on the
+/// table, z above the table top) [m].
 struct Shape {
-    enum Kind { kBox, kCylinder } kind = kBox;
+    enum Kind { kBox, kCylinder, kDish } kind = kBox;
     Eigen::Vector3f size = Eigen::Vector3f::Constant(0.1f);  ///< box extents or (r, r, h)
     Eigen::Vector3f base = Eigen::Vector3f::Zero();
 };
@@ -50,10 +51,20 @@ inline SimulatedFrame ScanShapes(const std::vector<Shape>& shapes, std::uint64_t
         sim::SceneObject o;
         if (s.kind == Shape::kBox) {
             o.mesh = std::make_shared<const sim::PartMesh>(sim::MakeBoxMesh(s.size));
-        } else {
+        } else if (s.kind == Shape::kCylinder) {
             const float r = s.size.x(), h = s.size.z();
             o.mesh = std::make_shared<const sim::PartMesh>(sim::MakeRevolutionMesh(
                 {{0.0f, 0.0f, 0}, {r, 0.0f, 0}, {r, h, 0}, {0.0f, h, 0}}, {"body"}, 96));
+        } else {
+            const float r = s.size.x(), h = s.size.z(), t = 0.004f;
+            o.mesh = std::make_shared<const sim::PartMesh>(
+                sim::MakeRevolutionMesh({{0.0f, 0.0f, 0},
+                                         {0.6f * r, 0.0f, 0},
+                                         {r, h, 0},
+                                         {r - 0.006f, h, 0},
+                                         {0.6f * r - 0.004f, t, 0},
+                                         {0.0f, t, 0}},
+                                        {"dish"}, 96));
         }
         o.T_world_object.translation() = s.base + Eigen::Vector3f(0.0f, 0.0f, kTableTop);
         o.label = sim::ObjectLabel(static_cast<std::uint32_t>(k + 1));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <limits>
 #include <optional>
 
@@ -74,6 +75,7 @@ void PerceiveParams::Validate() const {
     ValidateNode("occlusion", [&] { occlusion.Validate(); });
     ValidateNode("category", [&] { category.Validate(); });
     ValidateNode("models", [&] { models.Validate(); });
+    ValidateNode("floors", [&] { floors.Validate(); });
 }
 
 PerceiveParams ApplyThreadCount(PerceiveParams p) {
@@ -108,6 +110,35 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result) {
 }
 
 namespace {
+
+// The table-band points that a low object's own points enclose join the object (its floor) and
+// leave the table's inliers. Categories and models stay those of the object without them.
+void AddEnclosedFloors(const PointCloud& cloud, const Eigen::Vector4f& plane,
+                       const PerceiveParams& params, std::vector<PerceivedObject>& objects,
+                       Indices& table_inliers) {
+    std::vector<Indices> points;
+    points.reserve(objects.size());
+    for (const PerceivedObject& o : objects) points.push_back(o.indices);
+    const std::vector<Indices> floors =
+        EnclosedFloors(cloud, plane, points, params.prism.min_height, params.floors);
+    Indices all;
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        if (floors[k].empty()) continue;
+        Indices joined;
+        joined.reserve(objects[k].indices.size() + floors[k].size());
+        std::merge(objects[k].indices.begin(), objects[k].indices.end(), floors[k].begin(),
+                   floors[k].end(), std::back_inserter(joined));
+        objects[k].indices = std::move(joined);
+        all.insert(all.end(), floors[k].begin(), floors[k].end());
+    }
+    if (all.empty()) return;
+    std::sort(all.begin(), all.end());
+    Indices kept;
+    kept.reserve(table_inliers.size());
+    std::set_difference(table_inliers.begin(), table_inliers.end(), all.begin(), all.end(),
+                        std::back_inserter(kept));
+    table_inliers = std::move(kept);
+}
 
 // The stages on one frame (parameters checked already), in `cloud` itself: the normals stage
 // adds normals and curvature to it when it has none.
@@ -153,6 +184,10 @@ PerceiveResult PerceiveFrame(PointCloud& cloud, const PerceiveParams& params,
     refit(SplitTouchingRound(cloud, objects, plane, params.models, min_points));
     CategorizeByModels(objects, params.category);
     timer.Done("models");
+    if (params.floors.enabled && result.support.found) {
+        AddEnclosedFloors(cloud, plane, params, objects, result.support.inliers);
+        timer.Done("floors");
+    }
 
     result.objects = std::move(objects);
     LabelPoints(cloud, result);

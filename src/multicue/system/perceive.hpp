@@ -20,6 +20,7 @@
 #include "multicue/recognition/part_graph_model.hpp"
 #include "multicue/reconstruction/model_grouping.hpp"
 #include "multicue/reconstruction/object_model.hpp"
+#include "multicue/segmentation/enclosed_floors.hpp"
 #include "multicue/segmentation/euclidean_clustering.hpp"
 #include "multicue/segmentation/occlusion_merge.hpp"
 #include "multicue/segmentation/part_segmentation.hpp"
@@ -50,6 +51,8 @@ struct PerceiveParams {
     Switchable<OcclusionMergeParams> occlusion{};
     CategorizationParams category{};
     ModelParams models{};  ///< models and grouping by models (sections 5.4, 5.4.1)
+    /// The floor of a low object (a plate's bottom), cut away with the table, given back to it.
+    Switchable<EnclosedFloorParams> floors{};
     /// Throws ParameterError naming the node and field of the first out-of-range value.
     void Validate() const;
     /// Its parameters once each: configuration key (the field's name), field, meaning. A
@@ -69,6 +72,9 @@ struct PerceiveParams {
                  "join fragments of an object that a nearer object cuts in two");
         v.Node("category", category);
         v.Node("models", models);
+        v.Switch("floors", floors,
+                 "give a low object the table-band points its own points enclose (a plate's "
+                 "floor)");
     }
 };
 
