@@ -181,8 +181,23 @@ std::vector<Indices> EnclosedFloors(const PointCloud& cloud, const Eigen::Vector
     }
     if (grids.empty()) return floors;
 
-    // The band's free points in an enclosed cell.
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
+    // The band's free points in an enclosed cell: in an organized cloud only those inside a low
+    // object's image rectangle can be enclosed in the image, so only they are looked at.
+    Indices candidates;
+    if (organized) {
+        for (const FloorGrid& g : grids) {
+            const PixelMask& m = g.pixels;
+            for (long y = m.y0; y < m.y0 + m.height; ++y) {
+                for (long x = m.x0; x < m.x0 + m.width; ++x)
+                    candidates.push_back(static_cast<Index>(y * cloud.width + x));
+            }
+        }
+        std::sort(candidates.begin(), candidates.end());
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    }
+    const std::size_t n = organized ? candidates.size() : cloud.size();
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t i = organized ? candidates[k] : k;
         if (taken[i]) continue;
         const Eigen::Vector3f& p = cloud.points[i];
         if (!p.allFinite()) continue;
