@@ -453,6 +453,13 @@ TEST(PerceiveStages, ADishGetsItsFloorBackFromTheTable) {
         EXPECT_EQ(with.objects[k].model.mesh.vertices.size(),
                   without.objects[k].model.mesh.vertices.size());
         EXPECT_GE(with.objects[k].indices.size(), without.objects[k].indices.size());
+        // The parts still hold every point of their object, the floor as one part more.
+        Indices in_parts;
+        for (const Indices& part : with.objects[k].parts)
+            in_parts.insert(in_parts.end(), part.begin(), part.end());
+        std::sort(in_parts.begin(), in_parts.end());
+        EXPECT_EQ(in_parts, with.objects[k].indices);
+        EXPECT_LE(with.objects[k].parts.size(), without.objects[k].parts.size() + 1);
     }
     PerceiveParams bad;
     bad.floors.cell = 0.0f;

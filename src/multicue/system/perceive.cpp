@@ -111,8 +111,9 @@ void LabelPoints(const PointCloud& cloud, PerceiveResult& result) {
 
 namespace {
 
-// The table-band points that a low object's own points enclose join the object (its floor) and
-// leave the table's inliers. Categories and models stay those of the object without them.
+// The table-band points that a low object's own points enclose join the object as one more part
+// (its floor) and leave the table's inliers. Categories and models stay those of the object
+// without them.
 void AddEnclosedFloors(const PointCloud& cloud, const Eigen::Vector4f& plane,
                        const PerceiveParams& params, std::vector<PerceivedObject>& objects,
                        Indices& table_inliers) {
@@ -130,6 +131,10 @@ void AddEnclosedFloors(const PointCloud& cloud, const Eigen::Vector4f& plane,
                    floors[k].end(), std::back_inserter(joined));
         objects[k].indices = std::move(joined);
         all.insert(all.end(), floors[k].begin(), floors[k].end());
+        // The floor is a part of its own, named as its object.
+        objects[k].parts.push_back(floors[k]);
+        if (!objects[k].part_probabilities.empty())
+            objects[k].part_probabilities.push_back(objects[k].category.probabilities);
     }
     if (all.empty()) return;
     std::sort(all.begin(), all.end());
