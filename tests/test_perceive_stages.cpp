@@ -437,8 +437,8 @@ TEST(PerceiveStages, ADishGetsItsFloorBackFromTheTable) {
     };
     const auto [recall_with, precision_with] = dish(with);
     const auto [recall_without, precision_without] = dish(without);
-    std::printf("[ floors ] dish recall %.3f precision %.3f; without floors %.3f %.3f\n", recall_with,
-                precision_with, recall_without, precision_without);
+    std::printf("[ floors ] dish recall %.3f precision %.3f; without floors %.3f %.3f\n",
+                recall_with, precision_with, recall_without, precision_without);
     EXPECT_LT(recall_without, 0.7);  // its rim
     EXPECT_GT(recall_with, 0.9);
     EXPECT_GT(precision_with, 0.97);  // no table around it

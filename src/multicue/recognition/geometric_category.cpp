@@ -629,7 +629,8 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
     SetProbabilities(params.sharpness, r);
     LogDebug(
         "category: {} points, extents {:.3f} {:.3f} {:.3f}, box {:.2f} (axis {:.2f}, side {:.2f}, "
-        "planar parts {:.2f}), cylinder {:.2f} (r {:.3f}), sphere {:.2f}, thin {:.2f}, fill {:.2f}, "
+        "planar parts {:.2f}), cylinder {:.2f} (r {:.3f}), sphere {:.2f}, thin {:.2f}, fill "
+        "{:.2f}, "
         "cover {:.2f} -> {}",
         r.points, r.extents[0], r.extents[1], r.extents[2], r.box_score, r.axis_area,
         r.side_face_ratio, r.planar_part_ratio, best_cyl.score, r.cylinder_radius, sphere_score,
