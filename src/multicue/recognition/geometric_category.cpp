@@ -75,13 +75,13 @@ float PlanarPartRatio(const PointCloud& cloud, const std::vector<Indices>& parts
     return total > 0 ? static_cast<float>(planar) / static_cast<float>(total) : 0.0f;
 }
 
-// Hull area over rectangle area of the points projected along box axis `k`.
 struct Footprint {
     float fill = 1.0f;  // hull area / minimum rectangle area
     float area = 0.0f;  // hull area [m^2]
 };
 
-// The footprint across box axis k: its hull's area and how round it is.
+// The footprint across box axis k: its hull's area, and that area over the minimum rectangle's
+// (how round it is).
 Footprint MeasureFootprint(const PointCloud& cloud, const Indices& usable, const OrientedBox& box,
                            int k) {
     const int i = (k + 1) % 3, j = (k + 2) % 3;
@@ -629,9 +629,8 @@ CategoryResult CategorizeObject(const PointCloud& cloud, const Indices& object,
     SetProbabilities(params.sharpness, r);
     LogDebug(
         "category: {} points, extents {:.3f} {:.3f} {:.3f}, box {:.2f} (axis {:.2f}, side {:.2f}, "
-        "planar parts {:.2f}), cylinder {:.2f} (r {:.3f}), sphere {:.2f}, thin {:.2f}, fill "
-        "{:.2f}, "
-        "cover {:.2f} -> {}",
+        "planar parts {:.2f}), cylinder {:.2f} (r {:.3f}), sphere {:.2f}, thin {:.2f}, "
+        "fill {:.2f}, cover {:.2f} -> {}",
         r.points, r.extents[0], r.extents[1], r.extents[2], r.box_score, r.axis_area,
         r.side_face_ratio, r.planar_part_ratio, best_cyl.score, r.cylinder_radius, sphere_score,
         r.thickness_ratio, r.footprint_fill, r.footprint_cover, CategoryName(r.category));

@@ -29,51 +29,44 @@ void EnclosedFloorParams::Validate() const {
 
 namespace {
 
-// One object's pixels over its bounding rectangle in the image of an organized cloud.
-struct PixelMask {
+// A row-major bitmap over a rectangle whose first column and row are x0 and y0.
+struct Bitmap {
     long x0 = 0, y0 = 0, width = 0, height = 0;
     std::vector<char> set;
     bool At(long x, long y) const { return set[static_cast<std::size_t>(y * width + x)] != 0; }
 };
 
-// One low object's cells in the plane, and which of them its cells enclose.
+// Whether set entries surround (x, y) (rectangle coordinates) in all eight grid directions before
+// the rectangle ends.
+bool Surrounded(const Bitmap& b, long x, long y) {
+    static constexpr int kDirs[8][2] = {{1, 0}, {-1, 0},  {0, 1},  {0, -1},
+                                        {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
+    for (const auto& d : kDirs) {
+        bool hit = false;
+        for (long cx = x + d[0], cy = y + d[1]; cx >= 0 && cy >= 0 && cx < b.width && cy < b.height;
+             cx += d[0], cy += d[1]) {
+            if (b.At(cx, cy)) {
+                hit = true;
+                break;
+            }
+        }
+        if (!hit) return false;
+    }
+    return true;
+}
+
+// One low object's cells in the plane (x0, y0 unused: `lo` is the first cell's corner), which of
+// them its cells surround, and in an organized cloud its pixels.
 struct FloorGrid {
     std::size_t object = 0;
     Eigen::Vector2f lo = Eigen::Vector2f::Zero();
-    int width = 0, height = 0;
-    std::vector<char> enclosed;  // per cell, row-major
-    PixelMask pixels;            // organized clouds: its pixels
+    Bitmap enclosed;
+    Bitmap pixels;
 };
 
-// Marks the cells that the occupied ones enclose in all eight grid directions.
-void MarkEnclosed(const std::vector<char>& occupied, FloorGrid& g) {
-    static constexpr int kDirs[8][2] = {{1, 0}, {-1, 0},  {0, 1},  {0, -1},
-                                        {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
-    g.enclosed.assign(occupied.size(), 0);
-    for (int y = 0; y < g.height; ++y) {
-        for (int x = 0; x < g.width; ++x) {
-            bool all = true;
-            for (const auto& d : kDirs) {
-                bool hit = false;
-                for (int cx = x + d[0], cy = y + d[1];
-                     cx >= 0 && cy >= 0 && cx < g.width && cy < g.height; cx += d[0], cy += d[1]) {
-                    if (occupied[static_cast<std::size_t>(cy) * g.width + cx]) {
-                        hit = true;
-                        break;
-                    }
-                }
-                if (!hit) {
-                    all = false;
-                    break;
-                }
-            }
-            g.enclosed[static_cast<std::size_t>(y) * g.width + x] = all ? 1 : 0;
-        }
-    }
-}
-
-PixelMask MaskOf(const Indices& object, std::uint32_t image_width) {
-    PixelMask m;
+// The object's pixels over their bounding rectangle in the image.
+Bitmap PixelsOf(const Indices& object, std::uint32_t image_width) {
+    Bitmap m;
     if (object.empty()) return m;
     const long w = image_width;
     long x0 = w, y0 = std::numeric_limits<long>::max(), x1 = -1, y1 = -1;
@@ -90,27 +83,13 @@ PixelMask MaskOf(const Indices& object, std::uint32_t image_width) {
     return m;
 }
 
-// Whether the object's pixels surround pixel i in all eight image directions: the object hides
-// whatever lies behind its outline, so a point seen inside it is on it (a table seen under an
-// overhang at the object's side has the table beside it in the image).
-bool PixelEnclosed(const PixelMask& m, Index i, std::uint32_t image_width) {
-    static constexpr int kDirs[8][2] = {{1, 0}, {-1, 0},  {0, 1},  {0, -1},
-                                        {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
+// Whether the object's pixels surround pixel i in the image: the object hides whatever lies behind
+// its outline, so a point seen inside it is on it (a table seen under an overhang at the object's
+// side has the table beside it in the image).
+bool PixelEnclosed(const Bitmap& m, Index i, std::uint32_t image_width) {
     const long x = static_cast<long>(i) % image_width - m.x0;
     const long y = static_cast<long>(i) / image_width - m.y0;
-    if (x < 0 || y < 0 || x >= m.width || y >= m.height) return false;
-    for (const auto& d : kDirs) {
-        bool hit = false;
-        for (long cx = x + d[0], cy = y + d[1]; cx >= 0 && cy >= 0 && cx < m.width && cy < m.height;
-             cx += d[0], cy += d[1]) {
-            if (m.At(cx, cy)) {
-                hit = true;
-                break;
-            }
-        }
-        if (!hit) return false;
-    }
-    return true;
+    return x >= 0 && y >= 0 && x < m.width && y < m.height && Surrounded(m, x, y);
 }
 
 }  // namespace
@@ -124,7 +103,6 @@ std::vector<Indices> EnclosedFloors(const PointCloud& cloud, const Eigen::Vector
         throw InvalidArgument(
             fmt::format("enclosed floors: min_height must be finite, got {}", min_height));
     std::vector<Indices> floors(objects.size());
-    std::vector<char> taken(cloud.size(), 0);
     for (const Indices& o : objects) {
         for (Index i : o) {
             if (i >= cloud.size()) {
@@ -132,7 +110,6 @@ std::vector<Indices> EnclosedFloors(const PointCloud& cloud, const Eigen::Vector
                     fmt::format("enclosed floors: index {} out of range for a cloud of {} points",
                                 i, cloud.size()));
             }
-            taken[i] = 1;
         }
     }
     const float norm = plane.head<3>().norm();
@@ -162,31 +139,42 @@ std::vector<Indices> EnclosedFloors(const PointCloud& cloud, const Eigen::Vector
             (hi - lo).maxCoeff() > params.max_object_width) {
             continue;
         }
-        FloorGrid g;
-        g.object = k;
-        g.lo = lo;
-        g.width = static_cast<int>(std::floor((hi.x() - lo.x()) / cell)) + 1;
-        g.height = static_cast<int>(std::floor((hi.y() - lo.y()) / cell)) + 1;
-        std::vector<char> occupied(static_cast<std::size_t>(g.width) * g.height, 0);
+        Bitmap occupied;
+        occupied.width = static_cast<long>(std::floor((hi.x() - lo.x()) / cell)) + 1;
+        occupied.height = static_cast<long>(std::floor((hi.y() - lo.y()) / cell)) + 1;
+        occupied.set.assign(static_cast<std::size_t>(occupied.width * occupied.height), 0);
         for (Index i : objects[k]) {
             if (!cloud.points[i].allFinite()) continue;
             const Eigen::Vector2f c = (in_plane(cloud.points[i]) - lo) / cell;
-            const int x = std::min(g.width - 1, static_cast<int>(c.x()));
-            const int y = std::min(g.height - 1, static_cast<int>(c.y()));
-            occupied[static_cast<std::size_t>(y) * g.width + x] = 1;
+            const long x = std::min(occupied.width - 1, static_cast<long>(c.x()));
+            const long y = std::min(occupied.height - 1, static_cast<long>(c.y()));
+            occupied.set[static_cast<std::size_t>(y * occupied.width + x)] = 1;
         }
-        MarkEnclosed(occupied, g);
-        if (organized) g.pixels = MaskOf(objects[k], cloud.width);
+        FloorGrid g;
+        g.object = k;
+        g.lo = lo;
+        g.enclosed = occupied;
+        for (long y = 0; y < occupied.height; ++y) {
+            for (long x = 0; x < occupied.width; ++x) {
+                g.enclosed.set[static_cast<std::size_t>(y * occupied.width + x)] =
+                    Surrounded(occupied, x, y) ? 1 : 0;
+            }
+        }
+        if (organized) g.pixels = PixelsOf(objects[k], cloud.width);
         grids.push_back(std::move(g));
     }
     if (grids.empty()) return floors;
+    std::vector<char> taken(cloud.size(), 0);
+    for (const Indices& o : objects) {
+        for (Index i : o) taken[i] = 1;
+    }
 
     // The band's free points in an enclosed cell: in an organized cloud only those inside a low
     // object's image rectangle can be enclosed in the image, so only they are looked at.
     Indices candidates;
     if (organized) {
         for (const FloorGrid& g : grids) {
-            const PixelMask& m = g.pixels;
+            const Bitmap& m = g.pixels;
             for (long y = m.y0; y < m.y0 + m.height; ++y) {
                 for (long x = m.x0; x < m.x0 + m.width; ++x)
                     candidates.push_back(static_cast<Index>(y * cloud.width + x));
@@ -206,12 +194,11 @@ std::vector<Indices> EnclosedFloors(const PointCloud& cloud, const Eigen::Vector
         const Eigen::Vector2f q = in_plane(p);
         for (const FloorGrid& g : grids) {
             const Eigen::Vector2f c = (q - g.lo) / cell;
-            if (!(c.x() >= 0.0f && c.y() >= 0.0f && c.x() < static_cast<float>(g.width) &&
-                  c.y() < static_cast<float>(g.height))) {
+            if (!(c.x() >= 0.0f && c.y() >= 0.0f && c.x() < static_cast<float>(g.enclosed.width) &&
+                  c.y() < static_cast<float>(g.enclosed.height))) {
                 continue;
             }
-            const auto x = static_cast<std::size_t>(c.x()), y = static_cast<std::size_t>(c.y());
-            if (g.enclosed[y * static_cast<std::size_t>(g.width) + x] &&
+            if (g.enclosed.At(static_cast<long>(c.x()), static_cast<long>(c.y())) &&
                 (!organized || PixelEnclosed(g.pixels, static_cast<Index>(i), cloud.width))) {
                 floors[g.object].push_back(static_cast<Index>(i));
                 break;

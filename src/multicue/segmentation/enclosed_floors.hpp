@@ -40,16 +40,15 @@ struct EnclosedFloorParams {
 
 /// For each of `objects` (point indices into `cloud`) whose points rise at most
 /// max_object_height above `plane` (a, b, c, d, normal pointing up) and span at most
-/// max_object_width across it, the points of the band
-/// from -below to `min_height` above the plane that lie in a grid cell (cell metres, in the
-/// plane) that the object's own cells enclose: in each of the eight grid directions an object
-/// cell lies before the object's bounding rectangle ends; in an organized cloud its pixel must
-/// also be enclosed so by the object's pixels (seen obliquely, the table under an overhanging
-/// rim lies inside the outline from above but beside the object in the image). Points of any
-/// object are never taken;
-/// a point enclosed by two objects goes to the first. Returns one ascending list per object
-/// (empty for high ones). Non-finite points and a zero plane give nothing. Throws
-/// InvalidArgument for bad parameters, a non-finite plane or an index out of range.
+/// max_object_width across it, the points of the band from -below to `min_height` above the plane
+/// that lie in a grid cell (cell metres, in the plane) that the object's own cells enclose: in
+/// each of the eight grid directions an object cell lies before the object's bounding rectangle
+/// ends. In an organized cloud the point's pixel must also be enclosed so by the object's pixels
+/// (seen obliquely, the table under an overhanging rim lies inside the outline from above but
+/// beside the object in the image). Points of any object are never taken; a point enclosed by
+/// two objects goes to the first. Returns one ascending list per object (empty for high ones).
+/// Non-finite points and a zero plane give nothing. Throws InvalidArgument for bad parameters, a
+/// non-finite plane or an index out of range.
 std::vector<Indices> EnclosedFloors(const PointCloud& cloud, const Eigen::Vector4f& plane,
                                     const std::vector<Indices>& objects, float min_height,
                                     const EnclosedFloorParams& params = {});
