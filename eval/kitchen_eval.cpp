@@ -104,9 +104,17 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
                                                   {"extend_support", &m.outline.extend_support},
                                                   {"min_coverage", &m.outline.min_coverage},
                                                   {"recess", &m.outline.recess},
-                                                  {"step", &m.outline.step}};
+                                                  {"step", &m.outline.step},
+                                                  {"gap_cut_support", &m.gap_fronts.cut_support},
+                                                  {"gap_cut_coverage", &m.gap_fronts.cut_coverage},
+                                                  {"gap_min_size", &m.gap_fronts.min_size},
+                                                  {"gap_cut_margin", &m.gap_fronts.cut_margin},
+                                                  {"gap_min_fill", &m.gap_fronts.min_fill},
+                                                  {"gap_max_taken", &m.gap_fronts.max_taken}};
     if (name == "extend") {
         m.extend_fronts = v != 0.0f;
+    } else if (name == "gap") {
+        m.gap_fronts.enabled = v != 0.0f;
     } else if (const auto it = fields.find(name); it != fields.end()) {
         *it->second = v;
     } else {
@@ -194,11 +202,14 @@ struct Scores {
     Stats front_precision, front_recall;
     Stats front_on_face;  ///< share of those fronts' true points the map put on a face
     std::size_t joint_correct = 0, joint_total = 0;
+    std::size_t joint_none = 0;  ///< matched fronts without a fixture (no joint)
     std::size_t sign_correct = 0;
     Stats axis_angle, axis_position;
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
+    /// The same for the pairs of fronts without a fixture (found from their outlines alone).
+    std::size_t open_correct_bare = 0, open_total_bare = 0, open_missed_bare = 0;
     std::map<std::string, std::size_t> open_confusion;  ///< "true -> predicted"
     Stats open_angle, open_position;
     Stats time_ms;
@@ -491,6 +502,11 @@ class Evaluator {
             const sim::KitchenJoint& kj = k.joints[static_cast<std::size_t>(tf.joint)];
             const bool revolute = kj.type != io::UrdfJointType::kPrismatic;
             const auto pt = pf.articulation.type;
+            // A front without a fixture has no joint from one scan: counted apart.
+            if (pf.fixtures.empty() && pt == mapping::JointType::kUnknown) {
+                ++s.joint_none;
+                continue;
+            }
             ++s.joint_total;
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
@@ -569,9 +585,12 @@ class Evaluator {
                 mp.min_points = 10;
             }
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
+            const bool bare = pf.fixtures.empty();
             ++s.open_total;
+            s.open_total_bare += bare;
             if (!motion.found) {
                 ++s.open_missed;
+                s.open_missed_bare += bare;
                 continue;
             }
             const auto pt = motion.articulation.type;
@@ -580,6 +599,7 @@ class Evaluator {
             ++s.open_confusion[std::string(revolute ? "revolute" : "prismatic") + " -> " +
                                mapping::JointTypeName(pt)];
             s.open_correct += correct;
+            s.open_correct_bare += bare && correct;
             if (!correct) continue;
             const Axis& gt = axes.at(kj.name);
             const Axis pred{motion.articulation.origin, motion.articulation.axis};
@@ -761,8 +781,10 @@ class Evaluator {
                           {"all", s.front_iou_all.Json()}};
         const double jacc =
             ratio(static_cast<double>(s.joint_correct), static_cast<double>(s.joint_total));
-        std::printf("joint type accuracy %.3f (%zu of %zu matched fronts)\n", jacc, s.joint_correct,
-                    s.joint_total);
+        std::printf(
+            "joint type accuracy %.3f (%zu of %zu matched fronts with a fixture; %zu matched "
+            "fronts without one have no joint)\n",
+            jacc, s.joint_correct, s.joint_total, s.joint_none);
         std::printf(
             "hinge axis: angle mean %.2f median %.2f max %.2f deg; position mean %.3f "
             "median %.3f max %.3f m; opening sign right %zu of %zu\n",
@@ -770,6 +792,7 @@ class Evaluator {
             s.axis_position.Median(), s.axis_position.Max(), s.sign_correct, s.axis_angle.v.size());
         j["joint_type_accuracy"] = jacc;
         j["joint_total"] = s.joint_total;
+        j["joint_none"] = s.joint_none;
         j["hinge_angle_deg"] = s.axis_angle.Json();
         j["hinge_position_m"] = s.axis_position.Json();
         j["hinge_sign_correct"] = s.sign_correct;
@@ -798,6 +821,8 @@ class Evaluator {
             "angle mean %.2f median %.2f max %.2f deg; hinge position mean %.3f m\n",
             oacc, s.open_correct, s.open_total, s.open_missed, s.open_angle.Mean(),
             s.open_angle.Median(), s.open_angle.Max(), s.open_position.Mean());
+        std::printf("  of those, fronts without a fixture: %zu of %zu right, %zu without motion\n",
+                    s.open_correct_bare, s.open_total_bare, s.open_missed_bare);
         std::printf("  opened pairs (true -> estimated):");
         for (const auto& [c, n] : s.open_confusion) std::printf(" [%s] %zu", c.c_str(), n);
         std::printf("\n");
@@ -805,6 +830,9 @@ class Evaluator {
                        {"confusion", s.open_confusion},
                        {"pairs", s.open_total},
                        {"no_motion", s.open_missed},
+                       {"bare", {{"correct", s.open_correct_bare},
+                                 {"pairs", s.open_total_bare},
+                                 {"no_motion", s.open_missed_bare}}},
                        {"axis_angle_deg", s.open_angle.Json()},
                        {"hinge_position_m", s.open_position.Json()}};
         std::printf("time per frame: median %.0f ms, worst %.0f ms (shared machine)\n",

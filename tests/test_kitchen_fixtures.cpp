@@ -1,7 +1,7 @@
 // Fixture evidence and fronts between outlines on small synthetic kitchens: the local background
 // of a face (closed form), one evidence row per candidate with the handle's measured shape, a
 // fixture classifier trained on synthetic rows deciding what is a fixture, fronts bounded by the
-// gaps around a door, image edges of an organized scan, the room structure and the fixtures on any
+// gaps around a door, fronts without fixtures cut from a face along its gaps, image edges of an organized scan, the room structure and the fixtures on any
 // thread count, and bad parameters.
 
 #include <gtest/gtest.h>
@@ -370,6 +370,156 @@ TEST(FrontsFromEdges, AGrownFrontExtendsToItsOutline) {
     EXPECT_THROW(
         ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts, {.max_extend = 0.0f}),
         InvalidArgument);
+}
+
+/// A door front of DoorsInGaps: x and z ranges on the face y = 2.4.
+struct DoorRect {
+    float x0, x1, z0, z1;
+};
+
+/// The room of DoorInAGap with a face x 0.3 .. 1.6, z 0.1 .. 0.85 holding `doors` of the face's
+/// colour, each set in a 1 cm gap that shows the carcass 2 cm behind; no handles. Doors that reach
+/// the face's edges cover the carcass (overlay doors, as most kitchen fronts).
+PointCloud DoorsInGaps(const std::vector<DoorRect>& doors) {
+    std::mt19937 rng(5);
+    PointCloud c;
+    const float step = 0.005f, y = 2.4f;
+    const Color white{230, 230, 230, 255};
+    const Eigen::Vector3f n = -Eigen::Vector3f::UnitY();
+    test::AddPatch(c, {0, 0, 0}, {3, 0, 0}, {0, 3, 0}, 0.02f, Eigen::Vector3f::UnitZ(),
+                   Color{120, 110, 100, 255}, 0.001f, rng);
+    test::AddPatch(c, {0, 3, 0}, {3, 0, 0}, {0, 0, 2.0f}, 0.02f, n, white, 0.001f, rng);
+    test::AddPatch(c, {0, 0, 0}, {0, 3, 0}, {0, 0, 2.0f}, 0.02f, Eigen::Vector3f::UnitX(), white,
+                   0.001f, rng);
+    for (float x = 0.3f; x <= 1.6f; x += step) {
+        for (float z = 0.1f; z <= 0.85f; z += step) {
+            bool door = false, gap = false;
+            for (const DoorRect& d : doors) {
+                door = door || (x >= d.x0 && x <= d.x1 && z >= d.z0 && z <= d.z1);
+                gap = gap || (x >= d.x0 - 0.01f && x <= d.x1 + 0.01f && z >= d.z0 - 0.01f &&
+                              z <= d.z1 + 0.01f);
+            }
+            gap = gap && !door;
+            c.points.emplace_back(x, gap ? y + 0.02f : y, z);
+            c.normals.push_back(n);
+            c.colors.push_back(gap ? Color{40, 40, 40, 255} : white);
+        }
+    }
+    c.width = static_cast<std::uint32_t>(c.size());
+    c.height = 1;
+    c.sensor_origin = Eigen::Vector3f(1.0f, 1.0f, 1.3f);
+    return c;
+}
+
+/// x range of a front's rectangle (u runs along x, either sign).
+std::pair<float, float> FrontXRange(const Front& f) {
+    const float a = f.min.x() * f.u_axis.x(), b = f.max.x() * f.u_axis.x();
+    return {std::min(a, b), std::max(a, b)};
+}
+
+TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
+    // Two overlay doors and a drawer above the right one.
+    const std::vector<DoorRect> doors = {
+        {0.3f, 0.9f, 0.1f, 0.85f}, {0.93f, 1.6f, 0.1f, 0.55f}, {0.93f, 1.6f, 0.58f, 0.85f}};
+    const PointCloud c = DoorsInGaps(doors);
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    EXPECT_TRUE(fx.fixtures.empty());
+    FrontEvidence ev;
+    ev.point_face = fx.point_face;
+    ev.point_residual = fx.point_residual;
+    std::vector<Front> fronts;
+    AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, fronts);
+    ASSERT_EQ(fronts.size(), 3u);
+    auto order = [](std::vector<Front>& v) {
+        std::sort(v.begin(), v.end(), [](const Front& a, const Front& b) {
+            return std::pair(FrontXRange(a).first, a.min.y()) <
+                   std::pair(FrontXRange(b).first, b.min.y());
+        });
+    };
+    order(fronts);
+    for (std::size_t k = 0; k < 3; ++k) {
+        const auto [x0, x1] = FrontXRange(fronts[k]);
+        EXPECT_NEAR(x0, doors[k].x0, 0.025f) << k;
+        EXPECT_NEAR(x1, doors[k].x1, 0.025f) << k;
+        EXPECT_NEAR(fronts[k].min.y(), doors[k].z0, 0.025f) << k;
+        EXPECT_NEAR(fronts[k].max.y(), doors[k].z1, 0.025f) << k;
+        EXPECT_TRUE(fronts[k].fixtures.empty());
+        EXPECT_TRUE(std::is_sorted(fronts[k].indices.begin(), fronts[k].indices.end()));
+        // Its points are its door's, and nearly all of them.
+        std::size_t inside = 0;
+        for (const Index i : fronts[k].indices) {
+            const Eigen::Vector3f& q = c.points[i];
+            inside += q.x() > doors[k].x0 - 0.015f && q.x() < doors[k].x1 + 0.015f &&
+                      q.z() > doors[k].z0 - 0.015f && q.z() < doors[k].z1 + 0.015f;
+        }
+        EXPECT_GT(inside, fronts[k].indices.size() * 97 / 100) << k;
+        const std::size_t door_points = static_cast<std::size_t>(
+            (doors[k].x1 - doors[k].x0) * (doors[k].z1 - doors[k].z0) / (0.005f * 0.005f));
+        EXPECT_GT(fronts[k].indices.size(), door_points * 9 / 10) << k;
+    }
+    // A front found already (the left door's, of its fixture) keeps its door: only the others
+    // are added, and its points are not taken again.
+    std::vector<Front> known = {fronts[0]};
+    AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, known);
+    ASSERT_EQ(known.size(), 3u);
+    for (std::size_t k = 1; k < 3; ++k) {
+        EXPECT_NEAR(FrontXRange(known[k]).first, doors[1].x0, 0.025f);
+        for (const Index i : known[k].indices) {
+            EXPECT_FALSE(std::binary_search(fronts[0].indices.begin(), fronts[0].indices.end(), i));
+        }
+    }
+    // The same input gives the same fronts.
+    std::vector<Front> again;
+    AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, again);
+    ASSERT_EQ(again.size(), 3u);
+    order(again);
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(again[k].indices, fronts[k].indices);
+    // A frame narrower than cut_margin around an inset door stays with it.
+    const DoorRect inset{0.34f, 0.9f, 0.14f, 0.81f};
+    const PointCloud framed = DoorsInGaps({inset, doors[1], doors[2]});
+    const RoomStructure fs = SegmentRoomStructure(framed, RoomFrame{}, {});
+    const FixtureResult ffx = DetectFixtures(framed, RoomFrame{}, fs, {});
+    FrontEvidence fev;
+    fev.point_face = ffx.point_face;
+    fev.point_residual = ffx.point_residual;
+    std::vector<Front> with_frame;
+    AddFrontsFromGaps(framed, RoomFrame{}, fs, {}, fev, with_frame);
+    ASSERT_EQ(with_frame.size(), 3u);
+    order(with_frame);
+    EXPECT_NEAR(FrontXRange(with_frame[0]).first, 0.3f, 0.01f);
+    EXPECT_NEAR(with_frame[0].min.y(), 0.1f, 0.01f);
+}
+
+TEST(FrontsFromGaps, AFaceWithoutGapsWiderThanAFrontHasNone) {
+    const PointCloud c = DoorsInGaps({});
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    FrontEvidence ev;
+    ev.point_face = fx.point_face;
+    ev.point_residual = fx.point_residual;
+    std::vector<Front> fronts;
+    AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, fronts);
+    EXPECT_TRUE(fronts.empty());  // 1.3 m wide: no front
+    // Allowed that wide, the whole face is one.
+    AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, fronts, {}, {.max_width = 1.5f});
+    EXPECT_EQ(fronts.size(), 1u);
+    // Empty input, bad parameters and evidence of the wrong size.
+    std::vector<Front> none;
+    AddFrontsFromGaps(PointCloud{}, RoomFrame{}, RoomStructure{}, {}, {}, none);
+    EXPECT_TRUE(none.empty());
+    EXPECT_THROW(AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, none, {}, {.cut_support = 0.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, none, {}, {.max_width = 0.1f}),
+                 InvalidArgument);
+    EXPECT_THROW(AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, none, {}, {.min_fill = 2.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, none, {.cell = -1.0f}, {}),
+                 InvalidArgument);
+    FrontEvidence bad = ev;
+    bad.point_face.resize(5);
+    EXPECT_THROW(AddFrontsFromGaps(c, RoomFrame{}, s, {}, bad, none), InvalidArgument);
+    EXPECT_TRUE(none.empty());
 }
 
 TEST(ImageEdges, ColourStepOfAnOrganizedScan) {

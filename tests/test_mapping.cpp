@@ -290,12 +290,22 @@ TEST(MapKitchen, SyntheticKitchenEndToEnd) {
     const KitchenMap& m = r.map;
     EXPECT_NEAR(m.floor_height, 0.0f, 0.02f);
     EXPECT_NEAR(m.ceiling_height, 2.5f, 0.02f);
-    ASSERT_EQ(m.fronts.size(), 2u);
-    int revolute = 0, prismatic = 0;
+    // The door and the drawer have fixtures; the plain body panels between the fronts' colour
+    // edges pass for fronts without one (AddFrontsFromGaps), with no joint and no shared point.
+    int revolute = 0, prismatic = 0, with_fixture = 0;
+    std::vector<int> owner(r.cloud.size(), 0);
     for (const Front& f : m.fronts) {
         revolute += f.articulation.type == JointType::kRevolute;
         prismatic += f.articulation.type == JointType::kPrismatic;
+        with_fixture += !f.fixtures.empty();
+        if (f.fixtures.empty()) {
+            EXPECT_EQ(f.articulation.type, JointType::kUnknown);
+        }
+        for (const Index i : f.indices) {
+            EXPECT_EQ(owner[i]++, 0);
+        }
     }
+    EXPECT_EQ(with_fixture, 2);
     EXPECT_EQ(revolute, 1);
     EXPECT_EQ(prismatic, 1);
     for (const Front& f : m.fronts) {

@@ -98,4 +98,42 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame,
                             const FrontEvidence& evidence, std::vector<Front>& fronts,
                             const FrontEdgeParams& params = {});
 
+/// Fronts whose fixture was not found (AddFrontsFromGaps): the rest of a furniture face is cut
+/// along its outlines into rectangles, and the rectangles of a front's size become fronts
+/// without fixtures.
+struct GapFrontParams {
+    bool enabled = true;
+    /// A cut is a column or row of cells (one cell either side) that is outline in this share of
+    /// the cells along it that hold points [-]
+    float cut_support = 0.6f;
+    float cut_coverage = 0.5f;  ///< ... and whose cells hold points along this share of it [-]
+    /// No cut lies closer than this to a side of the rectangle it cuts: near a front's edge,
+    /// shading and texture look like outlines too, so a narrow frame around the doors stays
+    /// with them [m]
+    float cut_margin = 0.2f;
+    float min_size = 0.2f;      ///< rectangles narrower or lower are no front [m]
+    float max_width = 1.2f;     ///< wider rectangles are no front [m]
+    float max_height = 2.2f;    ///< higher rectangles are no front [m]
+    /// A rectangle's cells hold points in at least this share (a front is seen whole) [-]
+    float min_fill = 0.5f;
+    /// Rectangles sharing this share of their area with a front of a fixture are that front [-]
+    float max_taken = 0.2f;
+    std::size_t min_points = 50;  ///< rectangles with fewer free face points are dropped
+    int max_depth = 12;           ///< cuts nested at most this deep [-]
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// Adds a front without fixtures for every part of a furniture face that its outlines bound as a
+/// front-sized rectangle outside the fronts already found: the face is gridded as for
+/// ExtendFrontsToOutlines (`grid`), cut recursively at its strongest outline line (a guillotine
+/// partition: doors side by side, drawers stacked), and each leaf rectangle that holds enough
+/// free face points, is filled, of a front's size and not on a front already found, becomes a
+/// front of those points (no fixtures, so its joint stays unknown until a scan shows it open).
+/// Throws InvalidArgument for bad parameters or evidence of the wrong size.
+void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame,
+                       const RoomStructure& structure, const std::vector<Fixture>& fixtures,
+                       const FrontEvidence& evidence, std::vector<Front>& fronts,
+                       const FrontEdgeParams& grid = {}, const GapFrontParams& params = {});
+
 }  // namespace multicue::mapping

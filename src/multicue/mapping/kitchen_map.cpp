@@ -50,6 +50,7 @@ void MapKitchenParams::Validate() const {
     fronts.Validate();
     image_edges.Validate();
     outline.Validate();
+    gap_fronts.Validate();
     articulation.Validate();
     containers.Validate();
 }
@@ -93,6 +94,7 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.fronts.cell_size = 0.04f;
         p.fronts.seed_max = 0.08f;
         p.fronts.min_points = 8;
+        p.gap_fronts.min_points = 15;
     }
     return p;
 }
@@ -235,7 +237,7 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     // or rectangles between the outlines around the fixtures.
     const bool outline = p.front_segmentation == FrontSegmentation::kOutline;
     FrontEvidence evidence;
-    if (outline || p.extend_fronts) {
+    if (outline || p.extend_fronts || p.gap_fronts.enabled) {
         evidence.point_face = std::move(fixtures.point_face);
         evidence.point_residual = std::move(fixtures.point_residual);
         evidence.image_edge.assign(r.cloud.size(), 0);
@@ -270,6 +272,11 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
             ExtendFrontsToOutlines(r.cloud, map.frame, structure, map.fixtures, evidence,
                                    map.fronts, p.outline);
         }
+    }
+    // Fronts whose fixture was missed: the rest of each face cut along its outlines.
+    if (p.gap_fronts.enabled) {
+        AddFrontsFromGaps(r.cloud, map.frame, structure, map.fixtures, evidence, map.fronts,
+                          p.outline, p.gap_fronts);
     }
     stage("fronts");
     // How each front opens, from its fixture.

@@ -49,6 +49,9 @@ struct MapKitchenParams {
     /// kRegionGrowing: grown fronts are then extended to their outlines (ExtendFrontsToOutlines
     /// with `outline`)
     bool extend_fronts = true;
+    /// Parts of the faces that their outlines bound as fronts, outside every front of a fixture,
+    /// become fronts without fixtures (AddFrontsFromGaps on the grid of `outline`)
+    GapFrontParams gap_fronts;
     ArticulationParams articulation;
     ContainerParams containers;
     int num_threads = 0;  ///< 0 = all cores

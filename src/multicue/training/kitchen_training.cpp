@@ -157,6 +157,7 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
     const bool laser = o.sensor == mapping::KitchenSensor::kLaser;
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(o.sensor);
     params.num_threads = o.num_threads;
+    params.gap_fronts.enabled = false;  // the rows are the candidates; fronts are not needed
     for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
         const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
         sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, {}, seed);

@@ -1,0 +1,249 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "multicue/core/exceptions.hpp"
+#include "multicue/mapping/front_edges.hpp"
+#include "multicue/mapping/front_grid_internal.hpp"
+
+namespace multicue::mapping {
+
+using namespace front_grid_internal;
+
+namespace {
+
+/// A rectangle of grid cells, bounds inclusive.
+struct CellRect {
+    int u0, u1, v0, v1;
+};
+
+/// The strongest cut of `r`: a column (`columns`) or row at least `margin` cells inside each
+/// side whose line (one cell either side) is outline in the largest share of its cells with
+/// points, at least p.cut_support of them, with points along p.cut_coverage of its length. A gap is a few cells wide, so the lines next to it
+/// score as high: the cut is the whole run of lines scoring the best. Returns the run's first
+/// and last lines and its share; first = -1 for none.
+struct Cut {
+    int first = -1, last = -1;
+    float share = 0.0f;
+};
+Cut BestCut(const OutlineGrid& g, const CellRect& r, bool columns, int margin,
+            const GapFrontParams& p) {
+    const int lo = columns ? r.u0 : r.v0, hi = columns ? r.u1 : r.v1;
+    const int first = lo + margin, last = hi - margin;
+    const int a = columns ? r.v0 : r.u0, b = columns ? r.v1 : r.u1;
+    const int length = b - a + 1;
+    if (last < first) return {};
+    std::vector<float> shares(static_cast<std::size_t>(last - first + 1), -1.0f);
+    float best = -1.0f;
+    for (int k = first; k <= last; ++k) {
+        int with_points = 0, with_gap = 0;
+        for (int t = a; t <= b; ++t) {
+            bool points = false, gap = false;
+            for (int d = -1; d <= 1; ++d) {
+                const std::uint8_t m = columns ? g.At(k + d, t) : g.At(t, k + d);
+                points = points || m == kFaceCell || m == kGapCell;
+                gap = gap || m == kGapCell;
+            }
+            with_points += points;
+            with_gap += gap;
+        }
+        if (with_points == 0 ||
+            static_cast<float>(with_points) < p.cut_coverage * static_cast<float>(length)) {
+            continue;
+        }
+        const float share = static_cast<float>(with_gap) / static_cast<float>(with_points);
+        if (share < p.cut_support) continue;
+        shares[static_cast<std::size_t>(k - first)] = share;
+        best = std::max(best, share);
+    }
+    if (best < 0.0f) return {};
+    constexpr float kTie = 0.01f;
+    std::size_t run0 = 0;
+    while (shares[run0] < best - kTie) ++run0;
+    std::size_t run1 = run0;
+    while (run1 + 1 < shares.size() && shares[run1 + 1] >= best - kTie) ++run1;
+    return {first + static_cast<int>(run0), first + static_cast<int>(run1), best};
+}
+
+/// Cuts `search` at its strongest line, recursively. A cut's run of lines is searched no more,
+/// and its middle line divides the cells the two sides own (`own`, which the uncut rectangles
+/// bring to `leaves`).
+void Partition(const OutlineGrid& g, const CellRect& search, const CellRect& own, int margin,
+               int depth, const GapFrontParams& p, std::vector<CellRect>& leaves) {
+    if (depth < p.max_depth) {
+        const Cut col = BestCut(g, search, true, margin, p);
+        const Cut row = BestCut(g, search, false, margin, p);
+        if (col.first >= 0 && col.share >= row.share) {
+            const int mid = (col.first + col.last) / 2;
+            Partition(g, {search.u0, col.first - 1, search.v0, search.v1},
+                      {own.u0, mid, own.v0, own.v1}, margin, depth + 1, p, leaves);
+            Partition(g, {col.last + 1, search.u1, search.v0, search.v1},
+                      {mid + 1, own.u1, own.v0, own.v1}, margin, depth + 1, p, leaves);
+            return;
+        }
+        if (row.first >= 0) {
+            const int mid = (row.first + row.last) / 2;
+            Partition(g, {search.u0, search.u1, search.v0, row.first - 1},
+                      {own.u0, own.u1, own.v0, mid}, margin, depth + 1, p, leaves);
+            Partition(g, {search.u0, search.u1, row.last + 1, search.v1},
+                      {own.u0, own.u1, mid + 1, own.v1}, margin, depth + 1, p, leaves);
+            return;
+        }
+    }
+    leaves.push_back(own);
+}
+
+float Quantile(std::vector<float>& v, float q) {
+    const auto k = static_cast<long>(q * static_cast<float>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+}
+
+}  // namespace
+
+void GapFrontParams::Validate() const {
+    if (!(cut_support > 0.0f && cut_support <= 1.0f) ||
+        !(cut_coverage >= 0.0f && cut_coverage <= 1.0f) || !(cut_margin >= 0.0f) ||
+        !(min_size > 0.0f) ||
+        !(max_width >= min_size) || !(max_height >= min_size) || !std::isfinite(max_width) ||
+        !std::isfinite(max_height) || !(min_fill >= 0.0f && min_fill <= 1.0f) ||
+        !(max_taken >= 0.0f && max_taken <= 1.0f) || min_points < 1 || max_depth < 0) {
+        throw InvalidArgument(fmt::format(
+            "gap fronts: need cut_support in (0, 1], cut_coverage in [0, 1], "
+            "cut_margin >= 0, 0 < min_size <= max_width, max_height (finite), min_fill and max_taken in [0, 1], min_points >= 1, "
+            "max_depth >= 0 (got {}, {}, {}, {}, {}, {}, {}, {}, {}, {})",
+            cut_support, cut_coverage, cut_margin, min_size, max_width, max_height, min_fill, max_taken,
+            min_points, max_depth));
+    }
+}
+
+void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const RoomStructure& s,
+                       const std::vector<Fixture>& fixtures, const FrontEvidence& ev,
+                       std::vector<Front>& fronts, const FrontEdgeParams& grid,
+                       const GapFrontParams& p) {
+    grid.Validate();
+    p.Validate();
+    CheckEvidence(ev, cloud.size());
+    if (cloud.empty()) return;
+    std::vector<std::uint8_t> taken(cloud.size(), 0);
+    for (const Fixture& fx : fixtures) {
+        for (const Index i : fx.indices) {
+            if (i < cloud.size()) taken[i] = 1;
+        }
+    }
+    const std::vector<std::uint8_t> is_fixture = taken;
+    for (const Front& fr : fronts) {
+        for (const Index i : fr.indices) {
+            if (i < cloud.size()) taken[i] = 1;
+        }
+    }
+    std::vector<Indices> face_points(s.components.size());
+    if (ev.point_face.empty()) {
+        for (std::size_t c = 0; c < s.components.size(); ++c)
+            face_points[c] = s.components[c].indices;
+    } else {
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            const std::int32_t f = ev.point_face[i];
+            if (f >= 0 && static_cast<std::size_t>(f) < face_points.size())
+                face_points[static_cast<std::size_t>(f)].push_back(static_cast<Index>(i));
+        }
+    }
+    const std::size_t known = fronts.size();
+    for (std::size_t f = 0; f < s.components.size(); ++f) {
+        const PlanarComponent& face = s.components[f];
+        if (face.label != MapClass::kFace || face.axis == 2 || face_points[f].empty()) continue;
+        OutlineGrid g = BuildGrid(cloud, frame, face, face_points[f], ev, is_fixture, grid);
+        if (g.nu == 0) continue;
+        for (const Fixture& fx : fixtures) {
+            if (fx.face != static_cast<int>(f) || fx.indices.empty()) continue;
+            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
+            Eigen::Vector2f hi = -lo;
+            for (const Index i : fx.indices) {
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                lo = lo.cwiseMin(q);
+                hi = hi.cwiseMax(q);
+            }
+            MaskFixture(g, lo, hi, grid.margin,
+                        grid.margin + grid.shadow_factor * std::max(fx.protrusion, 0.0f));
+        }
+        const int margin = std::max(2, static_cast<int>(std::lround(p.cut_margin / g.cell)));
+        std::vector<CellRect> leaves;
+        const CellRect whole{0, g.nu - 1, 0, g.nv - 1};
+        Partition(g, whole, whole, margin, 0, p, leaves);
+        if (leaves.empty()) continue;
+        // The free face points of each leaf.
+        std::vector<Indices> members(leaves.size());
+        std::vector<std::int32_t> leaf_of(static_cast<std::size_t>(g.nu) * g.nv, -1);
+        for (std::size_t l = 0; l < leaves.size(); ++l) {
+            for (int v = leaves[l].v0; v <= leaves[l].v1; ++v) {
+                for (int u = leaves[l].u0; u <= leaves[l].u1; ++u)
+                    leaf_of[static_cast<std::size_t>(v * g.nu + u)] = static_cast<std::int32_t>(l);
+            }
+        }
+        for (const Index i : face_points[f]) {
+            if (taken[i]) continue;
+            const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+            const int u = std::clamp(g.U(q.x()), 0, g.nu - 1);
+            const int v = std::clamp(g.V(q.y()), 0, g.nv - 1);
+            const std::int32_t l = leaf_of[static_cast<std::size_t>(v * g.nu + u)];
+            if (l >= 0) members[static_cast<std::size_t>(l)].push_back(i);
+        }
+        const Eigen::Vector3f u_axis = PlaneU(face, frame), v_axis = PlaneV(face, frame);
+        for (std::size_t l = 0; l < leaves.size(); ++l) {
+            Indices& m = members[l];
+            if (m.size() < p.min_points) continue;
+            // The rectangle of its points (1st to 99th percentiles).
+            std::vector<float> us, vs;
+            us.reserve(m.size());
+            vs.reserve(m.size());
+            for (const Index i : m) {
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                us.push_back(q.x());
+                vs.push_back(q.y());
+            }
+            const Eigen::Vector2f lo(Quantile(us, 0.01f), Quantile(vs, 0.01f));
+            const Eigen::Vector2f hi(Quantile(us, 0.99f), Quantile(vs, 0.99f));
+            const Eigen::Vector2f size = hi - lo;
+            if (size.minCoeff() < p.min_size || size.x() > p.max_width || size.y() > p.max_height)
+                continue;
+            // Seen whole: cells of the rectangle holding points.
+            const int cu0 = std::clamp(g.U(lo.x()), 0, g.nu - 1);
+            const int cu1 = std::clamp(g.U(hi.x()), 0, g.nu - 1);
+            const int cv0 = std::clamp(g.V(lo.y()), 0, g.nv - 1);
+            const int cv1 = std::clamp(g.V(hi.y()), 0, g.nv - 1);
+            int cells = 0, filled = 0;
+            for (int v = cv0; v <= cv1; ++v) {
+                for (int u = cu0; u <= cu1; ++u) {
+                    ++cells;
+                    const std::uint8_t mk = g.At(u, v);
+                    filled += mk == kFaceCell || mk == kGapCell || mk == kMasked;
+                }
+            }
+            if (static_cast<float>(filled) < p.min_fill * static_cast<float>(cells)) continue;
+            // Not on a front found already (its rectangle may reach beyond its points).
+            float on_known = 0.0f;
+            for (std::size_t k = 0; k < known; ++k) {
+                if (fronts[k].face != static_cast<int>(f)) continue;
+                const Eigen::Vector2f a = lo.cwiseMax(fronts[k].min), b = hi.cwiseMin(fronts[k].max);
+                on_known += std::max(0.0f, b.x() - a.x()) * std::max(0.0f, b.y() - a.y());
+            }
+            if (on_known > p.max_taken * size.prod()) continue;
+            Front fr;
+            fr.face = static_cast<int>(f);
+            std::sort(m.begin(), m.end());
+            fr.indices = std::move(m);
+            fr.min = lo;
+            fr.max = hi;
+            fr.u_axis = u_axis;
+            fr.v_axis = v_axis;
+            fr.normal = face.plane.head<3>();
+            const Eigen::Vector2f c = (lo + hi) / 2;
+            fr.center = u_axis * c.x() + v_axis * c.y() - fr.normal * face.plane.w();
+            fronts.push_back(std::move(fr));
+        }
+    }
+}
+
+}  // namespace multicue::mapping
