@@ -830,9 +830,10 @@ class Evaluator {
                        {"confusion", s.open_confusion},
                        {"pairs", s.open_total},
                        {"no_motion", s.open_missed},
-                       {"bare", {{"correct", s.open_correct_bare},
-                                 {"pairs", s.open_total_bare},
-                                 {"no_motion", s.open_missed_bare}}},
+                       {"bare",
+                        {{"correct", s.open_correct_bare},
+                         {"pairs", s.open_total_bare},
+                         {"no_motion", s.open_missed_bare}}},
                        {"axis_angle_deg", s.open_angle.Json()},
                        {"hinge_position_m", s.open_position.Json()}};
         std::printf("time per frame: median %.0f ms, worst %.0f ms (shared machine)\n",

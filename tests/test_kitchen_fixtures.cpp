@@ -1,8 +1,8 @@
 // Fixture evidence and fronts between outlines on small synthetic kitchens: the local background
 // of a face (closed form), one evidence row per candidate with the handle's measured shape, a
 // fixture classifier trained on synthetic rows deciding what is a fixture, fronts bounded by the
-// gaps around a door, fronts without fixtures cut from a face along its gaps, image edges of an organized scan, the room structure and the fixtures on any
-// thread count, and bad parameters.
+// gaps around a door, fronts without fixtures cut from a face along its gaps, image edges of an
+// organized scan, the room structure and the fixtures on any thread count, and bad parameters.
 
 #include <gtest/gtest.h>
 

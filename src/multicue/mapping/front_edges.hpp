@@ -111,9 +111,9 @@ struct GapFrontParams {
     /// shading and texture look like outlines too, so a narrow frame around the doors stays
     /// with them [m]
     float cut_margin = 0.2f;
-    float min_size = 0.2f;      ///< rectangles narrower or lower are no front [m]
-    float max_width = 1.2f;     ///< wider rectangles are no front [m]
-    float max_height = 2.2f;    ///< higher rectangles are no front [m]
+    float min_size = 0.2f;    ///< rectangles narrower or lower are no front [m]
+    float max_width = 1.2f;   ///< wider rectangles are no front [m]
+    float max_height = 2.2f;  ///< higher rectangles are no front [m]
     /// A rectangle's cells hold points in at least this share (a front is seen whole) [-]
     float min_fill = 0.5f;
     /// Rectangles sharing this share of their area with a front of a fixture are that front [-]

@@ -21,9 +21,9 @@ struct CellRect {
 
 /// The strongest cut of `r`: a column (`columns`) or row at least `margin` cells inside each
 /// side whose line (one cell either side) is outline in the largest share of its cells with
-/// points, at least p.cut_support of them, with points along p.cut_coverage of its length. A gap is a few cells wide, so the lines next to it
-/// score as high: the cut is the whole run of lines scoring the best. Returns the run's first
-/// and last lines and its share; first = -1 for none.
+/// points, at least p.cut_support of them, with points along p.cut_coverage of its length. A gap is
+/// a few cells wide, so the lines next to it score as high: the cut is the whole run of lines
+/// scoring the best. Returns the run's first and last lines and its share; first = -1 for none.
 struct Cut {
     int first = -1, last = -1;
     float share = 0.0f;
@@ -106,16 +106,17 @@ float Quantile(std::vector<float>& v, float q) {
 void GapFrontParams::Validate() const {
     if (!(cut_support > 0.0f && cut_support <= 1.0f) ||
         !(cut_coverage >= 0.0f && cut_coverage <= 1.0f) || !(cut_margin >= 0.0f) ||
-        !(min_size > 0.0f) ||
-        !(max_width >= min_size) || !(max_height >= min_size) || !std::isfinite(max_width) ||
-        !std::isfinite(max_height) || !(min_fill >= 0.0f && min_fill <= 1.0f) ||
-        !(max_taken >= 0.0f && max_taken <= 1.0f) || min_points < 1 || max_depth < 0) {
-        throw InvalidArgument(fmt::format(
-            "gap fronts: need cut_support in (0, 1], cut_coverage in [0, 1], "
-            "cut_margin >= 0, 0 < min_size <= max_width, max_height (finite), min_fill and max_taken in [0, 1], min_points >= 1, "
-            "max_depth >= 0 (got {}, {}, {}, {}, {}, {}, {}, {}, {}, {})",
-            cut_support, cut_coverage, cut_margin, min_size, max_width, max_height, min_fill, max_taken,
-            min_points, max_depth));
+        !(min_size > 0.0f) || !(max_width >= min_size) || !(max_height >= min_size) ||
+        !std::isfinite(max_width) || !std::isfinite(max_height) ||
+        !(min_fill >= 0.0f && min_fill <= 1.0f) || !(max_taken >= 0.0f && max_taken <= 1.0f) ||
+        min_points < 1 || max_depth < 0) {
+        throw InvalidArgument(
+            fmt::format("gap fronts: need cut_support in (0, 1], cut_coverage in [0, 1], "
+                        "cut_margin >= 0, 0 < min_size <= max_width, max_height (finite), min_fill "
+                        "and max_taken in [0, 1], min_points >= 1, "
+                        "max_depth >= 0 (got {}, {}, {}, {}, {}, {}, {}, {}, {}, {})",
+                        cut_support, cut_coverage, cut_margin, min_size, max_width, max_height,
+                        min_fill, max_taken, min_points, max_depth));
     }
 }
 
@@ -226,7 +227,8 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
             float on_known = 0.0f;
             for (std::size_t k = 0; k < known; ++k) {
                 if (fronts[k].face != static_cast<int>(f)) continue;
-                const Eigen::Vector2f a = lo.cwiseMax(fronts[k].min), b = hi.cwiseMin(fronts[k].max);
+                const Eigen::Vector2f a = lo.cwiseMax(fronts[k].min),
+                                      b = hi.cwiseMin(fronts[k].max);
                 on_known += std::max(0.0f, b.x() - a.x()) * std::max(0.0f, b.y() - a.y());
             }
             if (on_known > p.max_taken * size.prod()) continue;
