@@ -242,11 +242,18 @@ TEST(FixtureClassifier, TrainedOnSyntheticRowsDecidesWhatIsAFixture) {
     EXPECT_THROW(training::LabelFixtureCandidates(bare.cloud, rules.candidates, 0.03f), DataError);
 }
 
+/// A door front of DoorsInGaps: x and z ranges on the face y = 2.4.
+struct DoorRect {
+    float x0, x1, z0, z1;
+};
+
 /// A room (floor, back wall y = 3, left wall x = 0) with a cupboard face y = 2.4 (x 0.3 .. 1.6,
-/// z 0.1 .. 0.85) holding one door x 0.6 .. 1.1, z 0.15 .. 0.8 of the face's colour, set in a
-/// 1 cm gap that shows the carcass 2 cm behind, with a vertical handle near its right edge.
-PointCloud DoorInAGap() {
-    std::mt19937 rng(4);
+/// z 0.1 .. 0.85) holding `doors` of the face's colour, each set in a 1 cm gap that shows the
+/// carcass 2 cm behind, and, when `handle`, a vertical handle at x = 1.04, z = 0.5. Doors that
+/// reach the face's edges cover the carcass (overlay doors, as most kitchen fronts).
+PointCloud DoorsInGaps(const std::vector<DoorRect>& doors, std::uint32_t seed = 5,
+                       bool handle = false) {
+    std::mt19937 rng(seed);
     PointCloud c;
     const float step = 0.005f, y = 2.4f;
     const Color white{230, 230, 230, 255};
@@ -256,22 +263,29 @@ PointCloud DoorInAGap() {
     test::AddPatch(c, {0, 3, 0}, {3, 0, 0}, {0, 0, 2.0f}, 0.02f, n, white, 0.001f, rng);
     test::AddPatch(c, {0, 0, 0}, {0, 3, 0}, {0, 0, 2.0f}, 0.02f, Eigen::Vector3f::UnitX(), white,
                    0.001f, rng);
-    // The face on a 5 mm grid: door, gap (carcass behind) or frame.
     for (float x = 0.3f; x <= 1.6f; x += step) {
         for (float z = 0.1f; z <= 0.85f; z += step) {
-            const bool door = x >= 0.6f && x <= 1.1f && z >= 0.15f && z <= 0.8f;
-            const bool gap = !door && x >= 0.59f && x <= 1.11f && z >= 0.14f && z <= 0.81f;
+            bool door = false, gap = false;
+            for (const DoorRect& d : doors) {
+                door = door || (x >= d.x0 && x <= d.x1 && z >= d.z0 && z <= d.z1);
+                gap = gap || (x >= d.x0 - 0.01f && x <= d.x1 + 0.01f && z >= d.z0 - 0.01f &&
+                              z <= d.z1 + 0.01f);
+            }
+            gap = gap && !door;
             c.points.emplace_back(x, gap ? y + 0.02f : y, z);
             c.normals.push_back(n);
             c.colors.push_back(gap ? Color{40, 40, 40, 255} : white);
         }
     }
-    test::AddHandle(c, {1.04f, y, 0.5f}, 0.16f, rng, true);
+    if (handle) test::AddHandle(c, {1.04f, y, 0.5f}, 0.16f, rng, true);
     c.width = static_cast<std::uint32_t>(c.size());
     c.height = 1;
     c.sensor_origin = Eigen::Vector3f(1.0f, 1.0f, 1.3f);
     return c;
 }
+
+/// One door x 0.6 .. 1.1, z 0.15 .. 0.8 in its gap, with a vertical handle near its right edge.
+PointCloud DoorInAGap() { return DoorsInGaps({{0.6f, 1.1f, 0.15f, 0.8f}}, 4, true); }
 
 TEST(FrontsFromEdges, DoorBoundedByItsGap) {
     const PointCloud c = DoorInAGap();
@@ -370,45 +384,6 @@ TEST(FrontsFromEdges, AGrownFrontExtendsToItsOutline) {
     EXPECT_THROW(
         ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts, {.max_extend = 0.0f}),
         InvalidArgument);
-}
-
-/// A door front of DoorsInGaps: x and z ranges on the face y = 2.4.
-struct DoorRect {
-    float x0, x1, z0, z1;
-};
-
-/// The room of DoorInAGap with a face x 0.3 .. 1.6, z 0.1 .. 0.85 holding `doors` of the face's
-/// colour, each set in a 1 cm gap that shows the carcass 2 cm behind; no handles. Doors that reach
-/// the face's edges cover the carcass (overlay doors, as most kitchen fronts).
-PointCloud DoorsInGaps(const std::vector<DoorRect>& doors) {
-    std::mt19937 rng(5);
-    PointCloud c;
-    const float step = 0.005f, y = 2.4f;
-    const Color white{230, 230, 230, 255};
-    const Eigen::Vector3f n = -Eigen::Vector3f::UnitY();
-    test::AddPatch(c, {0, 0, 0}, {3, 0, 0}, {0, 3, 0}, 0.02f, Eigen::Vector3f::UnitZ(),
-                   Color{120, 110, 100, 255}, 0.001f, rng);
-    test::AddPatch(c, {0, 3, 0}, {3, 0, 0}, {0, 0, 2.0f}, 0.02f, n, white, 0.001f, rng);
-    test::AddPatch(c, {0, 0, 0}, {0, 3, 0}, {0, 0, 2.0f}, 0.02f, Eigen::Vector3f::UnitX(), white,
-                   0.001f, rng);
-    for (float x = 0.3f; x <= 1.6f; x += step) {
-        for (float z = 0.1f; z <= 0.85f; z += step) {
-            bool door = false, gap = false;
-            for (const DoorRect& d : doors) {
-                door = door || (x >= d.x0 && x <= d.x1 && z >= d.z0 && z <= d.z1);
-                gap = gap || (x >= d.x0 - 0.01f && x <= d.x1 + 0.01f && z >= d.z0 - 0.01f &&
-                              z <= d.z1 + 0.01f);
-            }
-            gap = gap && !door;
-            c.points.emplace_back(x, gap ? y + 0.02f : y, z);
-            c.normals.push_back(n);
-            c.colors.push_back(gap ? Color{40, 40, 40, 255} : white);
-        }
-    }
-    c.width = static_cast<std::uint32_t>(c.size());
-    c.height = 1;
-    c.sensor_origin = Eigen::Vector3f(1.0f, 1.0f, 1.3f);
-    return c;
 }
 
 /// x range of a front's rectangle (u runs along x, either sign).

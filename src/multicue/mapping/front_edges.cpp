@@ -125,18 +125,7 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
         for (const Index i : fx.indices) is_fixture[i] = 1;
     }
     // The points measured against each face.
-    std::vector<Indices> face_points(s.components.size());
-    if (ev.point_face.empty()) {
-        for (std::size_t c = 0; c < s.components.size(); ++c)
-            face_points[c] = s.components[c].indices;
-    } else {
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            const std::int32_t f = ev.point_face[i];
-            if (f >= 0 && static_cast<std::size_t>(f) < face_points.size()) {
-                face_points[static_cast<std::size_t>(f)].push_back(static_cast<Index>(i));
-            }
-        }
-    }
+    const std::vector<Indices> face_points = FacePoints(cloud.size(), s, ev);
     for (std::size_t f = 0; f < s.components.size(); ++f) {
         const PlanarComponent& face = s.components[f];
         std::vector<int> mine;
@@ -147,18 +136,7 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
         if (mine.empty() || face_points[f].empty()) continue;
         OutlineGrid g = BuildGrid(cloud, frame, face, face_points[f], ev, is_fixture, p);
         if (g.nu == 0) continue;
-        for (std::size_t x = 0; x < fixtures.size(); ++x) {
-            if (fixtures[x].face != static_cast<int>(f)) continue;
-            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
-            Eigen::Vector2f hi = -lo;
-            for (const Index i : fixtures[x].indices) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                lo = lo.cwiseMin(q);
-                hi = hi.cwiseMax(q);
-            }
-            MaskFixture(g, lo, hi, p.margin,
-                        p.margin + p.shadow_factor * std::max(fixtures[x].protrusion, 0.0f));
-        }
+        MaskFixtures(g, cloud, frame, face, static_cast<int>(f), fixtures, p);
         struct Rect {
             Eigen::Vector2f lo, hi;
             std::vector<int> fixtures;

@@ -26,6 +26,7 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame, con
     for (std::size_t r = 0; r < fronts.size(); ++r) {
         for (const Index i : fronts[r].indices) owner[i] = static_cast<std::int32_t>(r);
     }
+    const std::vector<Indices> face_points = FacePoints(cloud.size(), s, ev);
     for (std::size_t f = 0; f < s.components.size(); ++f) {
         std::vector<std::size_t> mine;
         for (std::size_t r = 0; r < fronts.size(); ++r) {
@@ -33,30 +34,10 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame, con
         }
         if (mine.empty()) continue;
         const PlanarComponent& face = s.components[f];
-        Indices grid_points;
-        if (ev.point_face.empty()) {
-            grid_points = face.indices;
-        } else {
-            for (std::size_t i = 0; i < cloud.size(); ++i) {
-                if (ev.point_face[i] == static_cast<std::int32_t>(f))
-                    grid_points.push_back(static_cast<Index>(i));
-            }
-        }
-        if (grid_points.empty()) continue;
-        OutlineGrid g = BuildGrid(cloud, frame, face, grid_points, ev, is_fixture, p);
+        if (face_points[f].empty()) continue;
+        OutlineGrid g = BuildGrid(cloud, frame, face, face_points[f], ev, is_fixture, p);
         if (g.nu == 0) continue;
-        for (const Fixture& fx : fixtures) {
-            if (fx.face != static_cast<int>(f) || fx.indices.empty()) continue;
-            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
-            Eigen::Vector2f hi = -lo;
-            for (const Index i : fx.indices) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                lo = lo.cwiseMin(q);
-                hi = hi.cwiseMax(q);
-            }
-            MaskFixture(g, lo, hi, p.margin,
-                        p.margin + p.shadow_factor * std::max(fx.protrusion, 0.0f));
-        }
+        MaskFixtures(g, cloud, frame, face, static_cast<int>(f), fixtures, p);
         const int steps = static_cast<int>(std::ceil(p.max_extend / g.cell));
         std::vector<std::pair<Eigen::Vector2f, Eigen::Vector2f>> grown(mine.size());
         for (std::size_t k = 0; k < mine.size(); ++k) {

@@ -38,17 +38,8 @@ Cut BestCut(const OutlineGrid& g, const CellRect& r, bool columns, int margin,
     std::vector<float> shares(static_cast<std::size_t>(last - first + 1), -1.0f);
     float best = -1.0f;
     for (int k = first; k <= last; ++k) {
-        int with_points = 0, with_gap = 0;
-        for (int t = a; t <= b; ++t) {
-            bool points = false, gap = false;
-            for (int d = -1; d <= 1; ++d) {
-                const std::uint8_t m = columns ? g.At(k + d, t) : g.At(t, k + d);
-                points = points || m == kFaceCell || m == kGapCell;
-                gap = gap || m == kGapCell;
-            }
-            with_points += points;
-            with_gap += gap;
-        }
+        const auto [with_points, with_gap, masked] = CountLine(g, columns, k, a, b);
+        (void)masked;
         if (with_points == 0 ||
             static_cast<float>(with_points) < p.cut_coverage * static_cast<float>(length)) {
             continue;
@@ -140,35 +131,14 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
             if (i < cloud.size()) taken[i] = 1;
         }
     }
-    std::vector<Indices> face_points(s.components.size());
-    if (ev.point_face.empty()) {
-        for (std::size_t c = 0; c < s.components.size(); ++c)
-            face_points[c] = s.components[c].indices;
-    } else {
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            const std::int32_t f = ev.point_face[i];
-            if (f >= 0 && static_cast<std::size_t>(f) < face_points.size())
-                face_points[static_cast<std::size_t>(f)].push_back(static_cast<Index>(i));
-        }
-    }
+    const std::vector<Indices> face_points = FacePoints(cloud.size(), s, ev);
     const std::size_t known = fronts.size();
     for (std::size_t f = 0; f < s.components.size(); ++f) {
         const PlanarComponent& face = s.components[f];
         if (face.label != MapClass::kFace || face.axis == 2 || face_points[f].empty()) continue;
         OutlineGrid g = BuildGrid(cloud, frame, face, face_points[f], ev, is_fixture, grid);
         if (g.nu == 0) continue;
-        for (const Fixture& fx : fixtures) {
-            if (fx.face != static_cast<int>(f) || fx.indices.empty()) continue;
-            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
-            Eigen::Vector2f hi = -lo;
-            for (const Index i : fx.indices) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                lo = lo.cwiseMin(q);
-                hi = hi.cwiseMax(q);
-            }
-            MaskFixture(g, lo, hi, grid.margin,
-                        grid.margin + grid.shadow_factor * std::max(fx.protrusion, 0.0f));
-        }
+        MaskFixtures(g, cloud, frame, face, static_cast<int>(f), fixtures, grid);
         const int margin = std::max(2, static_cast<int>(std::lround(p.cut_margin / g.cell)));
         std::vector<CellRect> leaves;
         const CellRect whole{0, g.nu - 1, 0, g.nv - 1};

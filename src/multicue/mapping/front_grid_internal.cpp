@@ -137,6 +137,54 @@ void MaskFixture(OutlineGrid& g, const Eigen::Vector2f& lo, const Eigen::Vector2
     for (const auto& [u, v] : queue) g.mark[index(u, v)] = kMasked;
 }
 
+void MaskFixtures(OutlineGrid& g, const PointCloud& cloud, const RoomFrame& frame,
+                  const PlanarComponent& face, int f, const std::vector<Fixture>& fixtures,
+                  const FrontEdgeParams& p) {
+    for (const Fixture& fx : fixtures) {
+        if (fx.face != f || fx.indices.empty()) continue;
+        Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
+        Eigen::Vector2f hi = -lo;
+        for (const Index i : fx.indices) {
+            const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+            lo = lo.cwiseMin(q);
+            hi = hi.cwiseMax(q);
+        }
+        MaskFixture(g, lo, hi, p.margin,
+                    p.margin + p.shadow_factor * std::max(fx.protrusion, 0.0f));
+    }
+}
+
+LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b) {
+    LineCount n;
+    for (int t = a; t <= b; ++t) {
+        bool points = false, gap = false;
+        for (int d = -1; d <= 1; ++d) {
+            const std::uint8_t m = columns ? g.At(k + d, t) : g.At(t, k + d);
+            points = points || m == kFaceCell || m == kGapCell;
+            gap = gap || m == kGapCell;
+            n.masked = n.masked || m == kMasked;
+        }
+        n.points += points;
+        n.gap += gap;
+    }
+    return n;
+}
+
+std::vector<Indices> FacePoints(std::size_t num_points, const RoomStructure& s,
+                                const FrontEvidence& ev) {
+    std::vector<Indices> out(s.components.size());
+    if (ev.point_face.empty()) {
+        for (std::size_t c = 0; c < s.components.size(); ++c) out[c] = s.components[c].indices;
+        return out;
+    }
+    for (std::size_t i = 0; i < num_points && i < ev.point_face.size(); ++i) {
+        const std::int32_t f = ev.point_face[i];
+        if (f >= 0 && static_cast<std::size_t>(f) < out.size())
+            out[static_cast<std::size_t>(f)].push_back(static_cast<Index>(i));
+    }
+    return out;
+}
+
 /// Searches from line `start` in steps of `dir` (+1 or -1) for a side: along u (columns, over
 /// rows [a, b]) when `columns`, else along v (rows, over columns [a, b]). Returns the index of
 /// the side's line (or of the last line with points when the face ends first).
@@ -148,19 +196,7 @@ int FindSide(const OutlineGrid& g, bool columns, int start, int dir, int a, int 
     b = std::min(b, (columns ? g.nv : g.nu) - 1);
     int last_seen = std::clamp(start, 0, limit - 1), empty_run = 0;
     for (int k = start; k >= 0 && k < limit; k += dir) {
-        int with_points = 0, with_gap = 0;
-        bool masked = false;
-        for (int t = a; t <= b; ++t) {
-            bool points = false, gap = false;
-            for (int d = -1; d <= 1; ++d) {
-                const std::uint8_t m = columns ? g.At(k + d, t) : g.At(t, k + d);
-                points = points || m == kFaceCell || m == kGapCell;
-                gap = gap || m == kGapCell;
-                masked = masked || m == kMasked;
-            }
-            with_points += points;
-            with_gap += gap;
-        }
+        const auto [with_points, with_gap, masked] = CountLine(g, columns, k, a, b);
         const int length = std::max(1, b - a + 1);
         if (with_points == 0) {
             if (!masked && ++empty_run >= end_run) return last_seen;
@@ -188,17 +224,8 @@ int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a
     if (start < 0 || start >= limit || b < a) return -1;
     int last_seen = start, empty_run = 0;
     for (int k = start, steps = 0; k >= 0 && k < limit && steps <= max_steps; k += dir, ++steps) {
-        int with_points = 0, with_gap = 0;
-        for (int t = a; t <= b; ++t) {
-            bool points = false, gap = false;
-            for (int d = -1; d <= 1; ++d) {
-                const std::uint8_t m = columns ? g.At(k + d, t) : g.At(t, k + d);
-                points = points || m == kFaceCell || m == kGapCell;
-                gap = gap || m == kGapCell;
-            }
-            with_points += points;
-            with_gap += gap;
-        }
+        const auto [with_points, with_gap, masked] = CountLine(g, columns, k, a, b);
+        (void)masked;
         if (with_points == 0) {
             if (++empty_run >= end_run) return last_seen;
             continue;

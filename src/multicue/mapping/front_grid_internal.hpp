@@ -51,6 +51,25 @@ OutlineGrid BuildGrid(const PointCloud& cloud, const RoomFrame& frame, const Pla
 void MaskFixture(OutlineGrid& g, const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, float margin,
                  float reach);
 
+/// Masks every fixture on face `f` of the grid (MaskFixture with params.margin, reaching
+/// params.margin + params.shadow_factor * its protrusion).
+void MaskFixtures(OutlineGrid& g, const PointCloud& cloud, const RoomFrame& frame,
+                  const PlanarComponent& face, int f, const std::vector<Fixture>& fixtures,
+                  const FrontEdgeParams& p);
+
+/// The cells of line `k` (a column when `columns`, else a row) over [a, b], each with the lines
+/// either side: how many hold points, how many are gap, and whether any is masked.
+struct LineCount {
+    int points = 0, gap = 0;
+    bool masked = false;
+};
+LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b);
+
+/// Per component of `s`: the points measured against it (FrontEvidence::point_face, in
+/// increasing order), or its own points when the evidence has no faces.
+std::vector<Indices> FacePoints(std::size_t num_points, const RoomStructure& s,
+                                const FrontEvidence& ev);
+
 /// Searches from line `start` in steps of `dir` (+1 or -1) for a side: along u (columns, over
 /// rows [a, b]) when `columns`, else along v (rows, over columns [a, b]). Returns the index of
 /// the side's line (or of the last line with points when the face ends first).
