@@ -19,15 +19,17 @@ struct CellRect {
     int u0, u1, v0, v1;
 };
 
-/// The strongest cut of `r`: a column (`columns`) or row at least `margin` cells inside each
-/// side whose line (one cell either side) is outline in the largest share of its cells with
-/// points, at least p.cut_support of them, with points along p.cut_coverage of its length. A gap is
-/// a few cells wide, so the lines next to it score as high: the cut is the whole run of lines
-/// scoring the best. Returns the run's first and last lines and its share; first = -1 for none.
+/// A cut: a run of lines (columns or rows, bounds inclusive) and the outline share they scored.
 struct Cut {
     int first = -1, last = -1;
     float share = 0.0f;
 };
+
+/// The strongest cut of `r`: a column (`columns`) or row at least `margin` cells inside each
+/// side whose line (one cell either side) is outline in the largest share of its cells with
+/// points, at least p.cut_support of them, with points along p.cut_coverage of its length. A gap
+/// is a few cells wide, so the lines next to it score as high: the cut is the whole run of lines
+/// scoring the best. first = -1 for none.
 Cut BestCut(const OutlineGrid& g, const CellRect& r, bool columns, int margin,
             const GapFrontParams& p) {
     const int lo = columns ? r.u0 : r.v0, hi = columns ? r.u1 : r.v1;
@@ -38,13 +40,12 @@ Cut BestCut(const OutlineGrid& g, const CellRect& r, bool columns, int margin,
     std::vector<float> shares(static_cast<std::size_t>(last - first + 1), -1.0f);
     float best = -1.0f;
     for (int k = first; k <= last; ++k) {
-        const auto [with_points, with_gap, masked] = CountLine(g, columns, k, a, b);
-        (void)masked;
-        if (with_points == 0 ||
-            static_cast<float>(with_points) < p.cut_coverage * static_cast<float>(length)) {
+        const LineCount n = CountLine(g, columns, k, a, b);
+        if (n.points == 0 ||
+            static_cast<float>(n.points) < p.cut_coverage * static_cast<float>(length)) {
             continue;
         }
-        const float share = static_cast<float>(with_gap) / static_cast<float>(with_points);
+        const float share = static_cast<float>(n.gap) / static_cast<float>(n.points);
         if (share < p.cut_support) continue;
         shares[static_cast<std::size_t>(k - first)] = share;
         best = std::max(best, share);

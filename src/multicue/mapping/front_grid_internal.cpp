@@ -224,8 +224,8 @@ int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a
     if (start < 0 || start >= limit || b < a) return -1;
     int last_seen = start, empty_run = 0;
     for (int k = start, steps = 0; k >= 0 && k < limit && steps <= max_steps; k += dir, ++steps) {
-        const auto [with_points, with_gap, masked] = CountLine(g, columns, k, a, b);
-        (void)masked;
+        const LineCount n = CountLine(g, columns, k, a, b);
+        const int with_points = n.points, with_gap = n.gap;
         if (with_points == 0) {
             if (++empty_run >= end_run) return last_seen;
             continue;
