@@ -115,6 +115,8 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
         m.extend_fronts = v != 0.0f;
     } else if (name == "gap") {
         m.gap_fronts.enabled = v != 0.0f;
+    } else if (name == "gap_grow") {
+        m.gap_fronts.grow_fixture_fronts = v != 0.0f;
     } else if (const auto it = fields.find(name); it != fields.end()) {
         *it->second = v;
     } else {

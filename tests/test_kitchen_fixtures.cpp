@@ -466,6 +466,55 @@ TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     EXPECT_NEAR(with_frame[0].min.y(), 0.1f, 0.01f);
 }
 
+TEST(FrontsFromGaps, AFixturesFrontGrowsToTheOutlinesHoldingItsFixture) {
+    // Two overlay doors; the right one has a handle, and its front was grown over a part only.
+    const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.93f, 1.6f, 0.1f, 0.85f}};
+    const PointCloud c = DoorsInGaps(doors, 6, true);
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    ASSERT_EQ(fx.fixtures.size(), 1u);
+    FrontEvidence ev;
+    ev.point_face = fx.point_face;
+    ev.point_residual = fx.point_residual;
+    const int f = fx.fixtures[0].face;
+    const PlanarComponent& face = s.components[static_cast<std::size_t>(f)];
+    Front part;
+    part.face = f;
+    part.fixtures = {0};
+    part.u_axis = PlaneU(face, RoomFrame{});
+    part.v_axis = PlaneV(face, RoomFrame{});
+    part.normal = face.plane.head<3>();
+    const Eigen::Vector2f a = PlaneCoordinates(face, RoomFrame{}, {1.0f, 2.4f, 0.35f});
+    const Eigen::Vector2f b = PlaneCoordinates(face, RoomFrame{}, {1.25f, 2.4f, 0.65f});
+    part.min = a.cwiseMin(b);
+    part.max = a.cwiseMax(b);
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        if (fx.point_face[i] != f) continue;
+        const Eigen::Vector2f q = PlaneCoordinates(face, RoomFrame{}, c.points[i]);
+        if ((q.array() >= part.min.array()).all() && (q.array() <= part.max.array()).all())
+            part.indices.push_back(static_cast<Index>(i));
+    }
+    std::vector<Front> fronts = {part};
+    AddFrontsFromGaps(c, RoomFrame{}, s, fx.fixtures, ev, fronts);
+    ASSERT_EQ(fronts.size(), 2u);
+    const auto [x0, x1] = FrontXRange(fronts[0]);
+    EXPECT_NEAR(x0, doors[1].x0, 0.025f);
+    EXPECT_NEAR(x1, doors[1].x1, 0.025f);
+    EXPECT_NEAR(fronts[0].min.y(), doors[1].z0, 0.025f);
+    EXPECT_NEAR(fronts[0].max.y(), doors[1].z1, 0.025f);
+    EXPECT_EQ(fronts[0].fixtures, std::vector<int>{0});
+    EXPECT_TRUE(std::is_sorted(fronts[0].indices.begin(), fronts[0].indices.end()));
+    EXPECT_TRUE(std::includes(fronts[0].indices.begin(), fronts[0].indices.end(),
+                              part.indices.begin(), part.indices.end()));
+    EXPECT_NEAR(FrontXRange(fronts[1]).first, doors[0].x0, 0.025f);
+    EXPECT_TRUE(fronts[1].fixtures.empty());
+    // Without growing, the front keeps its part.
+    std::vector<Front> kept = {part};
+    AddFrontsFromGaps(c, RoomFrame{}, s, fx.fixtures, ev, kept, {}, {.grow_fixture_fronts = false});
+    EXPECT_EQ(kept[0].indices, part.indices);
+    EXPECT_TRUE(kept[0].min.isApprox(part.min));
+}
+
 TEST(FrontsFromGaps, AFaceWithoutGapsWiderThanAFrontHasNone) {
     const PointCloud c = DoorsInGaps({});
     const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});

@@ -100,7 +100,7 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame,
 
 /// Fronts whose fixture was not found (AddFrontsFromGaps): the rest of a furniture face is cut
 /// along its outlines into rectangles, and the rectangles of a front's size become fronts
-/// without fixtures.
+/// without fixtures or complete the front of the fixture they hold.
 struct GapFrontParams {
     bool enabled = true;
     /// A cut is a column or row of cells (one cell either side) that is outline in this share of
@@ -120,6 +120,9 @@ struct GapFrontParams {
     float max_taken = 0.2f;
     std::size_t min_points = 50;  ///< rectangles with fewer free face points are dropped
     int max_depth = 12;           ///< cuts nested at most this deep [-]
+    /// The front of a fixture also takes the free face points of the rectangle that holds its
+    /// fixtures (and no other front's), as long as it stays within max_width and max_height
+    bool grow_fixture_fronts = true;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -130,6 +133,8 @@ struct GapFrontParams {
 /// partition: doors side by side, drawers stacked), and each leaf rectangle that holds enough
 /// free face points, is filled, of a front's size and not on a front already found, becomes a
 /// front of those points (no fixtures, so its joint stays unknown until a scan shows it open).
+/// With params.grow_fixture_fronts, a leaf holding the fixtures of one front found already
+/// gives that front its free points instead (the front's rectangle grows to cover them).
 /// Throws InvalidArgument for bad parameters or evidence of the wrong size.
 void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame,
                        const RoomStructure& structure, const std::vector<Fixture>& fixtures,

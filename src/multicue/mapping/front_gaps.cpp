@@ -163,7 +163,60 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
             if (l >= 0) members[static_cast<std::size_t>(l)].push_back(i);
         }
         const Eigen::Vector3f u_axis = PlaneU(face, frame), v_axis = PlaneV(face, frame);
+        std::vector<std::uint8_t> used(leaves.size(), 0);
+        // A front of a fixture takes the free points of the outline rectangle holding its
+        // fixtures (of no other front's), up to a front's size: region growing stops where the
+        // front's colour drifts, its outlines do not.
+        if (p.grow_fixture_fronts) {
+            auto leaf_at = [&](const Eigen::Vector3f& x) {
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
+                const int u = std::clamp(g.U(q.x()), 0, g.nu - 1);
+                const int v = std::clamp(g.V(q.y()), 0, g.nv - 1);
+                return leaf_of[static_cast<std::size_t>(v * g.nu + u)];
+            };
+            std::vector<int> holder(leaves.size(), -1);  // -2: fixtures of several fronts
+            for (std::size_t k = 0; k < known; ++k) {
+                if (fronts[k].face != static_cast<int>(f)) continue;
+                for (const int x : fronts[k].fixtures) {
+                    const std::int32_t l = leaf_at(fixtures[static_cast<std::size_t>(x)].center);
+                    if (l < 0) continue;
+                    int& o = holder[static_cast<std::size_t>(l)];
+                    o = (o == -1 || o == static_cast<int>(k)) ? static_cast<int>(k) : -2;
+                }
+            }
+            for (std::size_t l = 0; l < leaves.size(); ++l) {
+                const int k = holder[l];
+                if (k < 0 || members[l].size() < p.min_points) continue;
+                Front& fr = fronts[static_cast<std::size_t>(k)];
+                std::vector<float> us, vs;
+                for (const Index i : members[l]) {
+                    const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                    us.push_back(q.x());
+                    vs.push_back(q.y());
+                }
+                const Eigen::Vector2f lo =
+                    fr.min.cwiseMin(Eigen::Vector2f(Quantile(us, 0.01f), Quantile(vs, 0.01f)));
+                const Eigen::Vector2f hi =
+                    fr.max.cwiseMax(Eigen::Vector2f(Quantile(us, 0.99f), Quantile(vs, 0.99f)));
+                const Eigen::Vector2f size = hi - lo;
+                if (size.x() > p.max_width || size.y() > p.max_height) continue;
+                used[l] = 1;
+                for (const Index i : members[l]) {
+                    const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+                    if ((q.array() >= lo.array()).all() && (q.array() <= hi.array()).all()) {
+                        fr.indices.push_back(i);
+                        taken[i] = 1;
+                    }
+                }
+                std::sort(fr.indices.begin(), fr.indices.end());
+                fr.min = lo;
+                fr.max = hi;
+                const Eigen::Vector2f c = (lo + hi) / 2;
+                fr.center = u_axis * c.x() + v_axis * c.y() - fr.normal * face.plane.w();
+            }
+        }
         for (std::size_t l = 0; l < leaves.size(); ++l) {
+            if (used[l]) continue;
             Indices& m = members[l];
             if (m.size() < p.min_points) continue;
             // The rectangle of its points (1st to 99th percentiles).
