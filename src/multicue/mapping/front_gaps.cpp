@@ -194,10 +194,27 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
                     us.push_back(q.x());
                     vs.push_back(q.y());
                 }
-                const Eigen::Vector2f lo =
+                Eigen::Vector2f lo =
                     fr.min.cwiseMin(Eigen::Vector2f(Quantile(us, 0.01f), Quantile(vs, 0.01f)));
-                const Eigen::Vector2f hi =
+                Eigen::Vector2f hi =
                     fr.max.cwiseMax(Eigen::Vector2f(Quantile(us, 0.99f), Quantile(vs, 0.99f)));
+                // A side already on an outline (the door's edge, a frame beyond it) stays.
+                const int u0 = std::clamp(g.U(fr.min.x()), 0, g.nu - 1);
+                const int u1 = std::clamp(g.U(fr.max.x()), 0, g.nu - 1);
+                const int v0 = std::clamp(g.V(fr.min.y()), 0, g.nv - 1);
+                const int v1 = std::clamp(g.V(fr.max.y()), 0, g.nv - 1);
+                auto outline = [&](bool columns, int line, int from, int to) {
+                    const LineCount n = CountLine(g, columns, line, from, to);
+                    return n.points > 0 &&
+                           static_cast<float>(n.points) >=
+                               grid.min_coverage * static_cast<float>(to - from + 1) &&
+                           static_cast<float>(n.gap) >=
+                               grid.extend_support * static_cast<float>(n.points);
+                };
+                if (outline(true, u0, v0, v1)) lo.x() = fr.min.x();
+                if (outline(true, u1, v0, v1)) hi.x() = fr.max.x();
+                if (outline(false, v0, u0, u1)) lo.y() = fr.min.y();
+                if (outline(false, v1, u0, u1)) hi.y() = fr.max.y();
                 const Eigen::Vector2f size = hi - lo;
                 if (size.x() > p.max_width || size.y() > p.max_height) continue;
                 used[l] = 1;
