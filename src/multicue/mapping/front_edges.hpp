@@ -121,7 +121,9 @@ struct GapFrontParams {
     std::size_t min_points = 50;  ///< rectangles with fewer free face points are dropped
     int max_depth = 12;           ///< cuts nested at most this deep [-]
     /// The front of a fixture also takes the free face points of the rectangle that holds its
-    /// fixtures (and no other front's), as long as it stays within max_width and max_height
+    /// fixtures (and no other front's), as long as it stays within max_width and max_height;
+    /// a side of the front that is outline along its whole line (FrontEdgeParams::
+    /// extend_support) stays where it is
     bool grow_fixture_fronts = true;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
