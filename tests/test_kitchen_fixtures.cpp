@@ -287,14 +287,53 @@ PointCloud DoorsInGaps(const std::vector<DoorRect>& doors, std::uint32_t seed = 
 /// One door x 0.6 .. 1.1, z 0.15 .. 0.8 in its gap, with a vertical handle near its right edge.
 PointCloud DoorInAGap() { return DoorsInGaps({{0.6f, 1.1f, 0.15f, 0.8f}}, 4, true); }
 
+/// A scan's room structure, its fixtures (by the rules) and the outline evidence they give.
+struct FaceScene {
+    RoomStructure s;
+    FixtureResult fx;
+    FrontEvidence ev;
+};
+
+FaceScene SceneOf(const PointCloud& c) {
+    FaceScene sc;
+    sc.s = SegmentRoomStructure(c, RoomFrame{}, {});
+    sc.fx = DetectFixtures(c, RoomFrame{}, sc.s, {});
+    sc.ev.point_face = sc.fx.point_face;
+    sc.ev.point_residual = sc.fx.point_residual;
+    return sc;
+}
+
+/// A front of fixture 0 on its face over the rectangle between the face points at a and b,
+/// holding the points of `candidates` inside it (the part a region grew over).
+Front PartOfFace(const PointCloud& c, const FaceScene& sc, const Eigen::Vector3f& a,
+                 const Eigen::Vector3f& b, const Indices& candidates) {
+    const int f = sc.fx.fixtures.at(0).face;
+    const PlanarComponent& face = sc.s.components.at(static_cast<std::size_t>(f));
+    Front part;
+    part.face = f;
+    part.fixtures = {0};
+    part.u_axis = PlaneU(face, RoomFrame{});
+    part.v_axis = PlaneV(face, RoomFrame{});
+    part.normal = face.plane.head<3>();
+    const Eigen::Vector2f qa = PlaneCoordinates(face, RoomFrame{}, a);
+    const Eigen::Vector2f qb = PlaneCoordinates(face, RoomFrame{}, b);
+    part.min = qa.cwiseMin(qb);
+    part.max = qa.cwiseMax(qb);
+    for (const Index i : candidates) {
+        const Eigen::Vector2f q = PlaneCoordinates(face, RoomFrame{}, c.points[i]);
+        if ((q.array() >= part.min.array()).all() && (q.array() <= part.max.array()).all())
+            part.indices.push_back(i);
+    }
+    return part;
+}
+
 TEST(FrontsFromEdges, DoorBoundedByItsGap) {
     const PointCloud c = DoorInAGap();
-    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
-    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    const FaceScene sc = SceneOf(c);
+    const RoomStructure& s = sc.s;
+    const FixtureResult& fx = sc.fx;
     ASSERT_EQ(fx.fixtures.size(), 1u);
-    FrontEvidence ev;
-    ev.point_face = fx.point_face;
-    ev.point_residual = fx.point_residual;
+    const FrontEvidence& ev = sc.ev;
     const std::vector<Front> fronts = FrontsFromEdges(c, RoomFrame{}, s, fx.fixtures, ev, {});
     ASSERT_EQ(fronts.size(), 1u);
     const Front& f = fronts[0];
@@ -327,29 +366,14 @@ TEST(FrontsFromEdges, DoorBoundedByItsGap) {
 
 TEST(FrontsFromEdges, AGrownFrontExtendsToItsOutline) {
     const PointCloud c = DoorInAGap();
-    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
-    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    const FaceScene sc = SceneOf(c);
+    const RoomStructure& s = sc.s;
+    const FixtureResult& fx = sc.fx;
     ASSERT_EQ(fx.fixtures.size(), 1u);
-    FrontEvidence ev;
-    ev.point_face = fx.point_face;
-    ev.point_residual = fx.point_residual;
+    const FrontEvidence& ev = sc.ev;
     // A front grown over the door's middle only (x 0.8 .. 1.0, z 0.4 .. 0.6).
     const PlanarComponent& face = s.components[static_cast<std::size_t>(fx.fixtures[0].face)];
-    Front part;
-    part.face = fx.fixtures[0].face;
-    part.fixtures = {0};
-    part.u_axis = PlaneU(face, RoomFrame{});
-    part.v_axis = PlaneV(face, RoomFrame{});
-    part.normal = face.plane.head<3>();
-    const Eigen::Vector2f a = PlaneCoordinates(face, RoomFrame{}, {0.8f, 2.4f, 0.4f});
-    const Eigen::Vector2f b = PlaneCoordinates(face, RoomFrame{}, {1.0f, 2.4f, 0.6f});
-    part.min = a.cwiseMin(b);
-    part.max = a.cwiseMax(b);
-    for (const Index i : face.indices) {
-        const Eigen::Vector2f q = PlaneCoordinates(face, RoomFrame{}, c.points[i]);
-        if ((q.array() >= part.min.array()).all() && (q.array() <= part.max.array()).all())
-            part.indices.push_back(i);
-    }
+    const Front part = PartOfFace(c, sc, {0.8f, 2.4f, 0.4f}, {1.0f, 2.4f, 0.6f}, face.indices);
     std::vector<Front> fronts = {part};
     ExtendFrontsToOutlines(c, RoomFrame{}, s, fx.fixtures, ev, fronts);
     ASSERT_EQ(fronts.size(), 1u);
@@ -397,12 +421,11 @@ TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     const std::vector<DoorRect> doors = {
         {0.3f, 0.9f, 0.1f, 0.85f}, {0.93f, 1.6f, 0.1f, 0.55f}, {0.93f, 1.6f, 0.58f, 0.85f}};
     const PointCloud c = DoorsInGaps(doors);
-    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
-    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    const FaceScene sc = SceneOf(c);
+    const RoomStructure& s = sc.s;
+    const FixtureResult& fx = sc.fx;
     EXPECT_TRUE(fx.fixtures.empty());
-    FrontEvidence ev;
-    ev.point_face = fx.point_face;
-    ev.point_residual = fx.point_residual;
+    const FrontEvidence& ev = sc.ev;
     std::vector<Front> fronts;
     AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, fronts);
     ASSERT_EQ(fronts.size(), 3u);
@@ -453,13 +476,9 @@ TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     // A frame narrower than cut_margin around an inset door stays with it.
     const DoorRect inset{0.34f, 0.9f, 0.14f, 0.81f};
     const PointCloud framed = DoorsInGaps({inset, doors[1], doors[2]});
-    const RoomStructure fs = SegmentRoomStructure(framed, RoomFrame{}, {});
-    const FixtureResult ffx = DetectFixtures(framed, RoomFrame{}, fs, {});
-    FrontEvidence fev;
-    fev.point_face = ffx.point_face;
-    fev.point_residual = ffx.point_residual;
+    const FaceScene fsc = SceneOf(framed);
     std::vector<Front> with_frame;
-    AddFrontsFromGaps(framed, RoomFrame{}, fs, {}, fev, with_frame);
+    AddFrontsFromGaps(framed, RoomFrame{}, fsc.s, {}, fsc.ev, with_frame);
     ASSERT_EQ(with_frame.size(), 3u);
     order(with_frame);
     EXPECT_NEAR(FrontXRange(with_frame[0]).first, 0.3f, 0.01f);
@@ -470,30 +489,16 @@ TEST(FrontsFromGaps, AFixturesFrontGrowsToTheOutlinesHoldingItsFixture) {
     // Two overlay doors; the right one has a handle, and its front was grown over a part only.
     const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.93f, 1.6f, 0.1f, 0.85f}};
     const PointCloud c = DoorsInGaps(doors, 6, true);
-    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
-    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
+    const FaceScene sc = SceneOf(c);
+    const RoomStructure& s = sc.s;
+    const FixtureResult& fx = sc.fx;
     ASSERT_EQ(fx.fixtures.size(), 1u);
-    FrontEvidence ev;
-    ev.point_face = fx.point_face;
-    ev.point_residual = fx.point_residual;
-    const int f = fx.fixtures[0].face;
-    const PlanarComponent& face = s.components[static_cast<std::size_t>(f)];
-    Front part;
-    part.face = f;
-    part.fixtures = {0};
-    part.u_axis = PlaneU(face, RoomFrame{});
-    part.v_axis = PlaneV(face, RoomFrame{});
-    part.normal = face.plane.head<3>();
-    const Eigen::Vector2f a = PlaneCoordinates(face, RoomFrame{}, {1.0f, 2.4f, 0.35f});
-    const Eigen::Vector2f b = PlaneCoordinates(face, RoomFrame{}, {1.25f, 2.4f, 0.65f});
-    part.min = a.cwiseMin(b);
-    part.max = a.cwiseMax(b);
+    const FrontEvidence& ev = sc.ev;
+    Indices measured;  // the points measured against the handle's face
     for (std::size_t i = 0; i < c.size(); ++i) {
-        if (fx.point_face[i] != f) continue;
-        const Eigen::Vector2f q = PlaneCoordinates(face, RoomFrame{}, c.points[i]);
-        if ((q.array() >= part.min.array()).all() && (q.array() <= part.max.array()).all())
-            part.indices.push_back(static_cast<Index>(i));
+        if (fx.point_face[i] == fx.fixtures[0].face) measured.push_back(static_cast<Index>(i));
     }
+    const Front part = PartOfFace(c, sc, {1.0f, 2.4f, 0.35f}, {1.25f, 2.4f, 0.65f}, measured);
     std::vector<Front> fronts = {part};
     AddFrontsFromGaps(c, RoomFrame{}, s, fx.fixtures, ev, fronts);
     ASSERT_EQ(fronts.size(), 2u);
@@ -517,11 +522,9 @@ TEST(FrontsFromGaps, AFixturesFrontGrowsToTheOutlinesHoldingItsFixture) {
 
 TEST(FrontsFromGaps, AFaceWithoutGapsWiderThanAFrontHasNone) {
     const PointCloud c = DoorsInGaps({});
-    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
-    const FixtureResult fx = DetectFixtures(c, RoomFrame{}, s, {});
-    FrontEvidence ev;
-    ev.point_face = fx.point_face;
-    ev.point_residual = fx.point_residual;
+    const FaceScene sc = SceneOf(c);
+    const RoomStructure& s = sc.s;
+    const FrontEvidence& ev = sc.ev;
     std::vector<Front> fronts;
     AddFrontsFromGaps(c, RoomFrame{}, s, {}, ev, fronts);
     EXPECT_TRUE(fronts.empty());  // 1.3 m wide: no front
