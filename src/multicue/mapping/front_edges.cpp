@@ -209,7 +209,6 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
             members[static_cast<std::size_t>(best)].push_back(i);
             if (inside > 1) overlapping[static_cast<std::size_t>(best)] = true;
         }
-        const Eigen::Vector3f u = PlaneU(face, frame), v = PlaneV(face, frame);
         for (std::size_t r = 0; r < rects.size(); ++r) {
             if (members[r].size() < p.min_points) continue;
             Front fr;
@@ -217,13 +216,7 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
             fr.fixtures = rects[r].fixtures;
             std::sort(members[r].begin(), members[r].end());
             fr.indices = std::move(members[r]);
-            fr.min = rects[r].lo;
-            fr.max = rects[r].hi;
-            fr.u_axis = u;
-            fr.v_axis = v;
-            fr.normal = face.plane.head<3>();
-            const Eigen::Vector2f c = (fr.min + fr.max) / 2;
-            fr.center = u * c.x() + v * c.y() - fr.normal * face.plane.w();
+            SetFrontRectangle(fr, face, frame, rects[r].lo, rects[r].hi);
             fr.overlapping = overlapping[r];
             fr.model_iterations = p.rounds;
             fronts.push_back(std::move(fr));

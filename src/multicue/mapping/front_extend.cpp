@@ -4,6 +4,7 @@
 
 #include "multicue/mapping/front_edges.hpp"
 #include "multicue/mapping/front_grid_internal.hpp"
+#include "multicue/mapping/fronts.hpp"
 
 namespace multicue::mapping {
 
@@ -79,10 +80,7 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame, con
                 fr.indices.push_back(i);
             }
             std::sort(fr.indices.begin(), fr.indices.end());
-            fr.min = lo;
-            fr.max = hi;
-            const Eigen::Vector2f c = (lo + hi) / 2;
-            fr.center = fr.u_axis * c.x() + fr.v_axis * c.y() - fr.normal * face.plane.w();
+            SetFrontRectangle(fr, face, frame, lo, hi);
         }
     }
 }

@@ -7,12 +7,16 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/mapping/front_edges.hpp"
 #include "multicue/mapping/front_grid_internal.hpp"
+#include "multicue/mapping/fronts.hpp"
 
 namespace multicue::mapping {
 
 using namespace front_grid_internal;
 
 namespace {
+
+/// Rectangles of points span their 1st to 99th percentiles (as SegmentFronts' do).
+constexpr float kRectQuantile = 0.01f;
 
 /// A rectangle of grid cells, bounds inclusive.
 struct CellRect {
@@ -40,6 +44,7 @@ Cut BestCut(const OutlineGrid& g, const CellRect& r, bool columns, int margin,
     std::vector<float> shares(static_cast<std::size_t>(last - first + 1), -1.0f);
     float best = -1.0f;
     for (int k = first; k <= last; ++k) {
+        // The share is compared, not the count: cuts are ranked by it.
         const LineCount n = CountLine(g, columns, k, a, b);
         if (n.points == 0 ||
             static_cast<float>(n.points) < p.cut_coverage * static_cast<float>(length)) {
@@ -85,12 +90,6 @@ void Partition(const OutlineGrid& g, const CellRect& search, const CellRect& own
         }
     }
     leaves.push_back(own);
-}
-
-float Quantile(std::vector<float>& v, float q) {
-    const auto k = static_cast<long>(q * static_cast<float>(v.size() - 1));
-    std::nth_element(v.begin(), v.begin() + k, v.end());
-    return v[static_cast<std::size_t>(k)];
 }
 
 }  // namespace
@@ -154,26 +153,22 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
                     leaf_of[static_cast<std::size_t>(v * g.nu + u)] = static_cast<std::int32_t>(l);
             }
         }
-        for (const Index i : face_points[f]) {
-            if (taken[i]) continue;
-            const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+        auto leaf_at = [&](const Eigen::Vector3f& x) {
+            const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
             const int u = std::clamp(g.U(q.x()), 0, g.nu - 1);
             const int v = std::clamp(g.V(q.y()), 0, g.nv - 1);
-            const std::int32_t l = leaf_of[static_cast<std::size_t>(v * g.nu + u)];
+            return leaf_of[static_cast<std::size_t>(v * g.nu + u)];
+        };
+        for (const Index i : face_points[f]) {
+            if (taken[i]) continue;
+            const std::int32_t l = leaf_at(cloud.points[i]);
             if (l >= 0) members[static_cast<std::size_t>(l)].push_back(i);
         }
-        const Eigen::Vector3f u_axis = PlaneU(face, frame), v_axis = PlaneV(face, frame);
         std::vector<std::uint8_t> used(leaves.size(), 0);
         // A front of a fixture takes the free points of the outline rectangle holding its
         // fixtures (of no other front's), up to a front's size: region growing stops where the
         // front's colour drifts, its outlines do not.
         if (p.grow_fixture_fronts) {
-            auto leaf_at = [&](const Eigen::Vector3f& x) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
-                const int u = std::clamp(g.U(q.x()), 0, g.nu - 1);
-                const int v = std::clamp(g.V(q.y()), 0, g.nv - 1);
-                return leaf_of[static_cast<std::size_t>(v * g.nu + u)];
-            };
             std::vector<int> holder(leaves.size(), -1);  // -2: fixtures of several fronts
             for (std::size_t k = 0; k < known; ++k) {
                 if (fronts[k].face != static_cast<int>(f)) continue;
@@ -188,28 +183,17 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
                 const int k = holder[l];
                 if (k < 0 || members[l].size() < p.min_points) continue;
                 Front& fr = fronts[static_cast<std::size_t>(k)];
-                std::vector<float> us, vs;
-                for (const Index i : members[l]) {
-                    const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                    us.push_back(q.x());
-                    vs.push_back(q.y());
-                }
-                Eigen::Vector2f lo =
-                    fr.min.cwiseMin(Eigen::Vector2f(Quantile(us, 0.01f), Quantile(vs, 0.01f)));
-                Eigen::Vector2f hi =
-                    fr.max.cwiseMax(Eigen::Vector2f(Quantile(us, 0.99f), Quantile(vs, 0.99f)));
+                const auto [leaf_lo, leaf_hi] =
+                    PointsRectangle(cloud, frame, face, members[l], kRectQuantile);
+                Eigen::Vector2f lo = fr.min.cwiseMin(leaf_lo), hi = fr.max.cwiseMax(leaf_hi);
                 // A side already on an outline (the door's edge, a frame beyond it) stays.
                 const int u0 = std::clamp(g.U(fr.min.x()), 0, g.nu - 1);
                 const int u1 = std::clamp(g.U(fr.max.x()), 0, g.nu - 1);
                 const int v0 = std::clamp(g.V(fr.min.y()), 0, g.nv - 1);
                 const int v1 = std::clamp(g.V(fr.max.y()), 0, g.nv - 1);
                 auto outline = [&](bool columns, int line, int from, int to) {
-                    const LineCount n = CountLine(g, columns, line, from, to);
-                    return n.points > 0 &&
-                           static_cast<float>(n.points) >=
-                               grid.min_coverage * static_cast<float>(to - from + 1) &&
-                           static_cast<float>(n.gap) >=
-                               grid.extend_support * static_cast<float>(n.points);
+                    return IsOutline(CountLine(g, columns, line, from, to), to - from + 1,
+                                     grid.min_coverage, grid.extend_support);
                 };
                 if (outline(true, u0, v0, v1)) lo.x() = fr.min.x();
                 if (outline(true, u1, v0, v1)) hi.x() = fr.max.x();
@@ -220,16 +204,11 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
                 used[l] = 1;
                 for (const Index i : members[l]) {
                     const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                    if ((q.array() >= lo.array()).all() && (q.array() <= hi.array()).all()) {
+                    if ((q.array() >= lo.array()).all() && (q.array() <= hi.array()).all())
                         fr.indices.push_back(i);
-                        taken[i] = 1;
-                    }
                 }
                 std::sort(fr.indices.begin(), fr.indices.end());
-                fr.min = lo;
-                fr.max = hi;
-                const Eigen::Vector2f c = (lo + hi) / 2;
-                fr.center = u_axis * c.x() + v_axis * c.y() - fr.normal * face.plane.w();
+                SetFrontRectangle(fr, face, frame, lo, hi);
             }
         }
         for (std::size_t l = 0; l < leaves.size(); ++l) {
@@ -237,16 +216,7 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
             Indices& m = members[l];
             if (m.size() < p.min_points) continue;
             // The rectangle of its points (1st to 99th percentiles).
-            std::vector<float> us, vs;
-            us.reserve(m.size());
-            vs.reserve(m.size());
-            for (const Index i : m) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                us.push_back(q.x());
-                vs.push_back(q.y());
-            }
-            const Eigen::Vector2f lo(Quantile(us, 0.01f), Quantile(vs, 0.01f));
-            const Eigen::Vector2f hi(Quantile(us, 0.99f), Quantile(vs, 0.99f));
+            const auto [lo, hi] = PointsRectangle(cloud, frame, face, m, kRectQuantile);
             const Eigen::Vector2f size = hi - lo;
             if (size.minCoeff() < p.min_size || size.x() > p.max_width || size.y() > p.max_height)
                 continue;
@@ -277,13 +247,7 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
             fr.face = static_cast<int>(f);
             std::sort(m.begin(), m.end());
             fr.indices = std::move(m);
-            fr.min = lo;
-            fr.max = hi;
-            fr.u_axis = u_axis;
-            fr.v_axis = v_axis;
-            fr.normal = face.plane.head<3>();
-            const Eigen::Vector2f c = (lo + hi) / 2;
-            fr.center = u_axis * c.x() + v_axis * c.y() - fr.normal * face.plane.w();
+            SetFrontRectangle(fr, face, frame, lo, hi);
             fronts.push_back(std::move(fr));
         }
     }

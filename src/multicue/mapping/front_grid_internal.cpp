@@ -170,6 +170,11 @@ LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b) {
     return n;
 }
 
+bool IsOutline(const LineCount& n, int length, float coverage, float support) {
+    return n.points > 0 && static_cast<float>(n.points) >= coverage * static_cast<float>(length) &&
+           static_cast<float>(n.gap) >= support * static_cast<float>(n.points);
+}
+
 std::vector<Indices> FacePoints(std::size_t num_points, const RoomStructure& s,
                                 const FrontEvidence& ev) {
     std::vector<Indices> out(s.components.size());
@@ -196,18 +201,14 @@ int FindSide(const OutlineGrid& g, bool columns, int start, int dir, int a, int 
     b = std::min(b, (columns ? g.nv : g.nu) - 1);
     int last_seen = std::clamp(start, 0, limit - 1), empty_run = 0;
     for (int k = start; k >= 0 && k < limit; k += dir) {
-        const auto [with_points, with_gap, masked] = CountLine(g, columns, k, a, b);
-        const int length = std::max(1, b - a + 1);
-        if (with_points == 0) {
-            if (!masked && ++empty_run >= end_run) return last_seen;
+        const LineCount n = CountLine(g, columns, k, a, b);
+        if (n.points == 0) {
+            if (!n.masked && ++empty_run >= end_run) return last_seen;
             continue;
         }
         empty_run = 0;
         last_seen = k;
-        if (static_cast<float>(with_points) >= p.min_coverage * static_cast<float>(length) &&
-            static_cast<float>(with_gap) >= p.min_support * static_cast<float>(with_points)) {
-            return k;
-        }
+        if (IsOutline(n, std::max(1, b - a + 1), p.min_coverage, p.min_support)) return k;
     }
     return last_seen;
 }
@@ -225,17 +226,13 @@ int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a
     int last_seen = start, empty_run = 0;
     for (int k = start, steps = 0; k >= 0 && k < limit && steps <= max_steps; k += dir, ++steps) {
         const LineCount n = CountLine(g, columns, k, a, b);
-        const int with_points = n.points, with_gap = n.gap;
-        if (with_points == 0) {
+        if (n.points == 0) {
             if (++empty_run >= end_run) return last_seen;
             continue;
         }
         empty_run = 0;
         last_seen = k;
-        if (static_cast<float>(with_points) >= p.min_coverage * static_cast<float>(b - a + 1) &&
-            static_cast<float>(with_gap) >= p.extend_support * static_cast<float>(with_points)) {
-            return k;
-        }
+        if (IsOutline(n, b - a + 1, p.min_coverage, p.extend_support)) return k;
     }
     // The face's last points lie within reach: it ends there.
     if (last_seen != start && (last_seen + dir < 0 || last_seen + dir >= limit)) return last_seen;

@@ -65,6 +65,10 @@ struct LineCount {
 };
 LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b);
 
+/// Whether a counted line of `length` cells is an outline: points along at least `coverage` of
+/// it, and at least `support` of its cells with points are gap.
+bool IsOutline(const LineCount& n, int length, float coverage, float support);
+
 /// Per component of `s`: the points measured against it (FrontEvidence::point_face, in
 /// increasing order), or its own points when the evidence has no faces.
 std::vector<Indices> FacePoints(std::size_t num_points, const RoomStructure& s,

@@ -88,6 +88,39 @@ float FootprintDistance2(const std::vector<Eigen::Vector2f>& footprint, const Ei
 
 }  // namespace
 
+std::pair<Eigen::Vector2f, Eigen::Vector2f> PointsRectangle(const PointCloud& cloud,
+                                                            const RoomFrame& frame,
+                                                            const PlanarComponent& face,
+                                                            const Indices& points, float quantile) {
+    std::vector<float> us, vs;
+    us.reserve(points.size());
+    vs.reserve(points.size());
+    for (const Index i : points) {
+        const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+        us.push_back(q.x());
+        vs.push_back(q.y());
+    }
+    auto at = [](std::vector<float>& x, float q) {
+        const auto k = static_cast<long>(std::floor(q * static_cast<float>(x.size() - 1)));
+        std::nth_element(x.begin(), x.begin() + k, x.end());
+        return x[static_cast<std::size_t>(k)];
+    };
+    return {{at(us, quantile), at(vs, quantile)},
+            {at(us, 1.0f - quantile), at(vs, 1.0f - quantile)}};
+}
+
+void SetFrontRectangle(Front& front, const PlanarComponent& face, const RoomFrame& frame,
+                       const Eigen::Vector2f& lo, const Eigen::Vector2f& hi) {
+    front.min = lo;
+    front.max = hi;
+    front.u_axis = PlaneU(face, frame);
+    front.v_axis = PlaneV(face, frame);
+    front.normal = face.plane.head<3>();
+    // The point of the plane at (u, v) = c: u * c.x + v * c.y + n * (-d).
+    const Eigen::Vector2f c = (lo + hi) / 2;
+    front.center = front.u_axis * c.x() + front.v_axis * c.y() - front.normal * face.plane.w();
+}
+
 std::vector<bool> PanelKnobs(const std::vector<Fixture>& fixtures) {
     std::vector<bool> panel(fixtures.size(), false);
     for (std::size_t i = 0; i < fixtures.size(); ++i) {
@@ -348,26 +381,11 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             }
         }
         // Rectangles on the face plane.
-        const Eigen::Vector3f u = PlaneU(face, frame), v = PlaneV(face, frame);
         for (Front& fr : grown) {
             if (fr.indices.size() < p.min_points) continue;
-            std::vector<float> us, vs;
-            for (const Index i : fr.indices) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
-                us.push_back(q.x());
-                vs.push_back(q.y());
-            }
-            auto quantile = [](std::vector<float>& x, float q) {
-                const auto k = static_cast<long>(std::floor(q * static_cast<float>(x.size() - 1)));
-                std::nth_element(x.begin(), x.begin() + k, x.end());
-                return x[static_cast<std::size_t>(k)];
-            };
-            fr.min = {quantile(us, p.rect_percentile), quantile(vs, p.rect_percentile)};
-            fr.max = {quantile(us, 1.0f - p.rect_percentile),
-                      quantile(vs, 1.0f - p.rect_percentile)};
-            fr.u_axis = u;
-            fr.v_axis = v;
-            fr.normal = face.plane.head<3>();
+            const auto [rect_lo, rect_hi] =
+                PointsRectangle(cloud, frame, face, fr.indices, p.rect_percentile);
+            SetFrontRectangle(fr, face, frame, rect_lo, rect_hi);
             // The rectangle stands for the front (thesis section 4.1.2: it still includes what
             // shadows kept the region from reaching): the face points inside it, when the region
             // fills most of it.
@@ -385,9 +403,6 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                     fr.indices = std::move(inside);
                 }
             }
-            const Eigen::Vector2f c = (fr.min + fr.max) / 2;
-            // The point of the plane at (u, v) = c: u * c.x + v * c.y + n * (-d).
-            fr.center = u * c.x() + v * c.y() - fr.normal * face.plane.w();
             fronts.push_back(std::move(fr));
         }
     }

@@ -8,6 +8,7 @@
 /// gets a rectangular approximation on the face plane.
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "multicue/core/point_cloud.hpp"
@@ -62,6 +63,18 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                                  const RoomStructure& structure,
                                  const std::vector<Fixture>& fixtures,
                                  const FrontParams& params = {});
+
+/// The rectangle of `points` on `face`: the `quantile` and 1 - `quantile` quantiles of their face
+/// coordinates u and v (lower corner, upper corner). `points` must not be empty.
+std::pair<Eigen::Vector2f, Eigen::Vector2f> PointsRectangle(const PointCloud& cloud,
+                                                            const RoomFrame& frame,
+                                                            const PlanarComponent& face,
+                                                            const Indices& points, float quantile);
+
+/// Gives `front` the rectangle [lo, hi] on `face` (face coordinates): its corners, the face's
+/// axes and normal, and the rectangle's centre in the world.
+void SetFrontRectangle(Front& front, const PlanarComponent& face, const RoomFrame& frame,
+                       const Eigen::Vector2f& lo, const Eigen::Vector2f& hi);
 
 /// Per fixture: true for a knob in a row of at least three knobs on one face (a control panel),
 /// which opens nothing on its own.
