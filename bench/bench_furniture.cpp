@@ -44,6 +44,7 @@ training::FurnitureTrainingOptions TrainingOptions() {
     o.kitchen.clear();
     o.procedural_per_class = 4;
     o.num_threads = 1;
+    o.verifier_rooms = 6;  // a verifier, so that its features and predictions are timed
     return o;
 }
 

@@ -24,6 +24,7 @@
 #include "multicue/core/progress.hpp"
 #include "multicue/io/file_utils.hpp"
 #include "multicue/mapping/furniture_detection.hpp"
+#include "multicue/ml/classifier.hpp"
 #include "multicue/training/furniture_training.hpp"
 
 #ifndef MULTICUE_SHARED_DATA_DIR
@@ -69,6 +70,12 @@ struct Options {
     int probe = 0;
     int train_procedural = 8;
     bool class_by_fit = true;
+    bool learned = true;
+    float min_confidence = FurnitureDetectionParams{}.min_confidence;
+    bool retrain_verifier = false;
+    bool learned_tests = true;
+    int verifier_rooms = -1;    // -1: the training default
+    std::string verifier_spec;  // empty: the training default
     std::size_t activations = 2;
     float max_height_error = 0.25f;
     float support_margin = 0.3f;
@@ -79,6 +86,7 @@ struct Variant {
     const FurnitureModel* model = nullptr;
     FurnitureActivation activation = FurnitureActivation::kWords;
     bool verify = false;
+    bool learned = false;  ///< with the model's learned verifier: scores are its confidences
 };
 
 // The visible objects of views `views` of a room: at least min_visible returns in them.
@@ -231,13 +239,35 @@ int Run(const Options& o) {
     to.num_threads = o.threads;
     to.procedural_per_class = o.train_procedural;
     to.parts.frame = ParseFurniturePartFrame(o.frame);
+    if (o.verifier_rooms >= 0) to.verifier_rooms = o.verifier_rooms;
+    if (!o.verifier_spec.empty()) to.verifier_spec = o.verifier_spec;
     FurnitureModel model;
     auto t0 = std::chrono::steady_clock::now();
     if (!o.retrain && std::filesystem::exists(o.model)) {
         model = FurnitureModel::Load(o.model);
+        if (o.retrain_verifier) {  // the verifier alone, on the loaded vocabulary and CAD models
+            model.SetVerifier(nullptr);
+            std::shared_ptr<const ml::Classifier> verifier;
+            if (to.verifier_rooms > 0) {
+                Progress progress("verifier rooms", static_cast<std::size_t>(to.verifier_rooms));
+                const ml::Dataset rows =
+                    training::CollectFurnitureVerifierRows(model, to, &progress);
+                if (InterruptRequested()) return 130;
+                progress.Finish();
+                auto c = ml::CreateClassifier(to.verifier_spec);
+                c->seed = static_cast<std::uint32_t>(to.seed);
+                c->Fit(rows);
+                std::size_t right = 0;
+                for (int l : rows.labels) right += l == rows.FindClass("right") ? 1 : 0;
+                std::fprintf(stderr, "verifier: %zu fits, %zu right\n", rows.rows(), right);
+                verifier = std::move(c);
+            }
+            model.SetVerifier(verifier);
+            model.Save(o.model);
+        }
     } else {
         const auto pieces = training::FurnitureTrainingPieces(to);
-        Progress progress("training", pieces.size());
+        Progress progress("training", training::FurnitureTrainingSteps(pieces, to));
         if (!training::TrainFurnitureModel(pieces, to, model, &progress)) return 130;
         progress.Finish();
         model.Save(o.model);
@@ -270,6 +300,9 @@ int Run(const Options& o) {
     dp.cross_class_surfaces = o.cross_class_surfaces;
     dp.max_overlap = o.max_overlap;
     dp.class_by_fit = o.class_by_fit;
+    dp.learned = o.learned;
+    dp.min_confidence = o.min_confidence;
+    dp.learned_tests = o.learned_tests;
     dp.voting.activations = o.activations;
     dp.voting.max_height_error = o.max_height_error;
     dp.support_margin = o.support_margin;
@@ -292,8 +325,13 @@ int Run(const Options& o) {
     const sim::FurnitureSource source(library, share);
     const std::uint64_t first_seed = o.seed > 0 ? o.seed : (test ? 2000 : 1000);
 
-    std::vector<Variant> variants = {{"full", &model, FurnitureActivation::kWords, false},
-                                     {"full+cad", &model, FurnitureActivation::kWords, true}};
+    const bool learned = o.learned && model.verifier() != nullptr;
+    std::vector<Variant> variants = {
+        {"full", &model, FurnitureActivation::kWords, false},
+        {"full+cad", &model, FurnitureActivation::kWords, true, learned}};
+    if (learned) {  // the thesis's tests alone, for comparison
+        variants.push_back({"full+cad-tests", &model, FurnitureActivation::kWords, true, false});
+    }
     if (o.variants) {
         variants.push_back({"nearest-part", &model, FurnitureActivation::kNearestPart, false});
         variants.push_back({"reduced", &reduced, FurnitureActivation::kWords, false});
@@ -322,6 +360,7 @@ int Run(const Options& o) {
         for (const auto& var : variants) {
             FurnitureDetectionParams p = dp;
             p.verify = var.verify;
+            p.learned = var.learned;
             p.voting.activation = var.activation;
             if (var.model != &model || var.activation != FurnitureActivation::kWords) {
                 for (std::size_t v = 0; v < views.size(); ++v) {
@@ -335,11 +374,11 @@ int Run(const Options& o) {
                 DetectFurniture(scene, {}, *var.model, var.verify ? &context : nullptr, p);
             merged[var.name].push_back(
                 Frame(det, VisibleTruth(room, all, model, o.min_visible), var.verify, group));
-            if (var.verify) {
+            if (var.name == "full+cad") {
                 // Why true hypotheses (right class, near a true piece) were rejected.
                 for (const auto* list : {&det.detections, &det.rejected}) {
                     for (const auto& d : *list) {
-                        if (d.score < 0.3f) continue;
+                        if ((var.learned ? d.hypothesis.normalized : d.score) < 0.3f) continue;
                         for (const auto& f : room.room.furniture) {
                             if (f.category != d.category ||
                                 (f.T_world_object.translation().head<2>() - d.hypothesis.centre)
@@ -352,7 +391,8 @@ int Run(const Options& o) {
                     }
                 }
             }
-            if (var.verify && o.draw < 0) {  // nearest hypothesis of the right class per piece
+            if (var.name == "full+cad" &&
+                o.draw < 0) {  // nearest hypothesis of the right class per piece
                 for (const auto& f : room.room.furniture) {
                     float best = 1e9f, score = 0.0f;
                     std::string fate;
@@ -372,11 +412,11 @@ int Run(const Options& o) {
                                  best, score, fate.c_str());
                 }
             }
-            if (var.verify && r < o.draw) {
+            if (var.name == "full+cad" && r < o.draw) {
                 eval::DrawRoom(fmt::format("{}/room_{:02}.png", o.out, r), room, scene, det, model);
                 ListRoom(r, room, det, model);
             }
-            if (var.verify) {
+            if (var.name == "full+cad") {
                 sel_ms += det.selection_ms, fit_ms += det.fit_ms, ++n_sel;
                 for (const auto* list : {&det.detections, &det.rejected}) {
                     for (const auto& d : *list) {
@@ -414,9 +454,13 @@ int Run(const Options& o) {
             const auto it = frames_by->find(var.name);
             if (it == frames_by->end()) continue;
             const auto& frames = it->second;
+            // The operating point: the class thresholds of the votes, or, with the learned
+            // verifier, every accepted fit (their scores are confidences above min_confidence).
+            const float op = var.learned ? 0.0f : 1.0f;
             eval::MatchCounts m;
-            for (const auto& f : frames) m.Add(eval::MatchFrame(f, 1.0f, -1, table));
-            const auto curve = eval::Curve(frames, o.floor_cut, 8.0f, 40, table);
+            for (const auto& f : frames) m.Add(eval::MatchFrame(f, op, -1, table));
+            const auto curve = var.learned ? eval::ExactCurve(frames, table)
+                                           : eval::Curve(frames, o.floor_cut, 8.0f, 40, table);
             const std::string name = var.name + (is_merged ? " merged" : " single");
             const double rap = eval::RecallAtPrecision(curve, 0.9);
             std::printf("%-24s %7.3f %7.3f %7.3f %9zu %6zu %6zu %6zu\n", name.c_str(),
@@ -442,7 +486,7 @@ int Run(const Options& o) {
             for (std::size_t c = 0; c < model.classes().size(); ++c) {
                 eval::MatchCounts mc;
                 for (const auto& f : frames)
-                    mc.Add(eval::MatchFrame(f, 1.0f, static_cast<int>(c), table));
+                    mc.Add(eval::MatchFrame(f, op, static_cast<int>(c), table));
                 float cut = 1.0f;
                 double f1 = 0.0;
                 const double ap = eval::AveragePrecision(frames, static_cast<int>(c), &cut, &f1);
@@ -455,13 +499,13 @@ int Run(const Options& o) {
                     {"fn", mc.fn},
                     {"ap", ap},
                     {"best_f1", f1},
-                    {"best_f1_threshold", cut * model.classes()[c].threshold}};
+                    {"best_f1_threshold", var.learned ? cut : cut * model.classes()[c].threshold}};
             }
             entry["map"] = map;
             for (const char* g : {"office", "seminar", "kitchen"}) {
                 eval::MatchCounts mg;
                 for (const auto& f : frames) {
-                    if (f.group == g) mg.Add(eval::MatchFrame(f, 1.0f, -1, table));
+                    if (f.group == g) mg.Add(eval::MatchFrame(f, op, -1, table));
                 }
                 entry["room_types"][g] = {{"precision", mg.Precision()}, {"recall", mg.Recall()}};
             }
@@ -579,6 +623,17 @@ int main(int argc, char** argv) {
     app.add_option("--probe", o.probe,
                    "only: N single fresh procedural pieces per class, one view each");
     app.add_flag("!--no-class-by-fit", o.class_by_fit, "overlapping fits: the strongest votes win");
+    app.add_flag("!--no-learned", o.learned, "without the model's learned verifier");
+    app.add_option("--min-confidence", o.min_confidence, "learned verifier: confidence kept")
+        ->capture_default_str();
+    app.add_flag("--retrain-verifier", o.retrain_verifier,
+                 "train the learned verifier of the loaded model again (written to --model)");
+    app.add_flag("!--no-learned-tests", o.learned_tests,
+                 "a fit must pass the coverage and free-space tests and the learned verifier");
+    app.add_option("--verifier-rooms", o.verifier_rooms,
+                   "rooms the verifier is trained on (default: the training's)");
+    app.add_option("--verifier-spec", o.verifier_spec,
+                   "classifier of the verifier (default: the training's)");
     app.add_option("--train-procedural", o.train_procedural, "procedural training pieces per class")
         ->capture_default_str();
     app.add_flag("!--no-variants", o.variants, "only the full method");

@@ -183,6 +183,23 @@ inline std::vector<CurvePoint> Curve(const std::vector<EvalFrame>& frames, float
     return c;
 }
 
+/// The curve with a cut at every distinct detection score (scores of any scale).
+inline std::vector<CurvePoint> ExactCurve(const std::vector<EvalFrame>& frames, int half_turn_cls) {
+    std::vector<float> cuts;
+    for (const auto& f : frames) {
+        for (const auto& d : f.detections) cuts.push_back(d.score);
+    }
+    std::sort(cuts.begin(), cuts.end());
+    cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+    std::vector<CurvePoint> c;
+    for (const float cut : cuts) {
+        MatchCounts m;
+        for (const auto& f : frames) m.Add(MatchFrame(f, cut, -1, half_turn_cls));
+        c.push_back({cut, m.Precision(), m.Recall()});
+    }
+    return c;
+}
+
 /// Highest recall at precision >= p_min over the curve (0 if never).
 inline double RecallAtPrecision(const std::vector<CurvePoint>& c, double p_min) {
     double r = 0.0;

@@ -348,7 +348,8 @@ def build_seeds(cli, data, tmp, seeds):
     # A small furniture model: one procedural piece per class, two views, coarse CAD points.
     model = tmp / "furniture.mcfm"
     run(cli, "train", "furniture", "--out", model, "--meshes", "", "--kitchen", "",
-        "--procedural", 1, "--views", 2, "--words", 8, "--cad-spacing", 0.15, "-q")
+        "--procedural", 1, "--views", 2, "--words", 8, "--cad-spacing", 0.15,
+        "--verifier-rooms", 0, "-q")
     seeds.add_payload("furniture_model", model)
 
 

@@ -20,6 +20,8 @@
 #include "multicue/io/file_utils.hpp"
 #include "multicue/io/point_cloud_io.hpp"
 #include "multicue/mapping/furniture_detection.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/ml/serialization.hpp"
 #include "multicue/sim/furniture_scenes.hpp"
 #include "multicue/sim/raycaster.hpp"
 #include "multicue/training/furniture_training.hpp"
@@ -39,6 +41,7 @@ training::FurnitureTrainingOptions SmallTraining() {
     to.views.views = 8;
     to.num_threads = 2;
     to.seed = 5;
+    to.verifier_rooms = 0;  // FurnitureVerifier trains one
     return to;
 }
 
@@ -322,6 +325,128 @@ TEST(FurnitureDetection, EmptyScansGiveNoDetections) {
                     .detections.empty());
 }
 
+// The learned verifier: trained on the fits in three simulated rooms, it ranks the right fits of
+// two other rooms above the wrong ones; it travels in the model file (version 1 files, without
+// one, still load); detection uses its confidence as the score and rejects below
+// min_confidence; bad verifiers and parameters are refused.
+TEST(FurnitureVerifier, RanksTheFitsOfUnseenRoomsAndTravelsInTheModelFile) {
+    auto to = SmallTraining();
+    to.verifier_rooms = 3;
+    to.verifier_spec = "rtrees:trees=50";
+    const auto pieces = training::FurnitureTrainingPieces(to);
+    FurnitureModel model;
+    ASSERT_TRUE(training::TrainFurnitureModel(pieces, to, model));
+    ASSERT_NE(model.verifier(), nullptr);
+    EXPECT_EQ(model.verifier()->feature_names(), FurnitureVerifierFeatureNames(model));
+
+    auto held = to;
+    held.verifier_rooms = 2;
+    held.verifier_seed = 7000;
+    const ml::Dataset rows = training::CollectFurnitureVerifierRows(model, held);
+    const int right = rows.FindClass("right");
+    std::vector<std::pair<float, bool>> scored;
+    const ml::FeatureMatrix p = model.verifier()->PredictProba(rows);
+    const auto& names = model.verifier()->class_names();
+    const auto col = std::find(names.begin(), names.end(), "right") - names.begin();
+    for (std::size_t i = 0; i < rows.rows(); ++i)
+        scored.push_back({p(static_cast<Eigen::Index>(i), col), rows.labels[i] == right});
+    // Area under the ROC curve: the chance that a right fit outranks a wrong one.
+    double pairs = 0.0, above = 0.0;
+    for (const auto& a : scored) {
+        for (const auto& b : scored) {
+            if (!a.second || b.second) continue;
+            pairs += 1.0;
+            above += a.first > b.first ? 1.0 : (a.first == b.first ? 0.5 : 0.0);
+        }
+    }
+    ASSERT_GT(pairs, 0.0) << "the held-out rooms need right and wrong fits";
+    EXPECT_GT(above / pairs, 0.75);
+
+    // Model file round trip; a version 1 file has no verifier.
+    const auto dir = std::filesystem::temp_directory_path() / "multicue_test_furniture_verifier";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    model.Save(dir / "m.mcfm");
+    const FurnitureModel loaded = FurnitureModel::Load(dir / "m.mcfm");
+    ASSERT_NE(loaded.verifier(), nullptr);
+    EXPECT_TRUE(loaded.verifier()->PredictProba(rows).isApprox(p));
+    FurnitureModel bare = model;
+    bare.SetVerifier(nullptr);
+    bare.Save(dir / "bare.mcfm");
+    std::string payload = ml::UnwrapContainer(ml::ReadBytes(dir / "bare.mcfm"), "MCFURNIT", 2,
+                                              "furniture model", "bare");
+    payload.pop_back();  // the verifier flag
+    io::WriteFileAtomically(dir / "v1.mcfm", [&](std::ostream& os) {
+        os << ml::WrapContainer("MCFURNIT", 1, payload);
+    });
+    const FurnitureModel v1 = FurnitureModel::Load(dir / "v1.mcfm");
+    EXPECT_EQ(v1.verifier(), nullptr);
+    EXPECT_EQ(v1.cads().size(), model.cads().size());
+
+    // Detection in a room of neither set.
+    const auto room =
+        training::SimulateFurnitureRoom({}, sim::FurnitureSource({}, 1.0f), 2, to, 7100);
+    std::vector<FurnitureView> views;
+    for (std::size_t v = 0; v < room.scans.size(); ++v)
+        views.push_back({&room.scans[v], room.T_world_sensor[v]});
+    FurnitureDetectionParams dp;
+    dp.num_threads = 2;
+    const FurnitureFitContext context(model, dp.fit);
+    const FurnitureScene scene = PrepareFurnitureScene(views, model, dp);
+    const auto det = DetectFurniture(scene, {}, model, &context, dp);
+    std::size_t confident = 0;
+    for (const auto& d : det.detections) {
+        EXPECT_GE(d.confidence, dp.min_confidence);
+        EXPECT_EQ(d.score, d.confidence);
+    }
+    for (const auto& d : det.rejected) {
+        if (d.rejection == "confidence") {
+            EXPECT_LT(d.confidence, dp.min_confidence);
+        }
+        confident += d.confidence >= 0.0f ? 1 : 0;
+    }
+    EXPECT_GT(det.detections.size() + confident, 0u);
+    dp.min_confidence = 1.0f;
+    for (const auto& d : DetectFurniture(scene, {}, model, &context, dp).detections)
+        EXPECT_EQ(d.confidence, 1.0f);
+    dp.learned = false;
+    const auto rules = DetectFurniture(scene, {}, model, &context, dp);
+    for (const auto* list : {&rules.detections, &rules.rejected}) {
+        for (const auto& d : *list) {
+            EXPECT_EQ(d.confidence, -1.0f);
+            EXPECT_NE(d.rejection, "confidence");
+        }
+    }
+
+    // Bad verifiers and parameters.
+    EXPECT_THROW(bare.SetVerifier(ml::CreateClassifier("rtrees:trees=5")), InvalidArgument);
+    ml::Dataset other = ml::Dataset::WithColumns(2);
+    for (int i = 0; i < 20; ++i) {
+        const float x[2] = {static_cast<float>(i), static_cast<float>(i % 3)};
+        other.AppendRow(x, i < 10 ? "yes" : "no");
+    }
+    std::shared_ptr<ml::Classifier> yes_no = ml::CreateClassifier("rtrees:trees=5");
+    yes_no->Fit(other);
+    EXPECT_THROW(bare.SetVerifier(yes_no), InvalidArgument);
+    for (int i = 0; i < 20; ++i) other.labels[static_cast<std::size_t>(i)] = i < 10 ? 0 : 1;
+    other.class_names = {"right", "wrong"};
+    std::shared_ptr<ml::Classifier> narrow = ml::CreateClassifier("rtrees:trees=5");
+    narrow->Fit(other);
+    bare.SetVerifier(narrow);  // the classes are right, the features are not
+    dp = {};
+    const FurnitureFitContext bare_context(bare, dp.fit);
+    EXPECT_THROW(DetectFurniture(scene, {}, bare, &bare_context, dp), InvalidArgument);
+    dp.min_confidence = 1.5f;
+    EXPECT_THROW(dp.Validate(), InvalidArgument);
+    auto bad = to;
+    bad.verifier_rooms = -1;
+    EXPECT_THROW(bad.Validate(), InvalidArgument);
+    bad = to;
+    bad.verifier_spec = "oracle";
+    EXPECT_THROW(bad.Validate(), InvalidArgument);
+    std::filesystem::remove_all(dir);
+}
+
 /// Exit status of the CLI with `args`.
 int Cli(const std::string& args) {
     const int rc =
@@ -371,10 +496,12 @@ TEST(DetectFurnitureCli, TrainThenDetectWritesTheResultAndTheReport) {
     EXPECT_FALSE(std::filesystem::exists(model));
     EXPECT_NE(Cli("train furniture --out " + model + " --views 0"), 0);
     EXPECT_NE(Cli("train furniture --out " + model + " --features some"), 0);
+    EXPECT_NE(Cli("train furniture --out " + model + " --verifier-rooms -1"), 0);
+    EXPECT_NE(Cli("train furniture --out " + model + " --verifier-classifier oracle"), 0);
     EXPECT_NE(Cli("train --views 1"), 0);  // the part-graph training still needs --out
     ASSERT_EQ(Cli("train furniture --out " + model +
                   " --meshes '' --kitchen '' --procedural 1 --views 4 --words 8 --cad-spacing 0.1 "
-                  "-q"),
+                  "--verifier-rooms 0 -q"),
               0);
     const FurnitureModel m = FurnitureModel::Load(model);
     EXPECT_EQ(m.classes().size(), 4u);

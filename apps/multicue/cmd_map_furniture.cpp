@@ -42,6 +42,9 @@ struct MapFurnitureOptions {
     float max_free_share = 0.4f;
     bool verify = true;
     bool free_space = true;
+    bool learned = true;
+    bool learned_tests = true;
+    float min_confidence = FurnitureDetectionParams{}.min_confidence;
     bool quiet = false;
     bool detect = false;  ///< `detect furniture`: the model must exist; result.json, report.html
     bool report = true;
@@ -80,7 +83,7 @@ FurnitureModel LoadOrTrain(const MapFurnitureOptions& o, int threads) {
     to.Validate();
     const auto pieces = training::FurnitureTrainingPieces(to);
     FurnitureModel model;
-    Progress progress("training", pieces.size());
+    Progress progress("training", training::FurnitureTrainingSteps(pieces, to));
     if (!training::TrainFurnitureModel(pieces, to, model, &progress)) {
         throw Error("map furniture: training interrupted, no model written");
     }
@@ -101,6 +104,7 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     j["class"] = d.category;
     j["score"] = d.score;
     j["votes"] = d.hypothesis.normalized;
+    if (d.confidence >= 0.0f) j["confidence"] = d.confidence;
     j["centre"] = {d.centre.x(), d.centre.y()};
     if (!d.rejection.empty()) j["rejection"] = d.rejection;
     if (!d.fitted || d.fit.cad < 0) return j;
@@ -133,6 +137,9 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     params.fit.max_free_share = o.max_free_share;
     params.verify = o.verify;
     params.free_space = o.free_space;
+    params.learned = o.learned;
+    params.learned_tests = o.learned_tests;
+    params.min_confidence = o.min_confidence;
     params.num_threads = global.threads;
     params.Validate();  // before reading or training anything
     for (const auto& s : o.scans) CheckDistinctPaths(s, o.out);
@@ -201,10 +208,12 @@ void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
                     "multiplies the class thresholds of the votes (lower: more hypotheses)")
         ->capture_default_str();
     cmd->add_option("--min-coverage", o->min_coverage,
-                    "share of a hypothesis's points a fitted model must cover, [0, 1]")
+                    "share of a hypothesis's points a fitted model must cover, [0, 1] (binding "
+                    "without a learned verifier or with --no-learned-tests)")
         ->capture_default_str();
     cmd->add_option("--max-free-share", o->max_free_share,
-                    "share of a fitted model allowed in space the scans saw empty, [0, 1]")
+                    "share of a fitted model allowed in space the scans saw empty, [0, 1] "
+                    "(binding without a learned verifier or with --no-learned-tests)")
         ->capture_default_str();
     cmd->add_flag(
         "--no-verify", [o](std::int64_t) { o->verify = false; },
@@ -212,6 +221,16 @@ void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
     cmd->add_flag(
         "--no-free-space", [o](std::int64_t) { o->free_space = false; },
         "fit without the free-space test");
+    cmd->add_option("--min-confidence", o->min_confidence,
+                    "fits the model's learned verifier gives a lower probability of being right "
+                    "are rejected, [0, 1]")
+        ->capture_default_str();
+    cmd->add_flag(
+        "--no-learned", [o](std::int64_t) { o->learned = false; },
+        "verify fits by the thesis's tests alone, without the model's learned verifier");
+    cmd->add_flag(
+        "--no-learned-tests", [o](std::int64_t) { o->learned_tests = false; },
+        "a fit must pass the coverage, free-space and wall tests as well as the verifier");
     cmd->add_flag("-q,--quiet", o->quiet, "no summary");
 }
 
@@ -239,7 +258,7 @@ void TrainFurniture(TrainFurnitureOptions& o, int threads) {
     InstallInterruptHandler();
     const auto pieces = training::FurnitureTrainingPieces(o.t);
     FurnitureModel model;
-    Progress progress("training", pieces.size());
+    Progress progress("training", training::FurnitureTrainingSteps(pieces, o.t));
     if (!training::TrainFurnitureModel(pieces, o.t, model, &progress)) {
         throw Error("train furniture: interrupted, no model written");
     }
@@ -323,6 +342,13 @@ void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& glob
                     "spacing of the CAD models' points used in fitting [m]")
         ->capture_default_str();
     cmd->add_option("--seed", o->t.seed, "views, sensor noise and procedural pieces")
+        ->capture_default_str();
+    cmd->add_option("--verifier-rooms", o->t.verifier_rooms,
+                    "simulated rooms of procedural pieces the learned verifier of fits is trained "
+                    "on; 0: no verifier")
+        ->capture_default_str();
+    cmd->add_option("--verifier-classifier", o->t.verifier_spec,
+                    "classifier of the verifier (spec as in `multicue ml train`)")
         ->capture_default_str();
     cmd->add_flag("-q,--quiet", o->quiet, "no summary");
     cmd->callback([o, &global] { TrainFurniture(*o, global.threads); });

@@ -13,6 +13,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/filters/voxel_grid.hpp"
+#include "multicue/ml/classifier.hpp"
 
 namespace multicue {
 namespace {
@@ -204,6 +205,40 @@ void FurnitureDetectionParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture detection: num_threads must be >= 0, got {}", num_threads));
     }
+    if (!(min_confidence >= 0.0f && min_confidence <= 1.0f)) {
+        throw InvalidArgument(fmt::format(
+            "furniture detection: min_confidence must be in [0, 1], got {}", min_confidence));
+    }
+}
+
+std::vector<std::string> FurnitureVerifierFeatureNames(const FurnitureModel& model) {
+    std::vector<std::string> names = {"log_votes",  "log_parts",    "coverage",
+                                      "free_share", "behind_share", "explained",
+                                      "log_points", "refined",      "shift"};
+    for (const auto& c : model.classes()) names.push_back("class_" + c.name);
+    return names;
+}
+
+std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
+                                             const FurnitureModel& model) {
+    const auto& classes = model.classes();
+    if (d.cls < 0 || d.cls >= static_cast<int>(classes.size())) {
+        throw InvalidArgument(fmt::format("furniture verifier: no class {}", d.cls));
+    }
+    const FurnitureClass& cls = classes[static_cast<std::size_t>(d.cls)];
+    const float shift = (d.centre - d.hypothesis.centre).norm() / cls.width;
+    std::vector<float> f = {std::log1p(std::max(0.0f, std::min(d.hypothesis.normalized, 1e6f))),
+                            std::log1p(static_cast<float>(d.hypothesis.parts.size())),
+                            d.fit.coverage,
+                            d.fit.free_share,
+                            d.fit.behind_share,
+                            d.explained,
+                            std::log1p(static_cast<float>(d.fit.scan_points)),
+                            d.fit.refined ? 1.0f : 0.0f,
+                            std::isfinite(shift) ? shift : 0.0f};
+    for (std::size_t c = 0; c < classes.size(); ++c)
+        f.push_back(static_cast<int>(c) == d.cls ? 1.0f : 0.0f);
+    return f;
 }
 
 float SharedSurfaceShare(const PointCloud& a, const Eigen::Isometry3f& T_a, const PointCloud& b,
@@ -339,11 +374,59 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                     d.centre = d.fit.T_world_model.translation().head<2>();
                     d.score *= std::max(
                         0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
+                    const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
+                    d.explained = SharedSurface(PlaceSurface(cad.cloud, d.fit.T_world_model,
+                                                             params.surface_overlap_distance),
+                                                PlaceSurface(pts, Eigen::Isometry3f::Identity(),
+                                                             params.surface_overlap_distance));
                 }
                 d.accepted = d.fit.accepted;
                 d.rejection = d.fit.rejection;
             },
             1);
+        const ml::Classifier* verifier = params.learned ? model.verifier() : nullptr;
+        if (verifier != nullptr) {
+            // The verifier's probability of a right fit for every fit that passed the tests.
+            if (verifier->feature_names() != FurnitureVerifierFeatureNames(model)) {
+                throw InvalidArgument(
+                    "furniture detection: the model's verifier was trained on other features");
+            }
+            const auto& names = verifier->class_names();
+            const auto right = static_cast<Eigen::Index>(
+                std::find(names.begin(), names.end(), "right") - names.begin());
+            std::vector<std::size_t> rows;
+            for (std::size_t i = 0; i < all.size(); ++i) {
+                const std::string& why = all[i].rejection;
+                const bool tested =
+                    why == "coverage" || why == "free_space" || why == "behind_wall";
+                if (all[i].fitted && (all[i].accepted || (params.learned_tests && tested)))
+                    rows.push_back(i);
+            }
+            if (!rows.empty()) {
+                const std::size_t nf = verifier->num_features();
+                ml::FeatureMatrix x(static_cast<Eigen::Index>(rows.size()),
+                                    static_cast<Eigen::Index>(nf));
+                for (std::size_t r = 0; r < rows.size(); ++r) {
+                    const auto f = FurnitureVerifierFeatures(all[rows[r]], model);
+                    for (std::size_t c = 0; c < nf; ++c)
+                        x(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f[c];
+                }
+                const ml::FeatureMatrix p = verifier->PredictProba(x);
+                for (std::size_t r = 0; r < rows.size(); ++r) {
+                    FurnitureDetection& d = all[rows[r]];
+                    d.confidence = p(static_cast<Eigen::Index>(r), right);
+                    d.score = d.confidence;
+                    const bool confident = d.confidence >= params.min_confidence;
+                    if (d.accepted && !confident) {
+                        d.accepted = false;
+                        d.rejection = "confidence";
+                    } else if (!d.accepted && confident) {  // a test's rejection overruled
+                        d.accepted = true;
+                        d.rejection.clear();
+                    }
+                }
+            }
+        }
         // Fitted footprints that overlap are one piece. Strongest first, each detection gathers
         // the accepted ones overlapping it; with class_by_fit the one whose model explains the
         // scan best (coverage minus free space and space behind walls) stays, with the group's
@@ -395,7 +478,11 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                 if (k != i && all[k].accepted && !done[k] && overlaps(i, k)) group.push_back(k);
             }
             std::size_t winner = i;
-            if (params.class_by_fit) {
+            if (verifier != nullptr) {
+                for (std::size_t k : group) {
+                    if (all[k].confidence > all[winner].confidence) winner = k;
+                }
+            } else if (params.class_by_fit) {
                 for (std::size_t k : group) {
                     if (quality(all[k]) > quality(all[winner])) winner = k;
                 }

@@ -52,6 +52,16 @@ struct FurnitureDetectionParams {
     /// Of overlapping fitted detections, keep the one whose model explains the scan best rather
     /// than the one with the strongest votes (the votes find the piece, the models name it)
     bool class_by_fit = true;
+    /// Learned verification: when the model has a verifier (FurnitureModel::verifier), every fit
+    /// gets the verifier's probability of being right (FurnitureDetection::confidence); fits
+    /// below min_confidence are rejected, the confidence is the detection's score and decides
+    /// which of overlapping fits stays
+    bool learned = true;
+    float min_confidence = 0.4f;  ///< [0, 1]
+    /// With learned verification, the verifier also judges the fits that the coverage,
+    /// free-space and wall tests rejected (its features hold the same shares): it replaces the
+    /// tests. Off: a fit must pass the tests and the verifier
+    bool learned_tests = true;
     /// Parts whose centre lies further from a hypothesis than half its class's length plus this
     /// are left out of its fit [m], >= 0
     float support_margin = 0.3f;
@@ -101,12 +111,26 @@ struct FurnitureDetection {
     Eigen::Vector2f centre = Eigen::Vector2f::Zero();
     /// The hypothesis's score over its class threshold; for a fitted detection (verify) times
     /// 0.5 + coverage - free share, so that a piece explained well by a model that claims no
-    /// free space outranks one that is not (and wins where two overlap)
+    /// free space outranks one that is not (and wins where two overlap); with learned
+    /// verification the confidence
     float score = 0.0f;
+    /// Share of the fitted model's surface within surface_overlap_distance (one to two cells)
+    /// of the scan points it was fitted to
+    float explained = 0.0f;
+    /// Probability that the fit is right by the model's verifier; -1 when not computed
+    float confidence = -1.0f;
     bool accepted = false;
-    /// "", "coverage", "free_space", "no_fit", "behind_wall" or "overlap"
+    /// "", "coverage", "free_space", "no_fit", "behind_wall", "confidence" or "overlap"
     std::string rejection;
 };
+
+/// Names of the verifier's features, in the order of FurnitureVerifierFeatures: the vote score
+/// and parts of the hypothesis, the fit's coverage, free and wall shares, explained surface,
+/// support points, refinement and shift from the votes, and one indicator per class.
+std::vector<std::string> FurnitureVerifierFeatureNames(const FurnitureModel& model);
+/// The verifier's feature row of a fitted detection.
+std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
+                                             const FurnitureModel& model);
 
 struct FurnitureDetectionResult {
     std::vector<FurnitureDetection> detections;  ///< accepted, strongest first

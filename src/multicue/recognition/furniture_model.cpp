@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/ml/classifier.hpp"
 #include "multicue/ml/kmeans.hpp"
 #include "multicue/ml/serialization.hpp"
 
@@ -319,6 +320,20 @@ FurniturePartParams GetPartParams(ml::ByteReader& r) {
 
 }  // namespace
 
+void FurnitureModel::SetVerifier(std::shared_ptr<const ml::Classifier> verifier) {
+    if (verifier) {
+        if (!verifier->fitted())
+            throw InvalidArgument("furniture model: the verifier is not trained");
+        const auto& names = verifier->class_names();
+        if (names.size() != 2 || std::find(names.begin(), names.end(), "right") == names.end() ||
+            std::find(names.begin(), names.end(), "wrong") == names.end()) {
+            throw InvalidArgument(
+                "furniture model: the verifier must have the classes \"right\" and \"wrong\"");
+        }
+    }
+    verifier_ = std::move(verifier);
+}
+
 void FurnitureModel::Save(const std::filesystem::path& path) const {
     if (!trained()) throw InvalidArgument("furniture model: nothing to save before training");
     ml::ByteWriter w;
@@ -360,20 +375,24 @@ void FurnitureModel::Save(const std::filesystem::path& path) const {
         PutCloud(w, c.cloud);
         PutMesh(w, c.mesh);
     }
+    w.Put<std::uint8_t>(verifier_ ? 1 : 0);
+    if (verifier_) w.PutString(verifier_->Serialize());
     ml::WriteContainer(path, kFurnitureMagic, kFormatVersion, w.bytes());
 }
 
 FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
     const std::string bytes = ml::ReadBytes(path);
     const std::uint32_t version = ml::ContainerVersion(bytes);
-    if (bytes.size() >= 8 && bytes.compare(0, 8, kFurnitureMagic) == 0 &&
+    if (bytes.size() >= 8 && bytes.compare(0, 8, kFurnitureMagic) == 0 && version != 1 &&
         version != kFormatVersion) {
         throw FormatError(fmt::format(
-            "{}: furniture model format version {} is not supported (this build reads version {})",
+            "{}: furniture model format version {} is not supported (this build reads versions 1 "
+            "to {})",
             path.string(), version, kFormatVersion));
     }
-    const std::string payload = ml::UnwrapContainer(bytes, kFurnitureMagic, kFormatVersion,
-                                                    "furniture model", path.string());
+    const std::string payload =
+        ml::UnwrapContainer(bytes, kFurnitureMagic, version == 1 ? 1 : kFormatVersion,
+                            "furniture model", path.string());
     ml::ByteReader r(payload, path.string());
     FurnitureModel m;
     m.part_params_ = GetPartParams(r);
@@ -445,6 +464,16 @@ FurnitureModel FurnitureModel::Load(const std::filesystem::path& path) {
         c.cloud = GetCloud(r);
         c.mesh = GetMesh(r);
         m.cads_.push_back(std::move(c));
+    }
+    if (version >= 2 && r.Get<std::uint8_t>() != 0) {
+        const std::string what = path.string() + " (verifier)";
+        std::shared_ptr<const ml::Classifier> verifier =
+            ml::DeserializeClassifier(r.GetString(), what);
+        try {
+            m.SetVerifier(std::move(verifier));
+        } catch (const InvalidArgument& e) {
+            r.Fail(std::string("bad verifier: ") + e.what());
+        }
     }
     if (!r.AtEnd()) r.Fail("trailing bytes");
     m.Derive();

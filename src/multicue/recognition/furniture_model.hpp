@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -27,6 +28,10 @@
 #include "multicue/core/triangle_mesh.hpp"
 #include "multicue/features/feature_common.hpp"
 #include "multicue/recognition/furniture_parts.hpp"
+
+namespace multicue::ml {
+class Classifier;
+}  // namespace multicue::ml
 
 namespace multicue {
 
@@ -91,8 +96,9 @@ struct FurnitureVocabularyParams {
 
 class FurnitureModel {
   public:
-    /// Format version of the model file this build reads and writes.
-    static constexpr std::uint32_t kFormatVersion = 1;
+    /// Format version of the model file this build writes. Version 2 added the learned
+    /// verifier; version 1 files (no verifier) are still read.
+    static constexpr std::uint32_t kFormatVersion = 2;
 
     FurnitureModel() = default;
 
@@ -136,6 +142,14 @@ class FurnitureModel {
     float max_part_extent() const { return max_part_extent_; }
     float max_object_height() const { return max_object_height_; }
 
+    /// The learned verifier of fitted detections (mapping/furniture_detection.hpp, "learned
+    /// verification"): a classifier of the rows FurnitureVerifierFeatures gives, with the classes
+    /// "right" and "wrong"; null when the model has none.
+    const ml::Classifier* verifier() const { return verifier_.get(); }
+    /// Sets (or, with null, removes) the verifier. Throws InvalidArgument for an unfitted
+    /// classifier or one without the classes "right" and "wrong".
+    void SetVerifier(std::shared_ptr<const ml::Classifier> verifier);
+
     /// Writes the model atomically (ml/serialization.hpp container, magic MCFURNIT). Throws
     /// IoError when the file cannot be written.
     void Save(const std::filesystem::path& path) const;
@@ -161,6 +175,7 @@ class FurnitureModel {
     void Derive();  ///< normalisation, limits and normalised parts from the training parts
     void Index();   ///< word elements and counts from the parts' words
     std::vector<int> part_words_;  ///< word of every training part
+    std::shared_ptr<const ml::Classifier> verifier_;
 };
 
 }  // namespace multicue

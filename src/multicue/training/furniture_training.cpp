@@ -11,6 +11,8 @@
 #include "multicue/core/logging.hpp"
 #include "multicue/core/parallel.hpp"
 #include "multicue/filters/voxel_grid.hpp"
+#include "multicue/mapping/furniture_detection.hpp"
+#include "multicue/ml/classifier.hpp"
 #include "multicue/sim/raycaster.hpp"
 #include "multicue/sim/rng.hpp"
 
@@ -65,6 +67,11 @@ void FurnitureTrainingOptions::Validate() const {
         }
     }
     if (num_threads < 0) throw InvalidArgument("furniture training: num_threads must be >= 0");
+    if (verifier_rooms < 0) {
+        throw InvalidArgument(
+            fmt::format("furniture training: verifier_rooms must be >= 0, got {}", verifier_rooms));
+    }
+    if (verifier_rooms > 0) (void)ml::CreateClassifier(verifier_spec);  // throws for a bad spec
 }
 
 std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTrainingOptions& o) {
@@ -268,8 +275,76 @@ bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
     }
     FurnitureVocabularyParams vp = o.vocabulary;
     vp.num_threads = o.num_threads;
-    out = FurnitureModel::Train(std::move(all), std::move(classes), std::move(kept), o.parts, vp);
+    FurnitureModel model =
+        FurnitureModel::Train(std::move(all), std::move(classes), std::move(kept), o.parts, vp);
+    if (o.verifier_rooms > 0) {
+        const ml::Dataset rows = CollectFurnitureVerifierRows(model, o, progress);
+        if (InterruptRequested()) return false;
+        std::size_t right = 0;
+        for (int l : rows.labels) right += l == rows.FindClass("right") ? 1 : 0;
+        if (right == 0 || right == rows.rows()) {
+            throw DataError(fmt::format(
+                "furniture training: the {} verifier rooms gave {} fits, {} of them right; the "
+                "verifier needs right and wrong ones",
+                o.verifier_rooms, rows.rows(), right));
+        }
+        std::shared_ptr<ml::Classifier> verifier = ml::CreateClassifier(o.verifier_spec);
+        verifier->seed = static_cast<std::uint32_t>(o.seed);
+        verifier->Fit(rows);
+        model.SetVerifier(std::move(verifier));
+    }
+    out = std::move(model);
     return true;
+}
+
+std::size_t FurnitureTrainingSteps(const std::vector<sim::FurniturePiece>& pieces,
+                                   const FurnitureTrainingOptions& options) {
+    return pieces.size() + static_cast<std::size_t>(std::max(0, options.verifier_rooms));
+}
+
+ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
+                                         const FurnitureTrainingOptions& o, Progress* progress) {
+    o.Validate();
+    ml::Dataset rows = ml::Dataset::WithBlocks({{"fit", FurnitureVerifierFeatureNames(model)}});
+    rows.ClassId("right");
+    rows.ClassId("wrong");
+    FurnitureDetectionParams dp;
+    dp.learned = false;
+    dp.num_threads = o.num_threads;
+    const FurnitureFitContext context(model, dp.fit);
+    const sim::FurnitureSource source({}, 1.0f);
+    for (int r = 0; r < o.verifier_rooms && !InterruptRequested(); ++r) {
+        sim::FurnitureRoomParams rp;
+        rp.type = static_cast<sim::RoomType>(r % 3);
+        const std::uint64_t seed = o.verifier_seed + static_cast<std::uint64_t>(r);
+        const ScannedFurnitureRoom room = SimulateFurnitureRoom(rp, source, 3, o, seed);
+        std::vector<FurnitureView> views;
+        for (std::size_t v = 0; v < room.scans.size(); ++v)
+            views.push_back({&room.scans[v], room.T_world_sensor[v]});
+        const FurnitureScene scene = PrepareFurnitureScene(views, model, dp);
+        std::vector<std::vector<int>> subsets = {{}};
+        for (std::size_t v = 0; v < views.size(); ++v) subsets.push_back({static_cast<int>(v)});
+        for (const auto& subset : subsets) {
+            const FurnitureDetectionResult det =
+                DetectFurniture(scene, subset, model, &context, dp);
+            for (const auto* list : {&det.detections, &det.rejected}) {
+                for (const FurnitureDetection& d : *list) {
+                    if (!d.fitted) continue;
+                    bool right = false;
+                    for (const auto& f : room.room.furniture) {
+                        right = right ||
+                                (f.category == d.category &&
+                                 (f.T_world_object.translation().head<2>() - d.centre).norm() <
+                                     f.width / 2);
+                    }
+                    rows.AppendRow(FurnitureVerifierFeatures(d, model), right ? "right" : "wrong",
+                                   static_cast<std::int64_t>(seed));
+                }
+            }
+        }
+        if (progress) progress->Advance();
+    }
+    return rows;
 }
 
 }  // namespace multicue::training

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "multicue/core/progress.hpp"
+#include "multicue/ml/dataset.hpp"
 #include "multicue/recognition/furniture_model.hpp"
 #include "multicue/sim/furniture_models.hpp"
 #include "multicue/sim/furniture_scenes.hpp"
@@ -37,8 +38,8 @@ struct FurnitureTrainingOptions {
     std::filesystem::path furniture;  ///< furniture folder with labels.csv; empty: none
     std::filesystem::path kitchen;    ///< kitchen library folder; empty: none
     sim::MeshSplit split = sim::MeshSplit::kTune;  ///< the library half trained on
-    int procedural_per_class = 8;     ///< procedural pieces per class, >= 0
-    std::uint64_t seed = 1;           ///< views, sensor noise and procedural pieces
+    int procedural_per_class = 8;                  ///< procedural pieces per class, >= 0
+    std::uint64_t seed = 1;                        ///< views, sensor noise and procedural pieces
     FurnitureSensor sensor = FurnitureSensor::kLaser;
     sim::FurnitureViewParams views{};  ///< 16 views at 1.5-3 m, 1.5 m high
     sim::LaserParams laser{.fov_deg = 120.0f};
@@ -47,7 +48,13 @@ struct FurnitureTrainingOptions {
     FurnitureVocabularyParams vocabulary{};
     std::map<std::string, float> thresholds = DefaultFurnitureThresholds();
     float cad_spacing = 0.02f;  ///< spacing of the CAD models' points [m], > 0
-    int num_threads = 0;        ///< 0 = all cores; never changes the model
+    /// Learned verification (mapping/furniture_detection.hpp): the model's verifier is trained
+    /// on the fits in this many simulated rooms of fresh procedural pieces, >= 0; 0: no verifier
+    int verifier_rooms = 30;
+    std::uint64_t verifier_seed = 5000;  ///< seed of the first verifier room (the next: + 1, ...)
+    /// Classifier of the verifier (ml::CreateClassifier spec)
+    std::string verifier_spec = "rtrees:trees=200";
+    int num_threads = 0;  ///< 0 = all cores; never changes the model
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -61,8 +68,8 @@ std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTraining
 PointCloud FurnitureCadCloud(const sim::PartMesh& mesh, float spacing);
 
 /// The training parts of one piece (class index `cls`, piece index `piece`) from its views.
-std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePiece& piece,
-                                                          int cls, int piece_index,
+std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePiece& piece, int cls,
+                                                          int piece_index,
                                                           const FurnitureTrainingOptions& options);
 
 /// A scan of a scene from a head pose with the chosen sensor: the laser in the head frame, the
@@ -75,7 +82,7 @@ PointCloud ScanFurniture(const sim::RayCaster& caster, const Eigen::Isometry3f& 
 /// sweeps its full field (270 degrees), the Kinect looks towards the room's centre.
 struct ScannedFurnitureRoom {
     sim::FurnitureRoom room;
-    std::vector<PointCloud> scans;                 ///< in their sensor frames, with labels
+    std::vector<PointCloud> scans;  ///< in their sensor frames, with labels
     std::vector<Eigen::Isometry3f> T_world_sensor;
 };
 ScannedFurnitureRoom SimulateFurnitureRoom(const sim::FurnitureRoomParams& params,
@@ -83,11 +90,27 @@ ScannedFurnitureRoom SimulateFurnitureRoom(const sim::FurnitureRoomParams& param
                                            const FurnitureTrainingOptions& sensor,
                                            std::uint64_t seed);
 
-/// Trains the model on `pieces` (one progress step per piece). Returns false, leaving `out`
-/// untouched, when interrupted (InterruptRequested). Throws InvalidArgument for bad options or no
-/// pieces, DataError when the views give no parts.
+/// Trains the model on `pieces` and, with verifier_rooms > 0, its verifier
+/// (FurnitureTrainingSteps progress steps: one per piece, one per verifier room). Returns false,
+/// leaving `out` untouched, when interrupted (InterruptRequested). Throws InvalidArgument for bad
+/// options or no pieces, DataError when the views give no parts or the verifier rooms no right
+/// and wrong fits.
 bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
                          const FurnitureTrainingOptions& options, FurnitureModel& out,
                          Progress* progress = nullptr);
+std::size_t FurnitureTrainingSteps(const std::vector<sim::FurniturePiece>& pieces,
+                                   const FurnitureTrainingOptions& options);
+
+/// Rows of the verifier (FurnitureVerifierFeatureNames; labels "right" and "wrong"): every fit
+/// of `model` (default detection parameters without the verifier: those the coverage,
+/// free-space and wall tests reject too, and those an overlapping fit displaces) in
+/// options.verifier_rooms rooms of fresh
+/// procedural pieces (offices, seminar rooms and kitchens in turn, seeds from verifier_seed),
+/// each scanned from 3 head positions, with the scans merged and each scan alone. A fit is right
+/// when a true piece of its class stands within half its width of the fitted centre. One
+/// progress step per room; stops early, with the rows so far, when interrupted.
+ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
+                                         const FurnitureTrainingOptions& options,
+                                         Progress* progress = nullptr);
 
 }  // namespace multicue::training
