@@ -469,6 +469,9 @@ TEST(MapFurnitureCli, RefusesBadParametersAndScansWithoutASensorPose) {
                   " --out " + out + " --min-coverage 2"),
               0);
     EXPECT_NE(Cli("map furniture " + (dir / "no_pose.pcd").string() + " --model " + model +
+                  " --out " + out + " --min-confidence 1.5"),
+              0);
+    EXPECT_NE(Cli("map furniture " + (dir / "no_pose.pcd").string() + " --model " + model +
                   " --out " + out),
               0);
     EXPECT_FALSE(std::filesystem::exists(model));  // nothing trained for a bad scan
