@@ -250,17 +250,9 @@ int Run(const Options& o) {
             std::shared_ptr<const ml::Classifier> verifier;
             if (to.verifier_rooms > 0) {
                 Progress progress("verifier rooms", static_cast<std::size_t>(to.verifier_rooms));
-                const ml::Dataset rows =
-                    training::CollectFurnitureVerifierRows(model, to, &progress);
-                if (InterruptRequested()) return 130;
+                verifier = training::TrainFurnitureVerifier(model, to, &progress);
+                if (!verifier) return 130;
                 progress.Finish();
-                auto c = ml::CreateClassifier(to.verifier_spec);
-                c->seed = static_cast<std::uint32_t>(to.seed);
-                c->Fit(rows);
-                std::size_t right = 0;
-                for (int l : rows.labels) right += l == rows.FindClass("right") ? 1 : 0;
-                std::fprintf(stderr, "verifier: %zu fits, %zu right\n", rows.rows(), right);
-                verifier = std::move(c);
             }
             model.SetVerifier(verifier);
             model.Save(o.model);

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,7 @@ struct MapFurnitureOptions {
     std::string out;
     std::string furniture = DefaultFurnitureDir();
     std::string kitchen = DefaultKitchenDir();
-    float threshold_scale = 1.0f;
+    std::optional<float> threshold_scale;  ///< default: 0.3 with verification, 1 without
     float min_coverage = 0.5f;
     float max_free_share = 0.4f;
     bool verify = true;
@@ -132,7 +133,7 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
 
 void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     FurnitureDetectionParams params;
-    params.selection.threshold_scale = o.threshold_scale;
+    params.selection.threshold_scale = o.threshold_scale.value_or(o.verify ? 0.3f : 1.0f);
     params.fit.min_coverage = o.min_coverage;
     params.fit.max_free_share = o.max_free_share;
     params.verify = o.verify;
@@ -205,8 +206,8 @@ void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
         ->required()
         ->check(CLI::ExistingFile);
     cmd->add_option("--threshold-scale", o->threshold_scale,
-                    "multiplies the class thresholds of the votes (lower: more hypotheses)")
-        ->capture_default_str();
+                    "multiplies the class thresholds of the votes (lower: more hypotheses); "
+                    "default 0.3 (the fits judge them), 1 with --no-verify");
     cmd->add_option("--min-coverage", o->min_coverage,
                     "share of a hypothesis's points a fitted model must cover, [0, 1] (binding "
                     "without a learned verifier or with --no-learned-tests)")

@@ -35,7 +35,9 @@ struct FurnitureView {
 
 struct FurnitureDetectionParams {
     FurnitureVotingParams voting{};
-    FurnitureSelectionParams selection{};
+    /// Hypotheses down to 0.3 of their class threshold are fitted: the fit and the verifier
+    /// judge them. Without verification, 1 keeps those above the class thresholds only
+    FurnitureSelectionParams selection{.threshold_scale = 0.3f};
     FurnitureFitParams fit{};
     bool verify = true;      ///< fit and verify CAD models; off: hypotheses are detections
     bool free_space = true;  ///< with verify: the free-space test (one occupancy map per scan)

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -101,14 +102,21 @@ bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
 std::size_t FurnitureTrainingSteps(const std::vector<sim::FurniturePiece>& pieces,
                                    const FurnitureTrainingOptions& options);
 
+/// The verifier of `model`: CollectFurnitureVerifierRows, then a classifier of
+/// options.verifier_spec (seeded with options.seed) fitted to them. Null when interrupted;
+/// DataError when the rooms give no right or no wrong fit.
+std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(
+    const FurnitureModel& model, const FurnitureTrainingOptions& options,
+    Progress* progress = nullptr);
+
 /// Rows of the verifier (FurnitureVerifierFeatureNames; labels "right" and "wrong"): every fit
-/// of `model` (default detection parameters without the verifier: those the coverage,
-/// free-space and wall tests reject too, and those an overlapping fit displaces) in
-/// options.verifier_rooms rooms of fresh
-/// procedural pieces (offices, seminar rooms and kitchens in turn, seeds from verifier_seed),
-/// each scanned from 3 head positions, with the scans merged and each scan alone. A fit is right
-/// when a true piece of its class stands within half its width of the fitted centre. One
-/// progress step per room; stops early, with the rows so far, when interrupted.
+/// of `model` to a hypothesis above its class threshold (default detection parameters without
+/// the verifier; fits the coverage, free-space and wall tests reject too, and those an
+/// overlapping fit displaces) in options.verifier_rooms rooms of fresh procedural pieces
+/// (offices, seminar rooms and kitchens in turn, seeds from verifier_seed), each scanned from 3
+/// head positions, with the scans merged and each scan alone. A fit is right when a true piece
+/// of its class stands within half its width of the fitted centre. One progress step per room;
+/// stops early, with the rows so far, when interrupted.
 ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
                                          const FurnitureTrainingOptions& options,
                                          Progress* progress = nullptr);
