@@ -386,7 +386,8 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             1);
         const ml::Classifier* verifier = params.learned ? model.verifier() : nullptr;
         if (verifier != nullptr) {
-            // The verifier's probability of a right fit for every fit that passed the tests.
+            // The verifier's probability of a right fit for every fit that passed the tests
+            // and, with learned_tests, every fit they rejected: the verifier decides.
             if (verifier->feature_names() != FurnitureVerifierFeatureNames(model)) {
                 throw InvalidArgument(
                     "furniture detection: the model's verifier was trained on other features");
@@ -428,9 +429,9 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             }
         }
         // Fitted footprints that overlap are one piece. Strongest first, each detection gathers
-        // the accepted ones overlapping it; with class_by_fit the one whose model explains the
-        // scan best (coverage minus free space and space behind walls) stays, with the group's
-        // best vote score, else the strongest stays.
+        // the accepted ones overlapping it; with the verifier the most likely stays, else with
+        // class_by_fit the one whose model explains the scan best (coverage minus free space and
+        // space behind walls) stays, with the group's best vote score, else the strongest stays.
         std::vector<Polygon> feet(all.size());
         std::vector<PlacedSurface> surfaces(all.size());
         std::vector<float> areas(all.size(), 0.0f), vote(all.size(), 0.0f);
