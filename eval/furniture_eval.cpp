@@ -246,8 +246,7 @@ int Run(const Options& o) {
     if (!o.retrain && std::filesystem::exists(o.model)) {
         model = FurnitureModel::Load(o.model);
         if (o.retrain_verifier) {  // the verifier alone, on the loaded vocabulary and CAD models
-            model.SetVerifier(nullptr);
-            std::shared_ptr<const ml::Classifier> verifier;
+            std::shared_ptr<const ml::Classifier> verifier;  // none with 0 rooms
             if (to.verifier_rooms > 0) {
                 Progress progress("verifier rooms", static_cast<std::size_t>(to.verifier_rooms));
                 verifier = training::TrainFurnitureVerifier(model, to, &progress);
@@ -353,6 +352,7 @@ int Run(const Options& o) {
             FurnitureDetectionParams p = dp;
             p.verify = var.verify;
             p.learned = var.learned;
+            const bool primary = var.name == "full+cad";  // fates, drawings and timings
             p.voting.activation = var.activation;
             if (var.model != &model || var.activation != FurnitureActivation::kWords) {
                 for (std::size_t v = 0; v < views.size(); ++v) {
@@ -366,7 +366,7 @@ int Run(const Options& o) {
                 DetectFurniture(scene, {}, *var.model, var.verify ? &context : nullptr, p);
             merged[var.name].push_back(
                 Frame(det, VisibleTruth(room, all, model, o.min_visible), var.verify, group));
-            if (var.name == "full+cad") {
+            if (primary) {
                 // Why true hypotheses (right class, near a true piece) were rejected.
                 for (const auto* list : {&det.detections, &det.rejected}) {
                     for (const auto& d : *list) {
@@ -383,8 +383,7 @@ int Run(const Options& o) {
                     }
                 }
             }
-            if (var.name == "full+cad" &&
-                o.draw < 0) {  // nearest hypothesis of the right class per piece
+            if (primary && o.draw < 0) {  // nearest hypothesis of the right class per piece
                 for (const auto& f : room.room.furniture) {
                     float best = 1e9f, score = 0.0f;
                     std::string fate;
@@ -404,11 +403,11 @@ int Run(const Options& o) {
                                  best, score, fate.c_str());
                 }
             }
-            if (var.name == "full+cad" && r < o.draw) {
+            if (primary && r < o.draw) {
                 eval::DrawRoom(fmt::format("{}/room_{:02}.png", o.out, r), room, scene, det, model);
                 ListRoom(r, room, det, model);
             }
-            if (var.name == "full+cad") {
+            if (primary) {
                 sel_ms += det.selection_ms, fit_ms += det.fit_ms, ++n_sel;
                 for (const auto* list : {&det.detections, &det.rejected}) {
                     for (const auto& d : *list) {

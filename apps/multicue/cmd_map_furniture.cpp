@@ -133,7 +133,11 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
 
 void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     FurnitureDetectionParams params;
-    params.selection.threshold_scale = o.threshold_scale.value_or(o.verify ? 0.3f : 1.0f);
+    if (o.threshold_scale) {
+        params.selection.threshold_scale = *o.threshold_scale;
+    } else if (!o.verify) {
+        params.selection.threshold_scale = 1.0f;  // the hypotheses are the detections
+    }
     params.fit.min_coverage = o.min_coverage;
     params.fit.max_free_share = o.max_free_share;
     params.verify = o.verify;

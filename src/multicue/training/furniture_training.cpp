@@ -52,18 +52,20 @@ void FurnitureTrainingOptions::Validate() const {
         throw InvalidArgument("furniture training: no library folder and no procedural pieces");
     }
     if (procedural_per_class < 0) {
-        throw InvalidArgument(fmt::format("furniture training: procedural_per_class must be >= 0, got {}",
-                                          procedural_per_class));
+        throw InvalidArgument(fmt::format(
+            "furniture training: procedural_per_class must be >= 0, got {}", procedural_per_class));
     }
     views.Validate();
     parts.Validate();
     vocabulary.Validate();
     if (!(cad_spacing > 0.0f) || !std::isfinite(cad_spacing)) {
-        throw InvalidArgument(fmt::format("furniture training: cad_spacing must be > 0, got {}", cad_spacing));
+        throw InvalidArgument(
+            fmt::format("furniture training: cad_spacing must be > 0, got {}", cad_spacing));
     }
     for (const auto& [name, t] : thresholds) {
         if (!(t >= 0.0f) || !std::isfinite(t)) {
-            throw InvalidArgument(fmt::format("furniture training: threshold of {} must be >= 0, got {}", name, t));
+            throw InvalidArgument(
+                fmt::format("furniture training: threshold of {} must be >= 0, got {}", name, t));
         }
     }
     if (num_threads < 0) throw InvalidArgument("furniture training: num_threads must be >= 0");
@@ -78,7 +80,8 @@ std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTraining
     o.Validate();
     std::vector<sim::FurniturePiece> pieces;
     if (!o.furniture.empty() || !o.kitchen.empty()) {
-        const auto library = sim::SelectFurnitureSplit(sim::ReadFurnitureLibrary(o.furniture, o.kitchen), o.split);
+        const auto library =
+            sim::SelectFurnitureSplit(sim::ReadFurnitureLibrary(o.furniture, o.kitchen), o.split);
         for (const auto& e : library) {
             try {
                 pieces.push_back(sim::LoadFurniturePiece(e));
@@ -90,7 +93,7 @@ std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTraining
     for (const auto& category : sim::FurnitureCategories()) {
         for (int k = 0; k < o.procedural_per_class; ++k) {
             sim::StreamRng rng(sim::SubSeed(o.seed, 7000 + static_cast<std::uint64_t>(k)),
-                               std::hash<std::string>{}(category) & 0xffff);
+                               std::hash<std::string>{}(category)&0xffff);
             sim::FurniturePiece p = sim::MakeProceduralFurniture(category, rng);
             p.id = fmt::format("procedural/{}/train{}", category, k);
             pieces.push_back(std::move(p));
@@ -118,21 +121,25 @@ PointCloud FurnitureCadCloud(const sim::PartMesh& mesh, float spacing) {
     for (int e = 0; e < 4; ++e) {
         const float el = (-5.0f + 20.0f * static_cast<float>(e)) * kPi / 180.0f;
         for (int a = 0; a < 8; ++a) {
-            const float az = 2 * kPi * (static_cast<float>(a) + 0.5f * static_cast<float>(e % 2)) / 8;
-            dirs.emplace_back(-std::cos(el) * std::cos(az), -std::cos(el) * std::sin(az), -std::sin(el));
+            const float az =
+                2 * kPi * (static_cast<float>(a) + 0.5f * static_cast<float>(e % 2)) / 8;
+            dirs.emplace_back(-std::cos(el) * std::cos(az), -std::cos(el) * std::sin(az),
+                              -std::sin(el));
         }
     }
     for (int a = 0; a < 8; ++a) {
         const float el = (a == 0 ? 89.0f : 65.0f) * kPi / 180.0f;
         const float az = 2 * kPi * static_cast<float>(a) / 7;
-        dirs.emplace_back(-std::cos(el) * std::cos(az), -std::cos(el) * std::sin(az), -std::sin(el));
+        dirs.emplace_back(-std::cos(el) * std::cos(az), -std::cos(el) * std::sin(az),
+                          -std::sin(el));
     }
     for (const auto& d : dirs) {
         const Eigen::Vector3f u = d.unitOrthogonal(), v = d.cross(u);
         const int n = static_cast<int>(std::ceil(2 * r / step));
         for (int i = 0; i <= n; ++i) {
             for (int j = 0; j <= n; ++j) {
-                const Eigen::Vector3f origin = c - r * d + (-r + step * i) * u + (-r + step * j) * v;
+                const Eigen::Vector3f origin =
+                    c - r * d + (-r + step * i) * u + (-r + step * j) * v;
                 const sim::RayHit h = caster.Intersect(origin, d);
                 if (!h.Valid()) continue;
                 hits.points.push_back(origin + h.t * d);
@@ -163,8 +170,8 @@ PointCloud ScanFurniture(const sim::RayCaster& caster, const Eigen::Isometry3f& 
     return sim::ScanKinect(caster, T_world_sensor, o.kinect, seed);
 }
 
-std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePiece& piece,
-                                                          int cls, int piece_index,
+std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePiece& piece, int cls,
+                                                          int piece_index,
                                                           const FurnitureTrainingOptions& o) {
     const sim::Scene scene = sim::MakeFurnitureViewScene(piece);
     const sim::RayCaster caster(scene);
@@ -179,7 +186,8 @@ std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePi
         Eigen::Isometry3f T;
         FurnitureTrainingOptions so = o;
         so.laser.num_threads = so.kinect.num_threads = 1;
-        const PointCloud scan = ScanFurniture(caster, heads[v], centre, so, sim::SubSeed(seed, 100 + v), T);
+        const PointCloud scan =
+            ScanFurniture(caster, heads[v], centre, so, sim::SubSeed(seed, 100 + v), T);
         const FurnitureParts parts = ExtractFurnitureParts(scan, T, pp);
         for (const auto& part : parts.parts) {
             FurnitureTrainingPart tp;
@@ -189,7 +197,8 @@ std::vector<FurnitureTrainingPart> FurnitureTrainingParts(const sim::FurniturePi
             tp.view = static_cast<int>(v);
             tp.centre_z = centre.z();
             // d = p - s in the part's bearing frame (section 4.2.3.2).
-            tp.offset = Eigen::AngleAxisf(-part.frame_yaw, Eigen::Vector3f::UnitZ()) * (centre - part.centroid);
+            tp.offset = Eigen::AngleAxisf(-part.frame_yaw, Eigen::Vector3f::UnitZ()) *
+                        (centre - part.centroid);
             if (tp.features.allFinite()) out.push_back(std::move(tp));
         }
     }
@@ -208,7 +217,8 @@ ScannedFurnitureRoom SimulateFurnitureRoom(const sim::FurnitureRoomParams& param
     for (std::size_t v = 0; v < poses.size(); ++v) {
         Eigen::Isometry3f T;
         const Eigen::Vector3f target(0.0f, 0.0f, 0.6f);
-        out.scans.push_back(ScanFurniture(caster, poses[v], target, so, sim::SubSeed(seed, 500 + v), T));
+        out.scans.push_back(
+            ScanFurniture(caster, poses[v], target, so, sim::SubSeed(seed, 500 + v), T));
         out.T_world_sensor.push_back(T);
     }
     return out;
@@ -267,11 +277,13 @@ bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
         1);
     if (stopped || InterruptRequested()) return false;
     std::vector<FurnitureTrainingPart> all;
-    for (auto& p : parts) all.insert(all.end(), std::make_move_iterator(p.begin()), std::make_move_iterator(p.end()));
+    for (auto& p : parts)
+        all.insert(all.end(), std::make_move_iterator(p.begin()), std::make_move_iterator(p.end()));
     if (all.empty()) throw DataError("furniture training: the training views gave no parts");
     std::vector<FurnitureCad> kept;
     for (std::size_t i = 0; i < cads.size(); ++i) {
-        if (piece_class[i] >= 0 && !cads[i].cloud.points.empty()) kept.push_back(std::move(cads[i]));
+        if (piece_class[i] >= 0 && !cads[i].cloud.points.empty())
+            kept.push_back(std::move(cads[i]));
     }
     FurnitureVocabularyParams vp = o.vocabulary;
     vp.num_threads = o.num_threads;
@@ -291,8 +303,9 @@ std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(const FurnitureMode
                                                              Progress* progress) {
     const ml::Dataset rows = CollectFurnitureVerifierRows(model, o, progress);
     if (InterruptRequested()) return nullptr;
+    const int right_class = rows.FindClass("right");
     std::size_t right = 0;
-    for (int l : rows.labels) right += l == rows.FindClass("right") ? 1 : 0;
+    for (int l : rows.labels) right += l == right_class ? 1 : 0;
     if (right == 0 || right == rows.rows()) {
         throw DataError(fmt::format(
             "furniture training: the {} verifier rooms gave {} fits, {} of them right; the "
@@ -343,10 +356,10 @@ ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
                     if (!d.fitted) continue;
                     bool right = false;
                     for (const auto& f : room.room.furniture) {
-                        right = right ||
-                                (f.category == d.category &&
-                                 (f.T_world_object.translation().head<2>() - d.centre).norm() <
-                                     f.width / 2);
+                        right =
+                            right || (f.category == d.category &&
+                                      (f.T_world_object.translation().head<2>() - d.centre).norm() <
+                                          f.width / 2);
                     }
                     rows.AppendRow(FurnitureVerifierFeatures(d, model), right ? "right" : "wrong",
                                    static_cast<std::int64_t>(seed));
