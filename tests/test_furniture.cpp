@@ -1,7 +1,8 @@
 // Furniture detection by part configurations on small simulated scenes: a CAD model fitted to a
 // noisy scan of its piece at a known pose (and rejected where a scan saw only floor), a planted
-// chair found by the votes (the same for any thread count), free space against a closed-form case,
-// the model file round trip, bad parameters and empty input.
+// chair found by the votes (the same for any thread count), merged views dropping a place only one
+// view votes for, free space against a closed-form case, the learned verifier, the model file
+// round trip, bad parameters and empty input.
 
 #include <gtest/gtest.h>
 
@@ -194,6 +195,37 @@ TEST(FurnitureDetection, VotesFindAPlantedChairForAnyThreadCount) {
     std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
     EXPECT_THROW(FurnitureModel::Load(path), FormatError);
     std::filesystem::remove(path);
+}
+
+// Merging views (section 4.2.5.3): a place only one view votes for (clutter seen once) is a
+// hypothesis of that view alone, but not of the merged views, whose vote weights are divided by
+// their number; a piece every view votes for stays in both.
+TEST(FurnitureDetection, MergingViewsRemovesAFalsePositiveOfOneView) {
+    const FurnitureModel model = TrainSmallModel();
+    const int chair = model.ClassIndex("chair");
+    ASSERT_GE(chair, 0);
+    const float t = model.classes()[static_cast<std::size_t>(chair)].threshold;
+    ASSERT_GT(t, 0.0f);
+    const Eigen::Vector2f piece(0.0f, 0.0f), clutter(3.0f, 0.0f);
+    std::vector<FurnitureVote> votes, first_view;
+    for (int v = 0; v < 3; ++v)
+        votes.push_back({{piece.x(), piece.y(), 0.4f}, 1.5f * t, chair, 0, v});
+    votes.push_back({{clutter.x(), clutter.y(), 0.4f}, 1.5f * t, chair, 1, 0});
+    for (const auto& vote : votes) {
+        if (vote.view == 0) first_view.push_back(vote);
+    }
+    auto at = [](const std::vector<FurnitureHypothesis>& hs, const Eigen::Vector2f& x) {
+        int n = 0;
+        for (const auto& h : hs) n += (h.centre - x).norm() < 0.1f ? 1 : 0;
+        return n;
+    };
+    const FurnitureSelectionParams sp;  // at the class thresholds
+    const auto single = SelectFurnitureHypotheses(first_view, 1, model, sp);
+    EXPECT_EQ(at(single, piece), 1);
+    EXPECT_EQ(at(single, clutter), 1);  // the single view's false positive
+    const auto merged = SelectFurnitureHypotheses(votes, 3, model, sp);
+    EXPECT_EQ(at(merged, piece), 1);
+    EXPECT_EQ(at(merged, clutter), 0);
 }
 
 TEST(FurnitureFreeSpace, PointsBetweenTheSensorAndTheFloorAreFreeAndBelowItAreNot) {
