@@ -89,12 +89,7 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
     params.num_threads = global.threads;
     mapping::MapKitchenResult r =
         mapping::MapKitchen(scans, params, classifier.get(), fixture_classifier.get());
-    mapping::MotionParams motion;
-    if (sensor == mapping::KitchenSensor::kLaser) {
-        motion.change_distance = 0.04f;
-        motion.plane_threshold = 0.03f;
-        motion.min_points = 10;
-    }
+    const mapping::MotionParams motion = mapping::MotionParamsFor(sensor);
     std::vector<int> moved;
     for (const auto& s : opened) {
         moved.push_back(mapping::UpdateArticulationFromOpenedScan(r.map, r.cloud, s, motion));

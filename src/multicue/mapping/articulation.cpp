@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -59,6 +60,13 @@ void MotionParams::Validate() const {
             "motion: need change_distance > 0, min_offset >= 0, reach > 0, plane_threshold > 0, "
             "parallel_deg in (0, 45), min_points >= 3 (got {}, {}, {}, {}, {}, {})",
             change_distance, min_offset, reach, plane_threshold, parallel_deg, min_points));
+    }
+    if (!(min_slide_coverage >= 0.0f && min_slide_coverage <= 1.0f) ||
+        !(coverage_cell > 0.0f && coverage_cell <= 0.5f)) {
+        throw InvalidArgument(
+            fmt::format("motion: need min_slide_coverage in [0, 1] and coverage_cell in (0, 0.5] m "
+                        "(got {}, {})",
+                        min_slide_coverage, coverage_cell));
     }
 }
 
@@ -131,19 +139,23 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     if (before.empty() || opened.empty()) return out;
     const float plane_d = -f.normal.dot(f.center);
     const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
-    const float reach = std::min(p.reach, std::max(width, height) + 0.05f);
+    // The space the front can sweep: turning about an edge, no farther from the face than its
+    // size and out to the sides by as much; sliding, straight out of its outline by up to the
+    // reach (a drawer may run out farther than its front is wide).
+    const float swing = std::min(p.reach, std::max(width, height) + 0.05f);
+    const float outline_margin = 0.05f;
     Indices moved;
     for (std::size_t i = 0; i < opened.size(); ++i) {
         if (!opened.IsFinite(i)) continue;
         const Eigen::Vector3f& x = opened.points[i];
         const float h = f.normal.dot(x) + plane_d;
-        if (h < p.min_offset || h > reach) continue;
-        // Within the space the front can sweep: its rectangle grown by its reach sideways.
+        if (h < p.min_offset || h > p.reach) continue;
         const float u = x.dot(f.u_axis), v = x.dot(f.v_axis);
-        if (u < f.min.x() - reach || u > f.max.x() + reach || v < f.min.y() - reach ||
-            v > f.max.y() + reach) {
-            continue;
-        }
+        const bool in_swing = h <= swing && u >= f.min.x() - swing && u <= f.max.x() + swing &&
+                              v >= f.min.y() - swing && v <= f.max.y() + swing;
+        const bool in_slide = u >= f.min.x() - outline_margin && u <= f.max.x() + outline_margin &&
+                              v >= f.min.y() - outline_margin && v <= f.max.y() + outline_margin;
+        if (!in_swing && !in_slide) continue;
         Index nn = 0;
         float d2 = 0.0f;
         if (before.SearchNearest(x, nn, d2) && d2 < p.change_distance * p.change_distance) continue;
@@ -250,6 +262,89 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         out.articulation = slide;
         out.opening = travel;
         out.moved = slide_inliers;
+    }
+    // A drawer pulled out shows its whole front again, parallel to where it was: the moved points
+    // cover much of the front's rectangle slid out (not all of it: the rectangle may be larger
+    // than the drawer). A door seen edge-on, or by little more than its free edge or handle, can
+    // make a parallel plane too, but covers a strip of the rectangle only. A slide that covers
+    // less than `min_slide_coverage` of it becomes a turn: about the tilted plane's axis when
+    // there is one, else about the edge of the rectangle (and by the angle) that covers most.
+    const float cell = p.coverage_cell;
+    const int nu = std::clamp(static_cast<int>(std::ceil(width / cell)), 1, 200);
+    const int nv = std::clamp(static_cast<int>(std::ceil(height / cell)), 1, 200);
+    std::vector<char> hit(static_cast<std::size_t>(nu * nv));
+    auto coverage = [&](const Eigen::Isometry3f& T) {
+        std::fill(hit.begin(), hit.end(), 0);
+        const Eigen::Isometry3f inv = T.inverse();
+        for (const Index i : moved) {
+            const Eigen::Vector3f q = inv * opened.points[i];
+            if (std::abs(f.normal.dot(q) + plane_d) > p.plane_threshold) continue;
+            const float u = (q.dot(f.u_axis) - f.min.x()) / width * static_cast<float>(nu);
+            const float v = (q.dot(f.v_axis) - f.min.y()) / height * static_cast<float>(nv);
+            if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(nu) &&
+                  v < static_cast<float>(nv))) {
+                continue;
+            }
+            hit[static_cast<std::size_t>(static_cast<int>(v) * nu + static_cast<int>(u))] = 1;
+        }
+        return static_cast<float>(std::count(hit.begin(), hit.end(), 1)) /
+               static_cast<float>(hit.size());
+    };
+    auto shift = [&](float d) {
+        Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+        T.translation() = f.normal * d;
+        return T;
+    };
+    auto turn = [](const Eigen::Vector3f& origin, const Eigen::Vector3f& axis, float a) {
+        return Eigen::Isometry3f(Eigen::Translation3f(origin) * Eigen::AngleAxisf(a, axis) *
+                                 Eigen::Translation3f(-origin));
+    };
+    const float slide_cover = slide.type != JointType::kUnknown ? coverage(shift(travel)) : 0.0f;
+    const float hinge_cover =
+        hinge.type != JointType::kUnknown ? coverage(turn(hinge.origin, hinge.axis, angle)) : 0.0f;
+    if (slide.type != JointType::kUnknown) out.slide_coverage = slide_cover;
+    if (hinge.type != JointType::kUnknown) out.turn_coverage = hinge_cover;
+    if (out.articulation.type != JointType::kPrismatic || p.min_slide_coverage <= 0.0f ||
+        slide_cover >= p.min_slide_coverage) {
+        return out;
+    }
+    if (hinge.type != JointType::kUnknown) {
+        out.articulation = hinge;
+        out.opening = angle;
+        out.moved = fit.inliers;
+        return out;
+    }
+    const Eigen::Vector3f left = f.center + f.u_axis * (f.min.x() - f.center.dot(f.u_axis));
+    const Eigen::Vector3f right = f.center + f.u_axis * (f.max.x() - f.center.dot(f.u_axis));
+    const Eigen::Vector3f bottom = f.center + f.v_axis * (f.min.y() - f.center.dot(f.v_axis));
+    const Eigen::Vector3f top = f.center + f.v_axis * (f.max.y() - f.center.dot(f.v_axis));
+    const std::pair<Eigen::Vector3f, Eigen::Vector3f> edges[4] = {
+        {left, f.u_axis}, {right, -f.u_axis}, {bottom, f.v_axis}, {top, -f.v_axis}};
+    ArticulationParams on_surface;
+    on_surface.hinge_depth = 0.0f;
+    float best = -1.0f, best_angle = 0.0f;
+    Articulation best_hinge;
+    for (const auto& [point, into] : edges) {
+        const Articulation a = Hinge(f, point, into, on_surface);
+        for (float deg = 10.0f; deg <= 120.0f; deg += 2.5f) {
+            const float c = coverage(turn(a.origin, a.axis, deg * kArticulationDegToRad));
+            if (c > best) {
+                best = c;
+                best_hinge = a;
+                best_angle = deg * kArticulationDegToRad;
+            }
+        }
+    }
+    if (best <= 0.0f) return out;
+    best_hinge.source = "motion";
+    best_hinge.upper = best_angle;
+    out.articulation = best_hinge;
+    out.opening = best_angle;
+    out.moved.clear();
+    const Eigen::Isometry3f inv = turn(best_hinge.origin, best_hinge.axis, best_angle).inverse();
+    for (const Index i : moved) {
+        if (std::abs(f.normal.dot(inv * opened.points[i]) + plane_d) <= p.plane_threshold)
+            out.moved.push_back(i);
     }
     return out;
 }

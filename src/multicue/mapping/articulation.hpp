@@ -14,7 +14,11 @@
 /// prismatic joint (the parallel plane's distance is the travel) and a revolute joint about the
 /// line where the closed front's plane meets a tilted plane (the angle between them is the
 /// opening). The hypothesis under which more moved points lie on the front's rectangle, moved
-/// that way, wins (a drawer's sides and bottom can outnumber its front in the best plane).
+/// that way, wins (a drawer's sides and bottom can outnumber its front in the best plane). A
+/// drawer pulled out shows much of its front again; a door seen edge-on, or by little more than
+/// its free edge or handle, can make a parallel plane too but covers a strip of the slid
+/// rectangle only. A slide covering too little of it becomes a turn, about the tilted plane's
+/// axis or, without one, about the edge of the rectangle that the moved points cover best.
 
 #include <cstddef>
 #include <cstdint>
@@ -48,13 +52,20 @@ Articulation ArticulationFromFixtures(const Front& front, const std::vector<Fixt
                                       const ArticulationParams& params = {});
 
 struct MotionParams {
-    float change_distance = 0.02f;   ///< opened-scan points this far from every closed-scan point
-                                     ///< are new [m]
-    float min_offset = 0.02f;        ///< new points at least this far in front of the face [m]
-    float reach = 1.2f;              ///< how far from the front the moved points may lie [m]
+    float change_distance = 0.02f;  ///< opened-scan points this far from every closed-scan point
+                                    ///< are new [m]
+    float min_offset = 0.02f;       ///< new points at least this far in front of the face [m]
+    /// How far a drawer may run out of its front [m]; a turning front reaches no farther from it
+    /// than its own size.
+    float reach = 1.2f;
     float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
     float parallel_deg = 8.0f;       ///< planes closer than this: prismatic [deg]
+    /// A slide that covers less than this share of the front's rectangle moved out (cells of
+    /// `coverage_cell`) is taken for a turn; 0: the two planes' support alone decides. Chosen on
+    /// simulated kitchens of the tune half (0.25-0.35 scored alike; from 0.4 drawers fail) [-]
+    float min_slide_coverage = 0.3f;
+    float coverage_cell = 0.03f;  ///< cell of the coverage grid on the front [m]
     std::uint64_t seed = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -66,6 +77,10 @@ struct MotionResult {
     float opening = 0.0f;       ///< observed angle [rad] or distance [m]
     std::size_t moved_points = 0;
     Indices moved;  ///< indices into `opened` of the moved front's points
+    /// Shares of the front's rectangle covered by moved points when slid out by the parallel
+    /// plane's travel and when turned by the tilted plane's hinge (-1: no such hypothesis or not
+    /// computed).
+    float slide_coverage = -1.0f, turn_coverage = -1.0f;
 };
 
 /// The joint of `front` from a scan `closed` in which it is shut and a scan `opened` taken from

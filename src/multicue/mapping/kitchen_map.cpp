@@ -55,6 +55,17 @@ void MapKitchenParams::Validate() const {
     containers.Validate();
 }
 
+MotionParams MotionParamsFor(KitchenSensor sensor) {
+    MotionParams p;
+    if (sensor == KitchenSensor::kLaser) {
+        p.change_distance = 0.04f;
+        p.plane_threshold = 0.03f;
+        p.min_points = 10;
+        p.coverage_cell = 0.05f;
+    }
+    return p;
+}
+
 MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
     MapKitchenParams p;
     if (sensor == KitchenSensor::kKinect) {

@@ -62,6 +62,10 @@ struct MapKitchenParams {
 /// The parameters tuned for a sensor (docs/kitchens.md lists them).
 MapKitchenParams KitchenParamsFor(KitchenSensor sensor);
 
+/// The parameters of articulation from an opened scan for a sensor: the laser's centimetre
+/// range noise and sparser rows need looser distances, fewer points and larger coverage cells.
+MotionParams MotionParamsFor(KitchenSensor sensor);
+
 /// The sensor a set of scans looks like: a laser when no scan has colours, else a Kinect.
 KitchenSensor GuessKitchenSensor(const std::vector<PointCloud>& scans);
 
