@@ -934,7 +934,8 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--min-slide-coverage", o.min_slide_coverage,
                    "opened pairs: share of the slid front the moved points must cover for a "
-                   "drawer (0: the planes' support decides; default: the library's)");
+                   "drawer (0: the planes' support decides; default: the library's)")
+        ->check(CLI::Range(-1.0, 1.0));
     app.add_option("--front-param", o.front_params,
                    "NAME=VALUE of the region growing's parameters (repeatable)");
     app.add_option("--load-fixtures", o.load_fixtures,
