@@ -199,6 +199,15 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         }
         return count;
     };
+    auto shift = [&](float d) {
+        Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+        T.translation() = f.normal * d;
+        return T;
+    };
+    auto turn = [](const Eigen::Vector3f& origin, const Eigen::Vector3f& axis, float a) {
+        return Eigen::Isometry3f(Eigen::Translation3f(origin) * Eigen::AngleAxisf(a, axis) *
+                                 Eigen::Translation3f(-origin));
+    };
     // The prismatic hypothesis.
     Articulation slide;
     float travel = 0.0f;
@@ -214,9 +223,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         slide.origin = f.center;
         slide.upper = travel;
         slide.source = "motion";
-        Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-        T.translation() = f.normal * travel;
-        slide_support = support(T);
+        slide_support = support(shift(travel));
         slide_inliers = pf.inliers;
     }
     // The revolute hypothesis, from the best plane when it is tilted.
@@ -248,9 +255,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         hinge.origin = point;
         hinge.upper = angle;
         hinge.source = "motion";
-        const Eigen::Isometry3f T = Eigen::Translation3f(point) * Eigen::AngleAxisf(angle, dir) *
-                                    Eigen::Translation3f(-point);
-        hinge_support = support(T);
+        hinge_support = support(turn(point, dir, angle));
     }
     if (slide.type == JointType::kUnknown && hinge.type == JointType::kUnknown) return out;
     out.found = true;
@@ -289,15 +294,6 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         }
         return static_cast<float>(std::count(hit.begin(), hit.end(), 1)) /
                static_cast<float>(hit.size());
-    };
-    auto shift = [&](float d) {
-        Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-        T.translation() = f.normal * d;
-        return T;
-    };
-    auto turn = [](const Eigen::Vector3f& origin, const Eigen::Vector3f& axis, float a) {
-        return Eigen::Isometry3f(Eigen::Translation3f(origin) * Eigen::AngleAxisf(a, axis) *
-                                 Eigen::Translation3f(-origin));
     };
     const float slide_cover = slide.type != JointType::kUnknown ? coverage(shift(travel)) : 0.0f;
     const float hinge_cover =
