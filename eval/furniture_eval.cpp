@@ -25,6 +25,7 @@
 #include "multicue/io/file_utils.hpp"
 #include "multicue/mapping/furniture_detection.hpp"
 #include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
 #include "multicue/training/furniture_training.hpp"
 
 #ifndef MULTICUE_SHARED_DATA_DIR
@@ -49,6 +50,8 @@ struct Options {
     std::string sensor = "laser";
     std::string out = "furniture_eval_out";
     float floor_cut = 0.3f;
+    bool other_classes = false;
+    std::string verifier_rows;  ///< with --retrain-verifier: rows read from or written to
     int min_visible = 50;
     bool variants = true;
     bool single = true;
@@ -247,11 +250,17 @@ int Run(const Options& o) {
         model = FurnitureModel::Load(o.model);
         if (o.retrain_verifier) {  // the verifier alone, on the loaded vocabulary and CAD models
             std::shared_ptr<const ml::Classifier> verifier;  // none with 0 rooms
-            if (to.verifier_rooms > 0) {
+            if (!o.verifier_rows.empty() && std::filesystem::exists(o.verifier_rows)) {
+                verifier =
+                    training::FitFurnitureVerifier(model, ml::ReadDatasetFile(o.verifier_rows), to);
+            } else if (to.verifier_rooms > 0) {
                 Progress progress("verifier rooms", static_cast<std::size_t>(to.verifier_rooms));
-                verifier = training::TrainFurnitureVerifier(model, to, &progress);
-                if (!verifier) return 130;
+                const ml::Dataset rows =
+                    training::CollectFurnitureVerifierRows(model, to, &progress);
+                if (InterruptRequested()) return 130;
                 progress.Finish();
+                if (!o.verifier_rows.empty()) ml::WriteDatasetFile(rows, o.verifier_rows);
+                verifier = training::FitFurnitureVerifier(model, rows, to);
             }
             model.SetVerifier(verifier);
             model.Save(o.model);
@@ -287,6 +296,7 @@ int Run(const Options& o) {
     dp.selection.min_part_share = o.min_part_share;
     dp.voting.normalization = ParseFurnitureVoteNormalization(o.normalization);
     dp.selection.cross_class = o.cross_class;
+    dp.other_classes = o.other_classes;
     dp.cross_class = o.fit_cross_class;
     dp.cross_class_surfaces = o.cross_class_surfaces;
     dp.max_overlap = o.max_overlap;
@@ -370,7 +380,7 @@ int Run(const Options& o) {
                 // Why true hypotheses (right class, near a true piece) were rejected.
                 for (const auto* list : {&det.detections, &det.rejected}) {
                     for (const auto& d : *list) {
-                        if ((var.learned ? d.hypothesis.normalized : d.score) < 0.3f) continue;
+                        if ((var.learned ? d.hypothesis.found : d.score) < 0.3f) continue;
                         for (const auto& f : room.room.furniture) {
                             if (f.category != d.category ||
                                 (f.T_world_object.translation().head<2>() - d.hypothesis.centre)
@@ -383,7 +393,8 @@ int Run(const Options& o) {
                     }
                 }
             }
-            if (primary && o.draw < 0) {  // nearest hypothesis of the right class per piece
+            if (primary &&
+                o.draw < 0) {  // nearest hypothesis (fitted centre) of the class per piece
                 for (const auto& f : room.room.furniture) {
                     float best = 1e9f, score = 0.0f;
                     std::string fate;
@@ -391,16 +402,29 @@ int Run(const Options& o) {
                         for (const auto& d : *list) {
                             if (d.category != f.category) continue;
                             const float dist =
-                                (f.T_world_object.translation().head<2>() - d.hypothesis.centre)
-                                    .norm();
+                                (f.T_world_object.translation().head<2>() - d.centre).norm();
                             if (dist < best)
                                 best = dist, score = d.hypothesis.normalized,
                                 fate = d.accepted ? "ok" : d.rejection;
                         }
                     }
-                    std::fprintf(stderr, "NEAREST %-9s w %.2f l %.2f: %.2f m score %.2f %s\n",
+                    // The nearest hypothesis of any class, for pieces found under another name.
+                    float any = 1e9f;
+                    std::string any_cls, any_fate;
+                    for (const auto* list : {&det.detections, &det.rejected}) {
+                        for (const auto& d : *list) {
+                            const float dist =
+                                (f.T_world_object.translation().head<2>() - d.centre).norm();
+                            if (dist < any)
+                                any = dist, any_cls = d.category,
+                                any_fate = d.accepted ? "ok" : d.rejection;
+                        }
+                    }
+                    std::fprintf(stderr,
+                                 "NEAREST %-9s w %.2f l %.2f: %.2f m score %.2f %s | any %.2f m "
+                                 "%s %s\n",
                                  f.category.c_str(), f.width, std::max(f.extent.x(), f.extent.y()),
-                                 best, score, fate.c_str());
+                                 best, score, fate.c_str(), any, any_cls.c_str(), any_fate.c_str());
                 }
             }
             if (primary && r < o.draw) {
@@ -574,6 +598,11 @@ int main(int argc, char** argv) {
     app.add_option("--heads", o.heads, "head positions per room")->capture_default_str();
     app.add_option("--sensor", o.sensor, "laser or kinect")->capture_default_str();
     app.add_option("--out", o.out, "folder for report.json and curves.svg")->capture_default_str();
+    app.add_option("--verifier-rows", o.verifier_rows,
+                   "with --retrain-verifier: the verifier's rows are read from this file when it "
+                   "exists, else collected and written to it");
+    app.add_flag("--other-classes", o.other_classes,
+                 "also fit every other class where a hypothesis reaches its class threshold");
     app.add_option("--floor", o.floor_cut, "lowest normalised score kept (curves start there)")
         ->capture_default_str();
     app.add_option("--min-visible", o.min_visible, "returns that make an object visible in a view")

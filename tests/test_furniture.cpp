@@ -228,6 +228,111 @@ TEST(FurnitureDetection, MergingViewsRemovesAFalsePositiveOfOneView) {
     EXPECT_EQ(at(merged, clutter), 0);
 }
 
+// Every class where another class's votes are strong: a place voted for only as a chair gets a
+// hypothesis of each other class with that class's votes (none) as its score and the chair's
+// parts; a weak place proposes nothing; a class already voted for nearby is not proposed again.
+TEST(FurnitureSelection, AStrongHypothesisProposesEveryOtherClassWhereNoneIsNear) {
+    const FurnitureModel model = TrainSmallModel();
+    const int chair = model.ClassIndex("chair"), table = model.ClassIndex("table");
+    ASSERT_GE(chair, 0);
+    ASSERT_GE(table, 0);
+    const int n_classes = static_cast<int>(model.classes().size());
+    const float tc = model.classes()[static_cast<std::size_t>(chair)].threshold;
+    const float tt = model.classes()[static_cast<std::size_t>(table)].threshold;
+    const Eigen::Vector2f strong(0.0f, 0.0f), weak(4.0f, 0.0f), shared(-4.0f, 0.0f);
+    std::vector<FurnitureVote> votes = {
+        {{strong.x(), strong.y(), 0.4f}, 2.0f * tc, chair, 0, 0},
+        {{weak.x(), weak.y(), 0.4f}, 0.5f * tc, chair, 1, 0},
+        {{shared.x(), shared.y(), 0.4f}, 2.0f * tc, chair, 2, 0},
+        {{shared.x() + 0.05f, shared.y(), 0.4f}, 0.5f * tt, table, 3, 0}};
+    FurnitureSelectionParams sp;
+    sp.threshold_scale = 0.3f;
+    auto at = [](const std::vector<FurnitureHypothesis>& hs, const Eigen::Vector2f& x, int cls) {
+        std::vector<const FurnitureHypothesis*> found;
+        for (const auto& h : hs) {
+            if (h.cls == cls && (h.centre - x).norm() < 0.1f) found.push_back(&h);
+        }
+        return found;
+    };
+    const auto plain = SelectFurnitureHypotheses(votes, 1, model, sp);
+    EXPECT_TRUE(at(plain, strong, table).empty());
+    sp.other_classes = true;
+    const auto all = SelectFurnitureHypotheses(votes, 1, model, sp);
+    for (int c = 0; c < n_classes; ++c) {
+        const auto here = at(all, strong, c);
+        ASSERT_EQ(here.size(), 1u) << model.classes()[static_cast<std::size_t>(c)].name;
+        ASSERT_EQ(here.front()->parts.size(), 1u);
+        EXPECT_EQ(here.front()->proposed_by, c == chair ? -1 : chair);
+        EXPECT_EQ(here.front()->found, here.front()->normalized * (c == chair ? 1.0f : 0.0f) +
+                                           (c == chair ? 0.0f : 2.0f));
+        EXPECT_EQ(here.front()->parts.front(), std::make_pair(0, 0));
+        if (c != chair) {
+            EXPECT_EQ(here.front()->score, 0.0f);
+            EXPECT_TRUE(at(all, weak, c).empty());
+        }
+    }
+    EXPECT_EQ(at(all, weak, chair).size(), 1u);
+    // At the shared place the table keeps its own hypothesis (its votes, its part) only.
+    const auto tables = at(all, shared, table);
+    ASSERT_EQ(tables.size(), 1u);
+    EXPECT_GT(tables.front()->score, 0.0f);
+    EXPECT_EQ(tables.front()->parts.front(), std::make_pair(0, 3));
+    sp.other_classes_from = -1.0f;
+    EXPECT_THROW(SelectFurnitureHypotheses(votes, 1, model, sp), InvalidArgument);
+}
+
+// The votes find the piece, the fits name it: a sideboard whose votes all went to the table
+// class is found as a sideboard when every class is fitted where one class's votes are strong,
+// and not found as one when only the voted class is.
+TEST(FurnitureDetection, APieceVotedForAsAnotherClassIsNamedByItsFittedModel) {
+    std::vector<sim::FurniturePiece> pieces;
+    const FurnitureModel model = TrainSmallModel(&pieces);
+    const sim::FurniturePiece* sideboard = nullptr;
+    for (const auto& p : pieces) {
+        if (sideboard == nullptr && p.category == "sideboard") sideboard = &p;
+    }
+    ASSERT_NE(sideboard, nullptr);
+    const int table = model.ClassIndex("table"), cls = model.ClassIndex("sideboard");
+    ASSERT_GE(table, 0);
+    const Eigen::Vector3f shift(0.5f, 0.8f, 0.0f);
+    const PieceScans s = ScanPiece(*sideboard, 0.4f, 3, 21);
+    FurnitureDetectionParams dp;
+    dp.num_threads = 2;
+    FurnitureScene scene = PrepareFurnitureScene(Views(s, shift), model, dp);
+    // Every vote near the piece becomes a strong table vote; the rest goes.
+    const float tt = model.classes()[static_cast<std::size_t>(table)].threshold;
+    for (auto& view : scene.votes) {
+        std::vector<FurnitureVote> kept;
+        for (auto v : view) {
+            if ((v.x.head<2>() - shift.head<2>()).norm() > 0.3f) continue;
+            v.cls = table;
+            v.weight = 6.0f * tt / static_cast<float>(view.size());
+            kept.push_back(v);
+        }
+        view = std::move(kept);
+    }
+    const FurnitureFitContext context(model, dp.fit);
+    auto found = [&](const FurnitureDetectionResult& r) {
+        for (const auto& d : r.detections) {
+            if (d.cls == cls && (d.centre - shift.head<2>()).norm() < 0.15f) return true;
+        }
+        return false;
+    };
+    dp.other_classes = false;
+    EXPECT_FALSE(found(DetectFurniture(scene, {}, model, &context, dp)));
+    dp.other_classes = true;
+    const auto named = DetectFurniture(scene, {}, model, &context, dp);
+    EXPECT_TRUE(found(named));
+    for (const auto& d : named.detections) {  // ranked by the votes that found it
+        if (d.cls == cls) {
+            EXPECT_GT(d.score, 0.0f);
+        }
+    }
+    for (const auto& d : named.detections) {  // and the table it was voted for does not stay
+        EXPECT_FALSE(d.cls == table && (d.centre - shift.head<2>()).norm() < 0.3f);
+    }
+}
+
 TEST(FurnitureFreeSpace, PointsBetweenTheSensorAndTheFloorAreFreeAndBelowItAreNot) {
     // A floor patch seen from 1.5 m above its centre.
     PointCloud floor;
@@ -468,6 +573,10 @@ TEST(FurnitureVerifier, RanksTheFitsOfUnseenRoomsAndTravelsInTheModelFile) {
     dp = {};
     const FurnitureFitContext bare_context(bare, dp.fit);
     EXPECT_THROW(DetectFurniture(scene, {}, bare, &bare_context, dp), InvalidArgument);
+    // Rows of other features are no verifier's; the held-out rows refit one.
+    EXPECT_THROW(training::FitFurnitureVerifier(model, other, to), DataError);
+    const auto refit = training::FitFurnitureVerifier(model, rows, to);
+    EXPECT_EQ(refit->feature_names(), FurnitureVerifierFeatureNames(model));
     dp.min_confidence = 1.5f;
     EXPECT_THROW(dp.Validate(), InvalidArgument);
     auto bad = to;

@@ -333,8 +333,10 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         votes.insert(votes.end(), vv.begin(), vv.end());
     }
     result.votes = votes.size();
+    FurnitureSelectionParams selection = params.selection;
+    selection.other_classes = selection.other_classes || (params.verify && params.other_classes);
     const auto hyps =
-        SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, params.selection);
+        SelectFurnitureHypotheses(votes, static_cast<int>(views.size()), model, selection);
     result.selection_ms = MillisecondsSince(t);
     std::vector<const FurnitureWall*> walls;
     for (int v : views) {
@@ -347,7 +349,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         all[i].category = model.classes()[static_cast<std::size_t>(hyps[i].cls)].name;
         all[i].hypothesis = hyps[i];
         all[i].centre = hyps[i].centre;
-        all[i].score = hyps[i].normalized;
+        all[i].score = hyps[i].found;  // a proposed hypothesis: the votes that found the place
         all[i].accepted = !BehindWalls(walls, hyps[i].centre, params.fit.wall_margin);
         if (!all[i].accepted) all[i].rejection = "behind_wall";
     }
@@ -390,7 +392,8 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             // and, with learned_tests, every fit they rejected: the verifier decides.
             if (verifier->feature_names() != FurnitureVerifierFeatureNames(model)) {
                 throw InvalidArgument(
-                    "furniture detection: the model's verifier was trained on other features");
+                    "furniture detection: the model's verifier was trained on other features "
+                    "(a model file of an older version); train the model again");
             }
             const auto& names = verifier->class_names();
             const auto right = static_cast<Eigen::Index>(
@@ -436,7 +439,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         std::vector<PlacedSurface> surfaces(all.size());
         std::vector<float> areas(all.size(), 0.0f), vote(all.size(), 0.0f);
         for (std::size_t i = 0; i < all.size(); ++i) {
-            vote[i] = all[i].hypothesis.normalized;
+            vote[i] = all[i].hypothesis.found;
             if (!all[i].accepted) continue;
             const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(all[i].fit.cad)];
             feet[i] = Footprint(cad, all[i].fit.T_world_model);
@@ -478,14 +481,23 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             for (std::size_t k : order) {
                 if (k != i && all[k].accepted && !done[k] && overlaps(i, k)) group.push_back(k);
             }
+            // A hypothesis proposed by another class's votes names the piece only when no fit
+            // of a voted-for class does.
+            auto proposed = [&](std::size_t k) { return all[k].hypothesis.proposed_by >= 0; };
             std::size_t winner = i;
+            for (std::size_t k : group) {
+                if (proposed(winner) && !proposed(k)) winner = k;
+            }
             if (verifier != nullptr) {
                 for (std::size_t k : group) {
-                    if (all[k].confidence > all[winner].confidence) winner = k;
+                    if (proposed(k) == proposed(winner) &&
+                        all[k].confidence > all[winner].confidence)
+                        winner = k;
                 }
             } else if (params.class_by_fit) {
                 for (std::size_t k : group) {
-                    if (quality(all[k]) > quality(all[winner])) winner = k;
+                    if (proposed(k) == proposed(winner) && quality(all[k]) > quality(all[winner]))
+                        winner = k;
                 }
                 float best_vote = 0.0f;
                 for (std::size_t k : group) best_vote = std::max(best_vote, vote[k]);

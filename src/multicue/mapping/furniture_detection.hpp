@@ -39,6 +39,11 @@ struct FurnitureDetectionParams {
     /// judge them. Without verification, 1 keeps those above the class thresholds only
     FurnitureSelectionParams selection{.threshold_scale = 0.3f};
     FurnitureFitParams fit{};
+    /// With verify: every class is also fitted where a hypothesis of another class reaches its
+    /// class threshold (FurnitureSelectionParams::other_classes); such a fit names a piece only
+    /// where no fit of a class voted for there does. Off: on the validation rooms it found one
+    /// piece more and added three false detections (eval/README.md)
+    bool other_classes = false;
     bool verify = true;      ///< fit and verify CAD models; off: hypotheses are detections
     bool free_space = true;  ///< with verify: the free-space test (one occupancy map per scan)
     /// Fitted footprints of two accepted detections that overlap by more than this share of the

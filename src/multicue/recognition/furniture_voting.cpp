@@ -61,6 +61,27 @@ VoteGrid BuildGrid(const std::vector<const FurnitureVote*>& votes, float cell, f
     return g;
 }
 
+// Section 4.2.4.2: two hypotheses of one class are inconsistent when the footprints of objects
+// centred there (discs of the class width) overlap; the stronger one stays.
+std::vector<FurnitureHypothesis> Consistent(std::vector<FurnitureHypothesis> out,
+                                            const FurnitureModel& model, bool cross_class) {
+    std::vector<FurnitureHypothesis> consistent;
+    for (auto& hyp : out) {
+        const float w = model.classes()[static_cast<std::size_t>(hyp.cls)].width;
+        bool ok = true;
+        for (const auto& k : consistent) {
+            if (k.cls == hyp.cls) {
+                ok = ok && (k.centre - hyp.centre).norm() >= w;
+            } else if (cross_class) {
+                const float wk = model.classes()[static_cast<std::size_t>(k.cls)].width;
+                ok = ok && (k.centre - hyp.centre).norm() >= (w + wk) / 2;
+            }
+        }
+        if (ok) consistent.push_back(std::move(hyp));
+    }
+    return consistent;
+}
+
 }  // namespace
 
 const char* FurnitureVoteNormalizationName(FurnitureVoteNormalization n) {
@@ -177,6 +198,10 @@ void FurnitureSelectionParams::Validate() const {
         throw InvalidArgument(fmt::format(
             "furniture selection: threshold_scale must be >= 0, got {}", threshold_scale));
     }
+    if (!(other_classes_from >= 0.0f) || !std::isfinite(other_classes_from)) {
+        throw InvalidArgument(fmt::format(
+            "furniture selection: other_classes_from must be >= 0, got {}", other_classes_from));
+    }
     if (!(min_part_share >= 0.0f && min_part_share <= 1.0f)) {
         throw InvalidArgument(fmt::format(
             "furniture selection: min_part_share must be in [0, 1], got {}", min_part_share));
@@ -202,13 +227,18 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
     }
     const float scale = 1.0f / static_cast<float>(views);
     std::vector<FurnitureHypothesis> out;
+    std::vector<VoteGrid> grids(static_cast<std::size_t>(n_classes));
+    auto half_window = [&](const FurnitureClass& cls) {
+        return std::max(
+            1, static_cast<int>(std::lround(params.window_scale * cls.width / 2 / params.cell)));
+    };
     for (int c = 0; c < n_classes; ++c) {
         const auto& cv = by_class[static_cast<std::size_t>(c)];
         if (cv.empty()) continue;
         const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(c)];
-        const VoteGrid g = BuildGrid(cv, params.cell, scale);
-        const int h = std::max(
-            1, static_cast<int>(std::lround(params.window_scale * cls.width / 2 / params.cell)));
+        grids[static_cast<std::size_t>(c)] = BuildGrid(cv, params.cell, scale);
+        const VoteGrid& g = grids[static_cast<std::size_t>(c)];
+        const int h = half_window(cls);
         const double floor = params.threshold_scale * cls.threshold;
         // Window sums and their local maxima among the 8 neighbours.
         std::vector<double> s(static_cast<std::size_t>(g.nx) * g.ny);
@@ -250,6 +280,7 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
             hyp.score = static_cast<float>(v);
             hyp.normalized = cls.threshold > 0.0f ? hyp.score / cls.threshold
                                                   : std::numeric_limits<float>::infinity();
+            hyp.found = hyp.normalized;
             // The weighted mean of the window's votes, and the parts they came from.
             const Eigen::Vector2f centre = g.origin + g.cell * at.cast<float>();
             const float half = (static_cast<float>(h) + 0.5f) * g.cell;
@@ -279,26 +310,45 @@ std::vector<FurnitureHypothesis> SelectFurnitureHypotheses(const std::vector<Fur
             out.push_back(std::move(hyp));
         }
     }
-    std::stable_sort(out.begin(), out.end(),
-                     [](const auto& a, const auto& b) { return a.normalized > b.normalized; });
-    if (!params.hull_consistency) return out;
-    // Section 4.2.4.2: two hypotheses of one class are inconsistent when the footprints of
-    // objects centred there (discs of the class width) overlap; the stronger one stays.
-    std::vector<FurnitureHypothesis> consistent;
-    for (auto& hyp : out) {
-        const float w = model.classes()[static_cast<std::size_t>(hyp.cls)].width;
-        bool ok = true;
-        for (const auto& k : consistent) {
-            if (k.cls == hyp.cls) {
-                ok = ok && (k.centre - hyp.centre).norm() >= w;
-            } else if (params.cross_class) {
-                const float wk = model.classes()[static_cast<std::size_t>(k.cls)].width;
-                ok = ok && (k.centre - hyp.centre).norm() >= (w + wk) / 2;
+    auto by_strength = [](const auto& a, const auto& b) { return a.normalized > b.normalized; };
+    std::stable_sort(out.begin(), out.end(), by_strength);
+    if (params.hull_consistency) out = Consistent(std::move(out), model, params.cross_class);
+    if (!params.other_classes) return out;
+    // Every class where a strong hypothesis of another class stands, unless one is near.
+    std::vector<FurnitureHypothesis> proposed;
+    for (const auto& src : out) {
+        if (!(src.normalized >= params.other_classes_from)) continue;
+        for (int c = 0; c < n_classes; ++c) {
+            if (c == src.cls) continue;
+            const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(c)];
+            bool near = false;
+            for (const auto* list : {&out, &proposed}) {
+                for (const auto& k : *list) {
+                    near = near || (k.cls == c && (k.centre - src.centre).norm() < cls.width / 2);
+                }
             }
+            if (near) continue;
+            FurnitureHypothesis hyp;
+            hyp.cls = c;
+            hyp.centre = src.centre;
+            const VoteGrid& g = grids[static_cast<std::size_t>(c)];
+            if (g.nx > 0) {
+                const int h = half_window(cls), x = g.Cx(src.centre.x()), y = g.Cy(src.centre.y());
+                hyp.score = static_cast<float>(g.Window(x - h, y - h, x + h, y + h));
+            }
+            hyp.normalized = cls.threshold > 0.0f ? hyp.score / cls.threshold
+                                                  : std::numeric_limits<float>::infinity();
+            hyp.parts = src.parts;
+            hyp.part_weights = src.part_weights;
+            hyp.proposed_by = src.cls;
+            hyp.found = src.normalized;
+            proposed.push_back(std::move(hyp));
         }
-        if (ok) consistent.push_back(std::move(hyp));
     }
-    return consistent;
+    out.insert(out.end(), std::make_move_iterator(proposed.begin()),
+               std::make_move_iterator(proposed.end()));
+    std::stable_sort(out.begin(), out.end(), by_strength);
+    return out;
 }
 
 }  // namespace multicue

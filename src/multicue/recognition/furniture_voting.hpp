@@ -75,6 +75,14 @@ struct FurnitureSelectionParams {
     bool hull_consistency = true;
     /// Apply the footprint test across classes too (by normalised score): one place, one piece
     bool cross_class = false;
+    /// Every class at every strong hypothesis: where a hypothesis reaches other_classes_from of
+    /// its class threshold and no hypothesis of another class lies within half that class's
+    /// width, a hypothesis of that class is added at its centre, with that class's votes there
+    /// as its score (often none) and the parts of the hypothesis that proposed it. For a CAD fit
+    /// to name the piece that the votes of another class found (a sideboard voted for as a
+    /// table). Off by default; FurnitureDetectionParams::other_classes turns it on
+    bool other_classes = false;
+    float other_classes_from = 1.0f;  ///< [-], >= 0
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -89,6 +97,12 @@ struct FurnitureHypothesis {
     /// first.
     std::vector<std::pair<int, int>> parts;
     std::vector<float> part_weights;
+    /// Proposed (FurnitureSelectionParams::other_classes): the class whose hypothesis proposed
+    /// it; -1 for a hypothesis of its own votes
+    int proposed_by = -1;
+    /// The normalised score of the votes that found the place: its own, or when proposed the
+    /// proposing hypothesis's
+    float found = 0.0f;
 };
 
 /// Hypotheses from the votes of `views` views (the weights of merged views are divided by their

@@ -303,6 +303,16 @@ std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(const FurnitureMode
                                                              Progress* progress) {
     const ml::Dataset rows = CollectFurnitureVerifierRows(model, o, progress);
     if (InterruptRequested()) return nullptr;
+    return FitFurnitureVerifier(model, rows, o);
+}
+
+std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel& model,
+                                                           const ml::Dataset& rows,
+                                                           const FurnitureTrainingOptions& o) {
+    if (rows.feature_names != FurnitureVerifierFeatureNames(model)) {
+        throw DataError(
+            "furniture training: the verifier rows have other features than the model's verifier");
+    }
     const int right_class = rows.FindClass("right");
     std::size_t right = 0;
     for (int l : rows.labels) right += l == right_class ? 1 : 0;

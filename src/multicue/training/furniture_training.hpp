@@ -110,6 +110,13 @@ std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(
     const FurnitureModel& model, const FurnitureTrainingOptions& options,
     Progress* progress = nullptr);
 
+/// A classifier of options.verifier_spec (seeded with options.seed) fitted to `rows` of
+/// CollectFurnitureVerifierRows. DataError when they hold no right or no wrong fit, or their
+/// features are not the verifier's of `model`.
+std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel& model,
+                                                           const ml::Dataset& rows,
+                                                           const FurnitureTrainingOptions& options);
+
 /// Rows of the verifier (FurnitureVerifierFeatureNames; labels "right" and "wrong"): every fit
 /// of `model` to a hypothesis above its class threshold (default detection parameters without
 /// the verifier; fits the coverage, free-space and wall tests reject too, and those an
