@@ -263,8 +263,8 @@ TEST(FurnitureSelection, AStrongHypothesisProposesEveryOtherClassWhereNoneIsNear
         ASSERT_EQ(here.size(), 1u) << model.classes()[static_cast<std::size_t>(c)].name;
         ASSERT_EQ(here.front()->parts.size(), 1u);
         EXPECT_EQ(here.front()->proposed_by, c == chair ? -1 : chair);
-        EXPECT_EQ(here.front()->found, here.front()->normalized * (c == chair ? 1.0f : 0.0f) +
-                                           (c == chair ? 0.0f : 2.0f));
+        // The votes that found the place: its own, or the proposing chair's (2 thresholds).
+        EXPECT_FLOAT_EQ(here.front()->found, c == chair ? here.front()->normalized : 2.0f);
         EXPECT_EQ(here.front()->parts.front(), std::make_pair(0, 0));
         if (c != chair) {
             EXPECT_EQ(here.front()->score, 0.0f);
