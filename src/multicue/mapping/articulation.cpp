@@ -184,20 +184,33 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         for (const Index i : idx) c += opened.points[i];
         return Eigen::Vector3f(c / static_cast<float>(std::max<std::size_t>(1, idx.size())));
     };
-    // Moved points on the closed front's rectangle carried by T (a small margin around it).
-    auto support = [&](const Eigen::Isometry3f& T) {
-        const Eigen::Vector3f c = T * f.center;
-        const Eigen::Vector3f u = T.linear() * f.u_axis, v = T.linear() * f.v_axis,
-                              n = T.linear() * f.normal;
-        const float hu = (f.max.x() - f.min.x()) / 2 + 0.03f,
-                    hv = (f.max.y() - f.min.y()) / 2 + 0.03f;
-        std::size_t count = 0;
+    // Moved points on the closed front's rectangle carried by T: how many lie on it (a small
+    // margin around it), and the share of its cells (coverage_cell) they hit.
+    struct OnFront {
+        std::size_t points = 0;
+        float cells = 0.0f;
+    };
+    const int nu = std::clamp(static_cast<int>(std::ceil(width / p.coverage_cell)), 1, 200);
+    const int nv = std::clamp(static_cast<int>(std::ceil(height / p.coverage_cell)), 1, 200);
+    std::vector<char> hit(static_cast<std::size_t>(nu * nv));
+    auto on_front = [&](const Eigen::Isometry3f& T) {
+        const float hu = width / 2 + 0.03f, hv = height / 2 + 0.03f;
+        std::fill(hit.begin(), hit.end(), 0);
+        const Eigen::Isometry3f inv = T.inverse();
+        OnFront r;
         for (const Index i : moved) {
-            const Eigen::Vector3f d = opened.points[i] - c;
-            count += std::abs(d.dot(n)) <= p.plane_threshold && std::abs(d.dot(u)) <= hu &&
-                     std::abs(d.dot(v)) <= hv;
+            const Eigen::Vector3f q = inv * opened.points[i];
+            const Eigen::Vector3f d = q - f.center;
+            if (std::abs(d.dot(f.normal)) > p.plane_threshold) continue;
+            r.points += std::abs(d.dot(f.u_axis)) <= hu && std::abs(d.dot(f.v_axis)) <= hv;
+            const float u = (q.dot(f.u_axis) - f.min.x()) / width * static_cast<float>(nu);
+            const float v = (q.dot(f.v_axis) - f.min.y()) / height * static_cast<float>(nv);
+            if (u >= 0.0f && v >= 0.0f && u < static_cast<float>(nu) && v < static_cast<float>(nv))
+                hit[static_cast<std::size_t>(static_cast<int>(v) * nu + static_cast<int>(u))] = 1;
         }
-        return count;
+        r.cells = static_cast<float>(std::count(hit.begin(), hit.end(), 1)) /
+                  static_cast<float>(hit.size());
+        return r;
     };
     auto shift = [&](float d) {
         Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
@@ -211,7 +224,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     // The prismatic hypothesis.
     Articulation slide;
     float travel = 0.0f;
-    std::size_t slide_support = 0;
+    OnFront slide_on;
     Indices slide_inliers;
     const float cos_par = std::cos(p.parallel_deg * kArticulationDegToRad);
     const PlaneFit& pf =
@@ -223,13 +236,13 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         slide.origin = f.center;
         slide.upper = travel;
         slide.source = "motion";
-        slide_support = support(shift(travel));
+        slide_on = on_front(shift(travel));
         slide_inliers = pf.inliers;
     }
     // The revolute hypothesis, from the best plane when it is tilted.
     Articulation hinge;
     float angle = 0.0f;
-    std::size_t hinge_support = 0;
+    OnFront hinge_on;
     Eigen::Vector3f nb = fit.plane.head<3>();
     if (std::abs(nb.dot(f.normal)) < cos_par) {
         const Eigen::Vector3f centroid = centroid_of(fit.inliers);
@@ -255,11 +268,11 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         hinge.origin = point;
         hinge.upper = angle;
         hinge.source = "motion";
-        hinge_support = support(turn(point, dir, angle));
+        hinge_on = on_front(turn(point, dir, angle));
     }
     if (slide.type == JointType::kUnknown && hinge.type == JointType::kUnknown) return out;
     out.found = true;
-    if (hinge.type != JointType::kUnknown && hinge_support >= slide_support) {
+    if (hinge.type != JointType::kUnknown && hinge_on.points >= slide_on.points) {
         out.articulation = hinge;
         out.opening = angle;
         out.moved = fit.inliers;
@@ -274,30 +287,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     // make a parallel plane too, but covers a strip of the rectangle only. A slide that covers
     // less than `min_slide_coverage` of it becomes a turn: about the tilted plane's axis when
     // there is one, else about the edge of the rectangle (and by the angle) that covers most.
-    const float cell = p.coverage_cell;
-    const int nu = std::clamp(static_cast<int>(std::ceil(width / cell)), 1, 200);
-    const int nv = std::clamp(static_cast<int>(std::ceil(height / cell)), 1, 200);
-    std::vector<char> hit(static_cast<std::size_t>(nu * nv));
-    auto coverage = [&](const Eigen::Isometry3f& T) {
-        std::fill(hit.begin(), hit.end(), 0);
-        const Eigen::Isometry3f inv = T.inverse();
-        for (const Index i : moved) {
-            const Eigen::Vector3f q = inv * opened.points[i];
-            if (std::abs(f.normal.dot(q) + plane_d) > p.plane_threshold) continue;
-            const float u = (q.dot(f.u_axis) - f.min.x()) / width * static_cast<float>(nu);
-            const float v = (q.dot(f.v_axis) - f.min.y()) / height * static_cast<float>(nv);
-            if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(nu) &&
-                  v < static_cast<float>(nv))) {
-                continue;
-            }
-            hit[static_cast<std::size_t>(static_cast<int>(v) * nu + static_cast<int>(u))] = 1;
-        }
-        return static_cast<float>(std::count(hit.begin(), hit.end(), 1)) /
-               static_cast<float>(hit.size());
-    };
-    const float slide_cover = slide.type != JointType::kUnknown ? coverage(shift(travel)) : 0.0f;
-    const float hinge_cover =
-        hinge.type != JointType::kUnknown ? coverage(turn(hinge.origin, hinge.axis, angle)) : 0.0f;
+    const float slide_cover = slide_on.cells, hinge_cover = hinge_on.cells;
     if (slide.type != JointType::kUnknown) out.slide_coverage = slide_cover;
     if (hinge.type != JointType::kUnknown) out.turn_coverage = hinge_cover;
     if (out.articulation.type != JointType::kPrismatic || p.min_slide_coverage <= 0.0f ||
@@ -323,7 +313,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     for (const auto& [point, into] : edges) {
         const Articulation a = Hinge(f, point, into, on_surface);
         for (float deg = 10.0f; deg <= 120.0f; deg += 2.5f) {
-            const float c = coverage(turn(a.origin, a.axis, deg * kArticulationDegToRad));
+            const float c = on_front(turn(a.origin, a.axis, deg * kArticulationDegToRad)).cells;
             if (c > best) {
                 best = c;
                 best_hinge = a;

@@ -318,9 +318,9 @@ std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel&
     for (int l : rows.labels) right += l == right_class ? 1 : 0;
     if (right == 0 || right == rows.rows()) {
         throw DataError(fmt::format(
-            "furniture training: the {} verifier rooms gave {} fits, {} of them right; the "
-            "verifier needs right and wrong ones",
-            o.verifier_rooms, rows.rows(), right));
+            "furniture training: the verifier rows hold {} fits, {} of them right; the verifier "
+            "needs right and wrong ones",
+            rows.rows(), right));
     }
     std::shared_ptr<ml::Classifier> verifier = ml::CreateClassifier(o.verifier_spec);
     verifier->seed = static_cast<std::uint32_t>(o.seed);
