@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -57,6 +58,7 @@ struct Options {
     bool single = true;
     int threads = 0;
     int draw = 0;
+    std::string dump_fits;  // TSV of every fit of the primary variant with its verifier features
     // Overrides of the detection settings, to tune on the validation rooms.
     std::vector<std::string> thresholds;
     float window_scale = 1.0f;
@@ -82,6 +84,10 @@ struct Options {
     std::size_t activations = 2;
     float max_height_error = 0.25f;
     float support_margin = 0.3f;
+    float fit_scale = FurnitureFitParams{}.max_scale;
+    int fit_scale_steps = FurnitureFitParams{}.scale_steps;
+    bool back_to_wall = FurnitureFitParams{}.back_to_wall;
+    float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
 };
 
 struct Variant {
@@ -244,6 +250,10 @@ int Run(const Options& o) {
     to.parts.frame = ParseFurniturePartFrame(o.frame);
     if (o.verifier_rooms >= 0) to.verifier_rooms = o.verifier_rooms;
     if (!o.verifier_spec.empty()) to.verifier_spec = o.verifier_spec;
+    to.verifier_fit.max_scale = o.fit_scale;
+    to.verifier_fit.scale_steps = o.fit_scale_steps;
+    to.verifier_fit.back_to_wall = o.back_to_wall;
+    to.verifier_fit.flip_tolerance = o.flip_tolerance;
     FurnitureModel model;
     auto t0 = std::chrono::steady_clock::now();
     if (!o.retrain && std::filesystem::exists(o.model)) {
@@ -309,6 +319,10 @@ int Run(const Options& o) {
     dp.support_margin = o.support_margin;
     dp.fit.min_coverage = o.min_coverage;
     dp.fit.max_free_share = o.max_free_share;
+    dp.fit.max_scale = o.fit_scale;
+    dp.fit.scale_steps = o.fit_scale_steps;
+    dp.fit.back_to_wall = o.back_to_wall;
+    dp.fit.flip_tolerance = o.flip_tolerance;
     dp.num_threads = o.threads;
     const FurnitureFitContext context(model, dp.fit);
 
@@ -343,6 +357,14 @@ int Run(const Options& o) {
     std::vector<double> fit_times;
     std::map<std::string, std::map<std::string, int>> fates;
     Progress progress("rooms", static_cast<std::size_t>(o.rooms));
+    std::ofstream dump;
+    if (!o.dump_fits.empty()) {
+        dump.open(o.dump_fits);
+        if (!dump) throw IoError("cannot write " + o.dump_fits);
+        dump << "room\tclass\tright\tfate\tconfidence";
+        for (const auto& n : FurnitureVerifierFeatureNames(model)) dump << '\t' << n;
+        dump << '\n';
+    }
     for (int r = 0; r < o.rooms && !InterruptRequested(); ++r) {
         sim::FurnitureRoomParams rp;
         rp.type = static_cast<sim::RoomType>(r % 3);
@@ -376,6 +398,24 @@ int Run(const Options& o) {
                 DetectFurniture(scene, {}, *var.model, var.verify ? &context : nullptr, p);
             merged[var.name].push_back(
                 Frame(det, VisibleTruth(room, all, model, o.min_visible), var.verify, group));
+            if (primary && dump.is_open()) {
+                for (const auto* list : {&det.detections, &det.rejected}) {
+                    for (const auto& d : *list) {
+                        if (!d.fitted) continue;
+                        bool right = false;
+                        for (const auto& f : room.room.furniture) {
+                            right = right ||
+                                    (f.category == d.category &&
+                                     (f.T_world_object.translation().head<2>() - d.centre).norm() <
+                                         f.width / 2);
+                        }
+                        dump << r << '\t' << d.category << '\t' << (right ? 1 : 0) << '\t'
+                             << (d.accepted ? "accepted" : d.rejection) << '\t' << d.confidence;
+                        for (float x : FurnitureVerifierFeatures(d, model)) dump << '\t' << x;
+                        dump << '\n';
+                    }
+                }
+            }
             if (primary) {
                 // Why true hypotheses (right class, near a true piece) were rejected.
                 for (const auto* list : {&det.detections, &det.rejected}) {
@@ -395,6 +435,10 @@ int Run(const Options& o) {
             }
             if (primary &&
                 o.draw < 0) {  // nearest hypothesis (fitted centre) of the class per piece
+                std::map<std::uint32_t, int> returns;  // per piece, in all scans
+                for (const auto& scan : room.scans) {
+                    for (std::uint32_t l : scan.labels) ++returns[l];
+                }
                 for (const auto& f : room.room.furniture) {
                     float best = 1e9f, score = 0.0f;
                     std::string fate;
@@ -421,10 +465,11 @@ int Run(const Options& o) {
                         }
                     }
                     std::fprintf(stderr,
-                                 "NEAREST %-9s w %.2f l %.2f: %.2f m score %.2f %s | any %.2f m "
-                                 "%s %s\n",
+                                 "NEAREST %-9s w %.2f l %.2f returns %d: %.2f m score %.2f %s | "
+                                 "any %.2f m %s %s\n",
                                  f.category.c_str(), f.width, std::max(f.extent.x(), f.extent.y()),
-                                 best, score, fate.c_str(), any, any_cls.c_str(), any_fate.c_str());
+                                 returns[f.label], best, score, fate.c_str(), any, any_cls.c_str(),
+                                 any_fate.c_str());
                 }
             }
             if (primary && r < o.draw) {
@@ -515,6 +560,15 @@ int Run(const Options& o) {
                     {"ap", ap},
                     {"best_f1", f1},
                     {"best_f1_threshold", var.learned ? cut : cut * model.classes()[c].threshold}};
+                if (!mc.yaw_errors.empty()) {
+                    std::size_t turned = 0;  // fitted the wrong way round
+                    for (float e : mc.yaw_errors) turned += e > 90.0f ? 1 : 0;
+                    auto& jc = entry["classes"][model.classes()[c].name];
+                    jc["yaw_median_deg"] = eval::Percentile(mc.yaw_errors, 0.5f);
+                    jc["yaw_p90_deg"] = eval::Percentile(mc.yaw_errors, 0.9f);
+                    jc["yaw_turned"] = turned;
+                    jc["yaw_fits"] = mc.yaw_errors.size();
+                }
             }
             entry["map"] = map;
             for (const char* g : {"office", "seminar", "kitchen"}) {
@@ -617,6 +671,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--min-part-share", o.min_part_share, "support share of a part for the fit")
         ->capture_default_str();
+    app.add_option("--dump-fits", o.dump_fits,
+                   "write every fit of the full method (merged views) with its verifier features "
+                   "as TSV");
     app.add_option("--draw", o.draw, "bird's-eye PNGs and listings of the first N rooms");
     app.add_option("--normalization", o.normalization, "per-class, per-word or balanced")
         ->capture_default_str();
@@ -644,6 +701,17 @@ int main(int argc, char** argv) {
                    "only: N single fresh procedural pieces per class, one view each");
     app.add_flag("!--no-class-by-fit", o.class_by_fit, "overlapping fits: the strongest votes win");
     app.add_flag("!--no-learned", o.learned, "without the model's learned verifier");
+    app.add_option("--fit-scale", o.fit_scale,
+                   "CAD fit: stretch per axis within 1 -+ this (FurnitureFitParams::max_scale; "
+                   "the verifier rooms fit with it too)");
+    app.add_option("--fit-scale-steps", o.fit_scale_steps,
+                   "CAD fit: stretches tried per side of 1 (FurnitureFitParams::scale_steps)");
+    app.add_flag(
+        "!--no-back-to-wall", o.back_to_wall,
+        "CAD fit: leave fits facing a wall as they are (FurnitureFitParams::back_to_wall)");
+    app.add_option("--flip-tolerance", o.flip_tolerance,
+                   "CAD fit: how much worse a fit turned away from a wall may score "
+                   "(FurnitureFitParams::flip_tolerance)");
     app.add_option("--min-confidence", o.min_confidence, "learned verifier: confidence kept")
         ->capture_default_str();
     app.add_flag("--retrain-verifier", o.retrain_verifier,

@@ -70,7 +70,7 @@ inline void DrawRoom(const std::string& path, const training::ScannedFurnitureRo
             const auto& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
             std::vector<Eigen::Vector2f> pts;
             for (std::size_t i = 0; i < cad.cloud.size(); i += 7)
-                pts.push_back((d.fit.T_world_model * cad.cloud.points[i]).head<2>());
+                pts.push_back((d.fit.ModelToWorld() * cad.cloud.points[i]).head<2>());
             if (accepted) poly(sim::ConvexHull2D(pts), col, 2);
         }
         const int rad = static_cast<int>(3 + 4 * std::min(d.score, 3.0f));

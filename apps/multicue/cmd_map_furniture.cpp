@@ -111,10 +111,11 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     if (!d.fitted || d.fit.cad < 0) return j;
     const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
     const Eigen::Isometry3f& T = d.fit.T_world_model;
+    const Eigen::Affine3f A = d.fit.ModelToWorld();
     Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
     for (const auto& p : cad.cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     if (cad.cloud.points.empty()) lo = hi = Eigen::Vector3f::Zero();
-    const Eigen::Vector3f box_centre = T * (0.5f * (lo + hi));
+    const Eigen::Vector3f box_centre = A * (0.5f * (lo + hi));
     nlohmann::json pose = nlohmann::json::array();
     for (int r = 0; r < 4; ++r) {
         pose.push_back({T.matrix()(r, 0), T.matrix()(r, 1), T.matrix()(r, 2), T.matrix()(r, 3)});
@@ -122,8 +123,12 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     j["cad_model"] = cad.id;
     j["pose"] = pose;
     j["yaw_deg"] = YawDeg(d.fit.yaw);
+    j["turned"] = d.fit.turned;
+    j["scale"] = {d.fit.scale.x(), d.fit.scale.y(), d.fit.scale.z()};
     j["box"] = {{"centre", {box_centre.x(), box_centre.y(), box_centre.z()}},
-                {"size", {hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z()}},
+                {"size",
+                 {(hi.x() - lo.x()) * d.fit.scale.x(), (hi.y() - lo.y()) * d.fit.scale.y(),
+                  (hi.z() - lo.z()) * d.fit.scale.z()}},
                 {"yaw_deg", YawDeg(d.fit.yaw)}};
     j["coverage"] = d.fit.coverage;
     j["free_share"] = d.fit.free_share;
@@ -173,8 +178,9 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
         doc["detections"].push_back(DetectionJson(d, model));
         if (!d.fitted || d.fit.cad < 0) continue;
         const TriangleMesh& m = model.cads()[static_cast<std::size_t>(d.fit.cad)].mesh;
+        const Eigen::Affine3f A = d.fit.ModelToWorld();
         const auto base = static_cast<std::uint32_t>(fitted.vertices.size());
-        for (const auto& v : m.vertices) fitted.vertices.push_back(d.fit.T_world_model * v);
+        for (const auto& v : m.vertices) fitted.vertices.push_back(A * v);
         for (const auto& t : m.triangles) fitted.triangles.push_back(t.array() + base);
     }
     for (const auto& d : r.rejected) doc["rejected"].push_back(DetectionJson(d, model));

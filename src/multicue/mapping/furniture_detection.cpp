@@ -55,7 +55,7 @@ Polygon Hull(std::vector<Eigen::Vector2f> pts) {
 }
 
 // The fitted model's footprint in the world.
-Polygon Footprint(const FurnitureCad& cad, const Eigen::Isometry3f& T) {
+Polygon Footprint(const FurnitureCad& cad, const Eigen::Affine3f& T) {
     std::vector<Eigen::Vector2f> pts;
     const std::size_t step = std::max<std::size_t>(1, cad.cloud.size() / 2000);
     for (std::size_t i = 0; i < cad.cloud.size(); i += step)
@@ -70,7 +70,7 @@ struct PlacedSurface {
     std::unordered_set<std::uint64_t> occupied;
 };
 
-PlacedSurface PlaceSurface(const PointCloud& model, const Eigen::Isometry3f& T, float cell) {
+PlacedSurface PlaceSurface(const PointCloud& model, const Eigen::Affine3f& T, float cell) {
     PlacedSurface s;
     const std::size_t step = std::max<std::size_t>(1, model.size() / 2000);
     for (std::size_t i = 0; i < model.size(); i += step) {
@@ -377,7 +377,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                     d.score *= std::max(
                         0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
                     const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
-                    d.explained = SharedSurface(PlaceSurface(cad.cloud, d.fit.T_world_model,
+                    d.explained = SharedSurface(PlaceSurface(cad.cloud, d.fit.FittedModelToWorld(),
                                                              params.surface_overlap_distance),
                                                 PlaceSurface(pts, Eigen::Isometry3f::Identity(),
                                                              params.surface_overlap_distance));
@@ -442,10 +442,10 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             vote[i] = all[i].hypothesis.found;
             if (!all[i].accepted) continue;
             const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(all[i].fit.cad)];
-            feet[i] = Footprint(cad, all[i].fit.T_world_model);
+            feet[i] = Footprint(cad, all[i].fit.FittedModelToWorld());
             areas[i] = Area(feet[i]);
             if (params.cross_class && params.cross_class_surfaces) {
-                surfaces[i] = PlaceSurface(cad.cloud, all[i].fit.T_world_model,
+                surfaces[i] = PlaceSurface(cad.cloud, all[i].fit.FittedModelToWorld(),
                                            params.surface_overlap_distance);
             }
         }

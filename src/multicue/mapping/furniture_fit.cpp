@@ -105,6 +105,19 @@ void FurnitureFitParams::Validate() const {
         !(max_free_share >= 0.0f && max_free_share <= 1.0f)) {
         throw InvalidArgument("furniture fit: min_coverage and max_free_share must be in [0, 1]");
     }
+    if (!(wall_gap >= 0.0f) || !std::isfinite(wall_gap) || !(flip_tolerance >= 0.0f) ||
+        !std::isfinite(flip_tolerance)) {
+        throw InvalidArgument(
+            fmt::format("furniture fit: wall_gap and flip_tolerance must be >= 0, got {} and {}",
+                        wall_gap, flip_tolerance));
+    }
+    if (!(max_scale >= 0.0f && max_scale < 0.5f) || scale_steps < 1 || !(min_scale_gain >= 0.0f) ||
+        !std::isfinite(min_scale_gain)) {
+        throw InvalidArgument(fmt::format(
+            "furniture fit: max_scale must be in [0, 0.5), scale_steps >= 1 and min_scale_gain "
+            ">= 0, got {}, {} and {}",
+            max_scale, scale_steps, min_scale_gain));
+    }
     if (!(occupancy_resolution > 0.0) || !std::isfinite(occupancy_resolution)) {
         throw InvalidArgument(fmt::format("furniture fit: occupancy_resolution must be > 0, got {}",
                                           occupancy_resolution));
@@ -223,7 +236,7 @@ struct Penalty {
     float Sum() const { return free + behind; }
 };
 
-Penalty ModelPenalty(const PointCloud& cloud, const Eigen::Isometry3f& T, std::size_t max_checks,
+Penalty ModelPenalty(const PointCloud& cloud, const Eigen::Affine3f& T, std::size_t max_checks,
                      const FurnitureSpace& space, float wall_margin) {
     Penalty out;
     if ((space.free.empty() && space.walls.empty()) || cloud.size() == 0) return out;
@@ -368,13 +381,16 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
     fit.T_world_model = UprightPose(best.yaw, best.t);
     const auto& cad = context.cad(static_cast<std::size_t>(fit.cad));
     const auto& target = model.cads()[static_cast<std::size_t>(fit.cad)].cloud;
-    auto coverage = [&](const Eigen::Isometry3f& T) {
+    // Scan points covered by the model stretched by `scale` and placed by T.
+    auto coverage = [&](const Eigen::Isometry3f& T, const Eigen::Vector3f& scale) {
         const Eigen::Isometry3f inv = T.inverse();
+        const Eigen::Array3f shrink = scale.array().inverse();
         std::size_t n = 0;
-        for (const auto& q : s) n += cad.Covers(inv * q) ? 1 : 0;
+        for (const auto& q : s) n += cad.Covers(((inv * q).array() * shrink).matrix()) ? 1 : 0;
         return n;
     };
-    fit.covered = coverage(fit.T_world_model);
+    const Eigen::Vector3f one = Eigen::Vector3f::Ones();
+    fit.covered = coverage(fit.T_world_model, one);
     if (p.refine) {
         PointCloud src;
         src.points = s;
@@ -386,7 +402,7 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
             const Eigen::Isometry3f T = r.T_target_source.inverse().cast<float>();
             const float yaw = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
             const Eigen::Isometry3f upright = UprightPose(yaw, T.translation().head<2>());
-            const std::size_t n = coverage(upright);
+            const std::size_t n = coverage(upright, one);
             if (n >= fit.covered &&
                 (upright.translation().head<2>() - centre).norm() <= max_offset) {
                 fit.T_world_model = upright;
@@ -396,11 +412,109 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
             }
         }
     }
+    if (p.max_scale > 0.0f) {
+        // Coordinate search over the stretch per axis. The stretch of a horizontal axis keeps
+        // one plane across it in place: the model's near face, its far face or the plane through
+        // the scan points' centroid, whichever scores best (a face the search aligned stays
+        // aligned); the height keeps the floor. T_world_model moves so that the plane stays.
+        const Eigen::Isometry3f T0 = fit.T_world_model;
+        const Eigen::Isometry3f inv = T0.inverse();
+        Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+        for (const auto& q : s) centroid += inv * q;
+        centroid /= static_cast<float>(s.size());
+        Eigen::AlignedBox3f bounds;
+        for (const auto& q : cad.points) bounds.extend(q);
+        auto placed = [&](const Eigen::Vector3f& scale, const Eigen::Vector3f& anchor) {
+            Eigen::Isometry3f T = T0;
+            T.translation() += T0.linear() * (anchor - scale.cwiseProduct(anchor));
+            return T;
+        };
+        const float n_scan = static_cast<float>(s.size());
+        auto score = [&](const Eigen::Vector3f& scale, const Eigen::Vector3f& anchor) {
+            const Eigen::Isometry3f T = placed(scale, anchor);
+            return static_cast<float>(coverage(T, scale)) / n_scan -
+                   ModelPenalty(target, T * Eigen::Scaling(scale), p.max_search_checks * 3, space,
+                                p.wall_margin)
+                       .Sum();
+        };
+        Eigen::Vector3f scale = one, anchor = Eigen::Vector3f::Zero();
+        float best_score = score(scale, anchor);
+        for (int round = 0; round < 2; ++round) {
+            for (int axis = 0; axis < 3; ++axis) {
+                const std::vector<float> planes =
+                    axis == 2 ? std::vector<float>{0.0f}
+                              : std::vector<float>{bounds.min()[axis], centroid[axis],
+                                                   bounds.max()[axis]};
+                Eigen::Vector3f best_scale = scale, best_anchor = anchor;
+                for (float plane : planes) {
+                    for (int k = -p.scale_steps; k <= p.scale_steps; ++k) {
+                        if (k == 0) continue;
+                        Eigen::Vector3f trial = scale, at = anchor;
+                        trial[axis] = 1.0f + p.max_scale * static_cast<float>(k) /
+                                                 static_cast<float>(p.scale_steps);
+                        at[axis] = plane;
+                        const float sc = score(trial, at);
+                        // A stretch must explain the scan clearly better than the model's own
+                        // size does (unseen sides and the sampled penalties are noise).
+                        if (sc > best_score + p.min_scale_gain) {
+                            best_score = sc;
+                            best_scale = trial;
+                            best_anchor = at;
+                        }
+                    }
+                }
+                scale = best_scale;
+                anchor = best_anchor;
+            }
+        }
+        if (scale != one) {
+            const Eigen::Isometry3f T = placed(scale, anchor);
+            if ((T.translation().head<2>() - centre).norm() <= max_offset) {
+                fit.T_world_model = T;
+                fit.scale = scale;
+                fit.covered = coverage(T, scale);
+            }
+        }
+    }
     fit.coverage = static_cast<float>(fit.covered) / static_cast<float>(s.size());
     const Penalty pen =
-        ModelPenalty(target, fit.T_world_model, p.max_model_checks, space, p.wall_margin);
+        ModelPenalty(target, fit.ModelToWorld(), p.max_model_checks, space, p.wall_margin);
     fit.free_share = pen.free;
     fit.behind_share = pen.behind;
+    if (p.back_to_wall && !space.walls.empty()) {
+        // Front and back: a fit whose front faces a wall right ahead of it is turned by a half
+        // turn about its centre when the turned model explains the scan nearly as well. Only
+        // the reported orientation changes; FittedModelToWorld() keeps the pose the tests and
+        // the verifier judge.
+        float depth = 0.0f;
+        for (const auto& q : cad.points) depth = std::max(depth, std::abs(q.x()));
+        depth *= fit.scale.x();
+        const Eigen::Vector2f c = fit.T_world_model.translation().head<2>();
+        const Eigen::Vector2f front = fit.T_world_model.linear().col(0).head<2>().normalized();
+        bool facing = false;
+        for (const auto* w : space.walls) {
+            const Eigen::Vector2f q = c - w->point;
+            const Eigen::Vector2f along(-w->normal.y(), w->normal.x());
+            const float dist = q.dot(w->normal), t = q.dot(along);
+            facing = facing || (dist > 0.0f && dist < depth + p.wall_gap && t >= w->lo - 0.3f &&
+                                t <= w->hi + 0.3f && front.dot(w->normal) < -0.7f);
+        }
+        if (facing) {
+            auto score = [&](const Eigen::Isometry3f& T) {
+                return static_cast<float>(coverage(T, fit.scale)) / static_cast<float>(s.size()) -
+                       ModelPenalty(target, T * Eigen::Scaling(fit.scale), p.max_model_checks,
+                                    space, p.wall_margin)
+                           .Sum();
+            };
+            Eigen::Isometry3f turned = fit.T_world_model;
+            turned.linear() = turned.linear() * Eigen::Vector3f(-1.0f, -1.0f, 1.0f).asDiagonal();
+            if (score(turned) >= fit.coverage - pen.Sum() - p.flip_tolerance) {
+                fit.T_world_model = turned;
+                fit.yaw = std::remainder(fit.yaw + kPi, 2.0f * kPi);
+                fit.turned = true;
+            }
+        }
+    }
     if (fit.coverage < p.min_coverage) {
         fit.rejection = "coverage";
     } else if (fit.free_share > p.max_free_share) {

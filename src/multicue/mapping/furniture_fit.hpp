@@ -9,7 +9,9 @@
 /// inlier_distance), counted on a share of the scan points and abandoned as soon as it cannot
 /// beat the best pose of any model so far. The iteration count adapts by Eq. (4.6) with
 /// p_good = covered / all scan points, over all models of the class together. The best pose is
-/// refined by ICP (registration module, point-to-plane) and projected back to upright.
+/// refined by ICP (registration module, point-to-plane) and projected back to upright, then
+/// optionally stretched to the piece's size (max_scale), and turned to face the room when it faces
+/// a wall it stands against (back_to_wall).
 ///
 /// Verification rejects a fit that covers less than min_coverage of the scan points, and one
 /// whose model lies in space a scan saw as free: a model point counts as in free space when its
@@ -62,6 +64,26 @@ struct FurnitureFitParams {
     /// The model's centre stays this far from the hypothesis at most, in class widths [-], > 0
     float max_offset = 1.0f;
     bool refine = true;  ///< ICP refinement after the search
+    /// Back to the wall: a fit whose front (the model's +x) faces a wall it stands within
+    /// wall_gap of (beyond half its depth) is turned by a half turn about its centre when the
+    /// turned pose scores (coverage minus the free and wall shares) at most flip_tolerance below
+    /// it. Cabinets and sideboards differ front to back only in handles and doors, so the scan
+    /// alone often cannot tell; furniture against a wall faces the room. Only the reported pose
+    /// turns: coverage and the free and wall shares stay those of the pose the search found.
+    bool back_to_wall = true;
+    float wall_gap = 0.3f;         ///< [m], >= 0
+    float flip_tolerance = 0.35f;  ///< [-], >= 0 (chosen on validation rooms)
+    /// Size adaptation: after the search and refinement the fitted model is stretched along its
+    /// own axes, each by a factor within [1 - max_scale, 1 + max_scale] (scale_steps factors on
+    /// either side of 1), axis by axis in two rounds. A horizontal stretch keeps the model's near
+    /// face, far face or the plane through the scan points' centroid in place, the height keeps
+    /// the floor. A stretch is kept when it scores (coverage minus the free and wall shares) more
+    /// than min_scale_gain above the best so far. A library model of another size then fits a
+    /// piece it has the shape of. 0: the models keep their size (the default: on validation rooms
+    /// stretching made wrong fits look as good as right ones, eval/README.md) [-], in [0, 0.5)
+    float max_scale = 0.0f;
+    int scale_steps = 2;           ///< >= 1
+    float min_scale_gain = 0.02f;  ///< [-], >= 0
     IcpParams icp{.correspondences = {.max_distance = 0.06f},
                   .max_iterations = 30,
                   .min_fitness = 0.1,
@@ -129,19 +151,29 @@ struct FurnitureSpace {
 
 struct FurnitureFit {
     int cad = -1;  ///< index into FurnitureModel::cads(); -1 when nothing was found
-    Eigen::Isometry3f T_world_model = Eigen::Isometry3f::Identity();  ///< upright
-    float yaw = 0.0f;                                                 ///< [rad]
-    std::size_t scan_points = 0;                                      ///< the parts' points used
-    std::size_t covered = 0;  ///< of those, covered by the fitted model
-    float coverage = 0.0f;    ///< covered / scan_points
-    int iterations = 0;       ///< RANSAC iterations over all models
+    /// Upright; the model is stretched by `scale` before it (ModelToWorld)
+    Eigen::Isometry3f T_world_model = Eigen::Isometry3f::Identity();
+    Eigen::Vector3f scale = Eigen::Vector3f::Ones();  ///< along the model's axes (max_scale)
+    float yaw = 0.0f;                                 ///< [rad]
+    std::size_t scan_points = 0;                      ///< the parts' points used
+    std::size_t covered = 0;                          ///< of those, covered by the fitted model
+    float coverage = 0.0f;                            ///< covered / scan_points
+    int iterations = 0;                               ///< RANSAC iterations over all models
     int models_tried = 0;
     bool refined = false;       ///< ICP converged and was kept
+    bool turned = false;        ///< turned by a half turn to face away from a wall (back_to_wall)
     float free_share = 0.0f;    ///< share of model points in observed free space
     float behind_share = 0.0f;  ///< share of model points behind a wall
     bool accepted = false;      ///< passed both checks
     std::string rejection;      ///< "", "coverage", "free_space", "behind_wall" or "no_fit"
     double ms = 0.0;            ///< wall time [ms]
+    /// The fitted model's points to the world: T_world_model after the stretch by `scale`.
+    Eigen::Affine3f ModelToWorld() const { return T_world_model * Eigen::Scaling(scale); }
+    /// The same before the half turn of back_to_wall: the pose the tests and the verifier judge.
+    Eigen::Affine3f FittedModelToWorld() const {
+        const Eigen::Affine3f A = ModelToWorld();
+        return turned ? A * Eigen::Scaling(Eigen::Vector3f(-1.0f, -1.0f, 1.0f)) : A;
+    }
 };
 
 /// Fits the CAD models of class `cls` to `points` (world frame, floor at z = 0, with normals

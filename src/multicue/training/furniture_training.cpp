@@ -73,7 +73,10 @@ void FurnitureTrainingOptions::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture training: verifier_rooms must be >= 0, got {}", verifier_rooms));
     }
-    if (verifier_rooms > 0) (void)ml::CreateClassifier(verifier_spec);  // throws for a bad spec
+    if (verifier_rooms > 0) {
+        (void)ml::CreateClassifier(verifier_spec);  // throws for a bad spec
+        verifier_fit.Validate();
+    }
 }
 
 std::vector<sim::FurniturePiece> FurnitureTrainingPieces(const FurnitureTrainingOptions& o) {
@@ -344,6 +347,7 @@ ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
     // detection fits, gave a slightly worse verifier on the validation rooms: eval/README.md).
     dp.selection.threshold_scale = 1.0f;
     dp.learned = false;
+    dp.fit = o.verifier_fit;
     dp.num_threads = o.num_threads;
     const FurnitureFitContext context(model, dp.fit);
     const sim::FurnitureSource source({}, 1.0f);

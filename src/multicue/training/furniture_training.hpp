@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "multicue/core/progress.hpp"
+#include "multicue/mapping/furniture_fit.hpp"
 #include "multicue/ml/dataset.hpp"
 #include "multicue/recognition/furniture_model.hpp"
 #include "multicue/sim/furniture_models.hpp"
@@ -56,6 +57,9 @@ struct FurnitureTrainingOptions {
     std::uint64_t verifier_seed = 5000;  ///< seed of the first verifier room (the next: + 1, ...)
     /// Classifier of the verifier (ml::CreateClassifier spec)
     std::string verifier_spec = "rtrees:trees=200";
+    /// CAD fitting in the verifier rooms: the parameters detection will use (the verifier learns
+    /// what their fits look like)
+    FurnitureFitParams verifier_fit{};
     int num_threads = 0;  ///< 0 = all cores; never changes the model
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
