@@ -361,7 +361,7 @@ int Run(const Options& o) {
     if (!o.dump_fits.empty()) {
         dump.open(o.dump_fits);
         if (!dump) throw IoError("cannot write " + o.dump_fits);
-        dump << "room\tclass\tright\tfate\tconfidence";
+        dump << "room\tclass\tright\tfate\tconfidence\tx\ty\tcad";
         for (const auto& n : FurnitureVerifierFeatureNames(model)) dump << '\t' << n;
         dump << '\n';
     }
@@ -410,7 +410,9 @@ int Run(const Options& o) {
                                          f.width / 2);
                         }
                         dump << r << '\t' << d.category << '\t' << (right ? 1 : 0) << '\t'
-                             << (d.accepted ? "accepted" : d.rejection) << '\t' << d.confidence;
+                             << (d.accepted ? "accepted" : d.rejection) << '\t' << d.confidence
+                             << '\t' << d.centre.x() << '\t' << d.centre.y() << '\t'
+                             << model.cads()[static_cast<std::size_t>(d.fit.cad)].id;
                         for (float x : FurnitureVerifierFeatures(d, model)) dump << '\t' << x;
                         dump << '\n';
                     }
