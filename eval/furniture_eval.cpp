@@ -563,13 +563,13 @@ int Run(const Options& o) {
                     {"best_f1", f1},
                     {"best_f1_threshold", var.learned ? cut : cut * model.classes()[c].threshold}};
                 if (!mc.yaw_errors.empty()) {
-                    std::size_t turned =
-                        0;  // fitted the wrong way round (more than 90 degrees off)
-                    for (float e : mc.yaw_errors) turned += e > 90.0f ? 1 : 0;
+                    // Fits the wrong way round: more than 90 degrees off.
+                    std::size_t over = 0;
+                    for (float e : mc.yaw_errors) over += e > 90.0f ? 1 : 0;
                     auto& jc = entry["classes"][model.classes()[c].name];
                     jc["yaw_median_deg"] = eval::Percentile(mc.yaw_errors, 0.5f);
                     jc["yaw_p90_deg"] = eval::Percentile(mc.yaw_errors, 0.9f);
-                    jc["yaw_over_90"] = turned;
+                    jc["yaw_over_90"] = over;
                     jc["yaw_fits"] = mc.yaw_errors.size();
                 }
             }
