@@ -211,11 +211,11 @@ float FurnitureFreeSpace::FreeShare(const std::vector<Eigen::Vector3f>& points) 
     return static_cast<float>(free) / static_cast<float>(points.size());
 }
 
-bool FurnitureWall::Behind(const Eigen::Vector2f& x, float margin) const {
+float FurnitureWall::Distance(const Eigen::Vector2f& x) const {
     const Eigen::Vector2f q = x - point;
-    const Eigen::Vector2f dir(-normal.y(), normal.x());
-    const float t = q.dot(dir);
-    return q.dot(normal) < -margin && t >= lo - 0.3f && t <= hi + 0.3f;
+    const float t = q.dot(Eigen::Vector2f(-normal.y(), normal.x()));
+    return t >= lo - 0.3f && t <= hi + 0.3f ? q.dot(normal)
+                                            : std::numeric_limits<float>::quiet_NaN();
 }
 
 bool BehindWalls(const std::vector<const FurnitureWall*>& walls, const Eigen::Vector2f& x,
@@ -432,6 +432,7 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         const float n_scan = static_cast<float>(s.size());
         auto score = [&](const Eigen::Vector3f& scale, const Eigen::Vector3f& anchor) {
             const Eigen::Isometry3f T = placed(scale, anchor);
+            // Three times the search's model checks: stretches differ by a few per cent.
             return static_cast<float>(coverage(T, scale)) / n_scan -
                    ModelPenalty(target, T * Eigen::Scaling(scale), p.max_search_checks * 3, space,
                                 p.wall_margin)
@@ -493,11 +494,9 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         const Eigen::Vector2f front = fit.T_world_model.linear().col(0).head<2>().normalized();
         bool facing = false;
         for (const auto* w : space.walls) {
-            const Eigen::Vector2f q = c - w->point;
-            const Eigen::Vector2f along(-w->normal.y(), w->normal.x());
-            const float dist = q.dot(w->normal), t = q.dot(along);
-            facing = facing || (dist > 0.0f && dist < depth + p.wall_gap && t >= w->lo - 0.3f &&
-                                t <= w->hi + 0.3f && front.dot(w->normal) < -0.7f);
+            const float dist = w->Distance(c);  // NaN beside the wall: no comparison holds
+            facing = facing ||
+                     (dist > 0.0f && dist < depth + p.wall_gap && front.dot(w->normal) < -0.7f);
         }
         if (facing) {
             auto score = [&](const Eigen::Isometry3f& T) {

@@ -41,8 +41,11 @@ struct FurnitureWall {
     Eigen::Vector2f point = Eigen::Vector2f::Zero();    ///< on the wall [m]
     Eigen::Vector2f normal = Eigen::Vector2f::UnitX();  ///< towards the room (the sensor)
     float lo = 0.0f, hi = 0.0f;  ///< extent along the wall (normal turned by +90 degrees) [m]
+    /// Signed distance of `x` from the wall, positive on the room's side, when `x` lies within
+    /// the wall's extent (+-0.3 m); NaN beside it.
+    float Distance(const Eigen::Vector2f& x) const;
     /// True when `x` lies behind the wall by more than `margin`, within its extent (+-0.3 m).
-    bool Behind(const Eigen::Vector2f& x, float margin) const;
+    bool Behind(const Eigen::Vector2f& x, float margin) const { return Distance(x) < -margin; }
 };
 
 /// True when `x` lies behind any of `walls` by more than `margin`.

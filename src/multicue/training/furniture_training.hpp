@@ -122,13 +122,13 @@ std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel&
                                                            const FurnitureTrainingOptions& options);
 
 /// Rows of the verifier (FurnitureVerifierFeatureNames; labels "right" and "wrong"): every fit
-/// of `model` to a hypothesis above its class threshold (default detection parameters without
-/// the verifier; fits the coverage, free-space and wall tests reject too, and those an
-/// overlapping fit displaces) in options.verifier_rooms rooms of fresh procedural pieces
-/// (offices, seminar rooms and kitchens in turn, seeds from verifier_seed), each scanned from 3
-/// head positions, with the scans merged and each scan alone. A fit is right when a true piece
-/// of its class stands within half its width of the fitted centre. One progress step per room;
-/// stops early, with the rows so far, when interrupted.
+/// of `model` to a hypothesis above its class threshold (default detection parameters with
+/// options.verifier_fit, without the verifier; fits the coverage, free-space and wall tests reject
+/// too, and those an overlapping fit displaces) in options.verifier_rooms rooms of fresh procedural
+/// pieces (offices, seminar rooms and kitchens in turn, seeds from verifier_seed), each scanned
+/// from 3 head positions, with the scans merged and each scan alone. A fit is right when a true
+/// piece of its class stands within half its width of the fitted centre. One progress step per
+/// room; stops early, with the rows so far, when interrupted.
 ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
                                          const FurnitureTrainingOptions& options,
                                          Progress* progress = nullptr);
