@@ -78,6 +78,8 @@ struct Options {
     std::string fronts = "grow";
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
+    float axis_snap_deg = -1.0f;            ///< < 0: the library's MotionParams default
+    float max_hinge_gap = -1.0f;            ///< < 0: the library's MotionParams default
     std::string load_fixtures;
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
@@ -142,6 +144,10 @@ struct Stats {
     }
     double Min() const { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); }
     double Max() const { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+    std::size_t AtMost(double t) const {
+        return static_cast<std::size_t>(
+            std::count_if(v.begin(), v.end(), [t](double x) { return x <= t; }));
+    }
     nlohmann::json Json() const {
         return {{"n", v.size()},
                 {"mean", Mean()},
@@ -601,6 +607,8 @@ class Evaluator {
             mapping::MotionParams mp = mapping::MotionParamsFor(
                 f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect);
             if (o_.min_slide_coverage >= 0.0f) mp.min_slide_coverage = o_.min_slide_coverage;
+            if (o_.axis_snap_deg >= 0.0f) mp.axis_snap_deg = o_.axis_snap_deg;
+            if (o_.max_hinge_gap >= 0.0f) mp.max_hinge_gap = o_.max_hinge_gap;
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
             const bool bare = pf.fixtures.empty();
             ++s.open_total;
@@ -812,14 +820,16 @@ class Evaluator {
             jacc, s.joint_correct, s.joint_total, s.joint_none);
         std::printf(
             "hinge axis: angle mean %.2f median %.2f max %.2f deg; position mean %.3f "
-            "median %.3f max %.3f m; opening sign right %zu of %zu\n",
+            "median %.3f max %.3f m (%zu within 3 cm); opening sign right %zu of %zu\n",
             s.axis_angle.Mean(), s.axis_angle.Median(), s.axis_angle.Max(), s.axis_position.Mean(),
-            s.axis_position.Median(), s.axis_position.Max(), s.sign_correct, s.axis_angle.v.size());
+            s.axis_position.Median(), s.axis_position.Max(), s.axis_position.AtMost(0.03),
+            s.sign_correct, s.axis_angle.v.size());
         j["joint_type_accuracy"] = jacc;
         j["joint_total"] = s.joint_total;
         j["joint_none"] = s.joint_none;
         j["hinge_angle_deg"] = s.axis_angle.Json();
         j["hinge_position_m"] = s.axis_position.Json();
+        j["hinge_position_within_3cm"] = s.axis_position.AtMost(0.03);
         j["hinge_sign_correct"] = s.sign_correct;
         std::size_t correct = 0, total = 0;
         const auto& names = mapping::ContainerTypeNames();
@@ -844,9 +854,11 @@ class Evaluator {
         std::printf(
             "opened pairs: joint type accuracy %.3f (%zu of %zu, %zu without motion; %zu more not "
             "scored: the opened front left the view); axis angle mean %.2f median %.2f max %.2f "
-            "deg; hinge position mean %.3f m\n",
+            "deg; hinge position median %.3f max %.3f m (%zu of %zu within 3 cm)\n",
             oacc, s.open_correct, s.open_total, s.open_missed, s.open_out_of_view,
-            s.open_angle.Mean(), s.open_angle.Median(), s.open_angle.Max(), s.open_position.Mean());
+            s.open_angle.Mean(), s.open_angle.Median(), s.open_angle.Max(),
+            s.open_position.Median(), s.open_position.Max(), s.open_position.AtMost(0.03),
+            s.open_position.v.size());
         std::printf("  of those, fronts without a fixture: %zu of %zu right, %zu without motion\n",
                     s.open_correct_bare, s.open_total_bare, s.open_missed_bare);
         std::printf("  opened pairs (true -> estimated):");
@@ -862,7 +874,8 @@ class Evaluator {
                          {"pairs", s.open_total_bare},
                          {"no_motion", s.open_missed_bare}}},
                        {"axis_angle_deg", s.open_angle.Json()},
-                       {"hinge_position_m", s.open_position.Json()}};
+                       {"hinge_position_m", s.open_position.Json()},
+                       {"hinge_position_within_3cm", s.open_position.AtMost(0.03)}};
         std::printf("time per frame: median %.0f ms, worst %.0f ms (shared machine)\n",
                     s.time_ms.Median(), s.time_ms.Max());
         j["time_ms"] = s.time_ms.Json();
@@ -936,6 +949,14 @@ int main(int argc, char** argv) {
                    "opened pairs: share of the slid front the moved points must cover for a "
                    "drawer (0: the planes' support decides; default: the library's)")
         ->check(CLI::Range(-1.0, 1.0));
+    app.add_option("--axis-snap", o.axis_snap_deg,
+                   "opened pairs: a hinge axis this close to the front's vertical or horizontal "
+                   "is that direction [deg] (0: off; default: the library's)")
+        ->check(CLI::Range(-1.0, 44.0));
+    app.add_option("--max-hinge-gap", o.max_hinge_gap,
+                   "opened pairs: a hinge no moved point comes this close to is replaced by the "
+                   "best edge's [m] (0: off; default: the library's)")
+        ->check(CLI::Range(-1.0, 10.0));
     app.add_option("--front-param", o.front_params,
                    "NAME=VALUE of the region growing's parameters (repeatable)");
     app.add_option("--load-fixtures", o.load_fixtures,

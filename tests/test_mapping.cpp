@@ -349,6 +349,68 @@ TEST(Articulation, AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer) {
               JointType::kPrismatic);
 }
 
+TEST(Articulation, AHingeAxisNearTheFrontsVerticalIsVertical) {
+    // The door of DoorScan opened by 50 deg about an axis leaning 4 deg from the vertical (in
+    // the face plane): the furniture is axis-aligned, so the lean is taken for the plane fit's.
+    const Front f = DoorFront();
+    const PointCloud closed = DoorScan(0.0f, 0.0f);
+    PointCloud opened;
+    PointCloud door;
+    std::mt19937 rng(5);
+    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    for (const auto& x : closed.points) {
+        if (x.x() < 0.595f || x.x() > 1.105f) opened.points.push_back(x);
+    }
+    const Eigen::Vector3f hinge(0.6f, 2.4f, 0.475f);
+    const Eigen::Vector3f lean =
+        Eigen::AngleAxisf(4.0f * kDeg, Eigen::Vector3f::UnitY()) * Eigen::Vector3f::UnitZ();
+    const Eigen::Matrix3f R = Eigen::AngleAxisf(50.0f * kDeg, -lean).toRotationMatrix();
+    for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    ASSERT_EQ(m.articulation.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(m.articulation.axis.z()), 0.99999f);
+    EXPECT_NEAR(m.opening / kDeg, 50.0f, 3.0f);
+    MotionParams as_fitted;
+    as_fitted.axis_snap_deg = 0.0f;
+    const MotionResult n = ArticulationFromMotion(closed, opened, f, as_fitted);
+    ASSERT_EQ(n.articulation.type, JointType::kRevolute);
+    EXPECT_NEAR(std::acos(std::abs(n.articulation.axis.z())) / kDeg, 4.0f, 1.0f);
+    as_fitted.axis_snap_deg = 45.0f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, as_fitted), InvalidArgument);
+}
+
+TEST(Articulation, AHingeFarFromTheMovedPlaneIsTakenAtTheFrontsEdge) {
+    // In front of the door a panel 0.25 m out, tilted by 30 deg: its plane meets the face 0.5 m
+    // from it, left of the door, where nothing hangs. The hinge is taken at a vertical edge of
+    // the door instead.
+    const Front f = DoorFront();
+    const PointCloud closed = DoorScan(0.0f, 0.0f);
+    PointCloud opened = closed;
+    const Eigen::Vector3f along(std::cos(30.0f * kDeg), -std::sin(30.0f * kDeg), 0.0f);
+    for (float s = 0.0f; s <= 0.4f; s += 0.01f) {
+        for (float z = 0.15f; z <= 0.8f; z += 0.01f) {
+            opened.points.push_back(Eigen::Vector3f(0.65f, 2.15f, z) + along * s);
+        }
+    }
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    ASSERT_EQ(m.articulation.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(m.articulation.axis.z()), 0.999f);
+    const float x = m.articulation.origin.x();
+    EXPECT_LT(std::min(std::abs(x - 0.6f), std::abs(x - 1.1f)), 0.02f) << x;
+    EXPECT_NEAR(m.articulation.origin.y(), 2.4f, 0.02f);
+    // Believing every plane: the hinge lies where the planes meet, 0.4 m left of the door.
+    MotionParams believe;
+    believe.max_hinge_gap = 0.0f;
+    const MotionResult n = ArticulationFromMotion(closed, opened, f, believe);
+    ASSERT_EQ(n.articulation.type, JointType::kRevolute);
+    EXPECT_NEAR(n.articulation.origin.x(), 0.65f - 0.25f / std::tan(30.0f * kDeg), 0.03f);
+    believe.max_hinge_gap = -1.0f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, believe), InvalidArgument);
+}
+
 MapKitchenResult MapSynthetic(int threads = 0) {
     test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
     MapKitchenParams p = KitchenParamsFor(KitchenSensor::kKinect);

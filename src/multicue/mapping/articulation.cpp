@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -62,11 +63,13 @@ void MotionParams::Validate() const {
             change_distance, min_offset, reach, plane_threshold, parallel_deg, min_points));
     }
     if (!(min_slide_coverage >= 0.0f && min_slide_coverage <= 1.0f) ||
-        !(coverage_cell > 0.0f && coverage_cell <= 0.5f)) {
-        throw InvalidArgument(
-            fmt::format("motion: need min_slide_coverage in [0, 1] and coverage_cell in (0, 0.5] m "
-                        "(got {}, {})",
-                        min_slide_coverage, coverage_cell));
+        !(coverage_cell > 0.0f && coverage_cell <= 0.5f) ||
+        !(axis_snap_deg >= 0.0f && axis_snap_deg < 45.0f) ||
+        !(max_hinge_gap >= 0.0f && max_hinge_gap <= 10.0f)) {
+        throw InvalidArgument(fmt::format(
+            "motion: need min_slide_coverage in [0, 1], coverage_cell in (0, 0.5] m, "
+            "axis_snap_deg in [0, 45) and max_hinge_gap in [0, 10] m (got {}, {}, {}, {})",
+            min_slide_coverage, coverage_cell, axis_snap_deg, max_hinge_gap));
     }
 }
 
@@ -247,6 +250,14 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     if (std::abs(nb.dot(f.normal)) < cos_par) {
         const Eigen::Vector3f centroid = centroid_of(fit.inliers);
         Eigen::Vector3f dir = f.normal.cross(nb).normalized();
+        // The line lies in the face plane; near the front's vertical or horizontal it is that.
+        const float cos_snap = std::cos(p.axis_snap_deg * kArticulationDegToRad);
+        for (const Eigen::Vector3f& a : {f.v_axis, f.u_axis}) {
+            if (p.axis_snap_deg > 0.0f && std::abs(dir.dot(a)) >= cos_snap) {
+                dir = dir.dot(a) >= 0.0f ? a : Eigen::Vector3f(-a);
+                break;
+            }
+        }
         // A point on both planes: solve [n_a; n_b; dir] x = [-d_a; -d_b; dir . c].
         Eigen::Matrix3f M;
         M.row(0) = f.normal.transpose();
@@ -272,10 +283,66 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     }
     if (slide.type == JointType::kUnknown && hinge.type == JointType::kUnknown) return out;
     out.found = true;
-    if (hinge.type != JointType::kUnknown && hinge_on.points >= slide_on.points) {
+    // The turn about the edge of the rectangle (and by the angle) under which the moved points
+    // cover most of it; false when none covers any of it.
+    auto edge_turn = [&](const Eigen::Vector3f* along) {
+        const Eigen::Vector3f left = f.center + f.u_axis * (f.min.x() - f.center.dot(f.u_axis));
+        const Eigen::Vector3f right = f.center + f.u_axis * (f.max.x() - f.center.dot(f.u_axis));
+        const Eigen::Vector3f bottom = f.center + f.v_axis * (f.min.y() - f.center.dot(f.v_axis));
+        const Eigen::Vector3f top = f.center + f.v_axis * (f.max.y() - f.center.dot(f.v_axis));
+        const std::pair<Eigen::Vector3f, Eigen::Vector3f> edges[4] = {
+            {left, f.u_axis}, {right, -f.u_axis}, {bottom, f.v_axis}, {top, -f.v_axis}};
+        ArticulationParams on_surface;
+        on_surface.hinge_depth = 0.0f;
+        float best = -1.0f, best_angle = 0.0f;
+        Articulation best_hinge;
+        for (const auto& [point, into] : edges) {
+            if (along && std::abs(into.dot(*along)) > 0.5f) continue;
+            const Articulation a = Hinge(f, point, into, on_surface);
+            for (float deg = 10.0f; deg <= 120.0f; deg += 2.5f) {
+                const float c = on_front(turn(a.origin, a.axis, deg * kArticulationDegToRad)).cells;
+                if (c > best) {
+                    best = c;
+                    best_hinge = a;
+                    best_angle = deg * kArticulationDegToRad;
+                }
+            }
+        }
+        if (best <= 0.0f) return false;
+        best_hinge.source = "motion";
+        best_hinge.upper = best_angle;
+        out.articulation = best_hinge;
+        out.opening = best_angle;
+        out.moved.clear();
+        const Eigen::Isometry3f inv =
+            turn(best_hinge.origin, best_hinge.axis, best_angle).inverse();
+        for (const Index i : moved) {
+            if (std::abs(f.normal.dot(inv * opened.points[i]) + plane_d) <= p.plane_threshold)
+                out.moved.push_back(i);
+        }
+        return true;
+    };
+    // The turn about the tilted plane's axis, unless that axis lies farther outside the
+    // rectangle than `hinge_margin` (a plane of the door's inside, its edge or a shelf meeting
+    // the face plane far from the front): then the best edge's turn, when there is one.
+    // The turn about the tilted plane's axis, unless no moved point on that plane comes within
+    // `max_hinge_gap` of the axis (a door hangs on its hinge; such a plane is the door's inside,
+    // its edge or a shelf meeting the face plane far from the front): then the turn about the
+    // rectangle's edge along that axis under which the moved points cover most, when there is
+    // one.
+    auto tilted_turn = [&]() {
+        float gap = std::numeric_limits<float>::max();
+        for (const Index i : fit.inliers) {
+            const Eigen::Vector3f d = opened.points[i] - hinge.origin;
+            gap = std::min(gap, (d - d.dot(hinge.axis) * hinge.axis).norm());
+        }
+        if (p.max_hinge_gap > 0.0f && gap > p.max_hinge_gap && edge_turn(&hinge.axis)) return;
         out.articulation = hinge;
         out.opening = angle;
         out.moved = fit.inliers;
+    };
+    if (hinge.type != JointType::kUnknown && hinge_on.points >= slide_on.points) {
+        tilted_turn();
     } else {
         out.articulation = slide;
         out.opening = travel;
@@ -295,43 +362,10 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         return out;
     }
     if (hinge.type != JointType::kUnknown) {
-        out.articulation = hinge;
-        out.opening = angle;
-        out.moved = fit.inliers;
+        tilted_turn();
         return out;
     }
-    const Eigen::Vector3f left = f.center + f.u_axis * (f.min.x() - f.center.dot(f.u_axis));
-    const Eigen::Vector3f right = f.center + f.u_axis * (f.max.x() - f.center.dot(f.u_axis));
-    const Eigen::Vector3f bottom = f.center + f.v_axis * (f.min.y() - f.center.dot(f.v_axis));
-    const Eigen::Vector3f top = f.center + f.v_axis * (f.max.y() - f.center.dot(f.v_axis));
-    const std::pair<Eigen::Vector3f, Eigen::Vector3f> edges[4] = {
-        {left, f.u_axis}, {right, -f.u_axis}, {bottom, f.v_axis}, {top, -f.v_axis}};
-    ArticulationParams on_surface;
-    on_surface.hinge_depth = 0.0f;
-    float best = -1.0f, best_angle = 0.0f;
-    Articulation best_hinge;
-    for (const auto& [point, into] : edges) {
-        const Articulation a = Hinge(f, point, into, on_surface);
-        for (float deg = 10.0f; deg <= 120.0f; deg += 2.5f) {
-            const float c = on_front(turn(a.origin, a.axis, deg * kArticulationDegToRad)).cells;
-            if (c > best) {
-                best = c;
-                best_hinge = a;
-                best_angle = deg * kArticulationDegToRad;
-            }
-        }
-    }
-    if (best <= 0.0f) return out;
-    best_hinge.source = "motion";
-    best_hinge.upper = best_angle;
-    out.articulation = best_hinge;
-    out.opening = best_angle;
-    out.moved.clear();
-    const Eigen::Isometry3f inv = turn(best_hinge.origin, best_hinge.axis, best_angle).inverse();
-    for (const Index i : moved) {
-        if (std::abs(f.normal.dot(inv * opened.points[i]) + plane_d) <= p.plane_threshold)
-            out.moved.push_back(i);
-    }
+    edge_turn(nullptr);
     return out;
 }
 
