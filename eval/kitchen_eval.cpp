@@ -78,8 +78,9 @@ struct Options {
     std::string fronts = "grow";
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
-    float axis_snap_deg = -1.0f;            ///< < 0: the library's MotionParams default
-    float max_hinge_gap = -1.0f;            ///< < 0: the library's MotionParams default
+    bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
+    float axis_snap_deg = -1.0f;  ///< < 0: the library's MotionParams default
+    float max_hinge_gap = -1.0f;  ///< < 0: the library's MotionParams default
     std::string load_fixtures;
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
@@ -283,6 +284,7 @@ class Evaluator {
         params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
                                                         : mapping::FrontSegmentation::kOutline;
         for (const auto& a : o_.front_params) SetFrontParam(params, a);
+        params.articulation.wall_drawers = o_.wall_drawers;
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -523,6 +525,14 @@ class Evaluator {
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
             s.joint_correct += correct;
+            if (o_.verbose) {
+                std::fprintf(stderr, "joint %s %s %s: %s -> %s (front IoU %.2f, %.2f x %.2f m)\n",
+                             f.laser ? "laser" : "kinect",
+                             k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
+                             kj.name.c_str(), revolute ? "revolute" : "prismatic",
+                             mapping::JointTypeName(pt), iou, pf.max.x() - pf.min.x(),
+                             pf.max.y() - pf.min.y());
+            }
             if (revolute && correct) {
                 const Axis& gt = axes.at(kj.name);
                 const Axis pred{pf.articulation.origin, pf.articulation.axis};
@@ -949,6 +959,9 @@ int main(int argc, char** argv) {
                    "opened pairs: share of the slid front the moved points must cover for a "
                    "drawer (0: the planes' support decides; default: the library's)")
         ->check(CLI::Range(-1.0, 1.0));
+    app.add_flag("--wall-drawers", o.wall_drawers,
+                 "one scan: wall cupboards' fronts with a horizontal handle away from their "
+                 "bottom and sides are drawers (as lower fronts), not doors");
     app.add_option("--axis-snap", o.axis_snap_deg,
                    "opened pairs: a hinge axis this close to the front's vertical or horizontal "
                    "is that direction [deg] (0: off; default: the library's)")

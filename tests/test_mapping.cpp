@@ -222,6 +222,30 @@ TEST(Articulation, HingeSideFromTheHandle) {
                  InvalidArgument);
 }
 
+TEST(Articulation, AWallCupboardsFrontIsNoDrawer) {
+    // A short front (z 0.15 .. 0.5) with a horizontal handle in its middle near the top: low
+    // down a drawer; 1.45 m above the floor (a wall cupboard) a flap hinged at its bottom edge.
+    Front f = DoorFront();
+    f.max.y() = 0.5f;
+    f.center.z() = 0.325f;
+    const Fixture h = HandleAt({0.85f, 2.365f, 0.45f}, false);
+    EXPECT_EQ(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f).type, JointType::kPrismatic);
+    const Articulation a = ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f);
+    ASSERT_EQ(a.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(a.axis.x()), 0.999f);
+    EXPECT_NEAR(a.origin.z(), 0.15f, 0.01f);
+    EXPECT_LT(Opened(a, {0.85f, 2.4f, 0.5f}, 0.1f).y(), 2.39f);
+    // The handle near the bottom: hinged at the top edge.
+    const Articulation b =
+        ArticulationFromFixtures(f, {HandleAt({0.85f, 2.365f, 0.2f}, false)}, RoomFrame{}, -1.3f);
+    ASSERT_EQ(b.type, JointType::kRevolute);
+    EXPECT_NEAR(b.origin.z(), 0.5f, 0.01f);
+    ArticulationParams drawers;
+    drawers.wall_drawers = true;
+    EXPECT_EQ(ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f, drawers).type,
+              JointType::kPrismatic);
+}
+
 /// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
 /// pulled out by `pull`, with a fixed frame around it.
 PointCloud DoorScan(float angle, float pull) {

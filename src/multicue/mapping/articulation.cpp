@@ -112,6 +112,12 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             // A flap hinged at the top edge (wall cupboards).
             return Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
         }
+        if (!p.wall_drawers && f.min.y() - base > p.flap_min_bottom) {
+            // No drawers hang on the wall: a flap, hinged at the horizontal edge farther from
+            // the fixture.
+            return rv >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p)
+                              : Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
+        }
         Articulation a;
         a.type = JointType::kPrismatic;
         a.origin = f.center;

@@ -4,9 +4,10 @@
 /// From one scan, from the fixture: a horizontal handle on a low front is a drawer (prismatic,
 /// out of the face); a horizontal handle near the top of a tall front is a door hinged at its
 /// bottom edge (an oven, a dishwasher), near the bottom of a front above the worktop a door hinged
-/// at its top edge; a vertical handle (or a knob) near one side edge is a door hinged at the
-/// opposite edge. The hinge axis lies in the face plane along that edge, signed so that a
-/// positive angle swings the front out of the furniture.
+/// at its top edge, and on any other front above the worktop (wall cupboards hold no drawers) a
+/// door hinged at the horizontal edge farther from it; a vertical handle (or a knob) near one side
+/// edge is a door hinged at the opposite edge. The hinge axis lies in the face plane along that
+/// edge, signed so that a positive angle swings the front out of the furniture.
 ///
 /// From two scans of the same view, before and after the robot opened a front: the points in
 /// front of the closed front that were not there before are the moved front. The best plane
@@ -31,10 +32,14 @@ namespace multicue::mapping {
 
 struct ArticulationParams {
     float horizontal_handle_deg = 30.0f;  ///< a handle this close to horizontal is horizontal
-    float door_min_height = 0.45f;   ///< a front with a horizontal handle this tall is a door [m]
-    float top_share = 0.35f;         ///< "near the top": within this share of the height [-]
-    float flap_min_bottom = 1.2f;    ///< fronts above this height with a handle at the bottom
-                                     ///< are hinged at the top [m above the floor]
+    float door_min_height = 0.45f;  ///< a front with a horizontal handle this tall is a door [m]
+    float top_share = 0.35f;        ///< "near the top": within this share of the height [-]
+    /// Fronts whose bottom lies above this height are wall cupboards': with a horizontal handle
+    /// at the bottom they are hinged at the top, otherwise at a vertical edge [m above the floor]
+    float flap_min_bottom = 1.2f;
+    /// Wall cupboards' fronts may be drawers (a horizontal handle away from their bottom and
+    /// sides); off, they are doors
+    bool wall_drawers = false;
     float revolute_upper = 1.5708f;  ///< upper limit given to revolute fronts from one scan [rad]
     float prismatic_upper = 0.4f;    ///< upper limit given to drawers from one scan [m]
     /// A hinge lies this far behind the front's surface (the door's thickness to its hinge
