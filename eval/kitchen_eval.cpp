@@ -539,6 +539,21 @@ class Evaluator {
                 s.axis_angle.Add(LineAngleDeg(pred.direction, gt.direction));
                 s.axis_position.Add(LineDistanceAt(pred, gt, pf.center));
                 s.sign_correct += pred.direction.dot(gt.direction) > 0;
+                if (o_.verbose) {
+                    // Where the true hinge lies from the estimated one: into the front (from its
+                    // edge towards its centre) and behind its surface.
+                    const Eigen::Vector3f d = pred.direction.normalized();
+                    const Eigen::Vector3f p = pred.point + d * d.dot(pf.center - pred.point);
+                    const Eigen::Vector3f g = gt.direction.normalized();
+                    const Eigen::Vector3f q = gt.point + g * g.dot(p - gt.point);
+                    Eigen::Vector3f into = pf.center - p;
+                    into -= d * d.dot(into) + pf.normal * pf.normal.dot(into);
+                    std::fprintf(
+                        stderr, "hinge %s %s: true hinge %.3f m into the front, %.3f m behind it\n",
+                        f.laser ? "laser" : "kinect",
+                        k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
+                        (q - p).dot(into.normalized()), -(q - p).dot(pf.normal));
+                }
             }
         }
         // Container types: the piece holding most of a model's matched fronts.
