@@ -79,8 +79,9 @@ struct Options {
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
-    float axis_snap_deg = -1.0f;  ///< < 0: the library's MotionParams default
-    float max_hinge_gap = -1.0f;  ///< < 0: the library's MotionParams default
+    float drawer_max_height = -1.0f;  ///< <= 0: the library's ArticulationParams default
+    float axis_snap_deg = -1.0f;      ///< < 0: the library's MotionParams default
+    float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
     std::string load_fixtures;
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
@@ -285,6 +286,8 @@ class Evaluator {
                                                         : mapping::FrontSegmentation::kOutline;
         for (const auto& a : o_.front_params) SetFrontParam(params, a);
         params.articulation.wall_drawers = o_.wall_drawers;
+        if (o_.drawer_max_height > 0.0f)
+            params.articulation.drawer_max_height = o_.drawer_max_height;
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -974,6 +977,10 @@ int main(int argc, char** argv) {
                    "opened pairs: share of the slid front the moved points must cover for a "
                    "drawer (0: the planes' support decides; default: the library's)")
         ->check(CLI::Range(-1.0, 1.0));
+    app.add_option("--drawer-max-height", o.drawer_max_height,
+                   "one scan: a front taller than this with a horizontal handle is a door [m] "
+                   "(default: the library's)")
+        ->check(CLI::Range(-1.0, 100.0));
     app.add_flag("--wall-drawers", o.wall_drawers,
                  "one scan: wall cupboards' fronts with a horizontal handle away from their "
                  "bottom and sides are drawers (as lower fronts), not doors");

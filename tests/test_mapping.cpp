@@ -246,6 +246,23 @@ TEST(Articulation, AWallCupboardsFrontIsNoDrawer) {
               JointType::kPrismatic);
 }
 
+TEST(Articulation, AFrontTallerThanAnyDrawerIsADoor) {
+    // DoorFront is 0.65 m tall; a horizontal handle in its middle, off to the right.
+    const Front f = DoorFront();
+    const Fixture h = HandleAt({0.95f, 2.365f, 0.5f}, false);
+    const Articulation a = ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(a.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(a.axis.z()), 0.999f);
+    EXPECT_NEAR(a.origin.x(), 0.6f, 0.01f);
+    EXPECT_LT(Opened(a, {1.1f, 2.4f, 0.5f}, 0.1f).y(), 2.39f);
+    ArticulationParams tall;
+    tall.drawer_max_height = 0.7f;
+    EXPECT_EQ(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, tall).type,
+              JointType::kPrismatic);
+    tall.drawer_max_height = 0.0f;
+    EXPECT_THROW(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, tall), InvalidArgument);
+}
+
 /// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
 /// pulled out by `pull`, with a fixed frame around it.
 PointCloud DoorScan(float angle, float pull) {

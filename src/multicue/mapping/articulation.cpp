@@ -45,11 +45,11 @@ void ArticulationParams::Validate() const {
             fmt::format("articulation: hinge_depth must be in [0, 0.5) m, got {}", hinge_depth));
     }
     if (!(door_min_height > 0.0f) || !(top_share > 0.0f && top_share < 1.0f) ||
-        !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f)) {
+        !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f) || !(drawer_max_height > 0.0f)) {
         throw InvalidArgument(fmt::format(
-            "articulation: need door_min_height > 0, top_share in (0, 1), limits > 0 (got {}, {}, "
-            "{}, {})",
-            door_min_height, top_share, revolute_upper, prismatic_upper));
+            "articulation: need door_min_height > 0, top_share in (0, 1), limits > 0 and "
+            "drawer_max_height > 0 (got {}, {}, {}, {}, {})",
+            door_min_height, top_share, revolute_upper, prismatic_upper, drawer_max_height));
     }
 }
 
@@ -111,6 +111,12 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             height >= 0.6f * p.door_min_height) {
             // A flap hinged at the top edge (wall cupboards).
             return Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
+        }
+        if (height > p.drawer_max_height) {
+            // No drawer is that tall (a fridge's door with a horizontal handle): a door, hinged
+            // at the vertical edge farther from the fixture.
+            return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
+                              : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
         }
         if (!p.wall_drawers && f.min.y() - base > p.flap_min_bottom) {
             // No drawers hang on the wall: a flap, hinged at the horizontal edge farther from

@@ -37,6 +37,9 @@ struct ArticulationParams {
     /// Fronts whose bottom lies above this height are wall cupboards': with a horizontal handle
     /// at the bottom they are hinged at the top, otherwise at a vertical edge [m above the floor]
     float flap_min_bottom = 1.2f;
+    /// No drawer front is taller: a taller front with a horizontal handle (not near its top) is
+    /// a door hinged at the vertical edge farther from the handle [m]
+    float drawer_max_height = 0.6f;
     /// Wall cupboards' fronts may be drawers (a horizontal handle away from their bottom and
     /// sides); off, they are doors
     bool wall_drawers = false;
