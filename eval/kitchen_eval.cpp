@@ -79,6 +79,7 @@ struct Options {
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
+    float flap_min_width = -1.0f;     ///< < 0: the library's ArticulationParams default
     float drawer_max_height = -1.0f;  ///< <= 0: the library's ArticulationParams default
     float axis_snap_deg = -1.0f;      ///< < 0: the library's MotionParams default
     float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
@@ -288,6 +289,7 @@ class Evaluator {
         params.articulation.wall_drawers = o_.wall_drawers;
         if (o_.drawer_max_height > 0.0f)
             params.articulation.drawer_max_height = o_.drawer_max_height;
+        if (o_.flap_min_width >= 0.0f) params.articulation.flap_min_width = o_.flap_min_width;
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -552,10 +554,13 @@ class Evaluator {
                     Eigen::Vector3f into = pf.center - p;
                     into -= d * d.dot(into) + pf.normal * pf.normal.dot(into);
                     std::fprintf(
-                        stderr, "hinge %s %s: true hinge %.3f m into the front, %.3f m behind it\n",
+                        stderr,
+                        "hinge %s %s: true hinge %.3f m into the front, %.3f m behind it, %.0f "
+                        "deg\n",
                         f.laser ? "laser" : "kinect",
                         k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
-                        (q - p).dot(into.normalized()), -(q - p).dot(pf.normal));
+                        (q - p).dot(into.normalized()), -(q - p).dot(pf.normal),
+                        LineAngleDeg(pred.direction, gt.direction));
                 }
             }
         }
@@ -977,6 +982,10 @@ int main(int argc, char** argv) {
                    "opened pairs: share of the slid front the moved points must cover for a "
                    "drawer (0: the planes' support decides; default: the library's)")
         ->check(CLI::Range(-1.0, 1.0));
+    app.add_option("--flap-min-width", o.flap_min_width,
+                   "one scan: a front narrower than this is never hinged at its bottom edge [m] "
+                   "(0: any; default: the library's)")
+        ->check(CLI::Range(-1.0, 100.0));
     app.add_option("--drawer-max-height", o.drawer_max_height,
                    "one scan: a front taller than this with a horizontal handle is a door [m] "
                    "(default: the library's)")

@@ -263,6 +263,27 @@ TEST(Articulation, AFrontTallerThanAnyDrawerIsADoor) {
     EXPECT_THROW(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, tall), InvalidArgument);
 }
 
+TEST(Articulation, ANarrowFrontWithAHandleAtItsTopIsHingedAtItsSide) {
+    // DoorFront cut to 0.3 m wide (x 0.6 .. 0.9), 0.65 m tall; a horizontal handle near its
+    // top, right of its middle: narrower than any oven or dishwasher, hinged at the left edge.
+    Front f = DoorFront();
+    f.max.x() = f.min.x() + 0.3f;
+    f.center.x() = 0.75f;
+    const Fixture h = HandleAt({0.8f, 2.365f, 0.75f}, false);
+    const Articulation a = ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(a.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(a.axis.z()), 0.999f);
+    EXPECT_NEAR(a.origin.x(), 0.6f, 0.01f);
+    ArticulationParams any;
+    any.flap_min_width = 0.0f;
+    const Articulation b = ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, any);
+    ASSERT_EQ(b.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(b.axis.x()), 0.999f);
+    EXPECT_NEAR(b.origin.z(), 0.15f, 0.01f);
+    any.flap_min_width = -0.1f;
+    EXPECT_THROW(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, any), InvalidArgument);
+}
+
 /// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
 /// pulled out by `pull`, with a fixed frame around it.
 PointCloud DoorScan(float angle, float pull) {

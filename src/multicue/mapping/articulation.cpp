@@ -45,11 +45,13 @@ void ArticulationParams::Validate() const {
             fmt::format("articulation: hinge_depth must be in [0, 0.5) m, got {}", hinge_depth));
     }
     if (!(door_min_height > 0.0f) || !(top_share > 0.0f && top_share < 1.0f) ||
-        !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f) || !(drawer_max_height > 0.0f)) {
+        !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f) || !(drawer_max_height > 0.0f) ||
+        !(flap_min_width >= 0.0f)) {
         throw InvalidArgument(fmt::format(
             "articulation: need door_min_height > 0, top_share in (0, 1), limits > 0 and "
-            "drawer_max_height > 0 (got {}, {}, {}, {}, {})",
-            door_min_height, top_share, revolute_upper, prismatic_upper, drawer_max_height));
+            "drawer_max_height > 0, flap_min_width >= 0 (got {}, {}, {}, {}, {}, {})",
+            door_min_height, top_share, revolute_upper, prismatic_upper, drawer_max_height,
+            flap_min_width));
     }
 }
 
@@ -104,8 +106,13 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
     const bool side = ru < p.top_share || ru > 1.0f - p.top_share;
     if (horizontal || (!handle && !side)) {
         if (height >= p.door_min_height && rv > 1.0f - p.top_share) {
-            // Hinged at the bottom edge: an oven or dishwasher door.
-            return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
+            // Hinged at the bottom edge: an oven or dishwasher door; too narrow for one, a door
+            // hinged at the vertical edge farther from the fixture.
+            if (width >= p.flap_min_width) {
+                return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
+            }
+            return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
+                              : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
         }
         if (f.min.y() - base > p.flap_min_bottom && rv < p.top_share &&
             height >= 0.6f * p.door_min_height) {

@@ -33,7 +33,11 @@ namespace multicue::mapping {
 struct ArticulationParams {
     float horizontal_handle_deg = 30.0f;  ///< a handle this close to horizontal is horizontal
     float door_min_height = 0.45f;  ///< a front with a horizontal handle this tall is a door [m]
-    float top_share = 0.35f;        ///< "near the top": within this share of the height [-]
+    /// Doors hinged at their bottom edge (ovens, dishwashers: 0.56-0.85 m in the model library)
+    /// are at least this wide; a narrower front with a handle near its top is hinged at a
+    /// vertical edge [m]
+    float flap_min_width = 0.4f;
+    float top_share = 0.35f;  ///< "near the top": within this share of the height [-]
     /// Fronts whose bottom lies above this height are wall cupboards': with a horizontal handle
     /// at the bottom they are hinged at the top, otherwise at a vertical edge [m above the floor]
     float flap_min_bottom = 1.2f;
