@@ -978,29 +978,31 @@ int main(int argc, char** argv) {
                    "front segmentation: outline (rectangles between outlines) or grow (region "
                    "growing)")
         ->capture_default_str();
-    app.add_option("--min-slide-coverage", o.min_slide_coverage,
-                   "opened pairs: share of the slid front the moved points must cover for a "
-                   "drawer (0: the planes' support decides; default: the library's)")
-        ->check(CLI::Range(-1.0, 1.0));
-    app.add_option("--flap-min-width", o.flap_min_width,
-                   "one scan: a front narrower than this is never hinged at its bottom edge [m] "
-                   "(0: any; default: the library's)")
-        ->check(CLI::Range(-1.0, 100.0));
-    app.add_option("--drawer-max-height", o.drawer_max_height,
-                   "one scan: a front taller than this with a horizontal handle is a door [m] "
-                   "(default: the library's)")
-        ->check(CLI::Range(-1.0, 100.0));
+    // Overrides of one library parameter each: a negative value keeps the library's default.
+    auto override = [&app](const char* name, float& value, const std::string& help, double max) {
+        app.add_option(name, value, help + " (default: the library's)")
+            ->check(CLI::Range(-1.0, max));
+    };
+    override("--min-slide-coverage", o.min_slide_coverage,
+             "opened pairs: share of the slid front the moved points must cover for a drawer "
+             "(0: the planes' support decides)",
+             1.0);
+    override("--flap-min-width", o.flap_min_width,
+             "one scan: a front narrower than this is never hinged at its bottom edge [m] (0: any)",
+             100.0);
+    override("--drawer-max-height", o.drawer_max_height,
+             "one scan: a front taller than this with a horizontal handle is a door [m]", 100.0);
     app.add_flag("--wall-drawers", o.wall_drawers,
                  "one scan: wall cupboards' fronts with a horizontal handle away from their "
                  "bottom and sides are drawers (as lower fronts), not doors");
-    app.add_option("--axis-snap", o.axis_snap_deg,
-                   "opened pairs: a hinge axis this close to the front's vertical or horizontal "
-                   "is that direction [deg] (0: off; default: the library's)")
-        ->check(CLI::Range(-1.0, 44.0));
-    app.add_option("--max-hinge-gap", o.max_hinge_gap,
-                   "opened pairs: a hinge no moved point comes this close to is replaced by the "
-                   "best edge's [m] (0: off; default: the library's)")
-        ->check(CLI::Range(-1.0, 10.0));
+    override("--axis-snap", o.axis_snap_deg,
+             "opened pairs: a hinge axis this close to the front's vertical or horizontal is that "
+             "direction [deg] (0: off)",
+             44.0);
+    override("--max-hinge-gap", o.max_hinge_gap,
+             "opened pairs: a hinge no moved point comes this close to is replaced by the best "
+             "edge's [m] (0: off)",
+             10.0);
     app.add_option("--front-param", o.front_params,
                    "NAME=VALUE of the region growing's parameters (repeatable)");
     app.add_option("--load-fixtures", o.load_fixtures,
