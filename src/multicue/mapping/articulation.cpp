@@ -104,6 +104,11 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
     const bool horizontal = handle && std::abs(fx->direction.dot(up)) <
                                           std::sin(p.horizontal_handle_deg * kArticulationDegToRad);
     const bool side = ru < p.top_share || ru > 1.0f - p.top_share;
+    // A door hinged at the vertical edge farther from the fixture.
+    auto side_door = [&]() {
+        return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
+                          : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
+    };
     if (horizontal || (!handle && !side)) {
         if (height >= p.door_min_height && rv > 1.0f - p.top_share) {
             // Hinged at the bottom edge: an oven or dishwasher door; too narrow for one, a door
@@ -111,8 +116,7 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             if (width >= p.flap_min_width) {
                 return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
             }
-            return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
-                              : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
+            return side_door();
         }
         if (f.min.y() - base > p.flap_min_bottom && rv < p.top_share &&
             height >= 0.6f * p.door_min_height) {
@@ -122,8 +126,7 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
         if (height > p.drawer_max_height) {
             // No drawer is that tall (a fridge's door with a horizontal handle): a door, hinged
             // at the vertical edge farther from the fixture.
-            return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
-                              : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
+            return side_door();
         }
         if (!p.wall_drawers && f.min.y() - base > p.flap_min_bottom) {
             // No drawers hang on the wall: a flap, hinged at the horizontal edge farther from
@@ -141,10 +144,7 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
         return a;
     }
     // Vertical handle or a knob off the centre: hinged at the farther vertical edge.
-    if (ru >= 0.5f) {
-        return Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p);
-    }
-    return Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
+    return side_door();
 }
 
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,
@@ -341,9 +341,6 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         }
         return true;
     };
-    // The turn about the tilted plane's axis, unless that axis lies farther outside the
-    // rectangle than `hinge_margin` (a plane of the door's inside, its edge or a shelf meeting
-    // the face plane far from the front): then the best edge's turn, when there is one.
     // The turn about the tilted plane's axis, unless no moved point on that plane comes within
     // `max_hinge_gap` of the axis (a door hangs on its hinge; such a plane is the door's inside,
     // its edge or a shelf meeting the face plane far from the front): then the turn about the

@@ -2,8 +2,9 @@
 /// \file How doors and drawers open (thesis section 4.1.2).
 ///
 /// From one scan, from the fixture: a horizontal handle on a low front is a drawer (prismatic,
-/// out of the face); a horizontal handle near the top of a tall front is a door hinged at its
-/// bottom edge (an oven, a dishwasher), near the bottom of a front above the worktop a door hinged
+/// out of the face) unless the front is taller than any drawer; a horizontal handle near the top
+/// of a tall front is a door hinged at its bottom edge (an oven, a dishwasher; a front too narrow
+/// for one is hinged at a side), near the bottom of a front above the worktop a door hinged
 /// at its top edge, and on any other front above the worktop (wall cupboards hold no drawers) a
 /// door hinged at the horizontal edge farther from it; a vertical handle (or a knob) near one side
 /// edge is a door hinged at the opposite edge. The hinge axis lies in the face plane along that
@@ -19,7 +20,10 @@
 /// drawer pulled out shows much of its front again; a door seen edge-on, or by little more than
 /// its free edge or handle, can make a parallel plane too but covers a strip of the slid
 /// rectangle only. A slide covering too little of it becomes a turn, about the tilted plane's
-/// axis or, without one, about the edge of the rectangle that the moved points cover best.
+/// axis or, without one, about the edge of the rectangle that the moved points cover best. A
+/// tilted plane no moved point of which comes near its axis does not hang there: its turn is
+/// taken about the rectangle's edge along that axis; an axis near the front's vertical or
+/// horizontal is taken to be that direction.
 
 #include <cstddef>
 #include <cstdint>
@@ -39,7 +43,7 @@ struct ArticulationParams {
     float flap_min_width = 0.4f;
     float top_share = 0.35f;  ///< "near the top": within this share of the height [-]
     /// Fronts whose bottom lies above this height are wall cupboards': with a horizontal handle
-    /// at the bottom they are hinged at the top, otherwise at a vertical edge [m above the floor]
+    /// they are flaps, hinged at the horizontal edge farther from it [m above the floor]
     float flap_min_bottom = 1.2f;
     /// No drawer front is taller: a taller front with a horizontal handle (not near its top) is
     /// a door hinged at the vertical edge farther from the handle [m]
