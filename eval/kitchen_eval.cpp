@@ -80,7 +80,7 @@ struct Options {
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
     float flap_min_width = -1.0f;     ///< < 0: the library's ArticulationParams default
-    float drawer_max_height = -1.0f;  ///< <= 0: the library's ArticulationParams default
+    float drawer_max_height = -1.0f;  ///< < 0: the library's ArticulationParams default
     float axis_snap_deg = -1.0f;      ///< < 0: the library's MotionParams default
     float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
     std::string load_fixtures;
@@ -287,7 +287,7 @@ class Evaluator {
                                                         : mapping::FrontSegmentation::kOutline;
         for (const auto& a : o_.front_params) SetFrontParam(params, a);
         params.articulation.wall_drawers = o_.wall_drawers;
-        if (o_.drawer_max_height > 0.0f)
+        if (o_.drawer_max_height >= 0.0f)
             params.articulation.drawer_max_height = o_.drawer_max_height;
         if (o_.flap_min_width >= 0.0f) params.articulation.flap_min_width = o_.flap_min_width;
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
@@ -548,10 +548,8 @@ class Evaluator {
                     // Where the true hinge lies from the estimated one: into the front (from its
                     // edge towards its centre) and behind its surface.
                     const Eigen::Vector3f d = pred.direction.normalized();
-                    const Eigen::Vector3f p = pred.point + d * d.dot(pf.center - pred.point);
-                    const Eigen::Vector3f g = gt.direction.normalized();
-                    const Eigen::Vector3f q = gt.point + g * g.dot(p - gt.point);
-                    Eigen::Vector3f into = pf.center - p;
+                    const Eigen::Vector3f off = LineOffsetAt(pred, gt, pf.center);
+                    Eigen::Vector3f into = pf.center - LinePointNear(pred, pf.center);
                     into -= d * d.dot(into) + pf.normal * pf.normal.dot(into);
                     std::fprintf(
                         stderr,
@@ -559,7 +557,7 @@ class Evaluator {
                         "deg\n",
                         f.laser ? "laser" : "kinect",
                         k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
-                        (q - p).dot(into.normalized()), -(q - p).dot(pf.normal),
+                        off.dot(into.normalized()), -off.dot(pf.normal),
                         LineAngleDeg(pred.direction, gt.direction));
                 }
             }

@@ -85,13 +85,23 @@ inline float LineAngleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
            57.29578f;
 }
 
+/// The point of line `pred` nearest to `at` [m].
+inline Eigen::Vector3f LinePointNear(const Axis& pred, const Eigen::Vector3f& at) {
+    const Eigen::Vector3f d = pred.direction.normalized();
+    return pred.point + d * d.dot(at - pred.point);
+}
+
+/// From the point of line `pred` nearest to `at` to the nearest point of line `truth` [m].
+inline Eigen::Vector3f LineOffsetAt(const Axis& pred, const Axis& truth,
+                                    const Eigen::Vector3f& at) {
+    const Eigen::Vector3f t = truth.direction.normalized();
+    const Eigen::Vector3f r = truth.point - LinePointNear(pred, at);
+    return r - t * t.dot(r);
+}
+
 /// Distance from the point of line `pred` nearest to `at` to the line `truth` [m].
 inline float LineDistanceAt(const Axis& pred, const Axis& truth, const Eigen::Vector3f& at) {
-    const Eigen::Vector3f d = pred.direction.normalized();
-    const Eigen::Vector3f p = pred.point + d * d.dot(at - pred.point);
-    const Eigen::Vector3f t = truth.direction.normalized();
-    const Eigen::Vector3f r = p - truth.point;
-    return (r - t * t.dot(r)).norm();
+    return LineOffsetAt(pred, truth, at).norm();
 }
 
 /// A true fixture: connected points of one handle or knob.

@@ -389,6 +389,14 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         for (const auto& q : s) n += cad.Covers(((inv * q).array() * shrink).matrix()) ? 1 : 0;
         return n;
     };
+    // How well the model stretched by `scale` and placed by T explains the scan: the share of
+    // scan points it covers minus the shares of its points in free space and behind walls
+    // (`checks` model points checked).
+    auto pose_score = [&](const Eigen::Isometry3f& T, const Eigen::Vector3f& scale,
+                          std::size_t checks) {
+        return static_cast<float>(coverage(T, scale)) / static_cast<float>(s.size()) -
+               ModelPenalty(target, T * Eigen::Scaling(scale), checks, space, p.wall_margin).Sum();
+    };
     const Eigen::Vector3f one = Eigen::Vector3f::Ones();
     fit.covered = coverage(fit.T_world_model, one);
     if (p.refine) {
@@ -429,14 +437,9 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
             T.translation() += T0.linear() * (anchor - scale.cwiseProduct(anchor));
             return T;
         };
-        const float n_scan = static_cast<float>(s.size());
         auto score = [&](const Eigen::Vector3f& scale, const Eigen::Vector3f& anchor) {
-            const Eigen::Isometry3f T = placed(scale, anchor);
             // Three times the search's model checks: stretches differ by a few per cent.
-            return static_cast<float>(coverage(T, scale)) / n_scan -
-                   ModelPenalty(target, T * Eigen::Scaling(scale), p.max_search_checks * 3, space,
-                                p.wall_margin)
-                       .Sum();
+            return pose_score(placed(scale, anchor), scale, p.max_search_checks * 3);
         };
         Eigen::Vector3f scale = one, anchor = Eigen::Vector3f::Zero();
         float best_score = score(scale, anchor);
@@ -499,15 +502,10 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
                      (dist > 0.0f && dist < depth + p.wall_gap && front.dot(w->normal) < -0.7f);
         }
         if (facing) {
-            auto score = [&](const Eigen::Isometry3f& T) {
-                return static_cast<float>(coverage(T, fit.scale)) / static_cast<float>(s.size()) -
-                       ModelPenalty(target, T * Eigen::Scaling(fit.scale), p.max_model_checks,
-                                    space, p.wall_margin)
-                           .Sum();
-            };
             Eigen::Isometry3f turned = fit.T_world_model;
             turned.linear() = turned.linear() * Eigen::Vector3f(-1.0f, -1.0f, 1.0f).asDiagonal();
-            if (score(turned) >= fit.coverage - pen.Sum() - p.flip_tolerance) {
+            if (pose_score(turned, fit.scale, p.max_model_checks) >=
+                fit.coverage - pen.Sum() - p.flip_tolerance) {
                 fit.T_world_model = turned;
                 fit.yaw = std::remainder(fit.yaw + kPi, 2.0f * kPi);
                 fit.turned = true;
