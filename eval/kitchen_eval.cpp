@@ -102,6 +102,7 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
                                                   {"local_alpha", &p.local_alpha},
                                                   {"min_offset_alpha", &p.min_offset_alpha},
                                                   {"min_fill", &p.min_fill},
+                                                  {"split_support", &p.split_support},
                                                   {"cell_size", &p.cell_size},
                                                   {"seed_max", &p.seed_max},
                                                   {"rect_percentile", &p.rect_percentile},
@@ -119,6 +120,8 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
                                                   {"gap_max_taken", &m.gap_fronts.max_taken}};
     if (name == "extend") {
         m.extend_fronts = v != 0.0f;
+    } else if (name == "split") {
+        p.split_at_outlines = v != 0.0f;
     } else if (name == "gap") {
         m.gap_fronts.enabled = v != 0.0f;
     } else if (name == "gap_grow") {
@@ -651,12 +654,17 @@ class Evaluator {
             }
             const auto pt = motion.articulation.type;
             if (o_.verbose) {
-                std::fprintf(stderr,
-                             "pair %s %s %s: slide coverage %.2f, turn coverage %.2f -> %s\n",
-                             f.laser ? "laser" : "kinect",
-                             k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
-                             revolute ? "revolute" : "prismatic", motion.slide_coverage,
-                             motion.turn_coverage, mapping::JointTypeName(pt));
+                const Axis& gt = axes.at(kj.name);
+                std::fprintf(
+                    stderr,
+                    "pair %s %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
+                    "front %.2f x %.2f m)\n",
+                    f.laser ? "laser" : "kinect",
+                    k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
+                    revolute ? "revolute" : "prismatic", motion.slide_coverage,
+                    motion.turn_coverage, mapping::JointTypeName(pt),
+                    LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
+                    pf.max.y() - pf.min.y());
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);

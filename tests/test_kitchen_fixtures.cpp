@@ -17,6 +17,7 @@
 #include "multicue/mapping/fixture_evidence.hpp"
 #include "multicue/mapping/fixtures.hpp"
 #include "multicue/mapping/front_edges.hpp"
+#include "multicue/mapping/fronts.hpp"
 #include "multicue/mapping/kitchen_map.hpp"
 #include "multicue/mapping/room_structure.hpp"
 #include "multicue/ml/classifier.hpp"
@@ -249,10 +250,11 @@ struct DoorRect {
 
 /// A room (floor, back wall y = 3, left wall x = 0) with a cupboard face y = 2.4 (x 0.3 .. 1.6,
 /// z 0.1 .. 0.85) holding `doors` of the face's colour, each set in a 1 cm gap that shows the
-/// carcass 2 cm behind, and, when `handle`, a vertical handle at x = 1.04, z = 0.5. Doors that
+/// carcass 2 cm behind (in `gap_colour`), and, when `handle`, a vertical handle at x = 1.04,
+/// z = 0.5. Doors that
 /// reach the face's edges cover the carcass (overlay doors, as most kitchen fronts).
 PointCloud DoorsInGaps(const std::vector<DoorRect>& doors, std::uint32_t seed = 5,
-                       bool handle = false) {
+                       bool handle = false, Color gap_colour = {40, 40, 40, 255}) {
     std::mt19937 rng(seed);
     PointCloud c;
     const float step = 0.005f, y = 2.4f;
@@ -274,7 +276,7 @@ PointCloud DoorsInGaps(const std::vector<DoorRect>& doors, std::uint32_t seed = 
             gap = gap && !door;
             c.points.emplace_back(x, gap ? y + 0.02f : y, z);
             c.normals.push_back(n);
-            c.colors.push_back(gap ? Color{40, 40, 40, 255} : white);
+            c.colors.push_back(gap ? gap_colour : white);
         }
     }
     if (handle) test::AddHandle(c, {1.04f, y, 0.5f}, 0.16f, rng, true);
@@ -414,6 +416,62 @@ TEST(FrontsFromEdges, AGrownFrontExtendsToItsOutline) {
 std::pair<float, float> FrontXRange(const Front& f) {
     const float a = f.min.x() * f.u_axis.x(), b = f.max.x() * f.u_axis.x();
     return {std::min(a, b), std::max(a, b)};
+}
+
+TEST(SegmentFronts, OverlappingRegionsSplitAtTheGapBetweenTheirFixtures) {
+    // Two doors side by side, each with a vertical handle near its right edge. The gap between
+    // them has the doors' colour and shows only as a recess: the regions grown from the two
+    // handles both cover the face.
+    const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.92f, 1.6f, 0.1f, 0.85f}};
+    PointCloud c = DoorsInGaps(doors, 7, false, Color{230, 230, 230, 255});
+    std::mt19937 rng(3);
+    for (const float x : {0.84f, 1.54f}) test::AddHandle(c, {x, 2.4f, 0.5f}, 0.16f, rng, true);
+    c.width = static_cast<std::uint32_t>(c.size());
+    const FaceScene sc = SceneOf(c);
+    ASSERT_EQ(sc.fx.fixtures.size(), 2u);
+    auto by_x = [](std::vector<Front> v) {
+        std::sort(v.begin(), v.end(), [](const Front& a, const Front& b) {
+            return FrontXRange(a).first < FrontXRange(b).first;
+        });
+        return v;
+    };
+    // Without the outline evidence each point goes to the nearer handle: the left door's front
+    // runs on to halfway between the handles (x 1.19), far over its gap.
+    const std::vector<Front> nearest = by_x(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures));
+    ASSERT_EQ(nearest.size(), 2u);
+    EXPECT_TRUE(nearest[0].overlapping);
+    EXPECT_GT(FrontXRange(nearest[0]).second, 1.1f);
+    // With it, the fronts part at the gap.
+    const std::vector<Front> split =
+        by_x(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev));
+    ASSERT_EQ(split.size(), 2u);
+    for (std::size_t k = 0; k < 2; ++k) {
+        const auto [x0, x1] = FrontXRange(split[k]);
+        EXPECT_NEAR(x0, doors[k].x0, 0.025f) << k;
+        EXPECT_NEAR(x1, doors[k].x1, 0.025f) << k;
+        for (const Index i : split[k].indices) {
+            ASSERT_GT(c.points[i].x(), doors[k].x0 - 0.02f) << k;
+            ASSERT_LT(c.points[i].x(), doors[k].x1 + 0.02f) << k;
+        }
+    }
+    // The same input gives the same fronts; off, the split is the nearest handle's again.
+    const std::vector<Front> again =
+        by_x(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev));
+    ASSERT_EQ(again.size(), 2u);
+    for (std::size_t k = 0; k < 2; ++k) EXPECT_EQ(again[k].indices, split[k].indices);
+    const std::vector<Front> off = by_x(
+        SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {.split_at_outlines = false}, &sc.ev));
+    ASSERT_EQ(off.size(), 2u);
+    EXPECT_EQ(off[0].indices, nearest[0].indices);
+    // Bad parameters and evidence of the wrong size are refused.
+    EXPECT_THROW(
+        SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {.split_support = 0.0f}, &sc.ev),
+        InvalidArgument);
+    FrontEvidence bad = sc.ev;
+    bad.point_residual.resize(5);
+    EXPECT_THROW(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &bad), InvalidArgument);
+    EXPECT_THROW(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev, {.cell = 0.0f}),
+                 InvalidArgument);
 }
 
 TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {

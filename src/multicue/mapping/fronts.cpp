@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/mapping/front_grid_internal.hpp"
 
 namespace multicue::mapping {
 namespace {
@@ -86,6 +87,92 @@ float FootprintDistance2(const std::vector<Eigen::Vector2f>& footprint, const Ei
     return best;
 }
 
+/// An outline between two members of a group of overlapping regions: member `a` (an index
+/// into the group) lies below `at` along u (`columns`) or v, member `b` above it.
+struct Separator {
+    std::size_t a = 0, b = 0;
+    bool columns = true;
+    float at = 0.0f;
+};
+
+/// The share of gap among the cells of grid line `k` over [t0, t1] that hold points; -1 when
+/// fewer than `coverage` of them hold points.
+float LineGapShare(const front_grid_internal::OutlineGrid& g, bool columns, int k, int t0, int t1,
+                   float coverage) {
+    using namespace front_grid_internal;
+    int points = 0, gap = 0;
+    for (int t = t0; t <= t1; ++t) {
+        const std::uint8_t m = columns ? g.At(k, t) : g.At(t, k);
+        points += m == kFaceCell || m == kGapCell;
+        gap += m == kGapCell;
+    }
+    if (points == 0 || static_cast<float>(points) < coverage * static_cast<float>(t1 - t0 + 1)) {
+        return -1.0f;
+    }
+    return static_cast<float>(gap) / static_cast<float>(points);
+}
+
+/// The lower and upper corner of a footprint.
+std::pair<Eigen::Vector2f, Eigen::Vector2f> Box(const std::vector<Eigen::Vector2f>& pts) {
+    Eigen::Vector2f lo = pts.front(), hi = lo;
+    for (const auto& q : pts) {
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+    }
+    return {lo, hi};
+}
+
+/// The outlines between the fixtures of overlapping regions: for every two members whose
+/// footprints lie apart along u or v (more than twice the outline margin), the grid line between
+/// them that is gap in the largest share of its cells with points (over the region's extent
+/// across the line), when that share reaches `support`.
+std::vector<Separator> OutlineSeparators(
+    const PointCloud& cloud, const RoomFrame& frame, const PlanarComponent& face,
+    const Indices& region, const front_grid_internal::OutlineGrid& g,
+    const std::vector<std::vector<Eigen::Vector2f>>& footprints,
+    const std::vector<std::size_t>& members, const FrontEdgeParams& ep, float support) {
+    std::vector<Separator> out;
+    if (g.nu == 0 || region.empty()) return out;
+    Eigen::Vector2f rlo = Eigen::Vector2f::Constant(std::numeric_limits<float>::infinity());
+    Eigen::Vector2f rhi = -rlo;
+    for (const Index i : region) {
+        const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[i]);
+        rlo = rlo.cwiseMin(q);
+        rhi = rhi.cwiseMax(q);
+    }
+    auto box = [&](std::size_t m) { return Box(footprints[members[m]]); };
+    for (std::size_t a = 0; a < members.size(); ++a) {
+        for (std::size_t b = 0; b < members.size(); ++b) {
+            if (a == b) continue;
+            const auto [alo, ahi] = box(a);
+            const auto [blo, bhi] = box(b);
+            // b lies above a along the axis with the wider space between them.
+            const Eigen::Vector2f space = blo - ahi;
+            const int axis = space.x() >= space.y() ? 0 : 1;
+            if (space[axis] <= 2.0f * ep.margin) continue;
+            const bool columns = axis == 0;
+            const int k0 = columns ? g.U(ahi.x() + ep.margin) : g.V(ahi.y() + ep.margin);
+            const int k1 = columns ? g.U(blo.x() - ep.margin) : g.V(blo.y() - ep.margin);
+            const int t0 = columns ? g.V(rlo.y()) : g.U(rlo.x());
+            const int t1 = columns ? g.V(rhi.y()) : g.U(rhi.x());
+            const float mid = (ahi[axis] + blo[axis]) / 2;
+            float best = -1.0f, best_at = mid;
+            for (int k = k0; k <= k1; ++k) {
+                const float share = LineGapShare(g, columns, k, t0, t1, ep.min_coverage);
+                if (share < 0.0f) continue;
+                const float at = columns ? g.UAt(k) : g.VAt(k);
+                if (share > best + 1e-6f || (std::abs(share - best) <= 1e-6f &&
+                                             std::abs(at - mid) < std::abs(best_at - mid))) {
+                    best = share;
+                    best_at = at;
+                }
+            }
+            if (best >= support) out.push_back({a, b, columns, best_at});
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
 std::pair<Eigen::Vector2f, Eigen::Vector2f> PointsRectangle(const PointCloud& cloud,
@@ -151,6 +238,10 @@ void FrontParams::Validate() const {
     if (!(min_fill >= 0.0f && min_fill <= 1.0f)) {
         throw InvalidArgument(fmt::format("fronts: min_fill must be in [0, 1], got {}", min_fill));
     }
+    if (!(split_support > 0.0f && split_support <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("fronts: split_support must be in (0, 1], got {}", split_support));
+    }
     positive("local_alpha", local_alpha);
     positive("min_offset_alpha", min_offset_alpha);
     positive("alpha_mads", alpha_mads);
@@ -206,12 +297,29 @@ std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
 
 std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame,
                                  const RoomStructure& s, const std::vector<Fixture>& fixtures,
-                                 const FrontParams& p) {
+                                 const FrontParams& p, const FrontEvidence* evidence,
+                                 const FrontEdgeParams& outline) {
     p.Validate();
+    if (evidence) {
+        outline.Validate();
+        front_grid_internal::CheckEvidence(*evidence, cloud.size());
+    }
     std::vector<Front> fronts;
     if (cloud.empty() || fixtures.empty()) return fronts;
     const std::vector<float> a_raw = AppearanceValues(cloud, p.cue, p.intensity_scale);
     const std::vector<bool> panel = PanelKnobs(fixtures);
+    // The outline evidence, for splitting regions that ran over the gap between two fronts.
+    std::vector<Indices> face_points;
+    std::vector<std::uint8_t> is_fixture;
+    if (evidence) {
+        face_points = front_grid_internal::FacePoints(cloud.size(), s, *evidence);
+        is_fixture.assign(cloud.size(), 0);
+        for (const Fixture& fx : fixtures) {
+            for (const Index i : fx.indices) {
+                if (i < cloud.size()) is_fixture[i] = 1;
+            }
+        }
+    }
     for (std::size_t f = 0; f < s.components.size(); ++f) {
         const PlanarComponent& face = s.components[f];
         std::vector<int> mine;
@@ -221,6 +329,21 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             }
         }
         if (mine.empty()) continue;
+        // The face's outline grid, built when first needed (empty without evidence).
+        front_grid_internal::OutlineGrid outline_grid;
+        bool have_grid = false;
+        auto grid = [&]() -> const front_grid_internal::OutlineGrid& {
+            if (!have_grid && evidence && !face_points[f].empty()) {
+                outline_grid = front_grid_internal::BuildGrid(cloud, frame, face, face_points[f],
+                                                              *evidence, is_fixture, outline);
+                if (outline_grid.nu > 0) {
+                    front_grid_internal::MaskFixtures(outline_grid, cloud, frame, face,
+                                                      static_cast<int>(f), fixtures, outline);
+                }
+            }
+            have_grid = true;
+            return outline_grid;
+        };
         // The face as a grid of cells in its plane, each with the mean appearance and offset of
         // its points: the region grows over cells, so neither the sensor's noise nor the depth
         // camera's quantisation steps (centimetres at 2-3 m) cut a front into pieces.
@@ -365,6 +488,11 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                 std::sort(all.begin(), all.end());
                 all.erase(std::unique(all.begin(), all.end()), all.end());
                 for (const std::size_t i : members) grown[i].indices.clear();
+                const std::vector<Separator> seps =
+                    p.split_at_outlines
+                        ? OutlineSeparators(cloud, frame, face, all, grid(), footprints, members,
+                                            outline, p.split_support)
+                        : std::vector<Separator>{};
                 for (const Index pt : all) {
                     const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[pt]);
                     std::size_t best = members[0];
@@ -376,6 +504,22 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                             best = i;
                         }
                     }
+                    // The one member on whose side of every outline the point lies, if any.
+                    std::size_t sided = members.size(), n_sided = 0;
+                    for (std::size_t m = 0; m < members.size() && !seps.empty(); ++m) {
+                        bool ok = true;
+                        for (const Separator& sp : seps) {
+                            if (sp.a != m && sp.b != m) continue;
+                            const float x = sp.columns ? q.x() : q.y();
+                            // Member a lies below the line, b above it.
+                            ok = ok && (sp.a == m ? x <= sp.at : x >= sp.at);
+                        }
+                        if (ok) {
+                            sided = m;
+                            ++n_sided;
+                        }
+                    }
+                    if (n_sided == 1) best = members[sided];
                     grown[best].indices.push_back(pt);
                 }
             }

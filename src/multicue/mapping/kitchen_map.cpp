@@ -278,7 +278,8 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
         map.fronts =
             FrontsFromEdges(r.cloud, map.frame, structure, map.fixtures, evidence, p.outline);
     } else {
-        map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts);
+        map.fronts = SegmentFronts(r.cloud, map.frame, structure, map.fixtures, p.fronts, &evidence,
+                                   p.outline);
         if (p.extend_fronts) {
             ExtendFrontsToOutlines(r.cloud, map.frame, structure, map.fixtures, evidence,
                                    map.fronts, p.outline);
