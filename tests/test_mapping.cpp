@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -14,6 +15,7 @@
 #include "kitchen_test_data.hpp"
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/urdf.hpp"
+#include "multicue/mapping/fronts.hpp"
 #include "multicue/mapping/kitchen_map.hpp"
 #include "multicue/mapping/map_export.hpp"
 #include "test_util.hpp"
@@ -516,6 +518,43 @@ TEST(MapKitchen, SyntheticKitchenEndToEnd) {
     }
     EXPECT_EQ(m.point_class.size(), r.cloud.size());
     EXPECT_FALSE(m.furniture.empty());
+}
+
+TEST(MapKitchen, AScanWithoutColourOrIntensityIsMappedByItsGeometry) {
+    // A depth camera without colour, or a laser without intensity: the fronts grow by their
+    // offset from the face (here, where the door and the drawer differ from the body only in
+    // colour, over the whole face, split between the two handles) and the handles still give
+    // their joints.
+    test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
+    PointCloud scan = k.cloud;
+    scan.normals.clear();
+    scan.colors.clear();
+    const std::vector<float> look = AppearanceValues(scan, AppearanceCue::kAuto, 255.0f);
+    ASSERT_EQ(look.size(), scan.size());
+    EXPECT_TRUE(std::all_of(look.begin(), look.end(), [](float v) { return v == 0.0f; }));
+    MapKitchenParams p = KitchenParamsFor(KitchenSensor::kKinect);
+    p.structure.range_noise = 0.0f;
+    p.axes.up = Eigen::Vector3f::UnitZ();
+    const MapKitchenResult r = MapKitchen({scan}, p);
+    EXPECT_EQ(r.map.fixtures.size(), 2u);
+    int with_fixture = 0;
+    for (const Front& f : r.map.fronts) {
+        EXPECT_FALSE(f.indices.empty());
+        if (f.fixtures.empty()) continue;
+        ++with_fixture;
+        EXPECT_NE(f.articulation.type, JointType::kUnknown);
+    }
+    EXPECT_EQ(with_fixture, 2);
+    EXPECT_NEAR(r.map.floor_height, 0.0f, 0.02f);
+    EXPECT_NEAR(r.map.ceiling_height, 2.5f, 0.02f);
+    // A cue the scan cannot give is refused with a clear error.
+    p.fronts.cue = AppearanceCue::kColor;
+    try {
+        MapKitchen({scan}, p);
+        FAIL() << "no exception";
+    } catch (const DataError& e) {
+        EXPECT_NE(std::string(e.what()).find("colour"), std::string::npos) << e.what();
+    }
 }
 
 TEST(MapKitchen, SerialEqualsParallel) {

@@ -272,10 +272,14 @@ void FrontParams::Validate() const {
 std::vector<float> AppearanceValues(const PointCloud& cloud, AppearanceCue cue,
                                     float intensity_scale) {
     if (cue == AppearanceCue::kAuto) {
-        cue = cloud.HasColors() ? AppearanceCue::kColor : AppearanceCue::kIntensity;
+        cue = cloud.HasColors()      ? AppearanceCue::kColor
+              : cloud.HasIntensity() ? AppearanceCue::kIntensity
+                                     : AppearanceCue::kNone;
     }
     std::vector<float> a(cloud.size(), kNoFrontValue);
-    if (cue == AppearanceCue::kColor) {
+    if (cue == AppearanceCue::kNone) {
+        std::fill(a.begin(), a.end(), 0.0f);
+    } else if (cue == AppearanceCue::kColor) {
         if (!cloud.HasColors())
             throw DataError("fronts: the colour cue needs a cloud with colours");
         for (std::size_t i = 0; i < cloud.size(); ++i) {

@@ -21,9 +21,13 @@ namespace multicue::mapping {
 
 /// What the region growing compares.
 enum class AppearanceCue {
-    kAuto,       ///< colour when the cloud has colours, else intensity
+    kAuto,       ///< colour when the cloud has colours, else intensity, else none
     kColor,      ///< grey level of the RGB colour [0, 255]
     kIntensity,  ///< intensity times intensity_scale
+    /// No appearance (a depth camera without colour, a laser without intensity): every point
+    /// looks the same, so a region grows by its offset from the face alone and ends where the
+    /// outlines (FrontEvidence) part it from its neighbours
+    kNone,
 };
 
 struct FrontParams {

@@ -101,7 +101,7 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.outline.step = 0.03f;
         p.outline.hole_reach = 2;
         p.outline.margin = 0.03f;
-        p.fronts.cue = AppearanceCue::kIntensity;
+        p.fronts.cue = AppearanceCue::kAuto;  // intensity (the laser has no colour), else none
         p.fronts.cell_size = 0.04f;
         p.fronts.seed_max = 0.08f;
         p.fronts.min_points = 8;
