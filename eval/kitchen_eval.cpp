@@ -358,6 +358,13 @@ class Evaluator {
         }
     }
 
+    /// "kinect MODEL" or "laser MODEL" of a joint's model, for the -v lines.
+    static std::string Who(const Frame& f, const sim::KitchenScene& k,
+                           const sim::KitchenJoint& kj) {
+        return std::string(f.laser ? "laser " : "kinect ") +
+               k.instances[static_cast<std::size_t>(kj.instance)].model->id;
+    }
+
     void Score(sim::KitchenScene& k, const std::map<std::string, Axis>& axes, const Frame& f,
                const mapping::MapKitchenResult& r, Scores& s, std::uint64_t seed) const {
         const ScanTruth t(f.cloud);
@@ -534,12 +541,10 @@ class Evaluator {
                                  (!revolute && pt == mapping::JointType::kPrismatic);
             s.joint_correct += correct;
             if (o_.verbose) {
-                std::fprintf(stderr, "joint %s %s %s: %s -> %s (front IoU %.2f, %.2f x %.2f m)\n",
-                             f.laser ? "laser" : "kinect",
-                             k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
-                             kj.name.c_str(), revolute ? "revolute" : "prismatic",
-                             mapping::JointTypeName(pt), iou, pf.max.x() - pf.min.x(),
-                             pf.max.y() - pf.min.y());
+                std::fprintf(stderr, "joint %s %s: %s -> %s (front IoU %.2f, %.2f x %.2f m)\n",
+                             Who(f, k, kj).c_str(), kj.name.c_str(),
+                             revolute ? "revolute" : "prismatic", mapping::JointTypeName(pt), iou,
+                             pf.max.x() - pf.min.x(), pf.max.y() - pf.min.y());
             }
             if (revolute && correct) {
                 const Axis& gt = axes.at(kj.name);
@@ -556,11 +561,9 @@ class Evaluator {
                     into -= d * d.dot(into) + pf.normal * pf.normal.dot(into);
                     std::fprintf(
                         stderr,
-                        "hinge %s %s: true hinge %.3f m into the front, %.3f m behind it, %.0f "
+                        "hinge %s: true hinge %.3f m into the front, %.3f m behind it, %.0f "
                         "deg\n",
-                        f.laser ? "laser" : "kinect",
-                        k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
-                        off.dot(into.normalized()), -off.dot(pf.normal),
+                        Who(f, k, kj).c_str(), off.dot(into.normalized()), -off.dot(pf.normal),
                         LineAngleDeg(pred.direction, gt.direction));
                 }
             }
@@ -657,12 +660,10 @@ class Evaluator {
                 const Axis& gt = axes.at(kj.name);
                 std::fprintf(
                     stderr,
-                    "pair %s %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
+                    "pair %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
                     "front %.2f x %.2f m)\n",
-                    f.laser ? "laser" : "kinect",
-                    k.instances[static_cast<std::size_t>(kj.instance)].model->id.c_str(),
-                    revolute ? "revolute" : "prismatic", motion.slide_coverage,
-                    motion.turn_coverage, mapping::JointTypeName(pt),
+                    Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
+                    motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
                     pf.max.y() - pf.min.y());
             }
