@@ -463,6 +463,12 @@ TEST(SegmentFronts, OverlappingRegionsSplitAtTheGapBetweenTheirFixtures) {
         SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {.split_at_outlines = false}, &sc.ev));
     ASSERT_EQ(off.size(), 2u);
     EXPECT_EQ(off[0].indices, nearest[0].indices);
+    // A fixture without points grows nothing; the other's region is no longer split.
+    std::vector<Fixture> hollow = sc.fx.fixtures;
+    hollow[1].indices.clear();
+    const std::vector<Front> one = SegmentFronts(c, RoomFrame{}, sc.s, hollow, {}, &sc.ev);
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_EQ(one[0].fixtures, std::vector<int>{0});
     // Bad parameters and evidence of the wrong size are refused.
     EXPECT_THROW(
         SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {.split_support = 0.0f}, &sc.ev),

@@ -393,8 +393,9 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             const Fixture& fx = fixtures[static_cast<std::size_t>(x)];
             std::vector<Eigen::Vector2f> fp;
             for (const Index i : fx.indices) {
-                fp.push_back(PlaneCoordinates(face, frame, cloud.points[i]));
+                if (i < cloud.size()) fp.push_back(PlaneCoordinates(face, frame, cloud.points[i]));
             }
+            if (fp.empty()) continue;  // a fixture without points of this cloud has no footprint
             // Seeds: cells in a ring around the footprint.
             Eigen::Vector2f flo = fp.front(), fhi = fp.front();
             for (const auto& q : fp) {
