@@ -453,7 +453,7 @@ class Evaluator {
                         }
                     }
                 }
-                ++s.fn_why[why];
+                ++s.fn_why[(fixtures[g].handle ? "" : "knob: ") + why];
             }
             s.any_tp += tp;
             s.any_fp += map.fixtures.size() - tp;
