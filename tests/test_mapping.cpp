@@ -557,6 +557,25 @@ TEST(MapKitchen, AScanWithoutColourOrIntensityIsMappedByItsGeometry) {
     }
 }
 
+TEST(MapKitchen, TheSensorIsGuessedFromWhatTheScansHold) {
+    PointCloud image;  // a 2 x 2 depth image without colour
+    image.points.assign(4, Eigen::Vector3f(0, 0, 1));
+    image.width = 2;
+    image.height = 2;
+    EXPECT_EQ(GuessKitchenSensor({image}), KitchenSensor::kKinect);
+    PointCloud sweep = image;  // the same with intensity: a laser sweep
+    sweep.intensity.assign(4, 0.5f);
+    EXPECT_EQ(GuessKitchenSensor({sweep}), KitchenSensor::kLaser);
+    EXPECT_EQ(GuessKitchenSensor({image, sweep}), KitchenSensor::kLaser);
+    PointCloud loose = image;  // unorganized points without colour: a laser
+    loose.width = 4;
+    loose.height = 1;
+    EXPECT_EQ(GuessKitchenSensor({loose}), KitchenSensor::kLaser);
+    PointCloud coloured = loose;  // colours: a camera
+    coloured.colors.assign(4, Color{});
+    EXPECT_EQ(GuessKitchenSensor({sweep, coloured}), KitchenSensor::kKinect);
+}
+
 TEST(MapKitchen, SerialEqualsParallel) {
     const MapKitchenResult a = MapSynthetic(1), b = MapSynthetic(2);
     EXPECT_EQ(a.map.point_class, b.map.point_class);

@@ -111,10 +111,13 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
 }
 
 KitchenSensor GuessKitchenSensor(const std::vector<PointCloud>& scans) {
+    bool intensity = false, organized = false;
     for (const auto& s : scans) {
         if (s.HasColors()) return KitchenSensor::kKinect;
+        intensity = intensity || s.HasIntensity();
+        organized = organized || s.IsOrganized();
     }
-    return KitchenSensor::kLaser;
+    return intensity || !organized ? KitchenSensor::kLaser : KitchenSensor::kKinect;
 }
 
 PointCloud MergeScansWithNormals(const std::vector<PointCloud>& scans, const MapKitchenParams& p,

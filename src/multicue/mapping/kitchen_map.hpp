@@ -66,7 +66,9 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor);
 /// range noise and sparser rows need looser distances, fewer points and larger coverage cells.
 MotionParams MotionParamsFor(KitchenSensor sensor);
 
-/// The sensor a set of scans looks like: a laser when no scan has colours, else a Kinect.
+/// The sensor a set of scans looks like: a Kinect when a scan has colours; else a laser when a
+/// scan has intensity or none is organized (an image); else (organized depth images without
+/// colour) a Kinect.
 KitchenSensor GuessKitchenSensor(const std::vector<PointCloud>& scans);
 
 struct MapKitchenResult {
