@@ -397,11 +397,7 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
             }
             if (fp.empty()) continue;  // a fixture without points of this cloud has no footprint
             // Seeds: cells in a ring around the footprint.
-            Eigen::Vector2f flo = fp.front(), fhi = fp.front();
-            for (const auto& q : fp) {
-                flo = flo.cwiseMin(q);
-                fhi = fhi.cwiseMax(q);
-            }
+            const auto [flo, fhi] = Box(fp);
             Cells seeds;
             const float lo2 = p.seed_min * p.seed_min, hi2 = p.seed_max * p.seed_max;
             const std::uint32_t c0 = cell_at(flo - Eigen::Vector2f::Constant(p.seed_max));
