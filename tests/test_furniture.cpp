@@ -2,7 +2,8 @@
 // noisy scan of its piece at a known pose (and rejected where a scan saw only floor) and
 // stretched to a piece of another size, a planted chair found by the votes (the same for any
 // thread count), merged views dropping a place only one view votes for, free space against a
-// closed-form case, the learned verifier, the model file round trip, bad parameters and empty
+// closed-form case, the shape evidence of a fit, the learned verifier (and one of an older model
+// that knows fewer features), the model file round trip, bad parameters and empty
 // input.
 
 #include <gtest/gtest.h>
@@ -605,6 +606,81 @@ TEST(FurnitureDetection, EmptyScansGiveNoDetections) {
                     .detections.empty());
 }
 
+/// Points on the surface of an upright box [x0, x1] x [y0, y1] x [0, h] (no bottom), about
+/// `step` apart, turned by `yaw` and moved to `at`.
+PointCloud BoxSurface(float x0, float x1, float y0, float y1, float h, float step, float yaw,
+                      const Eigen::Vector2f& at) {
+    PointCloud c;
+    const Eigen::Affine3f T = Eigen::Translation3f(at.x(), at.y(), 0.0f) *
+                              Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ());
+    for (float x = x0; x <= x1 + 1e-4f; x += step) {
+        for (float y = y0; y <= y1 + 1e-4f; y += step) {
+            for (float z = 0.0f; z <= h + 1e-4f; z += step) {
+                const bool side = x < x0 + step / 2 || x > x1 - step / 2 || y < y0 + step / 2 ||
+                                  y > y1 - step / 2;
+                if (side || z > h - step / 2) c.points.push_back(T * Eigen::Vector3f(x, y, z));
+            }
+        }
+    }
+    c.width = static_cast<std::uint32_t>(c.points.size());
+    return c;
+}
+
+// The shape evidence of the learned verifier: scan points of the piece the model was fitted to
+// lie inside its footprint, up to its height and across its size; a piece twice as wide puts
+// points beyond it; a table's legs and top leave its lower part nearly empty; no points give
+// zeros whatever the model.
+TEST(FurnitureShape, MeasuresThePieceAgainstTheFittedModel) {
+    FurnitureCad cad;
+    cad.cloud = BoxSurface(-0.25f, 0.25f, -0.4f, 0.4f, 0.8f, 0.02f, 0.0f, {0, 0});
+    cad.extent = Eigen::Vector3f(0.5f, 0.8f, 0.8f);
+    const float yaw = 0.7f;
+    const Eigen::Vector2f at(2.0f, -1.0f);
+    const Eigen::Affine3f T = Eigen::Translation3f(at.x(), at.y(), 0.0f) *
+                              Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ());
+    const PointCloud same = BoxSurface(-0.25f, 0.25f, -0.4f, 0.4f, 0.8f, 0.03f, yaw, at);
+    const FurnitureShapeEvidence a = MeasureFurnitureShape(same, cad, T);
+    EXPECT_FLOAT_EQ(a.inside_share, 1.0f);
+    EXPECT_NEAR(a.top, 0.78f, 0.04f);  // the top's points lie at 0.78 m (3 cm rows)
+    EXPECT_NEAR(a.top_ratio, 0.97f, 0.05f);
+    EXPECT_NEAR(a.span_x, 0.9f, 0.1f);
+    EXPECT_NEAR(a.span_y, 0.9f, 0.1f);
+    EXPECT_NEAR(a.low_share, 0.25f * 0.8f * (2 * 0.5f + 2 * 0.8f) / (0.8f * 2.6f + 0.4f), 0.05f);
+    EXPECT_EQ(a.beyond, 0.0f);
+
+    // Twice as wide along the model's y: the points 10-30 cm beyond the footprint count.
+    const PointCloud wide = BoxSurface(-0.25f, 0.25f, -1.2f, 0.4f, 0.8f, 0.03f, yaw, at);
+    const FurnitureShapeEvidence b = MeasureFurnitureShape(wide, cad, T);
+    EXPECT_LT(b.inside_share, 0.8f);
+    EXPECT_GT(b.beyond, 0.1f);
+    EXPECT_GT(b.span_y, 1.0f);
+
+    // A table: a top at 0.75 m and four legs; nothing else below.
+    PointCloud table = BoxSurface(-0.25f, 0.25f, -0.4f, 0.4f, 0.0f, 0.03f, 0.0f, {0, 0});
+    for (auto& p : table.points) p.z() = 0.75f;
+    for (float x : {-0.22f, 0.22f}) {
+        for (float y : {-0.37f, 0.37f}) {
+            for (float z = 0.0f; z < 0.75f; z += 0.03f) table.points.emplace_back(x, y, z);
+        }
+    }
+    for (auto& p : table.points) p = T * p;
+    table.width = static_cast<std::uint32_t>(table.points.size());
+    const FurnitureShapeEvidence c = MeasureFurnitureShape(table, cad, T);
+    EXPECT_LT(c.low_share, 0.1f);
+    EXPECT_NEAR(c.top, 0.75f, 0.01f);
+
+    // No points, or a non-finite pose: zeros; NaN points are skipped.
+    const FurnitureShapeEvidence none = MeasureFurnitureShape(PointCloud{}, cad, T);
+    EXPECT_EQ(none.inside_share, 0.0f);
+    EXPECT_EQ(none.top, 0.0f);
+    Eigen::Affine3f bad = T;
+    bad(0, 3) = std::nanf("");
+    EXPECT_EQ(MeasureFurnitureShape(same, cad, bad).inside_share, 0.0f);
+    PointCloud with_nan = same;
+    with_nan.points.push_back(Eigen::Vector3f::Constant(std::nanf("")));
+    EXPECT_FLOAT_EQ(MeasureFurnitureShape(with_nan, cad, T).inside_share, 1.0f);
+}
+
 // The learned verifier: trained on the fits in three simulated rooms, it ranks the right fits of
 // two other rooms above the wrong ones; it travels in the model file (version 1 files, without
 // one, still load); detection uses its confidence as the score and rejects below
@@ -697,6 +773,43 @@ TEST(FurnitureVerifier, RanksTheFitsOfUnseenRoomsAndTravelsInTheModelFile) {
             EXPECT_NE(d.rejection, "confidence");
         }
     }
+
+    // A verifier of an older model, trained on fewer features, gets those.
+    const std::vector<std::string> few = {"coverage", "explained", "free_share",
+                                          "class_" + model.classes()[0].name};
+    ml::Dataset few_rows = ml::Dataset::WithBlocks({{"fit", few}});
+    const FurnitureDetection* fitted = nullptr;
+    for (const auto* list : {&rules.detections, &rules.rejected}) {
+        for (const auto& d : *list) {
+            if (!d.fitted) continue;
+            fitted = &d;
+            few_rows.AppendRow(FurnitureVerifierFeatures(d, model, few),
+                               d.fit.coverage >= 0.6f ? "right" : "wrong");
+        }
+    }
+    ASSERT_NE(fitted, nullptr);
+    few_rows.ClassId("right");
+    few_rows.ClassId("wrong");
+    std::shared_ptr<ml::Classifier> older = ml::CreateClassifier("rtrees:trees=5");
+    older->Fit(few_rows);
+    FurnitureModel with_older = model;
+    with_older.SetVerifier(older);
+    dp.learned = true;
+    dp.min_confidence = 0.4f;
+    const FurnitureFitContext older_context(with_older, dp.fit);
+    for (const auto& d : DetectFurniture(scene, {}, with_older, &older_context, dp).detections)
+        EXPECT_GE(d.confidence, dp.min_confidence);
+    const auto some = FurnitureVerifierFeatures(*fitted, model, {few[1], few[0]});
+    const auto full = FurnitureVerifierFeatures(*fitted, model);
+    const auto all_names = FurnitureVerifierFeatureNames(model);
+    ASSERT_EQ(full.size(), all_names.size());
+    const auto at = [&](const std::string& n) {
+        return full[static_cast<std::size_t>(std::find(all_names.begin(), all_names.end(), n) -
+                                             all_names.begin())];
+    };
+    EXPECT_EQ(some, (std::vector<float>{at(few[1]), at(few[0])}));
+    EXPECT_THROW(FurnitureVerifierFeatures(*fitted, model, {"coverage", "no_such_feature"}),
+                 InvalidArgument);
 
     // Bad verifiers and parameters.
     EXPECT_THROW(bare.SetVerifier(ml::CreateClassifier("rtrees:trees=5")), InvalidArgument);

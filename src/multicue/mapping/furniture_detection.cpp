@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <unordered_set>
 
 #include <fmt/format.h>
@@ -211,10 +212,68 @@ void FurnitureDetectionParams::Validate() const {
     }
 }
 
+FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const FurnitureCad& cad,
+                                             const Eigen::Affine3f& T) {
+    FurnitureShapeEvidence e;
+    if (points.empty() || cad.cloud.empty() || !T.matrix().allFinite()) return e;
+    // The model's box in its own frame.
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f hi = -lo;
+    for (const auto& p : cad.cloud.points) {
+        if (!p.allFinite()) continue;
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+    if (!(hi.array() > lo.array()).all()) return e;
+    const Eigen::Vector3f size = hi - lo;
+    const Eigen::Affine3f to_model = T.inverse();
+    constexpr float kInside = 0.1f, kBeyond = 0.3f;  // [m]
+    // How far outside the box's footprint a point lies (0 inside).
+    auto outside = [&](const Eigen::Vector3f& q) {
+        const float dx = std::max({lo.x() - q.x(), q.x() - hi.x(), 0.0f});
+        const float dy = std::max({lo.y() - q.y(), q.y() - hi.y(), 0.0f});
+        return std::max(dx, dy);
+    };
+    std::vector<float> xs, ys, zs;
+    std::size_t beyond = 0, low = 0, finite = 0;
+    const float floor_z = lo.z();
+    for (const auto& p : points.points) {
+        if (!p.allFinite()) continue;
+        ++finite;
+        const Eigen::Vector3f q = to_model * p;
+        const float d = outside(q);
+        if (d <= kInside) {
+            xs.push_back(q.x());
+            ys.push_back(q.y());
+            zs.push_back(q.z() - floor_z);
+            if (q.z() - floor_z < 0.25f * size.z()) ++low;
+        } else if (d <= kBeyond) {
+            ++beyond;
+        }
+    }
+    if (finite == 0 || zs.empty()) return e;
+    auto quantile = [](std::vector<float>& v, double q) {
+        const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+        return v[k];
+    };
+    auto spread = [&](std::vector<float>& v) { return quantile(v, 0.95) - quantile(v, 0.05); };
+    const auto inside = static_cast<float>(zs.size());
+    e.inside_share = inside / static_cast<float>(finite);
+    e.top = quantile(zs, 0.95);
+    e.top_ratio = e.top / size.z();
+    e.span_x = spread(xs) / size.x();
+    e.span_y = spread(ys) / size.y();
+    e.low_share = static_cast<float>(low) / inside;
+    e.beyond = static_cast<float>(beyond) / inside;
+    return e;
+}
+
 std::vector<std::string> FurnitureVerifierFeatureNames(const FurnitureModel& model) {
-    std::vector<std::string> names = {"log_votes",  "log_parts",    "coverage",
-                                      "free_share", "behind_share", "explained",
-                                      "log_points", "refined",      "shift"};
+    std::vector<std::string> names = {"log_votes",    "log_parts", "coverage",   "free_share",
+                                      "behind_share", "explained", "log_points", "refined",
+                                      "shift",        "inside",    "top",        "top_ratio",
+                                      "span_x",       "span_y",    "low",        "beyond"};
     for (const auto& c : model.classes()) names.push_back("class_" + c.name);
     return names;
 }
@@ -235,10 +294,37 @@ std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
                             d.explained,
                             std::log1p(static_cast<float>(d.fit.scan_points)),
                             d.fit.refined ? 1.0f : 0.0f,
-                            std::isfinite(shift) ? shift : 0.0f};
+                            std::isfinite(shift) ? shift : 0.0f,
+                            d.shape.inside_share,
+                            d.shape.top,
+                            d.shape.top_ratio,
+                            d.shape.span_x,
+                            d.shape.span_y,
+                            d.shape.low_share,
+                            d.shape.beyond};
     for (std::size_t c = 0; c < classes.size(); ++c)
         f.push_back(static_cast<int>(c) == d.cls ? 1.0f : 0.0f);
     return f;
+}
+
+std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
+                                             const FurnitureModel& model,
+                                             const std::vector<std::string>& names) {
+    const std::vector<std::string> all = FurnitureVerifierFeatureNames(model);
+    const std::vector<float> row = FurnitureVerifierFeatures(d, model);
+    std::vector<float> out;
+    out.reserve(names.size());
+    for (const auto& n : names) {
+        const auto it = std::find(all.begin(), all.end(), n);
+        if (it == all.end()) {
+            throw InvalidArgument(fmt::format(
+                "furniture detection: the verifier needs the feature '{}', which this version "
+                "does not compute; train the model again",
+                n));
+        }
+        out.push_back(row[static_cast<std::size_t>(it - all.begin())]);
+    }
+    return out;
 }
 
 float SharedSurfaceShare(const PointCloud& a, const Eigen::Isometry3f& T_a, const PointCloud& b,
@@ -381,6 +467,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                                                              params.surface_overlap_distance),
                                                 PlaceSurface(pts, Eigen::Isometry3f::Identity(),
                                                              params.surface_overlap_distance));
+                    d.shape = MeasureFurnitureShape(pts, cad, d.fit.FittedModelToWorld());
                 }
                 d.accepted = d.fit.accepted;
                 d.rejection = d.fit.rejection;
@@ -390,11 +477,6 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         if (verifier != nullptr) {
             // The verifier's probability of a right fit for every fit that passed the tests
             // and, with learned_tests, every fit they rejected: the verifier decides.
-            if (verifier->feature_names() != FurnitureVerifierFeatureNames(model)) {
-                throw InvalidArgument(
-                    "furniture detection: the model's verifier was trained on other features "
-                    "(a model file of an older version); train the model again");
-            }
             const auto& names = verifier->class_names();
             const auto right = static_cast<Eigen::Index>(
                 std::find(names.begin(), names.end(), "right") - names.begin());
@@ -411,7 +493,8 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                 ml::FeatureMatrix x(static_cast<Eigen::Index>(rows.size()),
                                     static_cast<Eigen::Index>(nf));
                 for (std::size_t r = 0; r < rows.size(); ++r) {
-                    const auto f = FurnitureVerifierFeatures(all[rows[r]], model);
+                    const auto f =
+                        FurnitureVerifierFeatures(all[rows[r]], model, verifier->feature_names());
                     for (std::size_t c = 0; c < nf; ++c)
                         x(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f[c];
                 }

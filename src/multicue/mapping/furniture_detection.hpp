@@ -107,6 +107,26 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
                                      const FurnitureModel& model,
                                      const FurnitureDetectionParams& params);
 
+/// How the scan points around a fit lie in the fitted model's frame, whatever the model's surface
+/// looks like: the shape of the piece against the size of the model (features of the learned
+/// verifier). Points "inside" lie within the model's footprint grown by 10 cm, at any height.
+struct FurnitureShapeEvidence {
+    float inside_share = 0.0f;  ///< the fit's support points inside [-]
+    float top = 0.0f;           ///< 95th percentile of the inside points' heights [m]
+    float top_ratio = 0.0f;     ///< top / the model's height [-]
+    float span_x = 0.0f;     ///< 5-95 % spread of the inside points along the model's x / its depth
+    float span_y = 0.0f;     ///< the same along y / the model's width
+    float low_share = 0.0f;  ///< inside points below a quarter of the model's height [-]
+    /// Support points 10-30 cm beyond the footprint per inside point: the piece goes on where the
+    /// model ends [-]
+    float beyond = 0.0f;
+};
+
+/// The shape evidence of `points` (world frame) against CAD model `cad` placed by `T` (upright).
+/// Zeros without points.
+FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const FurnitureCad& cad,
+                                             const Eigen::Affine3f& T);
+
 /// One detection (or a rejected hypothesis).
 struct FurnitureDetection {
     int cls = 0;
@@ -124,6 +144,7 @@ struct FurnitureDetection {
     /// Share of the fitted model's surface within surface_overlap_distance (one to two cells)
     /// of the scan points it was fitted to
     float explained = 0.0f;
+    FurnitureShapeEvidence shape;  ///< the support points against the fitted model
     /// Probability that the fit is right by the model's verifier; -1 when not computed
     float confidence = -1.0f;
     bool accepted = false;
@@ -133,11 +154,18 @@ struct FurnitureDetection {
 
 /// Names of the verifier's features, in the order of FurnitureVerifierFeatures: the vote score
 /// and parts of the hypothesis, the fit's coverage, free and wall shares, explained surface,
-/// support points, refinement and shift from the votes, and one indicator per class.
+/// support points, refinement and shift from the votes, the shape evidence, and one indicator
+/// per class.
 std::vector<std::string> FurnitureVerifierFeatureNames(const FurnitureModel& model);
 /// The verifier's feature row of a fitted detection.
 std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
                                              const FurnitureModel& model);
+/// The row for a verifier trained on the features `names` (a selection of
+/// FurnitureVerifierFeatureNames in any order; verifiers of older models lack the shape
+/// evidence). Throws InvalidArgument for a name that is not one of them.
+std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
+                                             const FurnitureModel& model,
+                                             const std::vector<std::string>& names);
 
 struct FurnitureDetectionResult {
     std::vector<FurnitureDetection> detections;  ///< accepted, strongest first
