@@ -292,8 +292,9 @@ int Run(const Options& o) {
     SetThresholds(model, o.thresholds);
     const double train_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::fprintf(stderr, "model: %zu parts, %zu words, %zu CAD models (%.1f s)\n",
-                 model.parts().size(), model.num_words(), model.cads().size(), train_s);
+    std::fprintf(stderr, "model: %zu parts, %zu words, %zu CAD models up to %.2f m (%.1f s)\n",
+                 model.parts().size(), model.num_words(), model.cads().size(),
+                 model.max_object_height(), train_s);
     FurnitureVocabularyParams vp = model.vocabulary_params();
     vp.features = FurnitureFeatureSet::kReduced;
     vp.num_threads = o.threads;
@@ -444,6 +445,7 @@ int Run(const Options& o) {
                 for (const auto& f : room.room.furniture) {
                     float best = 1e9f, score = 0.0f;
                     std::string fate;
+                    const FurnitureDetection* nearest = nullptr;
                     for (const auto* list : {&det.detections, &det.rejected}) {
                         for (const auto& d : *list) {
                             if (d.category != f.category) continue;
@@ -451,8 +453,28 @@ int Run(const Options& o) {
                                 (f.T_world_object.translation().head<2>() - d.centre).norm();
                             if (dist < best)
                                 best = dist, score = d.hypothesis.normalized,
-                                fate = d.accepted ? "ok" : d.rejection;
+                                fate = d.accepted ? "ok" : d.rejection, nearest = &d;
                         }
+                    }
+                    // The nearest fit's yaw error (a full turn), whether it was turned away from
+                    // a wall, and the nearest wall the scans saw from the piece's centre.
+                    std::string pose;
+                    if (nearest != nullptr && nearest->fitted) {
+                        float wall = 1e9f;
+                        for (const auto& ws : scene.walls) {
+                            for (const auto& w : ws) {
+                                const float dw =
+                                    w.Distance(f.T_world_object.translation().head<2>());
+                                if (std::isfinite(dw)) wall = std::min(wall, std::abs(dw));
+                            }
+                        }
+                        pose = fmt::format(
+                            " yaw {:.0f} turned {} wall {:.2f} m depth {:.2f} room {} at {:.2f} "
+                            "{:.2f}",
+                            eval::YawError(nearest->fit.yaw, f.yaw, false),
+                            nearest->fit.turned ? 1 : 0, wall, std::min(f.extent.x(), f.extent.y()),
+                            r, f.T_world_object.translation().x(),
+                            f.T_world_object.translation().y());
                     }
                     // The nearest hypothesis of any class, for pieces found under another name.
                     float any = 1e9f;
@@ -468,10 +490,10 @@ int Run(const Options& o) {
                     }
                     std::fprintf(stderr,
                                  "NEAREST %-9s w %.2f l %.2f returns %d: %.2f m score %.2f %s | "
-                                 "any %.2f m %s %s\n",
+                                 "any %.2f m %s %s |%s\n",
                                  f.category.c_str(), f.width, std::max(f.extent.x(), f.extent.y()),
                                  returns[f.label], best, score, fate.c_str(), any, any_cls.c_str(),
-                                 any_fate.c_str());
+                                 any_fate.c_str(), pose.c_str());
                 }
             }
             if (primary && r < o.draw) {

@@ -2,9 +2,9 @@
 // noisy scan of its piece at a known pose (and rejected where a scan saw only floor) and
 // stretched to a piece of another size, a planted chair found by the votes (the same for any
 // thread count), merged views dropping a place only one view votes for, free space against a
-// closed-form case, the shape evidence of a fit, the learned verifier (and one of an older model
-// that knows fewer features), the model file round trip, bad parameters and empty
-// input.
+// closed-form case, walls among the parts, the shape evidence of a fit, the learned verifier (and
+// one of an older model that knows fewer features), the model file round trip, bad parameters and
+// empty input.
 
 #include <gtest/gtest.h>
 
@@ -679,6 +679,56 @@ TEST(FurnitureShape, MeasuresThePieceAgainstTheFittedModel) {
     PointCloud with_nan = same;
     with_nan.points.push_back(Eigen::Vector3f::Constant(std::nanf("")));
     EXPECT_FLOAT_EQ(MeasureFurnitureShape(with_nan, cad, T).inside_share, 1.0f);
+}
+
+// Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
+// even with a few stray points (a corner's, an object's touching it) in its part; two walls
+// grown into one part around a corner, a short part and a low one are no wall.
+TEST(FurnitureWalls, AWallKeepsItsStrayPointsAndACornerIsNoWall) {
+    FurnitureParts v;
+    v.sensor_origin = Eigen::Vector3f(0.0f, 0.0f, 1.5f);
+    auto add_part = [&](const std::vector<Eigen::Vector3f>& pts) {
+        FurniturePart part;
+        for (const auto& p : pts) {
+            part.indices.push_back(static_cast<Index>(v.cloud.points.size()));
+            v.cloud.points.push_back(p);
+            part.top = std::max(part.top, p.z());
+        }
+        v.parts.push_back(part);
+    };
+    std::vector<Eigen::Vector3f> wall, corner, low, narrow;
+    for (float x = -2.0f; x <= 2.0f; x += 0.05f) {
+        for (float z = 0.1f; z <= 2.2f; z += 0.05f) {
+            wall.emplace_back(x, 3.0f + 0.005f * std::sin(20.0f * x), z);
+            if (z < 1.0f) low.emplace_back(x, -3.0f, z);
+        }
+    }
+    for (int k = 0; k < 8; ++k) wall.emplace_back(-2.0f, 3.0f - 0.1f * k, 2.0f);  // the corner's
+    for (float t = 0.0f; t <= 2.0f; t += 0.05f) {
+        for (float z = 0.1f; z <= 2.2f; z += 0.1f) {
+            corner.emplace_back(-4.0f, -2.0f + t, z);  // along y ...
+            corner.emplace_back(-4.0f + t, -2.0f, z);  // ... and along x, one part
+        }
+    }
+    for (float x = 3.0f; x <= 3.5f; x += 0.05f) {
+        for (float z = 0.1f; z <= 2.2f; z += 0.1f) narrow.emplace_back(x, 1.0f, z);
+    }
+    add_part(wall);
+    add_part(corner);
+    add_part(low);
+    add_part(narrow);
+    v.cloud.width = static_cast<std::uint32_t>(v.cloud.points.size());
+    const auto walls = FindFurnitureWalls(v, 1.9f, 1.0f);
+    ASSERT_EQ(walls.size(), 1u);
+    EXPECT_NEAR(walls[0].normal.y(), -1.0f, 1e-3f);  // towards the sensor
+    EXPECT_NEAR(walls[0].Distance(Eigen::Vector2f(0.5f, 2.7f)), 0.3f, 0.02f);
+    EXPECT_NEAR(walls[0].hi - walls[0].lo, 4.0f, 0.1f);
+    EXPECT_TRUE(walls[0].Behind(Eigen::Vector2f(0.0f, 3.5f), 0.2f));
+    EXPECT_TRUE(std::isnan(walls[0].Distance(Eigen::Vector2f(5.0f, 2.7f))));  // beside it
+    EXPECT_TRUE(FindFurnitureWalls(v, 2.5f, 1.0f).empty());  // nothing reaches 2.5 m
+    EXPECT_TRUE(FindFurnitureWalls(FurnitureParts{}, 1.9f, 1.0f).empty());
+    EXPECT_THROW(FindFurnitureWalls(v, 1.9f, 0.0f), InvalidArgument);
+    EXPECT_THROW(FindFurnitureWalls(v, std::nanf(""), 1.0f), InvalidArgument);
 }
 
 // The learned verifier: trained on the fits in three simulated rooms, it ranks the right fits of

@@ -126,31 +126,57 @@ PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis&
     return out;
 }
 
-// The walls among a view's parts: upright planes reaching above max_top, long enough.
-std::vector<FurnitureWall> FindWalls(const FurnitureParts& v, float max_top, float min_length) {
+}  // namespace
+
+// The walls among a view's parts: upright planes reaching above max_top, long enough. A part
+// counts as a wall when nearly all its points (kWallInliers) lie within kWallSpread of one upright
+// plane: region growing lets a wall's part take in a few points around a corner or of an object
+// touching it, and a single such point must not cost the room its wall.
+std::vector<FurnitureWall> FindFurnitureWalls(const FurnitureParts& v, float max_top,
+                                              float min_length) {
+    if (!std::isfinite(max_top) || !(min_length > 0.0f) || !std::isfinite(min_length)) {
+        throw InvalidArgument(
+            fmt::format("furniture walls: max_top must be finite and min_length > 0, got {} and {}",
+                        max_top, min_length));
+    }
+    constexpr double kWallSpread = 0.1, kWallInliers = 0.95;
     std::vector<FurnitureWall> walls;
+    std::vector<Eigen::Vector2d> pts, in;
     for (const auto& part : v.parts) {
         if (part.top <= max_top || part.indices.size() < 20) continue;
-        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-        for (Index i : part.indices) mean += v.cloud.points[i].head<2>().cast<double>();
-        mean /= static_cast<double>(part.indices.size());
-        Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-        for (Index i : part.indices) {
-            const Eigen::Vector2d q = v.cloud.points[i].head<2>().cast<double>() - mean;
-            cov += q * q.transpose();
-        }
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-        Eigen::Vector2d n = eig.eigenvectors().col(0);
+        pts.clear();
+        for (Index i : part.indices) pts.push_back(v.cloud.points[i].head<2>().cast<double>());
+        // The line through points by their mean and principal direction; n its normal.
+        Eigen::Vector2d mean, n;
+        auto fit = [&](const std::vector<Eigen::Vector2d>& p) {
+            mean.setZero();
+            for (const auto& q : p) mean += q;
+            mean /= static_cast<double>(p.size());
+            Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+            for (const auto& q : p) cov += (q - mean) * (q - mean).transpose();
+            n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov).eigenvectors().col(0);
+        };
+        auto inliers = [&](std::vector<Eigen::Vector2d>& out) {
+            out.clear();
+            for (const auto& q : pts) {
+                if (std::abs((q - mean).dot(n)) <= kWallSpread) out.push_back(q);
+            }
+        };
+        fit(pts);
+        inliers(in);
+        if (in.size() < 20) continue;
+        fit(in);  // again without the stray points
+        inliers(in);
+        if (static_cast<double>(in.size()) < kWallInliers * static_cast<double>(pts.size()))
+            continue;  // not one upright plane
         if (n.dot(v.sensor_origin.head<2>().cast<double>() - mean) < 0.0) n = -n;
         const Eigen::Vector2d dir(-n.y(), n.x());
-        double lo = 1e9, hi = -1e9, spread = 0.0;
-        for (Index i : part.indices) {
-            const Eigen::Vector2d q = v.cloud.points[i].head<2>().cast<double>() - mean;
-            lo = std::min(lo, q.dot(dir));
-            hi = std::max(hi, q.dot(dir));
-            spread = std::max(spread, std::abs(q.dot(n)));
+        double lo = 1e9, hi = -1e9;
+        for (const auto& q : in) {
+            lo = std::min(lo, (q - mean).dot(dir));
+            hi = std::max(hi, (q - mean).dot(dir));
         }
-        if (hi - lo < min_length || spread > 0.1) continue;  // short, or not one upright plane
+        if (hi - lo < min_length) continue;
         FurnitureWall w;
         w.point = mean.cast<float>();
         w.normal = n.cast<float>();
@@ -160,8 +186,6 @@ std::vector<FurnitureWall> FindWalls(const FurnitureParts& v, float max_top, flo
     }
     return walls;
 }
-
-}  // namespace
 
 float ConvexIntersectionArea(const Polygon& a, const Polygon& b) {
     if (a.size() < 3 || b.size() < 3) return 0.0f;
@@ -362,11 +386,11 @@ FurnitureScene PrepareFurnitureScene(const std::vector<FurnitureView>& views,
         scene.votes.push_back(
             CastFurnitureVotes(scene.views.back(), model, static_cast<int>(v), params.voting));
         scene.votes_ms += MillisecondsSince(t);
-        scene.walls.push_back(
-            params.walls ? FindWalls(scene.views.back(),
-                                     model.max_object_height() + params.voting.height_margin,
-                                     params.min_wall_length)
-                         : std::vector<FurnitureWall>{});
+        scene.walls.push_back(params.walls ? FindFurnitureWalls(scene.views.back(),
+                                                                model.max_object_height() +
+                                                                    params.voting.height_margin,
+                                                                params.min_wall_length)
+                                           : std::vector<FurnitureWall>{});
         if (!params.verify || !params.free_space) continue;
         // Occupancy from the whole scan (the floor too: rays to it free the space above it),
         // thinned to the map's resolution.

@@ -189,6 +189,13 @@ FurnitureDetectionResult DetectFurniture(const std::vector<FurnitureView>& views
                                          const FurnitureFitContext* context,
                                          const FurnitureDetectionParams& params);
 
+/// The walls among a view's parts: parts reaching above `max_top` [m] of which at least 95 % of
+/// the points lie within 10 cm of one upright plane (a few stray points around a corner or of an
+/// object touching the wall are allowed), at least `min_length` [m] long. Their normals point to
+/// the view's sensor. Throws InvalidArgument for a max_top that is not finite or min_length <= 0.
+std::vector<FurnitureWall> FindFurnitureWalls(const FurnitureParts& view, float max_top,
+                                              float min_length);
+
 /// Area of the intersection of two convex polygons (counter-clockwise) [m^2].
 float ConvexIntersectionArea(const std::vector<Eigen::Vector2f>& a,
                              const std::vector<Eigen::Vector2f>& b);
