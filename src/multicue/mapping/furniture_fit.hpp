@@ -75,7 +75,7 @@ struct FurnitureFitParams {
     /// turns: coverage and the free and wall shares stay those of the pose the search found.
     bool back_to_wall = true;
     float wall_gap = 0.3f;         ///< [m], >= 0
-    float flip_tolerance = 0.35f;  ///< [-], >= 0 (chosen on validation rooms)
+    float flip_tolerance = 0.6f;  ///< [-], >= 0 (chosen on validation rooms)
     /// Size adaptation: after the search and refinement the fitted model is stretched along its
     /// own axes, each by a factor within [1 - max_scale, 1 + max_scale] (scale_steps factors on
     /// either side of 1), axis by axis in two rounds. A horizontal stretch keeps the model's near
