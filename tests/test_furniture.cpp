@@ -962,6 +962,18 @@ TEST(DetectFurnitureCli, TrainThenDetectWritesTheResultAndTheReport) {
     EXPECT_TRUE(result["detections"].is_array());
     EXPECT_TRUE(result["rejected"].is_array());
     EXPECT_GT(result["detections"].size() + result["rejected"].size(), 0u);
+    std::size_t fitted = 0;
+    for (const auto* list : {&result["detections"], &result["rejected"]}) {
+        for (const auto& d : *list) {
+            if (!d.contains("cad_model")) continue;  // not fitted
+            ++fitted;
+            ASSERT_TRUE(d.contains("shape"));
+            EXPECT_GE(d["shape"]["inside_share"].get<double>(), 0.0);
+            EXPECT_LE(d["shape"]["inside_share"].get<double>(), 1.0);
+            EXPECT_TRUE(d["shape"].contains("beyond"));
+        }
+    }
+    EXPECT_GT(fitted, 0u);
     const std::string report = io::ReadFileBytes(dir / "out" / "report.html");
     EXPECT_NE(report.find("<svg"), std::string::npos);
     EXPECT_NE(report.find("</html>"), std::string::npos);

@@ -133,6 +133,14 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     j["coverage"] = d.fit.coverage;
     j["free_share"] = d.fit.free_share;
     j["behind_wall_share"] = d.fit.behind_share;
+    const FurnitureShapeEvidence& e = d.shape;
+    j["shape"] = {{"inside_share", e.inside_share},
+                  {"top", e.top},
+                  {"top_ratio", e.top_ratio},
+                  {"span_x", e.span_x},
+                  {"span_y", e.span_y},
+                  {"low_share", e.low_share},
+                  {"beyond", e.beyond}};
     return j;
 }
 
