@@ -302,6 +302,30 @@ std::vector<std::string> FurnitureVerifierFeatureNames(const FurnitureModel& mod
     return names;
 }
 
+namespace {
+
+// Where each of `names` (a verifier's features) lies in FurnitureVerifierFeatures' row. Throws
+// InvalidArgument for a name this version does not compute.
+std::vector<std::size_t> VerifierColumns(const FurnitureModel& model,
+                                         const std::vector<std::string>& names) {
+    const std::vector<std::string> all = FurnitureVerifierFeatureNames(model);
+    std::vector<std::size_t> columns;
+    columns.reserve(names.size());
+    for (const auto& n : names) {
+        const auto it = std::find(all.begin(), all.end(), n);
+        if (it == all.end()) {
+            throw InvalidArgument(fmt::format(
+                "furniture detection: the verifier needs the feature '{}', which this version "
+                "does not compute; train the model again",
+                n));
+        }
+        columns.push_back(static_cast<std::size_t>(it - all.begin()));
+    }
+    return columns;
+}
+
+}  // namespace
+
 std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
                                              const FurnitureModel& model) {
     const auto& classes = model.classes();
@@ -334,20 +358,10 @@ std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
 std::vector<float> FurnitureVerifierFeatures(const FurnitureDetection& d,
                                              const FurnitureModel& model,
                                              const std::vector<std::string>& names) {
-    const std::vector<std::string> all = FurnitureVerifierFeatureNames(model);
     const std::vector<float> row = FurnitureVerifierFeatures(d, model);
     std::vector<float> out;
     out.reserve(names.size());
-    for (const auto& n : names) {
-        const auto it = std::find(all.begin(), all.end(), n);
-        if (it == all.end()) {
-            throw InvalidArgument(fmt::format(
-                "furniture detection: the verifier needs the feature '{}', which this version "
-                "does not compute; train the model again",
-                n));
-        }
-        out.push_back(row[static_cast<std::size_t>(it - all.begin())]);
-    }
+    for (std::size_t c : VerifierColumns(model, names)) out.push_back(row[c]);
     return out;
 }
 
@@ -463,6 +477,11 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         all[i].accepted = !BehindWalls(walls, hyps[i].centre, params.fit.wall_margin);
         if (!all[i].accepted) all[i].rejection = "behind_wall";
     }
+    const ml::Classifier* verifier = params.verify && params.learned ? model.verifier() : nullptr;
+    // The verifier's columns, checked before any fitting.
+    const std::vector<std::size_t> columns = verifier != nullptr
+                                                 ? VerifierColumns(model, verifier->feature_names())
+                                                 : std::vector<std::size_t>{};
     if (params.verify) {
         t = std::chrono::steady_clock::now();
         // What the chosen views say about the space: their free space and walls.
@@ -497,7 +516,6 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                 d.rejection = d.fit.rejection;
             },
             1);
-        const ml::Classifier* verifier = params.learned ? model.verifier() : nullptr;
         if (verifier != nullptr) {
             // The verifier's probability of a right fit for every fit that passed the tests
             // and, with learned_tests, every fit they rejected: the verifier decides.
@@ -513,14 +531,15 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                     rows.push_back(i);
             }
             if (!rows.empty()) {
-                const std::size_t nf = verifier->num_features();
+                const std::size_t nf = columns.size();
                 ml::FeatureMatrix x(static_cast<Eigen::Index>(rows.size()),
                                     static_cast<Eigen::Index>(nf));
                 for (std::size_t r = 0; r < rows.size(); ++r) {
-                    const auto f =
-                        FurnitureVerifierFeatures(all[rows[r]], model, verifier->feature_names());
-                    for (std::size_t c = 0; c < nf; ++c)
-                        x(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f[c];
+                    const auto f = FurnitureVerifierFeatures(all[rows[r]], model);
+                    for (std::size_t c = 0; c < nf; ++c) {
+                        x(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
+                            f[columns[c]];
+                    }
                 }
                 const ml::FeatureMatrix p = verifier->PredictProba(x);
                 for (std::size_t r = 0; r < rows.size(); ++r) {

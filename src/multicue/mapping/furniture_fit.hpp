@@ -74,7 +74,7 @@ struct FurnitureFitParams {
     /// alone often cannot tell; furniture against a wall faces the room. Only the reported pose
     /// turns: coverage and the free and wall shares stay those of the pose the search found.
     bool back_to_wall = true;
-    float wall_gap = 0.3f;         ///< [m], >= 0
+    float wall_gap = 0.3f;        ///< [m], >= 0
     float flip_tolerance = 0.6f;  ///< [-], >= 0 (chosen on validation rooms)
     /// Size adaptation: after the search and refinement the fitted model is stretched along its
     /// own axes, each by a factor within [1 - max_scale, 1 + max_scale] (scale_steps factors on
