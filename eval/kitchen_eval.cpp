@@ -384,6 +384,29 @@ class Evaluator {
             s.inter[c] += inter[c];
             s.uni[c] += uni[c];
             if (uni[c] > 0) s.frame_iou[c].Add(inter[c] / uni[c]);
+            if (o_.verbose && uni[c] > 0 && inter[c] < 0.5 * uni[c]) {
+                std::size_t truth = 0, predicted = 0;
+                std::array<std::size_t, mapping::kNumMapClasses> as{};
+                for (std::size_t i = 0; i < f.cloud.size(); ++i) {
+                    if (!f.cloud.IsFinite(i)) continue;
+                    const bool is = TrueIouClass(t.Class(i)) == static_cast<int>(c);
+                    truth += is;
+                    if (is) ++as[static_cast<std::size_t>(map.point_class[i])];
+                    predicted += PredIouClass(map.point_class[i]) == static_cast<int>(c);
+                }
+                std::string labels;
+                for (std::size_t m = 0; m < as.size(); ++m) {
+                    if (as[m] > 0) {
+                        labels += " " + mapping::MapClassNames()[m] + " " + std::to_string(as[m]);
+                    }
+                }
+                std::fprintf(stderr,
+                             "frame %s kitchen seed %llu: %s IoU %.2f (%zu true points, %zu "
+                             "labelled, sensor %.2f m above the floor; true points labelled%s)\n",
+                             f.laser ? "laser" : "kinect", static_cast<unsigned long long>(seed),
+                             kIouClasses[c].c_str(), inter[c] / uni[c], truth, predicted,
+                             f.pose.translation().z(), labels.c_str());
+            }
         }
         // Fixtures: greedy 1:1 by distance from the detection's centre to the true points.
         const std::size_t min_fixture = f.laser ? 4 : 15;

@@ -93,6 +93,46 @@ TEST(RoomStructure, FloorCeilingWallsWorktopAndFace) {
                  InvalidArgument);
 }
 
+// A close view: a strip of floor in front of the counters, the underside of a shelf seen from
+// below, a counter on a cupboard front away from every wall and a table with a short apron.
+TEST(RoomStructure, AStripOfFloorAndACounterAwayFromTheWalls) {
+    std::mt19937 rng(3);
+    PointCloud c;
+    c.sensor_origin = Eigen::Vector3f(0.0f, -0.5f, 1.4f);
+    const Color grey{128, 128, 128, 255};
+    const Eigen::Vector3f ux(1, 0, 0), uy(0, 1, 0), uz(0, 0, 1);
+    // Floor strip: 2.0 x 0.08 m (0.16 m^2; 0.2-0.27 m^2 of 3 cm cells).
+    test::AddPatch(c, {-1.0f, 0.85f, 0.0f}, 2.0f * ux, 0.08f * uy, 0.01f, uz, grey, 0.0f, rng);
+    // Underside of a shelf, 0.5 x 0.4 m, 2 m up, facing down.
+    test::AddPatch(c, {-0.25f, 1.2f, 2.0f}, 0.5f * ux, 0.4f * uy, 0.01f, -uz, grey, 0.0f, rng);
+    // Counter 0.9 m high on a cupboard front 0.78 m tall, 2 cm behind its edge.
+    test::AddPatch(c, {-1.0f, 1.0f, 0.9f}, 1.0f * ux, 0.6f * uy, 0.01f, uz, grey, 0.0f, rng);
+    test::AddPatch(c, {-1.0f, 1.02f, 0.1f}, 1.0f * ux, 0.78f * uz, 0.01f, -uy, grey, 0.0f, rng);
+    // Table 0.75 m high with an 11 cm apron.
+    test::AddPatch(c, {0.2f, 1.0f, 0.75f}, 0.8f * ux, 0.8f * uy, 0.01f, uz, grey, 0.0f, rng);
+    test::AddPatch(c, {0.2f, 1.02f, 0.62f}, 0.8f * ux, 0.11f * uz, 0.01f, -uy, grey, 0.0f, rng);
+    auto label_at = [](const RoomStructure& s, float height) {
+        for (const auto& comp : s.components) {
+            if (comp.axis == 2 && std::abs(std::abs(comp.plane.w()) - height) < 0.02f)
+                return comp.label;
+        }
+        return MapClass::kNone;
+    };
+    const RoomStructure s = SegmentRoomStructure(c, RoomFrame{}, {});
+    EXPECT_NEAR(s.floor_height, 0.0f, 0.01f);
+    EXPECT_TRUE(std::isnan(s.ceiling_height));  // a shelf's underside is no ceiling
+    EXPECT_EQ(label_at(s, 0.9f), MapClass::kWorktop);
+    EXPECT_EQ(label_at(s, 0.75f), MapClass::kTable);
+    // Without the face rule the counter is a table; with the floor needing 0.3 m^2, no floor.
+    const RoomStructure t =
+        SegmentRoomStructure(c, RoomFrame{}, {.min_floor_area = 0.3f, .worktop_face_height = 0.0f});
+    EXPECT_TRUE(std::isnan(t.floor_height));
+    EXPECT_EQ(label_at(t, 0.9f), MapClass::kTable);
+    EXPECT_THROW(SegmentRoomStructure(c, RoomFrame{}, {.worktop_face_height = -1.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(SegmentRoomStructure(c, RoomFrame{}, {.min_ceiling_area = 0.0f}), InvalidArgument);
+}
+
 TEST(Fixtures, HandleVersusKnob) {
     std::mt19937 rng(2);
     PlanarComponent face;

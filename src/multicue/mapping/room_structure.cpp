@@ -130,6 +130,32 @@ float DistanceToPlane(const PlanarComponent& h, const RoomFrame& f, const Planar
     return best;
 }
 
+/// Whether a vertical component at least `worktop_face_height` tall stands under an edge of the
+/// horizontal component `h` (at height `height` along up), its top within 15 cm below it, along
+/// at least half of its own width or 30 cm of the edge.
+bool FaceUnderEdge(const PlanarComponent& h, float height, const RoomFrame& f,
+                   const std::vector<PlanarComponent>& components, const RoomStructureParams& p) {
+    constexpr float kEdge = 0.1f, kDrop = 0.15f, kOverlap = 0.3f;
+    for (const PlanarComponent& v : components) {
+        if (v.axis == 2 || v.label == MapClass::kWall || v.indices.empty()) continue;
+        if (v.max.y() > height + 0.05f || v.max.y() < height - kDrop ||
+            v.max.y() - v.min.y() < p.worktop_face_height) {
+            continue;
+        }
+        // The face's position along its axis k and its extent along the other horizontal axis.
+        const int k = v.axis, j = 1 - v.axis;
+        const Eigen::Vector3f n = v.plane.head<3>();
+        const float pos = -v.plane.w() / n.dot(f.axes.col(k));
+        const float s = f.Up().cross(n).dot(f.axes.col(j));
+        const float lo = s > 0.0f ? v.min.x() : -v.max.x(), hi = s > 0.0f ? v.max.x() : -v.min.x();
+        const float edge = std::min(std::abs(pos - h.min[k]), std::abs(pos - h.max[k]));
+        if (edge > kEdge) continue;
+        const float overlap = std::min(hi, h.max[j]) - std::max(lo, h.min[j]);
+        if (overlap >= std::min(kOverlap, 0.5f * (hi - lo))) return true;
+    }
+    return false;
+}
+
 }  // namespace
 
 void RoomStructureParams::Validate() const {
@@ -149,6 +175,13 @@ void RoomStructureParams::Validate() const {
     positive("min_room_height", min_room_height);
     positive("behind_margin", behind_margin);
     positive("max_distance_threshold", max_distance_threshold);
+    positive("min_floor_area", min_floor_area);
+    positive("min_ceiling_area", min_ceiling_area);
+    if (!(worktop_face_height >= 0.0f && worktop_face_height <= 3.0f)) {
+        throw InvalidArgument(
+            fmt::format("room structure: worktop_face_height must be in [0, 3] m, got {}",
+                        worktop_face_height));
+    }
     if (!(range_noise >= 0.0f) || !(min_floor_depth >= 0.0f)) {
         throw InvalidArgument(fmt::format(
             "room structure: range_noise and min_floor_depth must be >= 0, got {} and {}",
@@ -295,7 +328,9 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
         if (pl.plane.sign > 0 && (!floor || pl.plane.offset < floor->plane.offset)) floor = &pl;
     }
     for (const auto& pl : planes) {
-        if (pl.plane.axis != 2 || pl.plane.sign > 0 || plane_area(pl) < p.min_floor_area) continue;
+        if (pl.plane.axis != 2 || pl.plane.sign > 0 || plane_area(pl) < p.min_ceiling_area) {
+            continue;
+        }
         if (floor && pl.plane.offset < floor->plane.offset + p.min_room_height) continue;
         if (!ceiling || pl.plane.offset > ceiling->plane.offset) ceiling = &pl;
     }
@@ -363,7 +398,10 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
                             p.worktop_wall_distance;
                 }
             }
-            c.label = by_wall ? MapClass::kWorktop : MapClass::kTable;
+            c.label = by_wall || (p.worktop_face_height > 0.0f &&
+                                  FaceUnderEdge(c, h, frame, out.components, p))
+                          ? MapClass::kWorktop
+                          : MapClass::kTable;
         } else if (c.area >= p.min_face_area) {
             c.label = MapClass::kFace;
         }

@@ -28,7 +28,13 @@ struct RoomStructureParams {
     float component_tolerance = 0.05f;      ///< points of one plane closer than this connect [m]
     std::size_t min_component_points = 40;  ///< smaller components are dropped [points]
     float cell_size = 0.03f;                ///< occupancy cell for component areas [m]
-    float min_floor_area = 0.3f;            ///< floor and ceiling need this much [m^2]
+    /// The floor needs this much area [m^2]. A Kinect looking at a counter from 1-2 m sees a
+    /// strip of floor in front of it, often under 0.3 m^2; nothing else in a kitchen faces up
+    /// below the counters, and the floor is the lowest such plane.
+    float min_floor_area = 0.1f;
+    /// The ceiling needs this much [m^2]: a smaller plane seen from below is the underside of a
+    /// wall cupboard or a shelf.
+    float min_ceiling_area = 0.3f;
     /// With a sensor position: the floor lies at least this far below the sensor [m]
     float min_floor_depth = 0.8f;
     float min_room_height = 1.8f;         ///< the ceiling lies at least this above the floor [m]
@@ -40,7 +46,12 @@ struct RoomStructureParams {
     float max_counter_height = 1.3f;      ///< [m]
     float min_counter_area = 0.04f;       ///< [m^2]
     float worktop_wall_distance = 0.25f;  ///< a worktop's edge lies this close to a wall [m]
-    float min_face_area = 0.015f;         ///< furniture face candidates [m^2]
+    /// A counter away from every wall found is still a worktop when a vertical face at least
+    /// this tall stands under one of its edges, its top just below the counter (the front of
+    /// the cupboards it rests on; a table's apron or drawer is shorter). Walls are often hidden
+    /// behind wall cupboards or out of a close view; 0: off [m]
+    float worktop_face_height = 0.4f;
+    float min_face_area = 0.015f;  ///< furniture face candidates [m^2]
     /// The three axes' planes, and each plane's components, in parallel (0 = all cores); the
     /// result does not depend on it.
     int num_threads = 1;
