@@ -105,12 +105,15 @@ TEST(RoomStructure, AStripOfFloorAndACounterAwayFromTheWalls) {
     test::AddPatch(c, {-1.0f, 0.85f, 0.0f}, 2.0f * ux, 0.08f * uy, 0.01f, uz, grey, 0.0f, rng);
     // Underside of a shelf, 0.5 x 0.4 m, 2 m up, facing down.
     test::AddPatch(c, {-0.25f, 1.2f, 2.0f}, 0.5f * ux, 0.4f * uy, 0.01f, -uz, grey, 0.0f, rng);
-    // Counter 0.9 m high on a cupboard front 0.78 m tall, 2 cm behind its edge.
+    // Counter 0.9 m high on a cupboard front 0.78 m tall, 12 cm behind its edge.
     test::AddPatch(c, {-1.0f, 1.0f, 0.9f}, 1.0f * ux, 0.6f * uy, 0.01f, uz, grey, 0.0f, rng);
-    test::AddPatch(c, {-1.0f, 1.02f, 0.1f}, 1.0f * ux, 0.78f * uz, 0.01f, -uy, grey, 0.0f, rng);
-    // Table 0.75 m high with an 11 cm apron.
+    test::AddPatch(c, {-1.0f, 1.12f, 0.1f}, 1.0f * ux, 0.78f * uz, 0.01f, -uy, grey, 0.0f, rng);
+    // Table 0.75 m high with an 11 cm apron and two legs 5 cm wide in view.
     test::AddPatch(c, {0.2f, 1.0f, 0.75f}, 0.8f * ux, 0.8f * uy, 0.01f, uz, grey, 0.0f, rng);
     test::AddPatch(c, {0.2f, 1.02f, 0.62f}, 0.8f * ux, 0.11f * uz, 0.01f, -uy, grey, 0.0f, rng);
+    for (const float x : {0.22f, 0.93f}) {
+        test::AddPatch(c, {x, 1.03f, 0.02f}, 0.05f * ux, 0.58f * uz, 0.01f, -uy, grey, 0.0f, rng);
+    }
     auto label_at = [](const RoomStructure& s, float height) {
         for (const auto& comp : s.components) {
             if (comp.axis == 2 && std::abs(std::abs(comp.plane.w()) - height) < 0.02f)

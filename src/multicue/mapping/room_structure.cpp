@@ -130,12 +130,17 @@ float DistanceToPlane(const PlanarComponent& h, const RoomFrame& f, const Planar
     return best;
 }
 
-/// Whether a vertical component at least `worktop_face_height` tall stands under an edge of the
-/// horizontal component `h` (at height `height` along up), its top within 15 cm below it, along
-/// at least half of its own width or 30 cm of the edge.
-bool FaceUnderEdge(const PlanarComponent& h, float height, const RoomFrame& f,
-                   const std::vector<PlanarComponent>& components, const RoomStructureParams& p) {
-    constexpr float kEdge = 0.1f, kDrop = 0.15f, kOverlap = 0.3f;
+/// Whether a vertical component at least `worktop_face_height` tall stands under the horizontal
+/// component `h` (at height `height` along up), its top within 15 cm below it, at least 15 cm
+/// wide, filling half of its box, along at least 30 cm or half of its own width or of the
+/// counter's length. The face need
+/// not lie under the counter's edge: a worktop may overhang its cupboards by a dozen centimetres,
+/// and the box of an L-shaped worktop has no edge above the fronts of one of its runs. A table's
+/// legs are too narrow, its apron too low.
+bool FaceUnder(const PlanarComponent& h, float height, const RoomFrame& f,
+               const std::vector<PlanarComponent>& components, const RoomStructureParams& p) {
+    constexpr float kMargin = 0.1f, kDrop = 0.15f, kOverlap = 0.3f, kMinWidth = 0.15f,
+                    kMinFill = 0.5f;
     for (const PlanarComponent& v : components) {
         if (v.axis == 2 || v.label == MapClass::kWall || v.indices.empty()) continue;
         if (v.max.y() > height + 0.05f || v.max.y() < height - kDrop ||
@@ -146,12 +151,15 @@ bool FaceUnderEdge(const PlanarComponent& h, float height, const RoomFrame& f,
         const int k = v.axis, j = 1 - v.axis;
         const Eigen::Vector3f n = v.plane.head<3>();
         const float pos = -v.plane.w() / n.dot(f.axes.col(k));
+        if (pos < h.min[k] - kMargin || pos > h.max[k] + kMargin) continue;
         const float s = f.Up().cross(n).dot(f.axes.col(j));
         const float lo = s > 0.0f ? v.min.x() : -v.max.x(), hi = s > 0.0f ? v.max.x() : -v.min.x();
-        const float edge = std::min(std::abs(pos - h.min[k]), std::abs(pos - h.max[k]));
-        if (edge > kEdge) continue;
+        if (hi - lo < kMinWidth) continue;
+        // Solid: a table's legs and apron in one plane make a frame, not a front.
+        if (v.area < kMinFill * (hi - lo) * (v.max.y() - v.min.y())) continue;
         const float overlap = std::min(hi, h.max[j]) - std::max(lo, h.min[j]);
-        if (overlap >= std::min(kOverlap, 0.5f * (hi - lo))) return true;
+        if (overlap >= std::min({kOverlap, 0.5f * (hi - lo), 0.5f * (h.max[j] - h.min[j])}))
+            return true;
     }
     return false;
 }
@@ -399,7 +407,7 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
                 }
             }
             c.label = by_wall || (p.worktop_face_height > 0.0f &&
-                                  FaceUnderEdge(c, h, frame, out.components, p))
+                                  FaceUnder(c, h, frame, out.components, p))
                           ? MapClass::kWorktop
                           : MapClass::kTable;
         } else if (c.area >= p.min_face_area) {

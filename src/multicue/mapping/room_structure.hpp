@@ -46,10 +46,10 @@ struct RoomStructureParams {
     float max_counter_height = 1.3f;      ///< [m]
     float min_counter_area = 0.04f;       ///< [m^2]
     float worktop_wall_distance = 0.25f;  ///< a worktop's edge lies this close to a wall [m]
-    /// A counter away from every wall found is still a worktop when a vertical face at least
-    /// this tall stands under one of its edges, its top just below the counter (the front of
-    /// the cupboards it rests on; a table's apron or drawer is shorter). Walls are often hidden
-    /// behind wall cupboards or out of a close view; 0: off [m]
+    /// A counter away from every wall found is still a worktop when a solid vertical face at
+    /// least this tall (and 15 cm wide) stands under it, its top just below the counter (the
+    /// front of the cupboards it rests on; a table's apron or drawer is shorter, its legs
+    /// narrower). Walls are often hidden behind wall cupboards or out of a close view; 0: off [m]
     float worktop_face_height = 0.4f;
     float min_face_area = 0.015f;  ///< furniture face candidates [m^2]
     /// The three axes' planes, and each plane's components, in parallel (0 = all cores); the
