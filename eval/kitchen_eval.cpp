@@ -209,6 +209,8 @@ struct Scores {
     std::size_t any_tp = 0, any_fp = 0, any_fn = 0;
     std::map<std::string, std::size_t> fp_on;   ///< class of the point under a false detection
     std::map<std::string, std::size_t> fn_why;  ///< why true fixtures were missed
+    /// Visible fronts with a visible fixture segmented with IoU under 0.5, by what went wrong.
+    std::map<std::string, std::size_t> front_why;
     /// Per kitchen model (its library id): visible true fixtures and those found (either type).
     std::map<std::string, std::pair<std::size_t, std::size_t>> fixtures_by_model;
     Stats front_iou_detectable, front_iou_all, front_iou_found;
@@ -533,6 +535,37 @@ class Evaluator {
                 }
             }
             if (found) s.front_iou_found.Add(iou);
+            if (tf.fixture_points >= min_fixture && iou < 0.5f) {
+                // What went wrong: no front over it, a front much larger (merged with its
+                // neighbours), or one covering a part of it.
+                std::string why = found ? "fixture found, " : "fixture missed, ";
+                double precision = 0.0, recall = 0.0;
+                if (it == match.end()) {
+                    why += "no front";
+                } else {
+                    const auto& pidx =
+                        map.fronts[static_cast<std::size_t>(it->second.first)].indices;
+                    std::size_t hit = 0;
+                    for (const Index i : pidx) hit += t.IsFront(i) && t.Key(i) == key;
+                    precision = static_cast<double>(hit) /
+                                static_cast<double>(std::max<std::size_t>(1, pidx.size()));
+                    recall = static_cast<double>(hit) /
+                             static_cast<double>(std::max<std::size_t>(1, tf.points));
+                    why += precision < 0.5 && recall >= 0.5   ? "front too large"
+                           : precision >= 0.5 && recall < 0.5 ? "front too small"
+                                                              : "front off";
+                }
+                ++s.front_why[why];
+                if (o_.verbose) {
+                    const auto inst = static_cast<std::size_t>(key >> 16) - 1;
+                    std::fprintf(
+                        stderr,
+                        "front %s %s: %s (%zu points, IoU %.2f, precision %.2f, recall %.2f)\n",
+                        f.laser ? "laser" : "kinect",
+                        inst < k.instances.size() ? k.instances[inst].model->id.c_str() : "?",
+                        why.c_str(), tf.points, iou, precision, recall);
+                }
+            }
             if (found && it != match.end()) {
                 const auto& pidx = map.fronts[static_cast<std::size_t>(it->second.first)].indices;
                 std::size_t hit = 0;
@@ -854,6 +887,9 @@ class Evaluator {
             std::printf("\n");
             std::printf("  false detections on:");
             for (const auto& [c, n] : s.fp_on) std::printf(" %s %zu", c.c_str(), n);
+            std::printf("\n");
+            std::printf("  fronts with a visible fixture under IoU 0.5:");
+            for (const auto& [c, n] : s.front_why) std::printf(" [%s] %zu", c.c_str(), n);
             std::printf("\n");
         }
         std::printf(

@@ -480,6 +480,29 @@ TEST(SegmentFronts, OverlappingRegionsSplitAtTheGapBetweenTheirFixtures) {
                  InvalidArgument);
 }
 
+TEST(SegmentFronts, AGapBesideALongHandleStillSplits) {
+    // Doors 75 cm tall with bar handles 45 cm long right at the gap: the handle's mask (its
+    // shadow and edges) covers the gap over 63 cm of its 75, and the line beside it shows its gap
+    // only above and below the mask. It still parts the two fronts.
+    const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.92f, 1.6f, 0.1f, 0.85f}};
+    PointCloud c = DoorsInGaps(doors, 7, false, Color{230, 230, 230, 255});
+    std::mt19937 rng(4);
+    for (const float x : {0.875f, 1.575f}) test::AddHandle(c, {x, 2.4f, 0.475f}, 0.45f, rng, true);
+    c.width = static_cast<std::uint32_t>(c.size());
+    const FaceScene sc = SceneOf(c);
+    ASSERT_EQ(sc.fx.fixtures.size(), 2u);
+    std::vector<Front> split = SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev);
+    ASSERT_EQ(split.size(), 2u);
+    std::sort(split.begin(), split.end(), [](const Front& a, const Front& b) {
+        return FrontXRange(a).first < FrontXRange(b).first;
+    });
+    for (std::size_t k = 0; k < 2; ++k) {
+        const auto [x0, x1] = FrontXRange(split[k]);
+        EXPECT_NEAR(x0, doors[k].x0, 0.025f) << k;
+        EXPECT_NEAR(x1, doors[k].x1, 0.025f) << k;
+    }
+}
+
 TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     // Two overlay doors and a drawer above the right one.
     const std::vector<DoorRect> doors = {

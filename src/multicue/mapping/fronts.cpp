@@ -100,13 +100,19 @@ struct Separator {
 float LineGapShare(const front_grid_internal::OutlineGrid& g, bool columns, int k, int t0, int t1,
                    float coverage) {
     using namespace front_grid_internal;
-    int points = 0, gap = 0;
+    // Cells masked around a fixture hold points too, but what they show is the fixture's: they
+    // count towards the line's coverage, not its share. A gap beside a door's handle runs through
+    // the handle's mask over most of the door's height.
+    constexpr int kMinCells = 5;
+    int points = 0, gap = 0, masked = 0;
     for (int t = t0; t <= t1; ++t) {
         const std::uint8_t m = columns ? g.At(k, t) : g.At(t, k);
         points += m == kFaceCell || m == kGapCell;
         gap += m == kGapCell;
+        masked += m == kMasked;
     }
-    if (points == 0 || static_cast<float>(points) < coverage * static_cast<float>(t1 - t0 + 1)) {
+    if (points < std::min(kMinCells, t1 - t0 + 1) ||
+        static_cast<float>(points + masked) < coverage * static_cast<float>(t1 - t0 + 1)) {
         return -1.0f;
     }
     return static_cast<float>(gap) / static_cast<float>(points);
