@@ -103,6 +103,7 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
                                                   {"min_offset_alpha", &p.min_offset_alpha},
                                                   {"min_fill", &p.min_fill},
                                                   {"split_support", &p.split_support},
+                                                  {"pair_end_reach", &p.pair_end_reach},
                                                   {"cell_size", &p.cell_size},
                                                   {"seed_max", &p.seed_max},
                                                   {"rect_percentile", &p.rect_percentile},

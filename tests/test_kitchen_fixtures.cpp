@@ -503,6 +503,44 @@ TEST(SegmentFronts, AGapBesideALongHandleStillSplits) {
     }
 }
 
+TEST(SegmentFronts, TwoKnobsNearTheEndsOfOneFrontStayOneFront) {
+    // A front 80 cm wide with a knob 8 cm from either end and nothing between them: one front
+    // with both. Knobs near its middle are two doors meeting there: split between them.
+    const std::vector<DoorRect> door = {{0.3f, 1.1f, 0.1f, 0.85f}};
+    auto fronts_of = [&](float left, float right, const FrontParams& fp) {
+        PointCloud c = DoorsInGaps(door, 7);
+        std::mt19937 rng(5);
+        for (const float x : {left, right}) test::AddKnob(c, {x, 2.4f, 0.75f}, rng);
+        c.width = static_cast<std::uint32_t>(c.size());
+        const FaceScene sc = SceneOf(c);
+        EXPECT_EQ(sc.fx.fixtures.size(), 2u);
+        std::vector<Front> out = SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, fp, &sc.ev);
+        std::sort(out.begin(), out.end(), [](const Front& a, const Front& b) {
+            return FrontXRange(a).first < FrontXRange(b).first;
+        });
+        return out;
+    };
+    const std::vector<Front> one = fronts_of(0.38f, 1.02f, {});
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_EQ(one[0].fixtures, (std::vector<int>{0, 1}));
+    EXPECT_NEAR(FrontXRange(one[0]).first, 0.3f, 0.025f);
+    EXPECT_NEAR(FrontXRange(one[0]).second, 1.1f, 0.025f);
+    // Off, each knob keeps the half nearer to it.
+    const std::vector<Front> halves = fronts_of(0.38f, 1.02f, {.pair_end_reach = 0.0f});
+    ASSERT_EQ(halves.size(), 2u);
+    EXPECT_NEAR(FrontXRange(halves[0]).second, 0.7f, 0.03f);
+    // Knobs meeting in the middle: two doors.
+    const std::vector<Front> two = fronts_of(0.66f, 0.74f, {});
+    ASSERT_EQ(two.size(), 2u);
+    EXPECT_NEAR(FrontXRange(two[0]).second, 0.7f, 0.03f);
+    // Too wide for one front: split.
+    EXPECT_EQ(fronts_of(0.38f, 1.02f, {.pair_max_width = 0.5f}).size(), 2u);
+    PointCloud c = DoorsInGaps(door, 7);
+    const FaceScene sc = SceneOf(c);
+    EXPECT_THROW(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {.pair_end_reach = -1.0f}),
+                 InvalidArgument);
+}
+
 TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     // Two overlay doors and a drawer above the right one.
     const std::vector<DoorRect> doors = {

@@ -179,6 +179,28 @@ std::vector<Separator> OutlineSeparators(
     return out;
 }
 
+/// FrontParams::pair_end_reach: whether two fixtures (footprints `fa`, `fb`) whose overlapping
+/// regions cover `region` each lie within the reach of opposite ends of it, along the axis of the
+/// wider space between them, and the region is no wider than one front.
+bool OneFrontsPair(const PointCloud& cloud, const RoomFrame& frame, const PlanarComponent& face,
+                   const Indices& region, const std::vector<Eigen::Vector2f>& fa,
+                   const std::vector<Eigen::Vector2f>& fb, const FrontParams& p) {
+    if (region.empty()) return false;
+    const auto [rlo, rhi] = PointsRectangle(cloud, frame, face, region, p.rect_percentile);
+    auto [alo, ahi] = Box(fa);
+    auto [blo, bhi] = Box(fb);
+    const Eigen::Vector2f ab = blo - ahi, ba = alo - bhi;
+    if (std::max(ab.maxCoeff(), ba.maxCoeff()) <= 0.0f) return false;  // they overlap
+    if (ba.maxCoeff() > ab.maxCoeff()) {  // a is the lower one along the axis
+        std::swap(alo, blo);
+        std::swap(ahi, bhi);
+    }
+    const Eigen::Vector2f space = blo - ahi;
+    const int axis = space.x() >= space.y() ? 0 : 1;
+    return rhi[axis] - rlo[axis] <= p.pair_max_width && alo[axis] - rlo[axis] <= p.pair_end_reach &&
+           rhi[axis] - bhi[axis] <= p.pair_end_reach;
+}
+
 }  // namespace
 
 std::pair<Eigen::Vector2f, Eigen::Vector2f> PointsRectangle(const PointCloud& cloud,
@@ -243,6 +265,13 @@ void FrontParams::Validate() const {
     positive("cell_size", cell_size);
     if (!(min_fill >= 0.0f && min_fill <= 1.0f)) {
         throw InvalidArgument(fmt::format("fronts: min_fill must be in [0, 1], got {}", min_fill));
+    }
+    if (!(pair_end_reach >= 0.0f && pair_end_reach <= 1.0f) || !(pair_max_width > 0.0f) ||
+        !std::isfinite(pair_max_width)) {
+        throw InvalidArgument(
+            fmt::format("fronts: need pair_end_reach in [0, 1] m and pair_max_width > 0 m (got {}, "
+                        "{})",
+                        pair_end_reach, pair_max_width));
     }
     if (!(split_support > 0.0f && split_support <= 1.0f)) {
         throw InvalidArgument(
@@ -500,6 +529,17 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                         ? OutlineSeparators(cloud, frame, face, all, grid(), footprints, members,
                                             outline, p.split_support)
                         : std::vector<Separator>{};
+                if (members.size() == 2 && seps.empty() && p.pair_end_reach > 0.0f &&
+                    OneFrontsPair(cloud, frame, face, all, footprints[members[0]],
+                                  footprints[members[1]], p)) {
+                    Front& one = grown[members[0]];
+                    one.indices = std::move(all);
+                    one.fixtures.insert(one.fixtures.end(), grown[members[1]].fixtures.begin(),
+                                        grown[members[1]].fixtures.end());
+                    std::sort(one.fixtures.begin(), one.fixtures.end());
+                    grown[members[1]].fixtures.clear();
+                    continue;
+                }
                 for (const Index pt : all) {
                     const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[pt]);
                     std::size_t best = members[0];

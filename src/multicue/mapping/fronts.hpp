@@ -66,6 +66,14 @@ struct FrontParams {
     bool split_at_outlines = true;
     /// Chosen on simulated kitchens of the tune half (0.3 and 0.5 scored alike, 0.7 lower) [-]
     float split_support = 0.5f;
+    /// Two fixtures whose overlapping regions no outline parts, each within this of its own end
+    /// of their common region (along the axis that parts them), are one front's: the two knobs
+    /// of a wide drawer, the handle and button of a dishwasher. Doors side by side carry their
+    /// handles at their free edges, which meet in the middle, or both on the same side; 0: off
+    /// (split as above) [m]
+    float pair_end_reach = 0.15f;
+    /// ... as long as that region is no wider than this (one front) [m]
+    float pair_max_width = 1.2f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
