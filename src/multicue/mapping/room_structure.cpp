@@ -133,10 +133,9 @@ float DistanceToPlane(const PlanarComponent& h, const RoomFrame& f, const Planar
 /// Whether a vertical component at least `worktop_face_height` tall stands under the horizontal
 /// component `h` (at height `height` along up), its top within 15 cm below it, at least 15 cm
 /// wide, filling half of its box, along at least 30 cm or half of its own width or of the
-/// counter's length. The face need
-/// not lie under the counter's edge: a worktop may overhang its cupboards by a dozen centimetres,
-/// and the box of an L-shaped worktop has no edge above the fronts of one of its runs. A table's
-/// legs are too narrow, its apron too low.
+/// counter's length. The face need not lie under the counter's edge: a worktop may overhang its
+/// cupboards by a dozen centimetres, and the box of an L-shaped worktop has no edge above the
+/// fronts of one of its runs. A table's legs are too narrow, its apron too low.
 bool FaceUnder(const PlanarComponent& h, float height, const RoomFrame& f,
                const std::vector<PlanarComponent>& components, const RoomStructureParams& p) {
     constexpr float kMargin = 0.1f, kDrop = 0.15f, kOverlap = 0.3f, kMinWidth = 0.15f,

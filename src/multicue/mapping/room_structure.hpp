@@ -28,9 +28,9 @@ struct RoomStructureParams {
     float component_tolerance = 0.05f;      ///< points of one plane closer than this connect [m]
     std::size_t min_component_points = 40;  ///< smaller components are dropped [points]
     float cell_size = 0.03f;                ///< occupancy cell for component areas [m]
-    /// The floor needs this much area [m^2]. A Kinect looking at a counter from 1-2 m sees a
-    /// strip of floor in front of it, often under 0.3 m^2; nothing else in a kitchen faces up
-    /// below the counters, and the floor is the lowest such plane.
+    /// The floor (the lowest plane facing up, min_floor_depth below the sensor) needs this much
+    /// area [m^2]: a Kinect looking at a counter from 1-2 m sees a strip of floor in front of it,
+    /// often under 0.3 m^2.
     float min_floor_area = 0.1f;
     /// The ceiling needs this much [m^2]: a smaller plane seen from below is the underside of a
     /// wall cupboard or a shelf.
