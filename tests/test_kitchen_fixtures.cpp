@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <random>
 #include <set>
 
@@ -418,37 +419,55 @@ std::pair<float, float> FrontXRange(const Front& f) {
     return {std::min(a, b), std::max(a, b)};
 }
 
+/// Fronts in the order of their rectangles along x.
+std::vector<Front> ByX(std::vector<Front> v) {
+    std::sort(v.begin(), v.end(), [](const Front& a, const Front& b) {
+        return FrontXRange(a).first < FrontXRange(b).first;
+    });
+    return v;
+}
+
+/// Doors of the face's colour in their recessed gaps, with a vertical bar handle `length` long
+/// centred at height z at each of `xs`.
+PointCloud DoorsWithHandles(const std::vector<DoorRect>& doors, std::initializer_list<float> xs,
+                            float z, float length, std::uint32_t seed) {
+    PointCloud c = DoorsInGaps(doors, 7, false, Color{230, 230, 230, 255});
+    std::mt19937 rng(seed);
+    for (const float x : xs) test::AddHandle(c, {x, 2.4f, z}, length, rng, true);
+    c.width = static_cast<std::uint32_t>(c.size());
+    return c;
+}
+
+/// Each front (sorted along x) spans its door along x, within 2.5 cm.
+void ExpectFrontsOnDoors(const std::vector<Front>& fronts, const std::vector<DoorRect>& doors) {
+    ASSERT_EQ(fronts.size(), doors.size());
+    for (std::size_t k = 0; k < doors.size(); ++k) {
+        const auto [x0, x1] = FrontXRange(fronts[k]);
+        EXPECT_NEAR(x0, doors[k].x0, 0.025f) << k;
+        EXPECT_NEAR(x1, doors[k].x1, 0.025f) << k;
+    }
+}
+
 TEST(SegmentFronts, OverlappingRegionsSplitAtTheGapBetweenTheirFixtures) {
     // Two doors side by side, each with a vertical handle near its right edge. The gap between
     // them has the doors' colour and shows only as a recess: the regions grown from the two
     // handles both cover the face.
     const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.92f, 1.6f, 0.1f, 0.85f}};
-    PointCloud c = DoorsInGaps(doors, 7, false, Color{230, 230, 230, 255});
-    std::mt19937 rng(3);
-    for (const float x : {0.84f, 1.54f}) test::AddHandle(c, {x, 2.4f, 0.5f}, 0.16f, rng, true);
-    c.width = static_cast<std::uint32_t>(c.size());
+    const PointCloud c = DoorsWithHandles(doors, {0.84f, 1.54f}, 0.5f, 0.16f, 3);
     const FaceScene sc = SceneOf(c);
     ASSERT_EQ(sc.fx.fixtures.size(), 2u);
-    auto by_x = [](std::vector<Front> v) {
-        std::sort(v.begin(), v.end(), [](const Front& a, const Front& b) {
-            return FrontXRange(a).first < FrontXRange(b).first;
-        });
-        return v;
-    };
     // Without the outline evidence each point goes to the nearer handle: the left door's front
     // runs on to halfway between the handles (x 1.19), far over its gap.
-    const std::vector<Front> nearest = by_x(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures));
+    const std::vector<Front> nearest = ByX(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures));
     ASSERT_EQ(nearest.size(), 2u);
     EXPECT_TRUE(nearest[0].overlapping);
     EXPECT_GT(FrontXRange(nearest[0]).second, 1.1f);
     // With it, the fronts part at the gap.
     const std::vector<Front> split =
-        by_x(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev));
+        ByX(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev));
+    ExpectFrontsOnDoors(split, doors);
     ASSERT_EQ(split.size(), 2u);
     for (std::size_t k = 0; k < 2; ++k) {
-        const auto [x0, x1] = FrontXRange(split[k]);
-        EXPECT_NEAR(x0, doors[k].x0, 0.025f) << k;
-        EXPECT_NEAR(x1, doors[k].x1, 0.025f) << k;
         for (const Index i : split[k].indices) {
             ASSERT_GT(c.points[i].x(), doors[k].x0 - 0.02f) << k;
             ASSERT_LT(c.points[i].x(), doors[k].x1 + 0.02f) << k;
@@ -456,10 +475,10 @@ TEST(SegmentFronts, OverlappingRegionsSplitAtTheGapBetweenTheirFixtures) {
     }
     // The same input gives the same fronts; off, the split is the nearest handle's again.
     const std::vector<Front> again =
-        by_x(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev));
+        ByX(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev));
     ASSERT_EQ(again.size(), 2u);
     for (std::size_t k = 0; k < 2; ++k) EXPECT_EQ(again[k].indices, split[k].indices);
-    const std::vector<Front> off = by_x(
+    const std::vector<Front> off = ByX(
         SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {.split_at_outlines = false}, &sc.ev));
     ASSERT_EQ(off.size(), 2u);
     EXPECT_EQ(off[0].indices, nearest[0].indices);
@@ -485,22 +504,11 @@ TEST(SegmentFronts, AGapBesideALongHandleStillSplits) {
     // shadow and edges) covers the gap over 63 cm of its 75, and the line beside it shows its gap
     // only above and below the mask. It still parts the two fronts.
     const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.92f, 1.6f, 0.1f, 0.85f}};
-    PointCloud c = DoorsInGaps(doors, 7, false, Color{230, 230, 230, 255});
-    std::mt19937 rng(4);
-    for (const float x : {0.875f, 1.575f}) test::AddHandle(c, {x, 2.4f, 0.475f}, 0.45f, rng, true);
-    c.width = static_cast<std::uint32_t>(c.size());
+    const PointCloud c = DoorsWithHandles(doors, {0.875f, 1.575f}, 0.475f, 0.45f, 4);
     const FaceScene sc = SceneOf(c);
     ASSERT_EQ(sc.fx.fixtures.size(), 2u);
-    std::vector<Front> split = SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev);
-    ASSERT_EQ(split.size(), 2u);
-    std::sort(split.begin(), split.end(), [](const Front& a, const Front& b) {
-        return FrontXRange(a).first < FrontXRange(b).first;
-    });
-    for (std::size_t k = 0; k < 2; ++k) {
-        const auto [x0, x1] = FrontXRange(split[k]);
-        EXPECT_NEAR(x0, doors[k].x0, 0.025f) << k;
-        EXPECT_NEAR(x1, doors[k].x1, 0.025f) << k;
-    }
+    ExpectFrontsOnDoors(ByX(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev)),
+                        doors);
 }
 
 TEST(SegmentFronts, TwoKnobsNearTheEndsOfOneFrontStayOneFront) {
@@ -514,11 +522,7 @@ TEST(SegmentFronts, TwoKnobsNearTheEndsOfOneFrontStayOneFront) {
         c.width = static_cast<std::uint32_t>(c.size());
         const FaceScene sc = SceneOf(c);
         EXPECT_EQ(sc.fx.fixtures.size(), 2u);
-        std::vector<Front> out = SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, fp, &sc.ev);
-        std::sort(out.begin(), out.end(), [](const Front& a, const Front& b) {
-            return FrontXRange(a).first < FrontXRange(b).first;
-        });
-        return out;
+        return ByX(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, fp, &sc.ev));
     };
     const std::vector<Front> one = fronts_of(0.38f, 1.02f, {});
     ASSERT_EQ(one.size(), 1u);
