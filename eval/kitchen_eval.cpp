@@ -8,8 +8,9 @@
 // container classifier are trained on kitchens of the other half of the models (never the ones
 // scored; --train-split tune trains on the tune half when the tune half is scored, to validate);
 // --fixture-kitchens 0 finds fixtures by rules, --rules types containers by rules.
-// --vary-handles varies the handle lengths of the fixture training kitchens (sim::VaryHandles),
-// --vary-scored-handles those of the scored kitchens: a validation on handle lengths the
+// The fixture training kitchens' handles are varied (sim::VaryHandles: length, reach out of the
+// front, thickness; --no-vary-handles keeps them); --vary-scored-handles varies those of the
+// scored kitchens (--scored-reach, --scored-thickness): a validation on handle designs the
 // classifier has not seen.
 //
 //   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--fixture-kitchens 24]
@@ -20,9 +21,11 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -88,6 +91,15 @@ struct Options {
     bool vary_scored_handles = false;
     float vary_chance = sim::HandleVariation{}.chance;
     float vary_min_shrink = sim::HandleVariation{}.min_shrink;
+    /// Scale ranges of the training handles' reach and thickness
+    std::vector<float> vary_reach = {
+        training::FixtureTrainingOptions{}.handle_variation.min_reach_scale,
+        training::FixtureTrainingOptions{}.handle_variation.max_reach_scale};
+    std::vector<float> vary_thickness = {
+        training::FixtureTrainingOptions{}.handle_variation.min_thickness_scale,
+        training::FixtureTrainingOptions{}.handle_variation.max_thickness_scale};
+    std::vector<float> scored_reach = {1.0f, 1.0f};  ///< the same for --vary-scored-handles
+    std::vector<float> scored_thickness = {1.0f, 1.0f};
 };
 
 /// Sets one field of the region growing's parameters from NAME=VALUE.
@@ -97,28 +109,38 @@ void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) 
     const std::string name = assignment.substr(0, eq);
     const float v = std::stof(assignment.substr(eq + 1));
     mapping::FrontParams& p = m.fronts;
-    const std::map<std::string, float*> fields = {{"alpha_mads", &p.alpha_mads},
-                                                  {"min_alpha", &p.min_alpha},
-                                                  {"local_alpha", &p.local_alpha},
-                                                  {"min_offset_alpha", &p.min_offset_alpha},
-                                                  {"min_fill", &p.min_fill},
-                                                  {"split_support", &p.split_support},
-                                                  {"pair_end_reach", &p.pair_end_reach},
-                                                  {"cell_size", &p.cell_size},
-                                                  {"seed_max", &p.seed_max},
-                                                  {"rect_percentile", &p.rect_percentile},
-                                                  {"max_extend", &m.outline.max_extend},
-                                                  {"min_support", &m.outline.min_support},
-                                                  {"extend_support", &m.outline.extend_support},
-                                                  {"min_coverage", &m.outline.min_coverage},
-                                                  {"recess", &m.outline.recess},
-                                                  {"step", &m.outline.step},
-                                                  {"gap_cut_support", &m.gap_fronts.cut_support},
-                                                  {"gap_cut_coverage", &m.gap_fronts.cut_coverage},
-                                                  {"gap_min_size", &m.gap_fronts.min_size},
-                                                  {"gap_cut_margin", &m.gap_fronts.cut_margin},
-                                                  {"gap_min_fill", &m.gap_fronts.min_fill},
-                                                  {"gap_max_taken", &m.gap_fronts.max_taken}};
+    const std::map<std::string, float*> fields = {
+        {"alpha_mads", &p.alpha_mads},
+        {"min_alpha", &p.min_alpha},
+        {"local_alpha", &p.local_alpha},
+        {"min_offset_alpha", &p.min_offset_alpha},
+        {"min_fill", &p.min_fill},
+        {"split_support", &p.split_support},
+        {"pair_end_reach", &p.pair_end_reach},
+        {"cell_size", &p.cell_size},
+        {"seed_max", &p.seed_max},
+        {"rect_percentile", &p.rect_percentile},
+        {"max_extend", &m.outline.max_extend},
+        {"min_support", &m.outline.min_support},
+        {"extend_support", &m.outline.extend_support},
+        {"min_coverage", &m.outline.min_coverage},
+        {"recess", &m.outline.recess},
+        {"step", &m.outline.step},
+        {"gap_cut_support", &m.gap_fronts.cut_support},
+        {"gap_cut_coverage", &m.gap_fronts.cut_coverage},
+        {"gap_min_size", &m.gap_fronts.min_size},
+        {"gap_cut_margin", &m.gap_fronts.cut_margin},
+        {"gap_min_fill", &m.gap_fronts.min_fill},
+        {"gap_max_taken", &m.gap_fronts.max_taken},
+        {"fixture_merge_gap", &m.fixtures.merge_gap},
+        {"fixture_cluster_tolerance", &m.fixtures.cluster_tolerance},
+        {"fixture_min_height", &m.fixtures.min_height},
+        {"fixture_min_residual", &m.fixtures.min_residual},
+        {"fixture_residual_sigmas", &m.fixtures.residual_sigmas},
+        {"fixture_point_sigmas", &m.fixtures.point_sigmas},
+        {"fixture_residual_cell", &m.fixtures.residual_cell},
+        {"fixture_min_contrast", &m.fixtures.min_contrast},
+        {"fixture_contrast_min_residual", &m.fixtures.contrast_min_residual}};
     if (name == "extend") {
         m.extend_fronts = v != 0.0f;
     } else if (name == "split") {
@@ -317,6 +339,16 @@ class Evaluator {
         t.vary_handles = o_.vary_handles;
         t.handle_variation.chance = o_.vary_chance;
         t.handle_variation.min_shrink = o_.vary_min_shrink;
+        t.handle_variation.min_reach_scale = o_.vary_reach[0];
+        t.handle_variation.max_reach_scale = o_.vary_reach[1];
+        t.handle_variation.min_thickness_scale = o_.vary_thickness[0];
+        t.handle_variation.max_thickness_scale = o_.vary_thickness[1];
+        {
+            // The candidates the classifier learns from are found as the scored scans' are.
+            mapping::MapKitchenParams mp = mapping::KitchenParamsFor(t.sensor);
+            for (const auto& a : o_.front_params) SetFrontParam(mp, a);
+            t.fixture_params = mp.fixtures;
+        }
         const ml::Dataset rows = training::CollectFixtureRows(library, cache, t);
         std::size_t positive = 0;
         for (const int l : rows.labels) positive += l > 0;
@@ -480,6 +512,36 @@ class Evaluator {
                     }
                 }
                 ++s.fn_why[(fixtures[g].handle ? "" : "knob: ") + why];
+                if (o_.verbose) {
+                    // The nearest detection: a fixture merged with its neighbour shows as one
+                    // taken by the other.
+                    const std::size_t instance = t.model[fixtures[g].points.front()];
+                    float nearest = std::numeric_limits<float>::infinity();
+                    std::size_t nd = 0;
+                    for (std::size_t d = 0; d < map.fixtures.size(); ++d) {
+                        for (const Index i : fixtures[g].points) {
+                            const float dist = (f.cloud.points[i] - map.fixtures[d].center).norm();
+                            if (dist < nearest) {
+                                nearest = dist;
+                                nd = d;
+                            }
+                        }
+                    }
+                    std::string detection = "no detection";
+                    if (std::isfinite(nearest)) {
+                        detection = fmt::format("nearest detection {:.2f} m away ({:.2f} m long{})",
+                                                nearest, map.fixtures[nd].length,
+                                                du[nd] ? ", another fixture's" : "");
+                    }
+                    std::fprintf(stderr,
+                                 "fixture %s %s: missed, %s (%zu points, %.2f m away); %s\n",
+                                 f.laser ? "laser" : "kinect",
+                                 instance >= 1 && instance <= k.instances.size()
+                                     ? k.instances[instance - 1].model->id.c_str()
+                                     : "?",
+                                 why.c_str(), fixtures[g].points.size(),
+                                 (c - f.pose.translation()).norm(), detection.c_str());
+                }
             }
             s.any_tp += tp;
             s.any_fp += map.fixtures.size() - tp;
@@ -543,6 +605,15 @@ class Evaluator {
                 double precision = 0.0, recall = 0.0;
                 if (it == match.end()) {
                     why += "no front";
+                    // The map's front holding most of it, if any: merged with a neighbour
+                    // whose front it was matched to.
+                    std::size_t best_hit = 0;
+                    for (const auto& mf : map.fronts) {
+                        std::size_t hit = 0;
+                        for (const Index i : mf.indices) hit += t.IsFront(i) && t.Key(i) == key;
+                        best_hit = std::max(best_hit, hit);
+                    }
+                    if (best_hit * 2 >= tf.points) why += " of its own (inside a neighbour's)";
                 } else {
                     const auto& pidx =
                         map.fronts[static_cast<std::size_t>(it->second.first)].indices;
@@ -790,7 +861,14 @@ class Evaluator {
         for (int i = 0; i < o_.kitchens; ++i) {
             const std::uint64_t seed = sim::SubSeed(o_.seed, static_cast<std::uint64_t>(i));
             sim::KitchenScene k = sim::MakeKitchenScene(test_lib, cache, {}, seed);
-            if (o_.vary_scored_handles) sim::VaryHandles(k, {}, sim::SubSeed(seed, 43));
+            if (o_.vary_scored_handles) {
+                sim::HandleVariation sv;
+                sv.min_reach_scale = o_.scored_reach[0];
+                sv.max_reach_scale = o_.scored_reach[1];
+                sv.min_thickness_scale = o_.scored_thickness[0];
+                sv.max_thickness_scale = o_.scored_thickness[1];
+                sim::VaryHandles(k, sv, sim::SubSeed(seed, 43));
+            }
             // The ground truth of joint axes comes from the kitchen's URDF, written and re-read.
             const io::UrdfModel gt = io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)),
                                                    fmt::format("kitchen_{}.urdf", i));
@@ -817,6 +895,10 @@ class Evaluator {
                               {"fixture_kitchens", o_.fixture_kitchens},
                               {"vary_handles", o_.vary_handles},
                               {"vary_scored_handles", o_.vary_scored_handles},
+                              {"vary_reach", o_.vary_reach},
+                              {"vary_thickness", o_.vary_thickness},
+                              {"scored_reach", o_.scored_reach},
+                              {"scored_thickness", o_.scored_thickness},
                               {"fixture_confidence", o_.fixture_confidence},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
@@ -1029,16 +1111,32 @@ int main(int argc, char** argv) {
     app.add_option("--fixture-confidence", o.fixture_confidence,
                    "P(handle) + P(knob) a fixture needs")
         ->capture_default_str();
-    app.add_flag("--vary-handles", o.vary_handles,
-                 "vary the handle lengths of the fixture training kitchens");
+    app.add_flag("--vary-handles,!--no-vary-handles", o.vary_handles,
+                 "vary the handles of the fixture training kitchens (on by default)");
     app.add_option("--vary-chance", o.vary_chance, "chance that a training handle is varied")
         ->capture_default_str();
     app.add_option("--vary-min-shrink", o.vary_min_shrink,
                    "shortest varied training handle as a share of its own length")
         ->capture_default_str();
     app.add_flag("--vary-scored-handles", o.vary_scored_handles,
-                 "vary the handle lengths of the scored kitchens too (handle designs unseen in "
+                 "vary the handles of the scored kitchens too (handle designs unseen in "
                  "training)");
+    app.add_option("--vary-reach", o.vary_reach,
+                   "MIN,MAX: scale of a varied training handle's reach out of its front")
+        ->delimiter(',')
+        ->expected(2);
+    app.add_option("--vary-thickness", o.vary_thickness,
+                   "MIN,MAX: scale of a varied training handle's thickness")
+        ->delimiter(',')
+        ->expected(2);
+    app.add_option("--scored-reach", o.scored_reach,
+                   "MIN,MAX: the same for the scored kitchens' handles (--vary-scored-handles)")
+        ->delimiter(',')
+        ->expected(2);
+    app.add_option("--scored-thickness", o.scored_thickness,
+                   "MIN,MAX: the same for the scored kitchens' handles (--vary-scored-handles)")
+        ->delimiter(',')
+        ->expected(2);
     app.add_option("--save-fixtures", o.save_fixtures,
                    "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
     app.add_option("--fronts", o.fronts,
@@ -1071,7 +1169,8 @@ int main(int argc, char** argv) {
              "edge's [m] (0: off)",
              10.0);
     app.add_option("--front-param", o.front_params,
-                   "NAME=VALUE of the region growing's parameters (repeatable)");
+                   "NAME=VALUE of the fronts' parameters, or fixture_NAME=VALUE of the "
+                   "fixture candidates' (repeatable)");
     app.add_option("--load-fixtures", o.load_fixtures,
                    "fixture classifiers saved by --save-fixtures PREFIX (instead of training)");
     app.add_flag("-v,--verbose", o.verbose, "progress on stderr");

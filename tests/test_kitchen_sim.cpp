@@ -215,6 +215,54 @@ TEST(KitchenScene, VaryHandlesStretchesTheBarAndMovesItsMountsRigidly) {
     EXPECT_GT(shorter, 0);
 }
 
+TEST(KitchenScene, VaryHandlesScalesTheReachFromTheFrontAndTheThickness) {
+    const sim::KitchenScene original = OneHandleKitchen();
+    const std::size_t box = 8;
+    sim::HandleVariation v;
+    v.chance = 1.0f;
+    v.min_reach_scale = v.max_reach_scale = 0.5f;
+    v.min_thickness_scale = v.max_thickness_scale = 2.0f;
+    sim::KitchenScene k = original;
+    ASSERT_EQ(sim::VaryHandles(k, v, 3), 1);
+    const sim::PartMesh& after = *k.scene.objects[0].mesh;
+    const sim::PartMesh& before = *original.scene.objects[0].mesh;
+    EXPECT_TRUE(VertexBounds(after, 0, box).isApprox(VertexBounds(before, 0, box)));
+    // The front's surface is at x = 0.01: the bar (0.0375-0.0525) comes half as far out of it,
+    // twice as thick along z about the handle's centre, as long as a variation of the length
+    // alone makes it.
+    const Eigen::AlignedBox3f bar = VertexBounds(after, box, 2 * box);
+    EXPECT_NEAR(bar.min().x(), 0.01f + 0.0275f * 0.5f, 1e-5f);
+    EXPECT_NEAR(bar.max().x(), 0.01f + 0.0425f * 0.5f, 1e-5f);
+    EXPECT_NEAR(bar.sizes().z(), 0.03f, 1e-5f);
+    EXPECT_NEAR(bar.center().z(), 0.1975f, 1e-5f);
+    sim::HandleVariation length_only;
+    length_only.chance = 1.0f;
+    sim::KitchenScene lk = original;
+    sim::VaryHandles(lk, length_only, 3);
+    EXPECT_NEAR(bar.sizes().y(), VertexBounds(*lk.scene.objects[0].mesh, box, 2 * box).sizes().y(),
+                1e-5f);
+    // The mounts start at the front and reach half as far.
+    const Eigen::AlignedBox3f mount = VertexBounds(after, 2 * box, 3 * box);
+    EXPECT_NEAR(mount.min().x(), 0.01f, 1e-5f);
+    EXPECT_NEAR(mount.max().x(), 0.025f, 1e-5f);
+    // Ranges give scales within them; deterministic for a seed.
+    v.min_reach_scale = 0.5f;
+    v.max_reach_scale = 1.5f;
+    v.min_thickness_scale = 0.5f;
+    v.max_thickness_scale = 2.0f;
+    for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+        sim::KitchenScene a = original, b = original;
+        sim::VaryHandles(a, v, seed);
+        sim::VaryHandles(b, v, seed);
+        EXPECT_EQ(a.scene.objects[0].mesh->mesh.vertices, b.scene.objects[0].mesh->mesh.vertices);
+        const Eigen::AlignedBox3f varied = VertexBounds(*a.scene.objects[0].mesh, box, 2 * box);
+        EXPECT_GE(varied.max().x(), 0.01f + 0.0425f * 0.5f - 1e-5f);
+        EXPECT_LE(varied.max().x(), 0.01f + 0.0425f * 1.5f + 1e-5f);
+        EXPECT_GE(varied.sizes().z(), 0.0075f - 1e-5f);
+        EXPECT_LE(varied.sizes().z(), 0.03f + 1e-5f);
+    }
+}
+
 TEST(KitchenScene, VaryHandlesLeavesKnobsAndRefusesBadParameters) {
     sim::KitchenScene k = OneHandleKitchen();
     const auto* mesh = k.scene.objects[0].mesh.get();
@@ -234,7 +282,8 @@ TEST(KitchenScene, VaryHandlesLeavesKnobsAndRefusesBadParameters) {
              [](auto& h) { h.chance = 1.5f; }, [](auto& h) { h.min_length = 0.0f; },
              [](auto& h) { h.max_length = 0.01f; },
              [](auto& h) { h.min_shrink = std::numeric_limits<float>::quiet_NaN(); },
-             [](auto& h) { h.min_elongation = 0.5f; }}) {
+             [](auto& h) { h.min_elongation = 0.5f; }, [](auto& h) { h.min_reach_scale = 0.0f; },
+             [](auto& h) { h.max_thickness_scale = 0.5f; }}) {
         sim::HandleVariation bad;
         change(bad);
         EXPECT_THROW(sim::VaryHandles(k, bad, 1), InvalidArgument);
@@ -402,7 +451,8 @@ TEST(KitchenCli, BadInputWritesNothing) {
     EXPECT_FALSE(std::filesystem::exists(dir / "c"));
     for (const std::string bad :
          {"--sensor sonar", "--kitchens 0", "--classifier bogus", "--split half", "--views -1",
-          "--vary-handles --handle-lengths 0.5,0.1", "--handle-lengths 0.1"}) {
+          "--vary-handles --handle-lengths 0.5,0.1", "--handle-lengths 0.1",
+          "--vary-handles --handle-reach 1.5,0.5", "--handle-thickness 0,2", "--handle-reach 2"}) {
         r = test::RunCli("train fixtures " + bad + " --out " + (dir / "f.mcm").string());
         EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
     }

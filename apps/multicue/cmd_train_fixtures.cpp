@@ -31,6 +31,10 @@ struct TrainFixturesOptions {
     int views = 0;  // 0: 3 Kinect frames or 1 laser sweep per kitchen
     training::FixtureTrainingOptions t;
     std::vector<float> lengths = {t.handle_variation.min_length, t.handle_variation.max_length};
+    std::vector<float> reach = {t.handle_variation.min_reach_scale,
+                                t.handle_variation.max_reach_scale};
+    std::vector<float> thickness = {t.handle_variation.min_thickness_scale,
+                                    t.handle_variation.max_thickness_scale};
     bool quiet = false;
 };
 
@@ -45,12 +49,20 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     o.t.split = sim::ParseMeshSplit(o.split);
     o.t.views = o.views > 0 ? o.views : laser ? 1 : 3;
     o.t.num_threads = threads;
-    if (o.lengths.size() != 2) {
-        throw InvalidArgument(
-            fmt::format("--handle-lengths needs MIN,MAX, got {} values", o.lengths.size()));
+    for (const auto& [name, range] :
+         {std::pair{"--handle-lengths", &o.lengths}, std::pair{"--handle-reach", &o.reach},
+          std::pair{"--handle-thickness", &o.thickness}}) {
+        if (range->size() != 2) {
+            throw InvalidArgument(
+                fmt::format("{} needs MIN,MAX, got {} values", name, range->size()));
+        }
     }
     o.t.handle_variation.min_length = o.lengths[0];
     o.t.handle_variation.max_length = o.lengths[1];
+    o.t.handle_variation.min_reach_scale = o.reach[0];
+    o.t.handle_variation.max_reach_scale = o.reach[1];
+    o.t.handle_variation.min_thickness_scale = o.thickness[0];
+    o.t.handle_variation.max_thickness_scale = o.thickness[1];
     o.t.Validate();
     ml::CreateClassifier(o.spec);  // throws for a bad spec
     const std::filesystem::path folder = std::filesystem::path(o.out).parent_path();
@@ -95,10 +107,20 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
     cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
     cmd->add_option("--views", o->views,
                     "scans per kitchen (default: 3 Kinect frames or 1 laser sweep)");
-    cmd->add_flag("--vary-handles", o->t.vary_handles,
-                  "stretch or shrink the training kitchens' handles (sim::VaryHandles)");
+    cmd->add_flag("--vary-handles,!--no-vary-handles", o->t.vary_handles,
+                  "vary the training kitchens' handles: length, reach and thickness "
+                  "(sim::VaryHandles; on by default)");
     cmd->add_option("--handle-lengths", o->lengths,
                     "MIN,MAX: range of the varied handle lengths with --vary-handles [m]")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--handle-reach", o->reach,
+                    "MIN,MAX: scale of a varied handle's reach out of its front with "
+                    "--vary-handles")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--handle-thickness", o->thickness,
+                    "MIN,MAX: scale of a varied handle's thickness with --vary-handles")
         ->delimiter(',')
         ->capture_default_str();
     cmd->add_option("--classifier", o->spec, "classifier spec (`multicue ml classifier train`)")

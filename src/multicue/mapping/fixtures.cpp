@@ -36,6 +36,12 @@ void FixtureParams::Validate() const {
     positive("max_protrusion_extent", max_protrusion_extent);
     positive("min_protrusion", min_protrusion);
     positive("footprint_reach", footprint_reach);
+    if (!(min_contrast >= 0.0f) || !std::isfinite(min_contrast) ||
+        !(contrast_min_residual >= 0.0f) || !std::isfinite(contrast_min_residual)) {
+        throw InvalidArgument(fmt::format(
+            "fixtures: min_contrast and contrast_min_residual must be >= 0, got {} and {}",
+            min_contrast, contrast_min_residual));
+    }
     if (!(range_noise >= 0.0f) || !std::isfinite(range_noise)) {
         throw InvalidArgument(
             fmt::format("fixtures: range_noise must be >= 0, got {}", range_noise));
@@ -416,8 +422,25 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 c.sigma += fs.sigma[j];
                 ++c.n;
             }
-            Indices candidates;
+            // Appearance residuals: the grey level above its local background, the same cells'
+            // median of medians (one pass: a handle may be darker or brighter than its front).
+            std::vector<float> contrast;
+            if (p.min_contrast > 0.0f && std::all_of(fs.appearance.begin(), fs.appearance.end(),
+                                                     [](float a) { return std::isfinite(a); })) {
+                FaceSamples grey;
+                grey.points = fs.points;
+                grey.q = fs.q;
+                grey.height = fs.appearance;
+                grey.sigma.assign(fs.size(), 0.0f);
+                ComputeFaceResiduals(grey, p.background_cell, p.background_radius, 1);
+                contrast = std::move(grey.residual);
+            }
+            Indices candidates, by_contrast;
             for (std::size_t j = 0; j < fs.size(); ++j) {
+                const bool contrasting = !contrast.empty() &&
+                                         fs.residual[j] >= p.contrast_min_residual &&
+                                         std::abs(contrast[j]) >= p.min_contrast;
+                if (contrasting) by_contrast.push_back(fs.points[j]);
                 if (fs.residual[j] <= 0.0f) continue;
                 const Cell& c = cells[key(fs.q[j])];
                 const float n = static_cast<float>(c.n);
@@ -433,13 +456,35 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 sample_of[fs.points[j]] = static_cast<std::int32_t>(j);
             }
             face_candidates[k] = candidates;
-            if (candidates.size() >= p.min_points) {
+            auto cluster_points = [&](Indices subset) {
+                if (subset.size() < p.min_points) return std::vector<Indices>{};
                 EuclideanClusteringParams cp;
                 cp.tolerance = p.cluster_tolerance;
                 cp.min_cluster_size = p.min_points;
-                cp.subset = std::move(candidates);
-                const std::vector<Indices> clusters =
-                    MergeClose(cloud, EuclideanClusteringGrid(cloud, cp).clusters, p.merge_gap);
+                cp.subset = std::move(subset);
+                return MergeClose(cloud, EuclideanClusteringGrid(cloud, cp).clusters, p.merge_gap);
+            };
+            std::vector<Indices> clusters = cluster_points(candidates);
+            if (!by_contrast.empty()) {
+                // Clusters of the depth candidates stay as they are; clusters of the depth and
+                // appearance candidates together are added where they hold none of them (a thin
+                // handle whose depth hardly leaves the noise, but whose colour does).
+                std::vector<bool> taken(cloud.size(), false);
+                for (const auto& c : clusters) {
+                    for (const Index i : c) taken[i] = true;
+                }
+                Indices all = candidates;
+                all.insert(all.end(), by_contrast.begin(), by_contrast.end());
+                std::sort(all.begin(), all.end());
+                all.erase(std::unique(all.begin(), all.end()), all.end());
+                for (auto& c : cluster_points(std::move(all))) {
+                    if (std::none_of(c.begin(), c.end(), [&](Index i) { return taken[i]; })) {
+                        face_candidates[k].insert(face_candidates[k].end(), c.begin(), c.end());
+                        clusters.push_back(std::move(c));
+                    }
+                }
+            }
+            {
                 for (const Indices& cluster : clusters) {
                     Eigen::AlignedBox3f box;
                     for (const Index i : cluster) box.extend(cloud.points[i]);

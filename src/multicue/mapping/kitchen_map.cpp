@@ -74,6 +74,8 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.structure.range_noise = 0.004f;
         p.fixtures.noise_floor = 0.002f;
         p.fixtures.range_noise = 0.0015f;
+        // Colour: a thin handle barely out of the disparity noise still differs in grey level.
+        p.fixtures.min_contrast = 40.0f;
     }
     if (sensor == KitchenSensor::kLaser) {
         // Centimetre range noise and sparse rows: thicker planes, looser clusters.

@@ -94,11 +94,29 @@ void HandleVariation::Validate() const {
     if (!(min_elongation >= 1.0f) || !std::isfinite(min_elongation)) {
         fail("min_elongation (need >= 1)", min_elongation);
     }
+    if (!(min_reach_scale > 0.0f) || !(max_reach_scale >= min_reach_scale) ||
+        !(max_reach_scale <= 10.0f)) {
+        fail("min_reach_scale/max_reach_scale (need 0 < min <= max <= 10)", min_reach_scale);
+    }
+    if (!(min_thickness_scale > 0.0f) || !(max_thickness_scale >= min_thickness_scale) ||
+        !(max_thickness_scale <= 10.0f)) {
+        fail("min_thickness_scale/max_thickness_scale (need 0 < min <= max <= 10)",
+             min_thickness_scale);
+    }
 }
 
 int VaryHandles(KitchenScene& kitchen, const HandleVariation& v, std::uint64_t seed) {
     v.Validate();
     StreamRng rng(seed, 41);
+    // Cross-sections draw from their own stream, so that the lengths stay those of a variation
+    // without them.
+    StreamRng cross_rng(seed, 42);
+    const bool vary_reach = v.max_reach_scale > v.min_reach_scale || v.min_reach_scale != 1.0f;
+    const bool vary_thickness =
+        v.max_thickness_scale > v.min_thickness_scale || v.min_thickness_scale != 1.0f;
+    auto log_uniform = [](float lo, float hi, double u) {
+        return static_cast<float>(std::exp(std::log(lo) + (std::log(hi) - std::log(lo)) * u));
+    };
     int varied = 0;
     for (std::size_t o = 0; o < kitchen.scene.objects.size(); ++o) {
         if (kitchen.truth[o].instance < 0) continue;
@@ -117,6 +135,8 @@ int VaryHandles(KitchenScene& kitchen, const HandleVariation& v, std::uint64_t s
             // Draw for every piece, varied or not, so one handle's draw does not shift the next.
             const double keep = rng.Uniform();
             const double u = rng.Uniform();
+            const double u_reach = vary_reach ? cross_rng.Uniform() : 0.0;
+            const double u_thick = vary_thickness ? cross_rng.Uniform() : 0.0;
             const Eigen::Vector3f size = piece.box.sizes();
             int axis = 0;
             size.maxCoeff(&axis);
@@ -131,19 +151,46 @@ int VaryHandles(KitchenScene& kitchen, const HandleVariation& v, std::uint64_t s
                                2.0f * v.front_margin;
             const float lo = std::max(v.min_length, v.min_shrink * length);
             const float hi = std::min(v.max_length, room);
-            if (!(hi > lo)) continue;
-            const auto target =
-                static_cast<float>(std::exp(std::log(lo) + (std::log(hi) - std::log(lo)) * u));
             // The outer fifth at each end (mounts) moves rigidly, the middle is scaled.
             const float end = 0.2f * length;
-            const float half = 0.5f * length - end, new_half = 0.5f * target - end;
-            if (!(half > 0.0f) || !(new_half > 0.0f)) continue;
+            const float half = 0.5f * length - end;
+            const float new_half = hi > lo ? 0.5f * log_uniform(lo, hi, u) - end : -1.0f;
+            const bool stretch = half > 0.0f && new_half > 0.0f;
+            if (!stretch && !vary_reach && !vary_thickness) continue;
             if (!copy) copy = std::make_shared<PartMesh>(*object.mesh);
             for (const std::uint32_t i : piece.vertices) {
+                if (!stretch) break;
                 float& x = copy->mesh.vertices[i][axis];
                 const float d = x - c;
                 x = std::abs(d) <= half ? c + d * (new_half / half)
                                         : c + d + (d < 0.0f ? half - new_half : new_half - half);
+            }
+            // Cross-section: the axis along which the handle stands out of its front is the
+            // front's normal; the front's surface there is the base its reach is scaled from.
+            int normal = -1;
+            float out = -1e9f;
+            for (int a = 0; a < 3; ++a) {
+                if (a == axis) continue;
+                const float beyond = std::max(piece.box.max()[a] - front.max()[a],
+                                              front.min()[a] - piece.box.min()[a]);
+                if (beyond > out) {
+                    out = beyond;
+                    normal = a;
+                }
+            }
+            const int across = 3 - axis - normal;
+            const bool outwards = piece.box.center()[normal] > front.center()[normal];
+            const float base = outwards ? front.max()[normal] : front.min()[normal];
+            const float reach =
+                vary_reach ? log_uniform(v.min_reach_scale, v.max_reach_scale, u_reach) : 1.0f;
+            const float thick =
+                vary_thickness ? log_uniform(v.min_thickness_scale, v.max_thickness_scale, u_thick)
+                               : 1.0f;
+            const float mid = piece.box.center()[across];
+            for (const std::uint32_t i : piece.vertices) {
+                Eigen::Vector3f& x = copy->mesh.vertices[i];
+                if (vary_reach) x[normal] = base + (x[normal] - base) * reach;
+                if (vary_thickness) x[across] = mid + (x[across] - mid) * thick;
             }
             ++varied;
         }

@@ -165,13 +165,21 @@ struct HandleVariation {
     float min_shrink = 0.5f;      ///< a handle keeps at least this share of its length
     float front_margin = 0.03f;   ///< a varied handle ends this far inside its front's edges [m]
     float min_elongation = 2.0f;  ///< handles less elongated than this (length / width) are kept
+    /// Cross-section: a varied handle's reach out of its front (along the front's normal, from
+    /// the front's surface) is scaled by a factor drawn from [min, max]; [1, 1] keeps it
+    float min_reach_scale = 1.0f;
+    float max_reach_scale = 1.0f;
+    /// ... and its thickness (the third axis, about its centre) by one from [min, max]
+    float min_thickness_scale = 1.0f;
+    float max_thickness_scale = 1.0f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
 
 /// Varies the handles of every model link in `kitchen` (the mesh parts named "handle", split into
-/// connected pieces) as `variation` says; a varied link gets a mesh of its own, the library's
-/// meshes are not changed. Deterministic for a seed. Returns the number of handles varied.
+/// connected pieces) as `variation` says (length, then reach and thickness); a varied link gets a
+/// mesh of its own, the library's meshes are not changed. Deterministic for a seed. Returns the
+/// number of handles varied.
 int VaryHandles(KitchenScene& kitchen, const HandleVariation& variation, std::uint64_t seed);
 
 }  // namespace multicue::sim

@@ -98,6 +98,7 @@ void FixtureTrainingOptions::Validate() const {
             fmt::format("train fixtures: num_threads must be >= 0, got {}", num_threads));
     }
     handle_variation.Validate();
+    if (fixture_params) fixture_params->Validate();
 }
 
 std::vector<int> LabelFixtureCandidates(const PointCloud& scan,
@@ -156,6 +157,7 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
     ml::Dataset data = EmptyFixtureDataset();
     const bool laser = o.sensor == mapping::KitchenSensor::kLaser;
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(o.sensor);
+    if (o.fixture_params) params.fixtures = *o.fixture_params;
     params.num_threads = o.num_threads;
     params.gap_fronts.enabled = false;  // the rows are the candidates; fronts are not needed
     for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,11 +63,16 @@ struct FixtureTrainingOptions {
     /// A candidate whose centre lies within this of a true fixture's points is that fixture [m]
     float match_distance = 0.03f;
     int num_threads = 0;  ///< 0 = all cores (per scan)
-    /// Vary the training kitchens' handles (sim::VaryHandles) so that the classifier meets
-    /// handle lengths beyond the few designs of the training models. Off by default: on the
-    /// validation folds it changed nothing measurable (docs/kitchens.md).
-    bool vary_handles = false;
-    sim::HandleVariation handle_variation;
+    /// Vary the training kitchens' handles (sim::VaryHandles): lengths, how far they stand out
+    /// of their fronts and their thickness, so that the classifier meets handle designs beyond
+    /// the few of the training models (docs/kitchens.md has the validation).
+    bool vary_handles = true;
+    sim::HandleVariation handle_variation{.min_reach_scale = 0.5f,
+                                          .max_reach_scale = 1.5f,
+                                          .min_thickness_scale = 0.5f,
+                                          .max_thickness_scale = 2.0f};
+    /// The candidates' parameters; unset: those of mapping::KitchenParamsFor(sensor)
+    std::optional<mapping::FixtureParams> fixture_params;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
