@@ -1121,22 +1121,17 @@ int main(int argc, char** argv) {
     app.add_flag("--vary-scored-handles", o.vary_scored_handles,
                  "vary the handles of the scored kitchens too (handle designs unseen in "
                  "training)");
-    app.add_option("--vary-reach", o.vary_reach,
-                   "MIN,MAX: scale of a varied training handle's reach out of its front")
-        ->delimiter(',')
-        ->expected(2);
-    app.add_option("--vary-thickness", o.vary_thickness,
-                   "MIN,MAX: scale of a varied training handle's thickness")
-        ->delimiter(',')
-        ->expected(2);
-    app.add_option("--scored-reach", o.scored_reach,
-                   "MIN,MAX: the same for the scored kitchens' handles (--vary-scored-handles)")
-        ->delimiter(',')
-        ->expected(2);
-    app.add_option("--scored-thickness", o.scored_thickness,
-                   "MIN,MAX: the same for the scored kitchens' handles (--vary-scored-handles)")
-        ->delimiter(',')
-        ->expected(2);
+    // MIN,MAX scale ranges of the handles' cross-section.
+    auto range = [&app](const char* name, std::vector<float>& value, const std::string& help) {
+        app.add_option(name, value, "MIN,MAX: " + help)->delimiter(',')->expected(2);
+    };
+    range("--vary-reach", o.vary_reach,
+          "scale of a varied training handle's reach out of its front");
+    range("--vary-thickness", o.vary_thickness, "scale of a varied training handle's thickness");
+    range("--scored-reach", o.scored_reach,
+          "the same for the scored kitchens' handles (--vary-scored-handles)");
+    range("--scored-thickness", o.scored_thickness,
+          "the same for the scored kitchens' handles (--vary-scored-handles)");
     app.add_option("--save-fixtures", o.save_fixtures,
                    "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
     app.add_option("--fronts", o.fronts,

@@ -116,6 +116,7 @@ TEST(Fixtures, TheSameOnAnyThreadCount) {
     const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
     FixtureParams p;
     p.num_threads = 1;
+    p.min_contrast = 40.0f;  // the grey-level candidates too
     const FixtureResult one = DetectFixtures(k.cloud, RoomFrame{}, s, p);
     ASSERT_GE(one.candidates.size(), 2u);
     auto same_floats = [](const std::vector<float>& a, const std::vector<float>& b) {
