@@ -96,6 +96,7 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.fixtures.surround_outer = 0.08f;
         p.fixtures.cluster_tolerance = 0.03f;
         p.fixtures.min_points = 5;
+        p.fixtures.min_contrast = 30.0f;  // remission (scaled to 0-255) of a handle's material
         p.fixtures.line_threshold = 0.015f;
         p.fixtures.circle_threshold = 0.01f;
         p.outline.cell = 0.025f;
