@@ -484,39 +484,37 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                     }
                 }
             }
-            {
-                for (const Indices& cluster : clusters) {
-                    Eigen::AlignedBox3f box;
-                    for (const Index i : cluster) box.extend(cloud.points[i]);
-                    Measured m;
-                    m.center = box.center();
-                    m.points = cluster.size();
-                    if (box.sizes().norm() > p.max_diameter) {
-                        m.too_large = true;
-                        measured[k].push_back(std::move(m));
-                        continue;
-                    }
-                    FixtureCandidate& cand = m.candidate;
-                    cand.fixture.face = faces[k];
-                    m.shape_ok = MeasureFixture(cloud, cluster, face, frame, p, cand.fixture);
-                    std::vector<std::uint32_t> members;
+            for (const Indices& cluster : clusters) {
+                Eigen::AlignedBox3f box;
+                for (const Index i : cluster) box.extend(cloud.points[i]);
+                Measured m;
+                m.center = box.center();
+                m.points = cluster.size();
+                if (box.sizes().norm() > p.max_diameter) {
+                    m.too_large = true;
+                    measured[k].push_back(std::move(m));
+                    continue;
+                }
+                FixtureCandidate& cand = m.candidate;
+                cand.fixture.face = faces[k];
+                m.shape_ok = MeasureFixture(cloud, cluster, face, frame, p, cand.fixture);
+                std::vector<std::uint32_t> members;
+                for (const Index i : cluster) {
+                    members.push_back(static_cast<std::uint32_t>(sample_of[i]));
+                }
+                cand.evidence = MeasureFixtureEvidence(fs, members, cand.fixture, face, frame,
+                                                       s.floor_height, p);
+                if (cloud.IsOrganized() && p.border_px > 0) {
+                    const auto b = static_cast<std::uint32_t>(p.border_px);
                     for (const Index i : cluster) {
-                        members.push_back(static_cast<std::uint32_t>(sample_of[i]));
-                    }
-                    cand.evidence = MeasureFixtureEvidence(fs, members, cand.fixture, face, frame,
-                                                           s.floor_height, p);
-                    if (cloud.IsOrganized() && p.border_px > 0) {
-                        const auto b = static_cast<std::uint32_t>(p.border_px);
-                        for (const Index i : cluster) {
-                            const std::uint32_t u = i % cloud.width, v = i / cloud.width;
-                            if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
-                                cand.evidence.border = 1.0f;
-                            }
+                        const std::uint32_t u = i % cloud.width, v = i / cloud.width;
+                        if (u < b || v < b || u + b >= cloud.width || v + b >= cloud.height) {
+                            cand.evidence.border = 1.0f;
                         }
                     }
-                    cand.evidence.attached_share = plane_cells.AttachedShare(cluster, face.axis);
-                    measured[k].push_back(std::move(m));
                 }
+                cand.evidence.attached_share = plane_cells.AttachedShare(cluster, face.axis);
+                measured[k].push_back(std::move(m));
             }
             for (std::size_t j = 0; j < fs.size(); ++j) {
                 result.point_face[fs.points[j]] = faces[k];
