@@ -102,8 +102,9 @@ struct Options {
     std::vector<float> scored_thickness = {1.0f, 1.0f};
 };
 
-/// Sets one field of the region growing's parameters from NAME=VALUE.
-void SetFrontParam(mapping::MapKitchenParams& m, const std::string& assignment) {
+/// Sets one parameter of the fronts (outline, gap fronts) or, as fixture_NAME, of the fixture
+/// candidates from NAME=VALUE (--front-param).
+void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
     const auto eq = assignment.find('=');
     if (eq == std::string::npos) throw InvalidArgument("--front-param: expected NAME=VALUE");
     const std::string name = assignment.substr(0, eq);
@@ -313,7 +314,7 @@ class Evaluator {
         params.fixtures.min_confidence = o_.fixture_confidence;
         params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
                                                         : mapping::FrontSegmentation::kOutline;
-        for (const auto& a : o_.front_params) SetFrontParam(params, a);
+        for (const auto& a : o_.front_params) SetMapParam(params, a);
         params.articulation.wall_drawers = o_.wall_drawers;
         if (o_.drawer_max_height >= 0.0f)
             params.articulation.drawer_max_height = o_.drawer_max_height;
@@ -346,7 +347,7 @@ class Evaluator {
         {
             // The candidates the classifier learns from are found as the scored scans' are.
             mapping::MapKitchenParams mp = mapping::KitchenParamsFor(t.sensor);
-            for (const auto& a : o_.front_params) SetFrontParam(mp, a);
+            for (const auto& a : o_.front_params) SetMapParam(mp, a);
             t.fixture_params = mp.fixtures;
         }
         const ml::Dataset rows = training::CollectFixtureRows(library, cache, t);

@@ -469,16 +469,19 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 // Clusters of the depth candidates stay as they are; clusters of the depth and
                 // appearance candidates together are added where they hold none of them (a thin
                 // handle whose depth hardly leaves the noise, but whose colour does).
-                std::vector<bool> taken(cloud.size(), false);
+                // Marked per sample of this face (sample_of), not per cloud point.
+                std::vector<bool> taken(fs.size(), false);
                 for (const auto& c : clusters) {
-                    for (const Index i : c) taken[i] = true;
+                    for (const Index i : c) taken[static_cast<std::size_t>(sample_of[i])] = true;
                 }
                 Indices all = candidates;
                 all.insert(all.end(), by_contrast.begin(), by_contrast.end());
                 std::sort(all.begin(), all.end());
                 all.erase(std::unique(all.begin(), all.end()), all.end());
                 for (auto& c : cluster_points(std::move(all))) {
-                    if (std::none_of(c.begin(), c.end(), [&](Index i) { return taken[i]; })) {
+                    if (std::none_of(c.begin(), c.end(), [&](Index i) {
+                            return taken[static_cast<std::size_t>(sample_of[i])];
+                        })) {
                         face_candidates[k].insert(face_candidates[k].end(), c.begin(), c.end());
                         clusters.push_back(std::move(c));
                     }
