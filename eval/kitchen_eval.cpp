@@ -41,6 +41,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/mapping/kitchen_map.hpp"
 #include "multicue/ml/classifier.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/sensors.hpp"
@@ -100,6 +101,9 @@ struct Options {
         training::FixtureTrainingOptions{}.handle_variation.max_thickness_scale};
     std::vector<float> scored_reach = {1.0f, 1.0f};  ///< the same for --vary-scored-handles
     std::vector<float> scored_thickness = {1.0f, 1.0f};
+    int procedural = training::FixtureTrainingOptions{}.procedural;  ///< per kind, training
+    float procedural_share = training::FixtureTrainingOptions{}.procedural_share;
+    int scored_procedural = 0;  ///< per kind, scored kitchens (tune half only)
 };
 
 /// Sets one parameter of the fronts (outline, gap fronts) or, as fixture_NAME, of the fixture
@@ -231,8 +235,9 @@ struct Scores {
     std::size_t handle_tp = 0, handle_fp = 0, handle_fn = 0;
     std::size_t knob_tp = 0, knob_fp = 0, knob_fn = 0;
     std::size_t any_tp = 0, any_fp = 0, any_fn = 0;
-    std::map<std::string, std::size_t> fp_on;   ///< class of the point under a false detection
-    std::map<std::string, std::size_t> fn_why;  ///< why true fixtures were missed
+    std::map<std::string, std::size_t> fp_on;     ///< class of the point under a false detection
+    std::map<std::string, std::size_t> fp_model;  ///< model of the point under it
+    std::map<std::string, std::size_t> fn_why;    ///< why true fixtures were missed
     /// Visible fronts with a visible fixture segmented with IoU under 0.5, by what went wrong.
     std::map<std::string, std::size_t> front_why;
     /// Per kitchen model (its library id): visible true fixtures and those found (either type).
@@ -338,6 +343,8 @@ class Evaluator {
         t.seed = o_.fixture_seed;
         t.fold = o_.tune_fold >= 0 ? 1 - o_.tune_fold : -1;
         t.vary_handles = o_.vary_handles;
+        t.procedural = o_.procedural;
+        t.procedural_share = o_.procedural_share;
         t.handle_variation.chance = o_.vary_chance;
         t.handle_variation.min_shrink = o_.vary_min_shrink;
         t.handle_variation.min_reach_scale = o_.vary_reach[0];
@@ -480,6 +487,10 @@ class Evaluator {
                 if (du[d] || map.fixtures[d].indices.empty()) continue;
                 const Index mid = map.fixtures[d].indices[map.fixtures[d].indices.size() / 2];
                 ++s.fp_on[sim::KitchenClassNames()[t.semantic[mid]]];
+                const std::size_t instance = t.model[mid];
+                ++s.fp_model[instance >= 1 && instance <= k.instances.size()
+                                 ? k.instances[instance - 1].model->id
+                                 : std::string("room")];
             }
             for (std::size_t g = 0; g < fixtures.size(); ++g) {
                 const std::size_t instance = t.model[fixtures[g].points.front()];
@@ -823,6 +834,17 @@ class Evaluator {
             test_lib = training::SelectKitchenFold(test_lib, o_.tune_fold);
             train_lib = training::SelectKitchenFold(train_lib, 1 - o_.tune_fold);
         }
+        // Procedural units: the container training's and the scored kitchens' from seeds of
+        // their own (the fixture training draws its own from --fixture-seed).
+        for (auto& e : sim::ProceduralKitchenEntries(o_.procedural, sim::SubSeed(o_.seed, 98))) {
+            train_lib.push_back(std::move(e));
+        }
+        for (auto& e :
+             sim::ProceduralKitchenEntries(o_.scored_procedural, sim::SubSeed(o_.seed, 99))) {
+            test_lib.push_back(std::move(e));
+        }
+        sim::KitchenSceneParams scene;
+        scene.procedural_share = o_.procedural_share;
         sim::KitchenModelCache cache;
         if (o_.fixture_kitchens > 0) {
             if (o_.sensor != "laser")
@@ -838,7 +860,7 @@ class Evaluator {
             for (int i = 0; i < o_.train_kitchens; ++i) {
                 const std::uint64_t seed =
                     sim::SubSeed(o_.seed ^ 0x7261696eull, static_cast<std::uint64_t>(i));
-                sim::KitchenScene k = sim::MakeKitchenScene(train_lib, cache, {}, seed);
+                sim::KitchenScene k = sim::MakeKitchenScene(train_lib, cache, scene, seed);
                 for (const Frame& f : Frames(k, seed)) {
                     try {
                         CollectTraining(k, f, Map(f, nullptr), data);
@@ -861,7 +883,7 @@ class Evaluator {
         Scores kinect, laser;
         for (int i = 0; i < o_.kitchens; ++i) {
             const std::uint64_t seed = sim::SubSeed(o_.seed, static_cast<std::uint64_t>(i));
-            sim::KitchenScene k = sim::MakeKitchenScene(test_lib, cache, {}, seed);
+            sim::KitchenScene k = sim::MakeKitchenScene(test_lib, cache, scene, seed);
             if (o_.vary_scored_handles) {
                 sim::HandleVariation sv;
                 sv.min_reach_scale = o_.scored_reach[0];
@@ -900,6 +922,9 @@ class Evaluator {
                               {"vary_thickness", o_.vary_thickness},
                               {"scored_reach", o_.scored_reach},
                               {"scored_thickness", o_.scored_thickness},
+                              {"procedural", o_.procedural},
+                              {"procedural_share", o_.procedural_share},
+                              {"scored_procedural", o_.scored_procedural},
                               {"fixture_confidence", o_.fixture_confidence},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
@@ -971,6 +996,12 @@ class Evaluator {
             std::printf("\n");
             std::printf("  false detections on:");
             for (const auto& [c, n] : s.fp_on) std::printf(" %s %zu", c.c_str(), n);
+            std::printf("\n");
+            std::vector<std::pair<std::size_t, std::string>> fp_models;
+            for (const auto& [m, n] : s.fp_model) fp_models.emplace_back(n, m);
+            std::sort(fp_models.rbegin(), fp_models.rend());
+            std::printf("  false detections by model:");
+            for (const auto& [n, m] : fp_models) std::printf(" %s %zu", m.c_str(), n);
             std::printf("\n");
             std::printf("  fronts with a visible fixture under IoU 0.5:");
             for (const auto& [c, n] : s.front_why) std::printf(" [%s] %zu", c.c_str(), n);
@@ -1133,6 +1164,20 @@ int main(int argc, char** argv) {
           "the same for the scored kitchens' handles (--vary-scored-handles)");
     range("--scored-thickness", o.scored_thickness,
           "the same for the scored kitchens' handles (--vary-scored-handles)");
+    app.add_option("--procedural", o.procedural,
+                   "procedural units per cupboard kind added to the training kitchens' models "
+                   "(fixtures and containers)")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    app.add_option("--procedural-share", o.procedural_share,
+                   "chance that a unit of a kind with procedural and library models is procedural")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 1.0));
+    app.add_option("--scored-procedural", o.scored_procedural,
+                   "procedural units per cupboard kind added to the scored kitchens' models, of "
+                   "other seeds than training's (--split tune only)")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
     app.add_option("--save-fixtures", o.save_fixtures,
                    "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
     app.add_option("--fronts", o.fronts,
@@ -1183,6 +1228,11 @@ int main(int argc, char** argv) {
             }
             if (o.train_split != "other" && o.train_split != "tune" && o.train_split != "test") {
                 throw CLI::ValidationError("--train-split", "must be other, tune or test");
+            }
+            if (o.scored_procedural > 0 && o.split != "tune") {
+                throw CLI::ValidationError("--scored-procedural",
+                                           "only with --split tune (the test half stays the "
+                                           "library's held-out models)");
             }
             if (o.fronts != "outline" && o.fronts != "grow") {
                 throw CLI::ValidationError("--fronts", "must be outline or grow");

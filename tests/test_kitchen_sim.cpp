@@ -19,6 +19,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/io/point_cloud_io.hpp"
 #include "multicue/io/urdf.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/sensors.hpp"
@@ -368,6 +369,111 @@ TEST(KitchenScene, GroundTruthAndUrdfWithSharedModels) {
     EXPECT_FALSE(k.scene.objects[static_cast<std::size_t>(object)].T_world_object.isApprox(before));
 }
 
+TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
+    int handles = 0, fronts = 0;
+    for (const std::string& kind : sim::ProceduralUnitKinds()) {
+        int prismatic = 0;
+        for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+            const sim::ArticulatedModel m = sim::MakeProceduralUnit(kind, seed);
+            SCOPED_TRACE(m.id);
+            EXPECT_EQ(m.kind, kind);
+            // The closed model's box is centred on x = y = 0, its bottom on the floor, and its
+            // size is a unit's.
+            EXPECT_NEAR(m.bounds.center().x(), 0.0f, 1e-4f);
+            EXPECT_NEAR(m.bounds.center().y(), 0.0f, 1e-4f);
+            EXPECT_NEAR(m.bounds.min().z(), 0.0f, 1e-4f);
+            EXPECT_GT(m.bounds.sizes().y(), 0.25f);
+            EXPECT_LT(m.bounds.sizes().y(), 1.3f);
+            EXPECT_LT(m.bounds.sizes().z(), kind == "tall_cupboard" ? 2.3f : 1.0f);
+            ASSERT_FALSE(m.joints.empty());
+            const auto closed = m.LinkPoses(m.ClosedState());
+            for (std::size_t j = 0; j < m.joints.size(); ++j) {
+                const sim::ArticulatedJoint& jt = m.joints[j];
+                ASSERT_TRUE(jt.Movable());
+                const sim::ArticulatedLink& link = m.links[static_cast<std::size_t>(jt.child)];
+                ASSERT_TRUE(link.mesh);
+                const bool drawer = jt.type == io::UrdfJointType::kPrismatic;
+                prismatic += drawer;
+                EXPECT_EQ(link.semantic, drawer ? "drawer" : "rotation_door");
+                ++fronts;
+                bool has_handle = false;
+                for (const auto& p : link.mesh->part_names) {
+                    has_handle = has_handle || p == "handle" || p == "knob";
+                }
+                handles += has_handle;
+                // Opening moves the front towards +x (out of the unit), never behind its face.
+                std::vector<float> q = m.ClosedState();
+                q[j] = jt.Opened(0.5f);
+                const auto open = m.LinkPoses(q);
+                const Eigen::Vector3f c = link.mesh->Bounds().center();
+                const std::size_t l = static_cast<std::size_t>(jt.child);
+                EXPECT_GT((open[l] * c).x(), (closed[l] * c).x() + 0.05f);
+                if (drawer) {
+                    EXPECT_NEAR((open[l] * c - closed[l] * c).norm(), jt.Opened(0.5f), 1e-4f);
+                    continue;
+                }
+                // A hinge lies on an edge of its closed front.
+                Eigen::AlignedBox3f front;
+                for (const auto& v : link.mesh->mesh.vertices) front.extend(closed[l] * v);
+                const Eigen::Vector3f hinge = closed[l].translation();
+                const Eigen::Vector3f axis = closed[l].linear() * jt.axis;
+                const int a = std::abs(axis.z()) > 0.99f ? 1 : 2;  // across the axis
+                EXPECT_GT(std::abs(axis.z()) + std::abs(axis.y()), 0.99f);
+                EXPECT_LT(std::min(std::abs(hinge[a] - front.min()[a]),
+                                   std::abs(hinge[a] - front.max()[a])),
+                          1e-4f);
+            }
+        }
+        if (kind == "drawer_unit") {
+            EXPECT_GE(prismatic, 24);  // at least two drawers each
+        }
+    }
+    EXPECT_GT(handles, fronts * 9 / 10);
+    // Deterministic for a seed, different for another.
+    const auto a = sim::MakeProceduralUnit("drawer_unit", 5);
+    const auto b = sim::MakeProceduralUnit("drawer_unit", 5);
+    const auto c = sim::MakeProceduralUnit("drawer_unit", 6);
+    EXPECT_EQ(a.links[1].mesh->mesh.vertices, b.links[1].mesh->mesh.vertices);
+    EXPECT_FALSE(a.bounds.isApprox(c.bounds));
+    EXPECT_THROW(sim::MakeProceduralUnit("fridge", 1), InvalidArgument);
+    EXPECT_THROW(sim::ProceduralKitchenEntries(-1, 1), InvalidArgument);
+}
+
+TEST(ProceduralUnits, MakeKitchensWithGroundTruth) {
+    const auto entries = sim::ProceduralKitchenEntries(3, 11);
+    ASSERT_EQ(entries.size(), 3 * sim::ProceduralUnitKinds().size());
+    EXPECT_NE(entries[0].id, sim::ProceduralKitchenEntries(3, 12)[0].id);
+    sim::KitchenModelCache cache;
+    const sim::KitchenScene k = sim::MakeKitchenScene(entries, cache, {}, 2);
+    ASSERT_GE(k.instances.size(), 3u);
+    ASSERT_FALSE(k.joints.empty());
+    // The cache builds each unit once.
+    EXPECT_EQ(cache.Get(entries[4]), cache.Get(entries[4]));
+    EXPECT_EQ(cache.Get(entries[4])->id, entries[4].id);
+    const io::UrdfModel urdf =
+        io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)), "kitchen.urdf");
+    for (const auto& j : k.joints) EXPECT_NE(urdf.FindJoint(j.name), nullptr) << j.name;
+    sim::KinectParams kp;
+    kp.width = 320;
+    kp.height = 240;
+    kp.fx = kp.fy = 262.5f;
+    kp.cx = 159.5f;
+    kp.cy = 119.5f;
+    PointCloud scan =
+        sim::ScanKinect(sim::RayCaster(k.scene), sim::KitchenCameraPoses(k, 1, 2).at(0), kp, 1);
+    sim::AddKitchenTruth(k, scan);
+    const ExtraField* sem = scan.FindExtraField("semantic");
+    ASSERT_NE(sem, nullptr);
+    std::size_t fronts = 0, handles = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+        const auto c = static_cast<sim::KitchenClass>(sem->data[i]);
+        fronts += c == sim::KitchenClass::kDoor || c == sim::KitchenClass::kDrawer;
+        handles += c == sim::KitchenClass::kHandle || c == sim::KitchenClass::kKnob;
+    }
+    EXPECT_GT(fronts, 1000u);
+    EXPECT_GT(handles, 20u);
+}
+
 TEST(KitchenCli, SimulateThenMapWithSharedModels) {
     if (!std::filesystem::is_directory(KitchenModels())) GTEST_SKIP() << "no kitchen models";
     test::TempDir dir;
@@ -393,9 +499,15 @@ TEST(KitchenCli, SimulateThenMapWithSharedModels) {
     }
     // The fixture classifier of `train fixtures` (one small kitchen) serves `map kitchen`.
     const auto fixtures = dir / "fixtures.mcm";
-    r = test::RunCli("train fixtures --kitchens 1 --views 1 -q --vary-handles --out " +
-                     fixtures.string() + " --kitchen " + KitchenModels().string());
+    const auto rows = dir / "rows.csv";
+    r = test::RunCli(
+        "train fixtures --kitchens 1 --views 1 -q --vary-handles --procedural 2 --out " +
+        fixtures.string() + " --rows " + rows.string() + " --kitchen " + KitchenModels().string());
     ASSERT_EQ(r.code, 0) << r.output;
+    // The candidate rows: a header of the fixture features and one labelled row per candidate.
+    const std::string csv = test::ReadTextFile(rows);
+    EXPECT_NE(csv.find("local_protrusion"), std::string::npos);
+    EXPECT_NE(csv.find("handle"), std::string::npos);
     r = test::RunCli("map kitchen " + (sim_dir / frame).string() + opened + " -q --fixtures " +
                      fixtures.string() + " --out " + map_dir.string());
     ASSERT_EQ(r.code, 0) << r.output;
@@ -447,16 +559,24 @@ TEST(KitchenCli, BadInputWritesNothing) {
               2);
     EXPECT_EQ(test::RunCli("simulate kitchens --kitchens -1 --out " + (dir / "d").string()).code,
               2);
+    EXPECT_EQ(test::RunCli("simulate kitchens --procedural -1 --out " + (dir / "d").string()).code,
+              2);
+    EXPECT_FALSE(std::filesystem::exists(dir / "d"));
     EXPECT_EQ(test::RunCli("map kitchen --out " + (dir / "e").string()).code, 2);
     EXPECT_FALSE(std::filesystem::exists(dir / "c"));
     for (const std::string bad :
          {"--sensor sonar", "--kitchens 0", "--classifier bogus", "--split half", "--views -1",
           "--vary-handles --handle-lengths 0.5,0.1", "--handle-lengths 0.1",
-          "--vary-handles --handle-reach 1.5,0.5", "--handle-thickness 0,2", "--handle-reach 2"}) {
+          "--vary-handles --handle-reach 1.5,0.5", "--handle-thickness 0,2", "--handle-reach 2",
+          "--procedural -1", "--procedural-share 1.5", "--fold 2"}) {
         r = test::RunCli("train fixtures " + bad + " --out " + (dir / "f.mcm").string());
         EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
     }
     EXPECT_EQ(test::RunCli("train fixtures --out " + (dir / "none" / "f.mcm").string()).code, 2);
+    EXPECT_EQ(test::RunCli("train fixtures --out " + (dir / "f.mcm").string() + " --rows " +
+                           (dir / "none" / "rows.mcd").string())
+                  .code,
+              2);
     EXPECT_FALSE(std::filesystem::exists(dir / "f.mcm"));
 }
 

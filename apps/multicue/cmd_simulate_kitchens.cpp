@@ -20,6 +20,7 @@
 #include "multicue/io/file_utils.hpp"
 #include "multicue/io/point_cloud_io.hpp"
 #include "multicue/io/urdf.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/sensors.hpp"
@@ -41,6 +42,7 @@ struct KitchenOptions {
     std::string mesh_split = "all";
     bool open_doors = false;
     int open_per_kitchen = 4;
+    int procedural = 0;  // procedural units per kind added to the library
     bool quiet = false;
 };
 
@@ -101,8 +103,11 @@ class KitchenSimulator {
 
     void Run() {
         const std::filesystem::path dir = o_.out;
-        const auto library = sim::SelectKitchenSplit(sim::ReadKitchenLibrary(o_.models),
-                                                     sim::ParseMeshSplit(o_.mesh_split));
+        auto library = sim::SelectKitchenSplit(sim::ReadKitchenLibrary(o_.models),
+                                               sim::ParseMeshSplit(o_.mesh_split));
+        for (auto& e : sim::ProceduralKitchenEntries(o_.procedural, sim::SubSeed(o_.seed, 97))) {
+            library.push_back(std::move(e));
+        }
         if (library.empty()) {
             throw DataError(
                 fmt::format("{}: no kitchen models in the '{}' half", o_.models, o_.mesh_split));
@@ -116,6 +121,7 @@ class KitchenSimulator {
                      {"seed", o_.seed},
                      {"models", o_.models},
                      {"mesh_split", o_.mesh_split},
+                     {"procedural_per_kind", o_.procedural},
                      {"classes", sim::KitchenClassNames()},
                      {"container_types", sim::ContainerTypes()},
                      {"frame", "world (z up, metres); the sensor pose is the PCD VIEWPOINT"},
@@ -306,6 +312,9 @@ void CheckOptions(const KitchenOptions& o) {
     if (o.laser_views < 0) {
         throw InvalidArgument(fmt::format("--laser-views must be >= 0, got {}", o.laser_views));
     }
+    if (o.procedural < 0) {
+        throw InvalidArgument(fmt::format("--procedural must be >= 0, got {}", o.procedural));
+    }
     if (o.open_per_kitchen < 0) {
         throw InvalidArgument(fmt::format("--open-count must be >= 0, got {}", o.open_per_kitchen));
     }
@@ -347,6 +356,10 @@ void AddSimulateKitchensCommand(CLI::App& simulate, const GlobalOptions& global)
                   "also scan each kitchen with fronts opened one at a time (opened-front pairs)");
     cmd->add_option("--open-count", o->open_per_kitchen,
                     "with --open-doors: fronts opened per kitchen")
+        ->capture_default_str();
+    cmd->add_option("--procedural", o->procedural,
+                    "also build kitchens from N procedural units of every cupboard kind "
+                    "(cupboards, sink, wall and tall cupboards, drawer units) of random designs")
         ->capture_default_str();
     cmd->add_flag("-q,--quiet", o->quiet, "no progress and no summary");
     cmd->callback([o, &global] {

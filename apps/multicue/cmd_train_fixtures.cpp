@@ -16,6 +16,7 @@
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/progress.hpp"
 #include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
 #include "multicue/sim/kitchen_library.hpp"
 #include "multicue/training/kitchen_training.hpp"
 
@@ -28,7 +29,8 @@ struct TrainFixturesOptions {
     std::string sensor = "kinect";
     std::string split = "tune";
     std::string spec = "rtrees:trees=100";
-    int views = 0;  // 0: 3 Kinect frames or 1 laser sweep per kitchen
+    int views = 0;     // 0: 3 Kinect frames or 1 laser sweep per kitchen
+    std::string rows;  // also write the candidate rows (dataset) here
     training::FixtureTrainingOptions t;
     std::vector<float> lengths = {t.handle_variation.min_length, t.handle_variation.max_length};
     std::vector<float> reach = {t.handle_variation.min_reach_scale,
@@ -69,6 +71,10 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     if (!folder.empty() && !std::filesystem::is_directory(folder)) {
         throw InvalidArgument(fmt::format("--out: no such folder '{}'", folder.string()));
     }
+    const std::filesystem::path rows_folder = std::filesystem::path(o.rows).parent_path();
+    if (!rows_folder.empty() && !std::filesystem::is_directory(rows_folder)) {
+        throw InvalidArgument(fmt::format("--rows: no such folder '{}'", rows_folder.string()));
+    }
     const auto library = sim::ReadKitchenLibrary(o.kitchen);
     InstallInterruptHandler();
     sim::KitchenModelCache cache;
@@ -78,6 +84,7 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     progress.Finish();
     const auto classifier = training::TrainFixtureClassifier(rows, o.spec);
     classifier->Save(o.out);
+    if (!o.rows.empty()) ml::WriteDatasetFile(rows, o.rows);
     if (!o.quiet) {
         std::size_t fixtures = 0;
         for (const int l : rows.labels) fixtures += l > 0;
@@ -122,6 +129,20 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
     cmd->add_option("--handle-thickness", o->thickness,
                     "MIN,MAX: scale of a varied handle's thickness with --vary-handles")
         ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--fold", o->t.fold,
+                    "-1: the whole --split half; 0 or 1: one fold of it (validation inside it)")
+        ->capture_default_str();
+    cmd->add_option("--rows", o->rows,
+                    "also write the labelled candidate rows as a dataset (.mcd, or .csv by "
+                    "extension) for `multicue classifier`");
+    cmd->add_option("--procedural", o->t.procedural,
+                    "procedural units of random designs per cupboard kind added to the "
+                    "training kitchens' models")
+        ->capture_default_str();
+    cmd->add_option("--procedural-share", o->t.procedural_share,
+                    "chance that a unit of a kind with procedural and library models is "
+                    "procedural")
         ->capture_default_str();
     cmd->add_option("--classifier", o->spec, "classifier spec (`multicue ml classifier train`)")
         ->capture_default_str();

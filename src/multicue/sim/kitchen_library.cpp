@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
 
 namespace multicue::sim {
 
@@ -127,17 +128,20 @@ std::vector<KitchenModelEntry> SelectKitchenSplit(const std::vector<KitchenModel
 }
 
 std::shared_ptr<const ArticulatedModel> KitchenModelCache::Get(const KitchenModelEntry& entry) {
+    const std::string key = entry.procedural ? entry.id : entry.folder.string();
     {
         const std::lock_guard<std::mutex> lock(mutex_);
-        const auto it = models_.find(entry.folder.string());
+        const auto it = models_.find(key);
         if (it != models_.end()) return it->second;
     }
     ArticulatedModel model =
-        LoadArticulatedModel(entry.folder, ArticulatedLoadParams{.scale = entry.scale_to_m});
+        entry.procedural
+            ? MakeProceduralUnit(entry.kind, entry.procedural_seed)
+            : LoadArticulatedModel(entry.folder, ArticulatedLoadParams{.scale = entry.scale_to_m});
     model.kind = entry.kind;
     auto shared = std::make_shared<const ArticulatedModel>(std::move(model));
     const std::lock_guard<std::mutex> lock(mutex_);
-    return models_.emplace(entry.folder.string(), std::move(shared)).first->second;
+    return models_.emplace(key, std::move(shared)).first->second;
 }
 
 }  // namespace multicue::sim

@@ -3,6 +3,7 @@
 /// README) and its held-out split: kitchen maps are trained and tuned on kitchens built from the
 /// "tune" half of the models and evaluated on kitchens built from the "test" half only.
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -22,6 +23,10 @@ struct KitchenModelEntry {
     std::string kind;  ///< cupboard, wall_cupboard, tall_cupboard, sink_cupboard, drawer_unit,
                        ///< dishwasher, fridge, oven, microwave or table
     float scale_to_m = 1.0f;  ///< file units -> metres
+    /// Made by MakeProceduralUnit(kind, procedural_seed) instead of loaded (folder empty); see
+    /// kitchen_procedural.hpp
+    bool procedural = false;
+    std::uint64_t procedural_seed = 0;
 };
 
 /// The kinds of labels.csv, in this order.

@@ -100,9 +100,17 @@ struct Builder {
 
     std::shared_ptr<const ArticulatedModel> Pick(const std::vector<KitchenModelEntry>& pool,
                                                  KitchenModelCache& cache) {
-        return cache.Get(
-            pool[static_cast<std::size_t>(rng.UniformInt(0, static_cast<int>(pool.size()) - 1))]);
+        std::vector<KitchenModelEntry> procedural, library;
+        for (const auto& e : pool) (e.procedural ? procedural : library).push_back(e);
+        // A draw only where both are offered, so that kitchens of library models stay the same.
+        const std::vector<KitchenModelEntry>* from = &pool;
+        if (!procedural.empty() && !library.empty()) {
+            from = rng.Uniform() < procedural_share ? &procedural : &library;
+        }
+        return cache.Get((*from)[static_cast<std::size_t>(
+            rng.UniformInt(0, static_cast<int>(from->size()) - 1))]);
     }
+    float procedural_share = 0.5f;
 };
 
 /// The models of each kind that fit a kitchen.
@@ -161,6 +169,9 @@ void KitchenSceneParams::Validate() const {
     if (!(max_model_width > 0.0f) || !(max_model_depth > 0.0f)) {
         fail("max_model_width", max_model_width);
     }
+    if (!(procedural_share >= 0.0f && procedural_share <= 1.0f)) {
+        fail("procedural_share (need [0, 1])", procedural_share);
+    }
 }
 
 void KitchenScene::SetJoint(std::size_t k, float value) {
@@ -210,6 +221,7 @@ KitchenScene MakeKitchenScene(const std::vector<KitchenModelEntry>& library,
     if (!any_lower) throw DataError("kitchen: the library has no lower units");
 
     Builder b(seed);
+    b.procedural_share = p.procedural_share;
     StreamRng& rng = b.rng;
     KitchenScene& k = b.k;
     k.size = Eigen::Vector3f(static_cast<float>(rng.Uniform(p.room_min, p.room_max)),

@@ -61,6 +61,9 @@ struct KitchenSceneParams {
     int max_table_objects = 4;           ///< objects on the table [objects]
     float max_model_width = 2.3f;        ///< models wider than this are not used [m]
     float max_model_depth = 1.1f;        ///< models deeper than this are not used [m]
+    /// Where the models of a kind include procedural units (KitchenModelEntry::procedural) and
+    /// library models, the chance that a unit is a procedural one
+    float procedural_share = 0.5f;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };

@@ -9,6 +9,7 @@
 
 #include "multicue/core/exceptions.hpp"
 #include "multicue/core/logging.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
 #include "multicue/sim/raycaster.hpp"
 #include "multicue/sim/rng.hpp"
 
@@ -97,6 +98,14 @@ void FixtureTrainingOptions::Validate() const {
         throw InvalidArgument(
             fmt::format("train fixtures: num_threads must be >= 0, got {}", num_threads));
     }
+    if (procedural < 0) {
+        throw InvalidArgument(
+            fmt::format("train fixtures: procedural must be >= 0, got {}", procedural));
+    }
+    if (!(procedural_share >= 0.0f && procedural_share <= 1.0f)) {
+        throw InvalidArgument(fmt::format(
+            "train fixtures: procedural_share must lie in [0, 1], got {}", procedural_share));
+    }
     handle_variation.Validate();
     if (fixture_params) fixture_params->Validate();
 }
@@ -154,6 +163,11 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
     o.Validate();
     auto models = sim::SelectKitchenSplit(library, o.split);
     if (o.fold >= 0) models = SelectKitchenFold(models, o.fold);
+    for (auto& e : sim::ProceduralKitchenEntries(o.procedural, sim::SubSeed(o.seed, 97))) {
+        models.push_back(std::move(e));
+    }
+    sim::KitchenSceneParams scene;
+    scene.procedural_share = o.procedural_share;
     ml::Dataset data = EmptyFixtureDataset();
     const bool laser = o.sensor == mapping::KitchenSensor::kLaser;
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(o.sensor);
@@ -162,7 +176,7 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
     params.gap_fronts.enabled = false;  // the rows are the candidates; fronts are not needed
     for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
         const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
-        sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, {}, seed);
+        sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, scene, seed);
         if (o.vary_handles) sim::VaryHandles(kitchen, o.handle_variation, sim::SubSeed(seed, 41));
         const auto frames = ScanKitchen(kitchen, laser ? 0 : o.views, laser ? o.views : 0, seed);
         for (std::size_t f = 0; f < frames.size(); ++f) {

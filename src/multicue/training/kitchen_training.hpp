@@ -71,6 +71,13 @@ struct FixtureTrainingOptions {
                                           .max_reach_scale = 1.5f,
                                           .min_thickness_scale = 0.5f,
                                           .max_thickness_scale = 2.0f};
+    /// Procedural units (sim::ProceduralKitchenEntries, seeds from `seed`) of every cupboard
+    /// kind added to the training kitchens' models, this many per kind; 0: library models only.
+    /// They bring unit designs (drawer stacks, framed fronts, handle placements) the library's
+    /// half lacks.
+    int procedural = 0;
+    /// The chance that a unit of a kind with procedural and library models is procedural
+    float procedural_share = 0.5f;
     /// The candidates' parameters; unset: those of mapping::KitchenParamsFor(sensor)
     std::optional<mapping::FixtureParams> fixture_params;
     /// Throws InvalidArgument naming the first out-of-range field.

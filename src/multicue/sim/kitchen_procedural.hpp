@@ -1,0 +1,39 @@
+#pragma once
+/// \file Procedural kitchen units: cupboards, sink cupboards, drawer units, wall and tall
+/// cupboards built from boards, with doors, drawers, flaps and fixed panels in random layouts,
+/// flat or framed fronts, and bar and knob handles of random size and placement.
+///
+/// PartNet-Mobility holds few designs of each kind (three drawer counters in the tune half), so
+/// classifiers and rules trained or validated on one half of the library meet unit designs on the
+/// other half they never saw. Procedural units add as many designs as training wants; they never
+/// replace the library's held-out half for evaluation.
+///
+/// The models follow the conventions of LoadArticulatedModel: z up, fronts facing +x, the closed
+/// model's bounding box centred on x = y = 0 with its bottom at z = 0; one root link (semantic
+/// "furniture_body") and one link per door ("rotation_door", revolute, opening towards +x) or
+/// drawer ("drawer", prismatic along +x, with its box); handles are parts named "handle" and
+/// knobs parts named "knob" of their front's link; vertex colours and laser reflectances are set.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "multicue/sim/articulated.hpp"
+#include "multicue/sim/kitchen_library.hpp"
+
+namespace multicue::sim {
+
+/// The kinds MakeProceduralUnit builds: cupboard, sink_cupboard, drawer_unit, wall_cupboard,
+/// tall_cupboard.
+const std::vector<std::string>& ProceduralUnitKinds();
+
+/// A random unit of `kind`, deterministic for a seed; its id is "procedural/<kind>/<seed in hex>".
+/// Throws InvalidArgument for a kind not in ProceduralUnitKinds().
+ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed);
+
+/// `per_kind` library entries of every procedural kind (KitchenModelEntry::procedural set, ids
+/// "procedural/<kind>/<its seed in hex>"), their seeds drawn from `seed`. KitchenModelCache builds
+/// them on first use. Throws InvalidArgument for a negative count.
+std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed);
+
+}  // namespace multicue::sim
