@@ -526,6 +526,47 @@ TEST(KitchenCli, SimulateThenMapWithSharedModels) {
     EXPECT_NE(labels.FindExtraField("semantic"), nullptr);
 }
 
+TEST(KitchenCli, ProceduralKitchensWithoutTheLibrary) {
+    // Kitchens of procedural units need no model files: simulate, train and map end to end.
+    test::TempDir dir;
+    const auto sim_dir = dir / "sim";
+    auto r = test::RunCli(
+        "simulate kitchens --models none --procedural 3 --kitchens 1 --views 1 --laser-views 0 "
+        "--open-doors --open-count 1 -q --out " +
+        sim_dir.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto manifest = nlohmann::json::parse(test::ReadTextFile(sim_dir / "manifest.json"));
+    EXPECT_TRUE(manifest["complete"].get<bool>());
+    const auto& kitchen = manifest["kitchens"][0];
+    for (const auto& m : kitchen["models"]) {
+        EXPECT_EQ(m["model"].get<std::string>().rfind("procedural/", 0), 0u) << m["model"];
+    }
+    EXPECT_NO_THROW(io::ReadUrdf(sim_dir / kitchen["urdf"].get<std::string>()));
+    const auto fixtures = dir / "fixtures.mcm";
+    r = test::RunCli(
+        "train fixtures --kitchen none --procedural 3 --kitchens 2 --views 2 -q --out " +
+        fixtures.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto map_dir = dir / "map";
+    std::string opened;
+    if (!kitchen["opened"].empty()) {
+        opened =
+            " --opened " + (sim_dir / kitchen["opened"][0]["file"].get<std::string>()).string();
+    }
+    r = test::RunCli("map kitchen " +
+                     (sim_dir / kitchen["frames"][0]["file"].get<std::string>()).string() + opened +
+                     " -q --fixtures " + fixtures.string() + " --out " + map_dir.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_FALSE(io::ReadUrdf(map_dir / "map.urdf").links.empty());
+    // Without procedural units there is nothing to build kitchens from.
+    EXPECT_EQ(test::RunCli("simulate kitchens --models none --out " + (dir / "x").string()).code,
+              2);
+    EXPECT_EQ(test::RunCli("train fixtures --kitchen none --out " + (dir / "x.mcm").string()).code,
+              2);
+    EXPECT_FALSE(std::filesystem::exists(dir / "x"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.mcm"));
+}
+
 TEST(KitchenCli, BadInputWritesNothing) {
     test::TempDir dir;
     // An empty cloud.

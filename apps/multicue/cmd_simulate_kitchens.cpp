@@ -103,8 +103,11 @@ class KitchenSimulator {
 
     void Run() {
         const std::filesystem::path dir = o_.out;
-        auto library = sim::SelectKitchenSplit(sim::ReadKitchenLibrary(o_.models),
-                                               sim::ParseMeshSplit(o_.mesh_split));
+        // "none": kitchens of procedural units only (no library needed).
+        auto library = o_.models == "none"
+                           ? std::vector<sim::KitchenModelEntry>{}
+                           : sim::SelectKitchenSplit(sim::ReadKitchenLibrary(o_.models),
+                                                     sim::ParseMeshSplit(o_.mesh_split));
         for (auto& e : sim::ProceduralKitchenEntries(o_.procedural, sim::SubSeed(o_.seed, 97))) {
             library.push_back(std::move(e));
         }
@@ -315,6 +318,9 @@ void CheckOptions(const KitchenOptions& o) {
     if (o.procedural < 0) {
         throw InvalidArgument(fmt::format("--procedural must be >= 0, got {}", o.procedural));
     }
+    if (o.models == "none" && o.procedural == 0) {
+        throw InvalidArgument("--models none needs --procedural N (N > 0)");
+    }
     if (o.open_per_kitchen < 0) {
         throw InvalidArgument(fmt::format("--open-count must be >= 0, got {}", o.open_per_kitchen));
     }
@@ -340,7 +346,9 @@ void AddSimulateKitchensCommand(CLI::App& simulate, const GlobalOptions& global)
     auto o = std::make_shared<KitchenOptions>();
     cmd->add_option("--out", o->out, "output folder: PCD files, URDF files and manifest.json")
         ->required();
-    cmd->add_option("--models", o->models, "kitchen model library (folder with labels.csv)")
+    cmd->add_option("--models", o->models,
+                    "kitchen model library (folder with labels.csv); none: procedural units "
+                    "only (--procedural)")
         ->capture_default_str();
     cmd->add_option("--seed", o->seed, "random seed; equal seeds give identical files")
         ->capture_default_str();

@@ -66,6 +66,9 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     o.t.handle_variation.min_thickness_scale = o.thickness[0];
     o.t.handle_variation.max_thickness_scale = o.thickness[1];
     o.t.Validate();
+    if (o.kitchen == "none" && o.t.procedural == 0) {
+        throw InvalidArgument("--kitchen none needs --procedural N (N > 0)");
+    }
     ml::CreateClassifier(o.spec);  // throws for a bad spec
     const std::filesystem::path folder = std::filesystem::path(o.out).parent_path();
     if (!folder.empty() && !std::filesystem::is_directory(folder)) {
@@ -75,7 +78,9 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     if (!rows_folder.empty() && !std::filesystem::is_directory(rows_folder)) {
         throw InvalidArgument(fmt::format("--rows: no such folder '{}'", rows_folder.string()));
     }
-    const auto library = sim::ReadKitchenLibrary(o.kitchen);
+    // "none": training kitchens of procedural units only.
+    const auto library = o.kitchen == "none" ? std::vector<sim::KitchenModelEntry>{}
+                                             : sim::ReadKitchenLibrary(o.kitchen);
     InstallInterruptHandler();
     sim::KitchenModelCache cache;
     Progress progress("kitchens", static_cast<std::size_t>(o.t.kitchens));
@@ -89,9 +94,14 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
         std::size_t fixtures = 0;
         for (const int l : rows.labels) fixtures += l > 0;
         std::printf(
-            "multicue train fixtures: %s, %d kitchens of the %s half, %zu candidates (%zu handles "
-            "and knobs) -> %s\n",
-            o.sensor.c_str(), o.t.kitchens, o.split.c_str(), rows.rows(), fixtures, o.out.c_str());
+            "multicue train fixtures: %s, %d kitchens of %s, %zu candidates (%zu handles and "
+            "knobs) -> %s\n",
+            o.sensor.c_str(), o.t.kitchens,
+            (o.kitchen == "none"
+                 ? std::string("procedural units")
+                 : "the " + o.split + " half" + (o.t.procedural > 0 ? " and procedural units" : ""))
+                .c_str(),
+            rows.rows(), fixtures, o.out.c_str());
     }
 }
 
@@ -106,7 +116,9 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
     cmd->add_option("--out", o->out, "classifier file to write (.mcm)")->required();
     cmd->add_option("--sensor", o->sensor, "kinect or laser: the scans the classifier will see")
         ->capture_default_str();
-    cmd->add_option("--kitchen", o->kitchen, "kitchen library (PartNet-Mobility models)")
+    cmd->add_option("--kitchen", o->kitchen,
+                    "kitchen library (PartNet-Mobility models); none: procedural units only "
+                    "(--procedural)")
         ->capture_default_str();
     cmd->add_option("--split", o->split,
                     "library half trained on: tune (the other half stays held out), test, all")
