@@ -28,6 +28,24 @@
 namespace multicue {
 namespace {
 
+/// A 320 x 240 Kinect: enough for the kitchen tests' views.
+sim::KinectParams SmallKinect() {
+    sim::KinectParams kp;
+    kp.width = 320;
+    kp.height = 240;
+    kp.fx = kp.fy = 262.5f;
+    kp.cx = 159.5f;
+    kp.cy = 119.5f;
+    return kp;
+}
+
+/// The kitchen's ground-truth URDF parses with urdfdom and holds every joint.
+void ExpectUrdfHoldsEveryJoint(const sim::KitchenScene& k) {
+    const io::UrdfModel urdf =
+        io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)), "kitchen.urdf");
+    for (const auto& j : k.joints) EXPECT_NE(urdf.FindJoint(j.name), nullptr) << j.name;
+}
+
 /// An axis-aligned box as an OBJ file with one material of diffuse colour `kd`.
 void WriteBoxObj(const std::filesystem::path& path, const Eigen::Vector3f& lo,
                  const Eigen::Vector3f& hi, const std::string& kd) {
@@ -327,17 +345,10 @@ TEST(KitchenScene, GroundTruthAndUrdfWithSharedModels) {
     EXPECT_TRUE(k.instances[0].T_world_model.isApprox(again.instances[0].T_world_model));
     EXPECT_GE(k.runs.size(), 2u);
     ASSERT_FALSE(k.joints.empty());
-    // The URDF parses with urdfdom and holds every joint at its world axis.
-    const io::UrdfModel urdf =
-        io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)), "kitchen.urdf");
-    for (const auto& j : k.joints) EXPECT_NE(urdf.FindJoint(j.name), nullptr) << j.name;
+    // The URDF parses with urdfdom and holds every joint.
+    ExpectUrdfHoldsEveryJoint(k);
     // A Kinect view: its points carry the kitchen's classes, and fronts have joints.
-    sim::KinectParams kp;
-    kp.width = 320;
-    kp.height = 240;
-    kp.fx = kp.fy = 262.5f;
-    kp.cx = 159.5f;
-    kp.cy = 119.5f;
+    const sim::KinectParams kp = SmallKinect();
     const auto pose = sim::KitchenCameraPoses(k, 1, 3).at(0);
     PointCloud scan = sim::ScanKinect(sim::RayCaster(k.scene), pose, kp, 1);
     sim::AddKitchenTruth(k, scan);
@@ -450,15 +461,8 @@ TEST(ProceduralUnits, MakeKitchensWithGroundTruth) {
     // The cache builds each unit once.
     EXPECT_EQ(cache.Get(entries[4]), cache.Get(entries[4]));
     EXPECT_EQ(cache.Get(entries[4])->id, entries[4].id);
-    const io::UrdfModel urdf =
-        io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)), "kitchen.urdf");
-    for (const auto& j : k.joints) EXPECT_NE(urdf.FindJoint(j.name), nullptr) << j.name;
-    sim::KinectParams kp;
-    kp.width = 320;
-    kp.height = 240;
-    kp.fx = kp.fy = 262.5f;
-    kp.cx = 159.5f;
-    kp.cy = 119.5f;
+    ExpectUrdfHoldsEveryJoint(k);
+    const sim::KinectParams kp = SmallKinect();
     PointCloud scan =
         sim::ScanKinect(sim::RayCaster(k.scene), sim::KitchenCameraPoses(k, 1, 2).at(0), kp, 1);
     sim::AddKitchenTruth(k, scan);
