@@ -403,6 +403,10 @@ TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
                 ASSERT_TRUE(jt.Movable());
                 const sim::ArticulatedLink& link = m.links[static_cast<std::size_t>(jt.child)];
                 ASSERT_TRUE(link.mesh);
+                // Colours and laser reflectances on every vertex.
+                EXPECT_EQ(link.mesh->mesh.vertex_colors.size(), link.mesh->mesh.vertices.size());
+                EXPECT_EQ(link.mesh->vertex_reflectance.size(), link.mesh->mesh.vertices.size());
+                EXPECT_NO_THROW(link.mesh->Validate());
                 const bool drawer = jt.type == io::UrdfJointType::kPrismatic;
                 prismatic += drawer;
                 EXPECT_EQ(link.semantic, drawer ? "drawer" : "rotation_door");
