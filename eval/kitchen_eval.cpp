@@ -1168,7 +1168,7 @@ int main(int argc, char** argv) {
                    "procedural units per cupboard kind added to the training kitchens' models "
                    "(fixtures and containers)")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+        ->check(CLI::Range(0, sim::kMaxProceduralPerKind));
     app.add_option("--procedural-share", o.procedural_share,
                    "chance that a unit of a kind with procedural and library models is procedural")
         ->capture_default_str()
@@ -1177,7 +1177,7 @@ int main(int argc, char** argv) {
                    "procedural units per cupboard kind added to the scored kitchens' models, of "
                    "other seeds than training's (--split tune only)")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+        ->check(CLI::Range(0, sim::kMaxProceduralPerKind));
     app.add_option("--save-fixtures", o.save_fixtures,
                    "also save the fixture classifiers as PREFIX_kinect.mcm and PREFIX_laser.mcm");
     app.add_option("--fronts", o.fronts,

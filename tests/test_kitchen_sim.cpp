@@ -452,6 +452,7 @@ TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
     EXPECT_FALSE(a.bounds.isApprox(c.bounds));
     EXPECT_THROW(sim::MakeProceduralUnit("fridge", 1), InvalidArgument);
     EXPECT_THROW(sim::ProceduralKitchenEntries(-1, 1), InvalidArgument);
+    EXPECT_THROW(sim::ProceduralKitchenEntries(sim::kMaxProceduralPerKind + 1, 1), InvalidArgument);
 }
 
 TEST(ProceduralUnits, MakeKitchensWithGroundTruth) {
@@ -617,7 +618,7 @@ TEST(KitchenCli, BadInputWritesNothing) {
          {"--sensor sonar", "--kitchens 0", "--classifier bogus", "--split half", "--views -1",
           "--vary-handles --handle-lengths 0.5,0.1", "--handle-lengths 0.1",
           "--vary-handles --handle-reach 1.5,0.5", "--handle-thickness 0,2", "--handle-reach 2",
-          "--procedural -1", "--procedural-share 1.5", "--fold 2"}) {
+          "--procedural -1", "--procedural 100000", "--procedural-share 1.5", "--fold 2"}) {
         r = test::RunCli("train fixtures " + bad + " --out " + (dir / "f.mcm").string());
         EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
     }

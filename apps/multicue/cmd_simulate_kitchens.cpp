@@ -315,8 +315,9 @@ void CheckOptions(const KitchenOptions& o) {
     if (o.laser_views < 0) {
         throw InvalidArgument(fmt::format("--laser-views must be >= 0, got {}", o.laser_views));
     }
-    if (o.procedural < 0) {
-        throw InvalidArgument(fmt::format("--procedural must be >= 0, got {}", o.procedural));
+    if (o.procedural < 0 || o.procedural > sim::kMaxProceduralPerKind) {
+        throw InvalidArgument(fmt::format("--procedural must lie in [0, {}], got {}",
+                                          sim::kMaxProceduralPerKind, o.procedural));
     }
     if (o.models == "none" && o.procedural == 0) {
         throw InvalidArgument("--models none needs --procedural N (N > 0)");

@@ -459,9 +459,10 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
 }
 
 std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed) {
-    if (per_kind < 0) {
+    if (per_kind < 0 || per_kind > kMaxProceduralPerKind) {
         throw InvalidArgument(
-            fmt::format("procedural units: the count per kind must be >= 0, got {}", per_kind));
+            fmt::format("procedural units: the count per kind must lie in [0, {}], got {}",
+                        kMaxProceduralPerKind, per_kind));
     }
     std::vector<KitchenModelEntry> out;
     for (std::size_t k = 0; k < ProceduralUnitKinds().size(); ++k) {

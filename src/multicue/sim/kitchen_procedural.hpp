@@ -31,9 +31,13 @@ const std::vector<std::string>& ProceduralUnitKinds();
 /// Throws InvalidArgument for a kind not in ProceduralUnitKinds().
 ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed);
 
+/// The most procedural units of a kind a library may list (each is built when a kitchen of the
+/// library is made).
+inline constexpr int kMaxProceduralPerKind = 1000;
+
 /// `per_kind` library entries of every procedural kind (KitchenModelEntry::procedural set, ids
 /// "procedural/<kind>/<its seed in hex>"), their seeds drawn from `seed`. KitchenModelCache builds
-/// them on first use. Throws InvalidArgument for a negative count.
+/// them on first use. Throws InvalidArgument for a count outside [0, kMaxProceduralPerKind].
 std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed);
 
 }  // namespace multicue::sim

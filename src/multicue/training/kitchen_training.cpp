@@ -98,9 +98,9 @@ void FixtureTrainingOptions::Validate() const {
         throw InvalidArgument(
             fmt::format("train fixtures: num_threads must be >= 0, got {}", num_threads));
     }
-    if (procedural < 0) {
-        throw InvalidArgument(
-            fmt::format("train fixtures: procedural must be >= 0, got {}", procedural));
+    if (procedural < 0 || procedural > sim::kMaxProceduralPerKind) {
+        throw InvalidArgument(fmt::format("train fixtures: procedural must lie in [0, {}], got {}",
+                                          sim::kMaxProceduralPerKind, procedural));
     }
     if (!(procedural_share >= 0.0f && procedural_share <= 1.0f)) {
         throw InvalidArgument(fmt::format(
