@@ -106,6 +106,13 @@ struct Options {
     int scored_procedural = 0;  ///< per kind, scored kitchens (tune half only)
 };
 
+/// The library id of a kitchen's model instance as the truth's `model` field numbers it (1 +
+/// instance); `none` for 0 (room structure, objects).
+std::string ModelIdOf(const sim::KitchenScene& k, std::size_t instance, const char* none) {
+    return instance >= 1 && instance <= k.instances.size() ? k.instances[instance - 1].model->id
+                                                           : std::string(none);
+}
+
 /// Sets one parameter of the fronts (outline, gap fronts) or, as fixture_NAME, of the fixture
 /// candidates from NAME=VALUE (--front-param).
 void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
@@ -487,16 +494,10 @@ class Evaluator {
                 if (du[d] || map.fixtures[d].indices.empty()) continue;
                 const Index mid = map.fixtures[d].indices[map.fixtures[d].indices.size() / 2];
                 ++s.fp_on[sim::KitchenClassNames()[t.semantic[mid]]];
-                const std::size_t instance = t.model[mid];
-                ++s.fp_model[instance >= 1 && instance <= k.instances.size()
-                                 ? k.instances[instance - 1].model->id
-                                 : std::string("room")];
+                ++s.fp_model[ModelIdOf(k, t.model[mid], "room")];
             }
             for (std::size_t g = 0; g < fixtures.size(); ++g) {
-                const std::size_t instance = t.model[fixtures[g].points.front()];
-                const std::string id = instance >= 1 && instance <= k.instances.size()
-                                           ? k.instances[instance - 1].model->id
-                                           : std::string("unknown");
+                const std::string id = ModelIdOf(k, t.model[fixtures[g].points.front()], "unknown");
                 auto& [visible, found] = s.fixtures_by_model[id];
                 ++visible;
                 found += gu[g] ? 1 : 0;
@@ -527,7 +528,6 @@ class Evaluator {
                 if (o_.verbose) {
                     // The nearest detection: a fixture merged with its neighbour shows as one
                     // taken by the other.
-                    const std::size_t instance = t.model[fixtures[g].points.front()];
                     float nearest = std::numeric_limits<float>::infinity();
                     std::size_t nd = 0;
                     for (std::size_t d = 0; d < map.fixtures.size(); ++d) {
@@ -548,9 +548,7 @@ class Evaluator {
                     std::fprintf(stderr,
                                  "fixture %s %s: missed, %s (%zu points, %.2f m away); %s\n",
                                  f.laser ? "laser" : "kinect",
-                                 instance >= 1 && instance <= k.instances.size()
-                                     ? k.instances[instance - 1].model->id.c_str()
-                                     : "?",
+                                 ModelIdOf(k, t.model[fixtures[g].points.front()], "?").c_str(),
                                  why.c_str(), fixtures[g].points.size(),
                                  (c - f.pose.translation()).norm(), detection.c_str());
                 }

@@ -70,13 +70,11 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
         throw InvalidArgument("--kitchen none needs --procedural N (N > 0)");
     }
     ml::CreateClassifier(o.spec);  // throws for a bad spec
-    const std::filesystem::path folder = std::filesystem::path(o.out).parent_path();
-    if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-        throw InvalidArgument(fmt::format("--out: no such folder '{}'", folder.string()));
-    }
-    const std::filesystem::path rows_folder = std::filesystem::path(o.rows).parent_path();
-    if (!rows_folder.empty() && !std::filesystem::is_directory(rows_folder)) {
-        throw InvalidArgument(fmt::format("--rows: no such folder '{}'", rows_folder.string()));
+    for (const auto& [option, file] : {std::pair{"--out", &o.out}, std::pair{"--rows", &o.rows}}) {
+        const std::filesystem::path folder = std::filesystem::path(*file).parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+            throw InvalidArgument(fmt::format("{}: no such folder '{}'", option, folder.string()));
+        }
     }
     // "none": training kitchens of procedural units only.
     const auto library = o.kitchen == "none" ? std::vector<sim::KitchenModelEntry>{}

@@ -486,6 +486,11 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                         clusters.push_back(std::move(c));
                     }
                 }
+                // A depth candidate left out of the depth clusters may be in an added one.
+                std::sort(face_candidates[k].begin(), face_candidates[k].end());
+                face_candidates[k].erase(
+                    std::unique(face_candidates[k].begin(), face_candidates[k].end()),
+                    face_candidates[k].end());
             }
             for (const Indices& cluster : clusters) {
                 Eigen::AlignedBox3f box;

@@ -158,12 +158,14 @@ int VaryHandles(KitchenScene& kitchen, const HandleVariation& v, std::uint64_t s
             const bool stretch = half > 0.0f && new_half > 0.0f;
             if (!stretch && !vary_reach && !vary_thickness) continue;
             if (!copy) copy = std::make_shared<PartMesh>(*object.mesh);
-            for (const std::uint32_t i : piece.vertices) {
-                if (!stretch) break;
-                float& x = copy->mesh.vertices[i][axis];
-                const float d = x - c;
-                x = std::abs(d) <= half ? c + d * (new_half / half)
-                                        : c + d + (d < 0.0f ? half - new_half : new_half - half);
+            if (stretch) {
+                for (const std::uint32_t i : piece.vertices) {
+                    float& x = copy->mesh.vertices[i][axis];
+                    const float d = x - c;
+                    x = std::abs(d) <= half
+                            ? c + d * (new_half / half)
+                            : c + d + (d < 0.0f ? half - new_half : new_half - half);
+                }
             }
             // Cross-section: the axis along which the handle stands out of its front is the
             // front's normal; the front's surface there is the base its reach is scaled from.

@@ -45,15 +45,23 @@ Paint RandomFinish(StreamRng& rng) {
     return MakePaint(c[0] + j, c[1] + j, c[2] + j);
 }
 
+/// Appends `piece` to `m` turned so that its +z axis runs along `up` (unit) and moved to `at`, in
+/// the colour and reflectance of `paint`.
+void AppendPlaced(PartMesh& m, PartMesh piece, const Eigen::Vector3f& up, const Eigen::Vector3f& at,
+                  const Paint& paint) {
+    const Eigen::Quaternionf q = Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), up);
+    for (auto& v : piece.mesh.vertices) v = q * v + at;
+    for (auto& n : piece.mesh.vertex_normals) n = q * n;
+    piece.mesh.vertex_colors.assign(piece.mesh.vertices.size(), paint.color);
+    piece.vertex_reflectance.assign(piece.mesh.vertices.size(), paint.reflectance);
+    m.AppendParts(piece);
+}
+
 /// Appends a box spanning [lo, hi] (unit frame) to `m` as part `part`.
 void AddBlock(PartMesh& m, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
               const std::string& part, const Paint& paint) {
-    PartMesh b = MakeBoxMesh(hi - lo, part);
-    const Eigen::Vector3f shift((lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, lo.z());
-    for (auto& v : b.mesh.vertices) v += shift;
-    b.mesh.vertex_colors.assign(b.mesh.vertices.size(), paint.color);
-    b.vertex_reflectance.assign(b.mesh.vertices.size(), paint.reflectance);
-    m.AppendParts(b);
+    AppendPlaced(m, MakeBoxMesh(hi - lo, part), Eigen::Vector3f::UnitZ(),
+                 {(lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, lo.z()}, paint);
 }
 
 /// Appends a cylinder (or, with few segments, a prism) of `radius` about the line through `from`
@@ -61,15 +69,11 @@ void AddBlock(PartMesh& m, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
 void AddRod(PartMesh& m, const Eigen::Vector3f& from, const Eigen::Vector3f& to, float radius,
             const std::string& part, const Paint& paint, int segments) {
     const float len = (to - from).norm();
-    PartMesh c = MakeRevolutionMesh(
-        {{0.0f, 0.0f, 0}, {radius, 0.0f, 0}, {radius, len, 0}, {0.0f, len, 0}}, {part}, segments);
-    const Eigen::Quaternionf q =
-        Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), (to - from) / len);
-    for (auto& v : c.mesh.vertices) v = q * v + from;
-    for (auto& n : c.mesh.vertex_normals) n = q * n;
-    c.mesh.vertex_colors.assign(c.mesh.vertices.size(), paint.color);
-    c.vertex_reflectance.assign(c.mesh.vertices.size(), paint.reflectance);
-    m.AppendParts(c);
+    AppendPlaced(
+        m,
+        MakeRevolutionMesh({{0.0f, 0.0f, 0}, {radius, 0.0f, 0}, {radius, len, 0}, {0.0f, len, 0}},
+                           {part}, segments),
+        (to - from) / len, from, paint);
 }
 
 /// A knob standing out of the surface x = x0 at (y, z) along +x.
@@ -79,14 +83,8 @@ void AddKnob(PartMesh& m, float x0, float y, float z, float reach, float radius,
     const std::vector<ProfilePoint> profile = {{0.0f, 0.0f, 0},          {stem * 1.4f, 0.0f, 0},
                                                {stem, 0.35f * reach, 0}, {radius, 0.6f * reach, 0},
                                                {radius, reach, 0},       {0.0f, reach, 0}};
-    PartMesh k = MakeRevolutionMesh(profile, {"knob"}, 24);
-    const Eigen::Quaternionf q =
-        Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), Eigen::Vector3f::UnitX());
-    for (auto& v : k.mesh.vertices) v = q * v + Eigen::Vector3f(x0, y, z);
-    for (auto& n : k.mesh.vertex_normals) n = q * n;
-    k.mesh.vertex_colors.assign(k.mesh.vertices.size(), paint.color);
-    k.vertex_reflectance.assign(k.mesh.vertices.size(), paint.reflectance);
-    m.AppendParts(k);
+    AppendPlaced(m, MakeRevolutionMesh(profile, {"knob"}, 24), Eigen::Vector3f::UnitX(), {x0, y, z},
+                 paint);
 }
 
 /// One handle design, shared by a unit's fronts.

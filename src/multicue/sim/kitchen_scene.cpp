@@ -100,14 +100,17 @@ struct Builder {
 
     std::shared_ptr<const ArticulatedModel> Pick(const std::vector<KitchenModelEntry>& pool,
                                                  KitchenModelCache& cache) {
-        std::vector<KitchenModelEntry> procedural, library;
-        for (const auto& e : pool) (e.procedural ? procedural : library).push_back(e);
+        std::vector<const KitchenModelEntry*> procedural, library, all;
+        for (const auto& e : pool) {
+            (e.procedural ? procedural : library).push_back(&e);
+            all.push_back(&e);
+        }
         // A draw only where both are offered, so that kitchens of library models stay the same.
-        const std::vector<KitchenModelEntry>* from = &pool;
+        const std::vector<const KitchenModelEntry*>* from = &all;
         if (!procedural.empty() && !library.empty()) {
             from = rng.Uniform() < procedural_share ? &procedural : &library;
         }
-        return cache.Get((*from)[static_cast<std::size_t>(
+        return cache.Get(*(*from)[static_cast<std::size_t>(
             rng.UniformInt(0, static_cast<int>(from->size()) - 1))]);
     }
     float procedural_share = 0.5f;
