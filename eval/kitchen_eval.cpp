@@ -87,6 +87,7 @@ struct Options {
     float drawer_max_height = -1.0f;  ///< < 0: the library's ArticulationParams default
     float axis_snap_deg = -1.0f;      ///< < 0: the library's MotionParams default
     float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
+    float vacated_max_share = -1.0f;  ///< < 0: the library's MotionParams default
     std::string load_fixtures;
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
@@ -784,6 +785,7 @@ class Evaluator {
             if (o_.min_slide_coverage >= 0.0f) mp.min_slide_coverage = o_.min_slide_coverage;
             if (o_.axis_snap_deg >= 0.0f) mp.axis_snap_deg = o_.axis_snap_deg;
             if (o_.max_hinge_gap >= 0.0f) mp.max_hinge_gap = o_.max_hinge_gap;
+            if (o_.vacated_max_share >= 0.0f) mp.vacated_max_share = o_.vacated_max_share;
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
             const bool bare = pf.fixtures.empty();
             ++s.open_total;
@@ -799,11 +801,12 @@ class Evaluator {
                 std::fprintf(
                     stderr,
                     "pair %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
-                    "front %.2f x %.2f m)\n",
+                    "front %.2f x %.2f m, moved part %.2f x %.2f m)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
-                    pf.max.y() - pf.min.y());
+                    pf.max.y() - pf.min.y(), motion.front_max.x() - motion.front_min.x(),
+                    motion.front_max.y() - motion.front_min.y());
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
@@ -1207,6 +1210,10 @@ int main(int argc, char** argv) {
              "opened pairs: a hinge no moved point comes this close to is replaced by the best "
              "edge's [m] (0: off)",
              10.0);
+    override("--vacated-share", o.vacated_max_share,
+             "opened pairs: the part of a front's rectangle the motion vacated is taken for the "
+             "front when it covers less than this share of it (0: off)",
+             1.0);
     app.add_option("--front-param", o.front_params,
                    "NAME=VALUE of the fronts' parameters, or fixture_NAME=VALUE of the "
                    "fixture candidates' (repeatable)");

@@ -431,6 +431,117 @@ TEST(Articulation, ADrawerRunningOutFartherThanItsFrontIsWideSlides) {
     EXPECT_THROW(ArticulationFromMotion(closed, closed, f, near), InvalidArgument);
 }
 
+/// Four drawers 11 cm tall (x 0.7 .. 0.9, z 0.35 .. 0.79) in a face at y = 2.4, the third from
+/// the bottom pulled out by `pull` with its sides and bottom in view.
+PointCloud DrawerStackScan(float pull) {
+    std::mt19937 rng(13);
+    PointCloud c;
+    test::AddPatch(c, {0.3f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    test::AddPatch(c, {0.9f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    for (int k = 0; k < 4; ++k) {
+        const float z = 0.352f + 0.11f * static_cast<float>(k);
+        const float y = k == 2 ? 2.4f - pull : 2.4f;
+        test::AddPatch(c, {0.7f, y, z}, {0.2f, 0, 0}, {0, 0, 0.106f}, 0.005f, {0, -1, 0}, Color{},
+                       0.001f, rng);
+        if (k != 2 || pull <= 0.0f) continue;
+        for (const float x : {0.705f, 0.895f}) {
+            test::AddPatch(c, {x, y, z + 0.01f}, {0, pull, 0}, {0, 0, 0.08f}, 0.005f,
+                           {x < 0.8f ? 1.0f : -1.0f, 0, 0}, Color{}, 0.001f, rng);
+        }
+        test::AddPatch(c, {0.705f, y, z + 0.01f}, {0.19f, 0, 0}, {0, pull, 0}, 0.005f, {0, 0, 1},
+                       Color{}, 0.001f, rng);
+    }
+    return c;
+}
+
+TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
+    // The stack's handles were missed and its four drawers make one front: the pulled drawer
+    // covers a quarter of that rectangle, too little for a slide, but it is the part of the
+    // rectangle that the motion vacated.
+    Front f = DrawerFront();
+    f.min.y() = 0.35f;
+    f.max.y() = 0.79f;
+    f.center.z() = 0.57f;
+    const PointCloud closed = DrawerStackScan(0.0f);
+    const PointCloud opened = DrawerStackScan(0.3f);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
+    EXPECT_NEAR(m.opening, 0.3f, 0.02f);
+    EXPECT_LT(m.articulation.axis.y(), -0.99f);
+    EXPECT_NEAR(m.front_min.y(), 0.57f, 0.02f);
+    EXPECT_NEAR(m.front_max.y(), 0.67f, 0.02f);
+    EXPECT_NEAR(m.front_max.x() - m.front_min.x(), 0.2f, 0.03f);
+    // The whole rectangle: a quarter of it slid, taken for a turn.
+    MotionParams whole;
+    whole.vacated_max_share = 0.0f;
+    const MotionResult n = ArticulationFromMotion(closed, opened, f, whole);
+    ASSERT_TRUE(n.found);
+    EXPECT_EQ(n.articulation.type, JointType::kRevolute);
+    EXPECT_EQ(n.front_max.y(), f.max.y());
+    whole.vacated_max_share = 1.5f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, whole), InvalidArgument);
+}
+
+TEST(Articulation, AnOpenedScanSplitsAFrontSpanningSeveralDrawers) {
+    // The map took the stack of DrawerStackScan for one front, with one handle found on its top
+    // drawer; the robot pulls out the third drawer from the bottom.
+    const PointCloud closed = DrawerStackScan(0.0f);
+    KitchenMap map;
+    Fixture handle;
+    handle.center = Eigen::Vector3f(0.8f, 2.37f, 0.74f);
+    handle.direction = Eigen::Vector3f::UnitX();
+    handle.length = 0.12f;
+    map.fixtures = {handle};
+    Front f = DrawerFront();
+    f.min.y() = 0.35f;
+    f.max.y() = 0.79f;
+    f.center.z() = 0.57f;
+    f.fixtures = {0};
+    for (std::size_t i = 0; i < closed.size(); ++i) {
+        const Eigen::Vector3f& x = closed.points[i];
+        if (std::abs(x.y() - 2.4f) < 0.01f && x.x() >= 0.7f && x.x() <= 0.9f && x.z() >= 0.35f &&
+            x.z() <= 0.79f) {
+            f.indices.push_back(static_cast<Index>(i));
+        }
+    }
+    map.fronts = {f};
+    ASSERT_EQ(UpdateArticulationFromOpenedScan(map, closed, DrawerStackScan(0.3f)), 0);
+    ASSERT_EQ(map.fronts.size(), 3u);
+    const Front& moved = map.fronts[0];
+    EXPECT_EQ(moved.articulation.type, JointType::kPrismatic);
+    EXPECT_EQ(moved.articulation.source, "motion");
+    EXPECT_NEAR(moved.min.y(), 0.57f, 0.02f);
+    EXPECT_NEAR(moved.max.y(), 0.67f, 0.02f);
+    EXPECT_NEAR(moved.center.z(), (moved.min.y() + moved.max.y()) / 2, 1e-5f);
+    EXPECT_TRUE(moved.fixtures.empty());
+    // The rest: the two drawers below it, and the top drawer with the handle (a drawer by its
+    // fixture).
+    const Front& below = map.fronts[1];
+    const Front& above = map.fronts[2];
+    EXPECT_FLOAT_EQ(below.min.y(), 0.35f);
+    EXPECT_FLOAT_EQ(below.max.y(), moved.min.y());
+    EXPECT_FLOAT_EQ(above.min.y(), moved.max.y());
+    EXPECT_FLOAT_EQ(above.max.y(), 0.79f);
+    EXPECT_EQ(below.articulation.type, JointType::kUnknown);
+    EXPECT_EQ(above.fixtures, std::vector<int>{0});
+    EXPECT_EQ(above.articulation.type, JointType::kPrismatic);
+    EXPECT_EQ(above.articulation.source, "fixture");
+    for (const Front* g : {&moved, &below, &above}) {
+        EXPECT_GT(g->indices.size(), 100u);
+        for (const Index i : g->indices) {
+            const float z = closed.points[i].z();
+            EXPECT_TRUE(z >= g->min.y() && z <= g->max.y()) << z;
+        }
+    }
+    EXPECT_LE(moved.indices.size() + below.indices.size() + above.indices.size(), f.indices.size());
+    // Opened again, the part alone moves: nothing more is split.
+    ASSERT_EQ(UpdateArticulationFromOpenedScan(map, closed, DrawerStackScan(0.3f)), 0);
+    EXPECT_EQ(map.fronts.size(), 3u);
+}
+
 TEST(Articulation, AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer) {
     // A door opened by 60 deg about its left edge (x = 0.6) and seen edge-on: what the sensor
     // shows of it is a strip along its free edge, parallel to the face 0.3 m out.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -30,6 +31,71 @@ Articulation Hinge(const Front& f, const Eigen::Vector3f& edge_point,
     a.upper = p.revolute_upper;
     a.source = "fixture";
     return a;
+}
+
+/// Closed-scan points on front `f` that the opened scan has no point near any more (the front
+/// moved away, or its motion hides them), and the band of the rectangle they lie in: their 2 %
+/// to 98 % quantiles along the front's vertical, grown by the change distance, across the whole
+/// width. Drawers stack, and a drawer is as wide as its unit: a rectangle spanning several drawers
+/// is cut along its height only (a door's vacated place can be narrower than the door, its part
+/// near the hinge moving little, and a strip of it cut out would look like a slid drawer). The
+/// band replaces `f` when it covers less than `vacated_max_share` of its height and at least two
+/// coverage cells.
+struct Vacated {
+    Front part;              ///< the front, or the band of it that the motion vacated
+    std::size_t points = 0;  ///< closed-scan points on the front the opened scan lost
+};
+
+Vacated VacatedPart(const KdTree& before, const PointCloud& opened, const Front& f,
+                    const MotionParams& p) {
+    Vacated out{f, 0};
+    const float plane_d = -f.normal.dot(f.center);
+    const float margin = p.change_distance;
+    auto over_front = [&](const Eigen::Vector3f& x, float slack) {
+        const float u = x.dot(f.u_axis), v = x.dot(f.v_axis);
+        return u >= f.min.x() - slack && u <= f.max.x() + slack && v >= f.min.y() - slack &&
+               v <= f.max.y() + slack;
+    };
+    Indices near;
+    for (std::size_t i = 0; i < opened.size(); ++i) {
+        if (!opened.IsFinite(i)) continue;
+        const Eigen::Vector3f& x = opened.points[i];
+        if (std::abs(f.normal.dot(x) + plane_d) <= p.plane_threshold + margin &&
+            over_front(x, margin)) {
+            near.push_back(static_cast<Index>(i));
+        }
+    }
+    const KdTree after(opened, near);
+    std::vector<float> vs;
+    for (const Eigen::Vector3f& x : before.TreePoints()) {
+        if (std::abs(f.normal.dot(x) + plane_d) > p.plane_threshold || !over_front(x, 0.0f)) {
+            continue;
+        }
+        Index nn = 0;
+        float d2 = 0.0f;
+        if (!after.SearchNearestWithin(x, p.change_distance, nn, d2)) {
+            vs.push_back(x.dot(f.v_axis));
+        }
+    }
+    out.points = vs.size();
+    if (p.vacated_max_share <= 0.0f || vs.size() < p.min_points) return out;
+    auto quantile = [&vs](float q) {
+        const auto k = static_cast<std::ptrdiff_t>(q * static_cast<float>(vs.size() - 1));
+        std::nth_element(vs.begin(), vs.begin() + k, vs.end());
+        return vs[static_cast<std::size_t>(k)];
+    };
+    // What the moved front left within change_distance of a surface that stayed (the drawer's
+    // sides and bottom cross the face plane) was not counted: the band reaches that much farther.
+    const float lo = std::max(f.min.y(), quantile(0.02f) - p.change_distance);
+    const float hi = std::min(f.max.y(), quantile(0.98f) + p.change_distance);
+    if (hi - lo < 2.0f * p.coverage_cell ||
+        hi - lo >= p.vacated_max_share * (f.max.y() - f.min.y())) {
+        return out;
+    }
+    out.part.min.y() = lo;
+    out.part.max.y() = hi;
+    out.part.center = f.center + f.v_axis * ((lo + hi - f.min.y() - f.max.y()) / 2.0f);
+    return out;
 }
 
 }  // namespace
@@ -67,11 +133,13 @@ void MotionParams::Validate() const {
     if (!(min_slide_coverage >= 0.0f && min_slide_coverage <= 1.0f) ||
         !(coverage_cell > 0.0f && coverage_cell <= 0.5f) ||
         !(axis_snap_deg >= 0.0f && axis_snap_deg < 45.0f) ||
-        !(max_hinge_gap >= 0.0f && max_hinge_gap <= 10.0f)) {
+        !(max_hinge_gap >= 0.0f && max_hinge_gap <= 10.0f) ||
+        !(vacated_max_share >= 0.0f && vacated_max_share <= 1.0f)) {
         throw InvalidArgument(fmt::format(
             "motion: need min_slide_coverage in [0, 1], coverage_cell in (0, 0.5] m, "
-            "axis_snap_deg in [0, 45) and max_hinge_gap in [0, 10] m (got {}, {}, {}, {})",
-            min_slide_coverage, coverage_cell, axis_snap_deg, max_hinge_gap));
+            "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m and vacated_max_share in "
+            "[0, 1] (got {}, {}, {}, {}, {})",
+            min_slide_coverage, coverage_cell, axis_snap_deg, max_hinge_gap, vacated_max_share));
     }
 }
 
@@ -154,11 +222,16 @@ MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& 
     return ArticulationFromMotion(KdTree(closed), opened, f, p);
 }
 
-MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& opened, const Front& f,
-                                    const MotionParams& p) {
+MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& opened,
+                                    const Front& whole, const MotionParams& p) {
     p.Validate();
     MotionResult out;
     if (before.empty() || opened.empty()) return out;
+    const Vacated vacated = VacatedPart(before, opened, whole, p);
+    const Front& f = vacated.part;
+    out.vacated_points = vacated.points;
+    out.front_min = f.min;
+    out.front_max = f.max;
     const float plane_d = -f.normal.dot(f.center);
     const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
     // The space the front can sweep: turning about an edge, no farther from the face than its
@@ -385,24 +458,100 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     return out;
 }
 
+namespace {
+
+/// Splits front `index` of `map` (built from `cloud`) at the part [lo, hi] of its rectangle that
+/// moved: the front keeps that part, and the strips of the rest below and above it, at least
+/// `min_size` tall, become fronts of their own. Points and fixtures go to the piece they lie on
+/// (fixtures off every piece to the nearest); a strip with a fixture is hinged by
+/// ArticulationFromFixtures.
+void SplitAtMovedPart(KitchenMap& map, const PointCloud& cloud, std::size_t index,
+                      const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, float min_size) {
+    const Front whole = map.fronts[index];
+    if ((lo - whole.min).cwiseAbs().maxCoeff() < 1e-4f &&
+        (hi - whole.max).cwiseAbs().maxCoeff() < 1e-4f) {
+        return;
+    }
+    auto piece = [&](const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+        Front g = whole;
+        g.min = a;
+        g.max = b;
+        const Eigen::Vector2f shift = (a + b - whole.min - whole.max) / 2.0f;
+        g.center = whole.center + whole.u_axis * shift.x() + whole.v_axis * shift.y();
+        g.indices.clear();
+        g.fixtures.clear();
+        g.articulation = Articulation{};
+        g.furniture = -1;
+        return g;
+    };
+    std::vector<Front> pieces = {piece(lo, hi)};
+    pieces.front().articulation = whole.articulation;
+    const std::pair<Eigen::Vector2f, Eigen::Vector2f> rest[2] = {
+        {whole.min, {whole.max.x(), lo.y()}}, {{whole.min.x(), hi.y()}, whole.max}};
+    for (const auto& [a, b] : rest) {
+        if (b.y() - a.y() >= min_size) pieces.push_back(piece(a, b));
+    }
+    // Distance of face coordinates `q` from a piece's rectangle (0 on it).
+    auto off = [](const Front& g, const Eigen::Vector2f& q) {
+        return (g.min - q).cwiseMax(q - g.max).cwiseMax(0.0f).norm();
+    };
+    auto face_coords = [&](const Eigen::Vector3f& x) {
+        return Eigen::Vector2f(x.dot(whole.u_axis), x.dot(whole.v_axis));
+    };
+    for (const Index i : whole.indices) {
+        const Eigen::Vector2f q = face_coords(cloud.points[i]);
+        for (Front& g : pieces) {
+            if (off(g, q) == 0.0f) {
+                g.indices.push_back(i);
+                break;
+            }
+        }
+    }
+    for (const int fx : whole.fixtures) {
+        const Eigen::Vector2f q = face_coords(map.fixtures[static_cast<std::size_t>(fx)].center);
+        std::size_t nearest = 0;
+        for (std::size_t k = 1; k < pieces.size(); ++k) {
+            if (off(pieces[k], q) < off(pieces[nearest], q)) nearest = k;
+        }
+        pieces[nearest].fixtures.push_back(fx);
+    }
+    for (std::size_t k = 1; k < pieces.size(); ++k) {
+        if (!pieces[k].fixtures.empty()) {
+            pieces[k].articulation =
+                ArticulationFromFixtures(pieces[k], map.fixtures, map.frame, map.floor_height);
+        }
+    }
+    map.fronts[index] = std::move(pieces.front());
+    for (std::size_t k = 1; k < pieces.size(); ++k) map.fronts.push_back(std::move(pieces[k]));
+}
+
+}  // namespace
+
 int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
                                      const PointCloud& opened, const MotionParams& p) {
     p.Validate();
     int best = -1;
-    std::size_t best_points = 0;
+    std::pair<std::size_t, std::size_t> best_points{0, 0};
     MotionResult best_motion;
     if (closed.empty() || opened.empty()) return -1;
     const KdTree tree(closed);
     for (std::size_t f = 0; f < map.fronts.size(); ++f) {
         MotionResult m = ArticulationFromMotion(tree, opened, map.fronts[f], p);
-        if (m.found && m.moved.size() > best_points) {
-            best_points = m.moved.size();
+        // The front that moved lost its own points; a front beside it may sweep more of the
+        // moved points but kept its own.
+        const std::pair<std::size_t, std::size_t> points{m.vacated_points, m.moved.size()};
+        if (m.found && points > best_points) {
+            best_points = points;
             best = static_cast<int>(f);
             best_motion = std::move(m);
         }
     }
-    if (best >= 0)
-        map.fronts[static_cast<std::size_t>(best)].articulation = best_motion.articulation;
+    if (best >= 0) {
+        const auto b = static_cast<std::size_t>(best);
+        map.fronts[b].articulation = best_motion.articulation;
+        SplitAtMovedPart(map, closed, b, best_motion.front_min, best_motion.front_max,
+                         2.0f * p.coverage_cell);
+    }
     return best;
 }
 

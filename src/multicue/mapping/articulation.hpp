@@ -93,6 +93,13 @@ struct MotionParams {
     /// simulated kitchens of the tune half, where 96 % of the hinges this far from their door
     /// were more than 0.3 m off and 2 % of the others [m]
     float max_hinge_gap = 0.15f;
+    /// A front's rectangle may span several drawers (their fixtures missed, one rectangle found
+    /// from the outlines), of which one moved. The band of it whose closed-scan points the
+    /// opened scan no longer shows (their 2 % to 98 % quantiles along the front's vertical,
+    /// grown by `change_distance`, the margin within which they were not counted; across the
+    /// whole width, as drawers stack) is taken for the front when it is less than this share of
+    /// the rectangle's height; 0: the rectangle as it is [-]
+    float vacated_max_share = 0.8f;
     std::uint64_t seed = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -108,6 +115,12 @@ struct MotionResult {
     /// plane's travel and when turned by the tilted plane's hinge (-1: no such hypothesis or not
     /// computed).
     float slide_coverage = -1.0f, turn_coverage = -1.0f;
+    /// The rectangle (face coordinates, as Front::min / max) the joint was found for: the
+    /// front's, or the band of it that the motion vacated (see `vacated_max_share`).
+    Eigen::Vector2f front_min = Eigen::Vector2f::Zero(), front_max = Eigen::Vector2f::Zero();
+    /// Closed-scan points on the front's rectangle with no opened-scan point within
+    /// `change_distance`: the place the front left (or its motion hides).
+    std::size_t vacated_points = 0;
 };
 
 /// The joint of `front` from a scan `closed` in which it is shut and a scan `opened` taken from
@@ -120,9 +133,15 @@ MotionResult ArticulationFromMotion(const KdTree& closed, const PointCloud& open
                                     const Front& front, const MotionParams& params = {});
 
 /// The front that moved between the map's cloud `closed` and a scan `opened` of the same scene
-/// with one front opened: the front with the most new points in the space it can sweep. Its
-/// articulation is replaced by ArticulationFromMotion's when that finds the motion. Returns the
-/// front's index, or -1 when no front moved. `map` must have been built from `closed`.
+/// with one front opened: of the fronts where ArticulationFromMotion finds a motion, the one
+/// that lost the most of its own points (`vacated_points`; ties: the most moved points). Its
+/// articulation is replaced by ArticulationFromMotion's when that finds the motion. When only a
+/// band of its rectangle moved (`MotionResult::front_min` / `front_max`), the front is cut down
+/// to that band, and the rest below and above it (strips at least two coverage cells tall) are
+/// appended as fronts of their own, with the points and fixtures on them (one
+/// with a fixture hinged by ArticulationFromFixtures); group and type the furniture again
+/// afterwards. Returns the front's index, or -1 when no front moved. `map` must have been built
+/// from `closed`.
 int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
                                      const PointCloud& opened, const MotionParams& params = {});
 
