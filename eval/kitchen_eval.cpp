@@ -88,6 +88,7 @@ struct Options {
     float axis_snap_deg = -1.0f;      ///< < 0: the library's MotionParams default
     float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
     float vacated_max_share = -1.0f;  ///< < 0: the library's MotionParams default
+    bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
     std::string load_fixtures;
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
@@ -262,6 +263,8 @@ struct Scores {
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
+    /// Pairs where the map, offered all its fronts, takes the matched front for the opened one.
+    std::size_t open_picked_right = 0, open_picked_total = 0;
     /// Pairs not scored: opening swung the front out of the sensor's view (fewer points of it
     /// in the opened scan than a visible front has).
     std::size_t open_out_of_view = 0;
@@ -786,7 +789,16 @@ class Evaluator {
             if (o_.axis_snap_deg >= 0.0f) mp.axis_snap_deg = o_.axis_snap_deg;
             if (o_.max_hinge_gap >= 0.0f) mp.max_hinge_gap = o_.max_hinge_gap;
             if (o_.vacated_max_share >= 0.0f) mp.vacated_max_share = o_.vacated_max_share;
+            mp.select_by_vacated = o_.select_by_vacated;
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
+            {
+                // Which front the map takes for the opened one, from all of its fronts.
+                mapping::KitchenMap copy = map;
+                const int picked =
+                    mapping::UpdateArticulationFromOpenedScan(copy, f.cloud, opened.cloud, mp);
+                ++s.open_picked_total;
+                s.open_picked_right += picked == match.at(key).first;
+            }
             const bool bare = pf.fixtures.empty();
             ++s.open_total;
             s.open_total_bare += bare;
@@ -1076,6 +1088,8 @@ class Evaluator {
             s.open_position.v.size());
         std::printf("  of those, fronts without a fixture: %zu of %zu right, %zu without motion\n",
                     s.open_correct_bare, s.open_total_bare, s.open_missed_bare);
+        std::printf("  opened front found among all fronts: %zu of %zu\n", s.open_picked_right,
+                    s.open_picked_total);
         std::printf("  opened pairs (true -> estimated):");
         for (const auto& [c, n] : s.open_confusion) std::printf(" [%s] %zu", c.c_str(), n);
         std::printf("\n");
@@ -1090,7 +1104,9 @@ class Evaluator {
                          {"no_motion", s.open_missed_bare}}},
                        {"axis_angle_deg", s.open_angle.Json()},
                        {"hinge_position_m", s.open_position.Json()},
-                       {"hinge_position_within_3cm", s.open_position.AtMost(0.03)}};
+                       {"hinge_position_within_3cm", s.open_position.AtMost(0.03)},
+                       {"front_found", s.open_picked_right},
+                       {"front_found_of", s.open_picked_total}};
         std::printf("time per frame: median %.0f ms, worst %.0f ms (shared machine)\n",
                     s.time_ms.Median(), s.time_ms.Max());
         j["time_ms"] = s.time_ms.Json();
@@ -1214,6 +1230,9 @@ int main(int argc, char** argv) {
              "opened pairs: the part of a front's rectangle the motion vacated is taken for the "
              "front when it covers less than this share of it (0: off)",
              1.0);
+    app.add_flag("--select-by-vacated,!--select-by-moved", o.select_by_vacated,
+                 "opened pairs: the map takes the front that lost the most of its own points for "
+                 "the opened one (default), or the one with the most moved points");
     app.add_option("--front-param", o.front_params,
                    "NAME=VALUE of the fronts' parameters, or fixture_NAME=VALUE of the "
                    "fixture candidates' (repeatable)");

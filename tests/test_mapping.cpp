@@ -381,26 +381,40 @@ TEST(Articulation, FromASyntheticOpenedDoorAndDrawer) {
                  InvalidArgument);
 }
 
+/// The face at y = 2.4 left and right of drawers at x 0.7 .. 0.9 (x 0.3 .. 0.7 and 0.9 .. 1.3,
+/// z 0.3 .. 0.9).
+void AddFaceBesideDrawers(PointCloud& c, std::mt19937& rng) {
+    test::AddPatch(c, {0.3f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    test::AddPatch(c, {0.9f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+}
+
+/// A drawer front (x 0.7 .. 0.9, z `bottom` .. `bottom + height`) in the face at y = 2.4,
+/// pulled out by `pull` with its box's sides and bottom (from `box_offset` above the front's
+/// bottom, `box_height` tall) in view.
+void AddDrawer(PointCloud& c, float bottom, float height, float box_offset, float box_height,
+               float pull, std::mt19937& rng) {
+    const float y = 2.4f - pull;
+    test::AddPatch(c, {0.7f, y, bottom}, {0.2f, 0, 0}, {0, 0, height}, 0.005f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    if (pull <= 0.0f) return;
+    const float z = bottom + box_offset;
+    for (const float x : {0.705f, 0.895f}) {
+        test::AddPatch(c, {x, y, z}, {0, pull, 0}, {0, 0, box_height}, 0.005f,
+                       {x < 0.8f ? 1.0f : -1.0f, 0, 0}, Color{}, 0.001f, rng);
+    }
+    test::AddPatch(c, {0.705f, y, z}, {0.19f, 0, 0}, {0, pull, 0}, 0.005f, {0, 0, 1}, Color{},
+                   0.001f, rng);
+}
+
 /// A drawer front (x 0.7 .. 0.9, z 0.5 .. 0.65) in a face at y = 2.4, pulled out by `pull` with
 /// its sides and bottom in view: it runs out farther than its front is wide or tall.
 PointCloud DrawerScan(float pull) {
     std::mt19937 rng(11);
     PointCloud c;
-    test::AddPatch(c, {0.3f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
-                   0.001f, rng);
-    test::AddPatch(c, {0.9f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
-                   0.001f, rng);
-    const float y = 2.4f - pull;
-    test::AddPatch(c, {0.7f, y, 0.5f}, {0.2f, 0, 0}, {0, 0, 0.15f}, 0.005f, {0, -1, 0}, Color{},
-                   0.001f, rng);
-    if (pull > 0.0f) {
-        for (const float x : {0.705f, 0.895f}) {
-            test::AddPatch(c, {x, y, 0.52f}, {0, pull, 0}, {0, 0, 0.12f}, 0.005f,
-                           {x < 0.8f ? 1.0f : -1.0f, 0, 0}, Color{}, 0.001f, rng);
-        }
-        test::AddPatch(c, {0.705f, y, 0.52f}, {0.19f, 0, 0}, {0, pull, 0}, 0.005f, {0, 0, 1},
-                       Color{}, 0.001f, rng);
-    }
+    AddFaceBesideDrawers(c, rng);
+    AddDrawer(c, 0.5f, 0.15f, 0.02f, 0.12f, pull, rng);
     return c;
 }
 
@@ -436,22 +450,10 @@ TEST(Articulation, ADrawerRunningOutFartherThanItsFrontIsWideSlides) {
 PointCloud DrawerStackScan(float pull) {
     std::mt19937 rng(13);
     PointCloud c;
-    test::AddPatch(c, {0.3f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
-                   0.001f, rng);
-    test::AddPatch(c, {0.9f, 2.4f, 0.3f}, {0.4f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0}, Color{},
-                   0.001f, rng);
+    AddFaceBesideDrawers(c, rng);
     for (int k = 0; k < 4; ++k) {
-        const float z = 0.352f + 0.11f * static_cast<float>(k);
-        const float y = k == 2 ? 2.4f - pull : 2.4f;
-        test::AddPatch(c, {0.7f, y, z}, {0.2f, 0, 0}, {0, 0, 0.106f}, 0.005f, {0, -1, 0}, Color{},
-                       0.001f, rng);
-        if (k != 2 || pull <= 0.0f) continue;
-        for (const float x : {0.705f, 0.895f}) {
-            test::AddPatch(c, {x, y, z + 0.01f}, {0, pull, 0}, {0, 0, 0.08f}, 0.005f,
-                           {x < 0.8f ? 1.0f : -1.0f, 0, 0}, Color{}, 0.001f, rng);
-        }
-        test::AddPatch(c, {0.705f, y, z + 0.01f}, {0.19f, 0, 0}, {0, pull, 0}, 0.005f, {0, 0, 1},
-                       Color{}, 0.001f, rng);
+        AddDrawer(c, 0.352f + 0.11f * static_cast<float>(k), 0.106f, 0.01f, 0.08f,
+                  k == 2 ? pull : 0.0f, rng);
     }
     return c;
 }
@@ -537,7 +539,12 @@ TEST(Articulation, AnOpenedScanSplitsAFrontSpanningSeveralDrawers) {
         }
     }
     EXPECT_LE(moved.indices.size() + below.indices.size() + above.indices.size(), f.indices.size());
-    // Opened again, the part alone moves: nothing more is split.
+    // Opened again, the part alone moves: nothing more is split. The drawers below it sweep
+    // more of the moved points (the pulled drawer's box), but kept their own.
+    MotionParams by_moved;
+    by_moved.select_by_vacated = false;
+    KitchenMap copy = map;
+    EXPECT_EQ(UpdateArticulationFromOpenedScan(copy, closed, DrawerStackScan(0.3f), by_moved), 1);
     ASSERT_EQ(UpdateArticulationFromOpenedScan(map, closed, DrawerStackScan(0.3f)), 0);
     EXPECT_EQ(map.fronts.size(), 3u);
 }

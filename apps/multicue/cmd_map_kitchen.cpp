@@ -91,8 +91,11 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
         mapping::MapKitchen(scans, params, classifier.get(), fixture_classifier.get());
     const mapping::MotionParams motion = mapping::MotionParamsFor(sensor);
     std::vector<int> moved;
+    std::vector<std::size_t> split_off;  // fronts cut from the opened front's rectangle
     for (const auto& s : opened) {
+        const std::size_t before = r.map.fronts.size();
         moved.push_back(mapping::UpdateArticulationFromOpenedScan(r.map, r.cloud, s, motion));
+        split_off.push_back(r.map.fronts.size() - before);
     }
     if (!opened.empty()) {
         // Joint types from motion can change how fronts group and what the pieces are.
@@ -130,8 +133,14 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
                 std::printf("  %s: no front moved\n", o.opened[k].c_str());
             } else {
                 const auto& a = r.map.fronts[static_cast<std::size_t>(moved[k])].articulation;
-                std::printf("  %s: front %d opened, %s joint\n", o.opened[k].c_str(), moved[k] + 1,
-                            mapping::JointTypeName(a.type));
+                std::printf("  %s: front %d opened, %s joint%s\n", o.opened[k].c_str(),
+                            moved[k] + 1, mapping::JointTypeName(a.type),
+                            split_off[k] > 0
+                                ? fmt::format(" (cut from a front spanning several; the rest "
+                                              "made {} more)",
+                                              split_off[k])
+                                      .c_str()
+                                : "");
             }
         }
         if (o.report && !ReportViewerAvailable()) {

@@ -539,7 +539,9 @@ int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
         MotionResult m = ArticulationFromMotion(tree, opened, map.fronts[f], p);
         // The front that moved lost its own points; a front beside it may sweep more of the
         // moved points but kept its own.
-        const std::pair<std::size_t, std::size_t> points{m.vacated_points, m.moved.size()};
+        const std::pair<std::size_t, std::size_t> points =
+            p.select_by_vacated ? std::pair{m.vacated_points, m.moved.size()}
+                                : std::pair{m.moved.size(), m.vacated_points};
         if (m.found && points > best_points) {
             best_points = points;
             best = static_cast<int>(f);

@@ -100,6 +100,10 @@ struct MotionParams {
     /// whole width, as drawers stack) is taken for the front when it is less than this share of
     /// the rectangle's height; 0: the rectangle as it is [-]
     float vacated_max_share = 0.8f;
+    /// UpdateArticulationFromOpenedScan takes for the opened front the one that lost the most
+    /// of its own points (`MotionResult::vacated_points`); off: the one with the most moved
+    /// points
+    bool select_by_vacated = true;
     std::uint64_t seed = 1;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
@@ -134,7 +138,8 @@ MotionResult ArticulationFromMotion(const KdTree& closed, const PointCloud& open
 
 /// The front that moved between the map's cloud `closed` and a scan `opened` of the same scene
 /// with one front opened: of the fronts where ArticulationFromMotion finds a motion, the one
-/// that lost the most of its own points (`vacated_points`; ties: the most moved points). Its
+/// that lost the most of its own points (`vacated_points`; ties: the most moved points; see
+/// `select_by_vacated`). Its
 /// articulation is replaced by ArticulationFromMotion's when that finds the motion. When only a
 /// band of its rectangle moved (`MotionResult::front_min` / `front_max`), the front is cut down
 /// to that band, and the rest below and above it (strips at least two coverage cells tall) are
