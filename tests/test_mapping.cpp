@@ -487,6 +487,21 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, whole), InvalidArgument);
 }
 
+TEST(Articulation, AFrontIsCutAlongItsHeightOnly) {
+    // One rectangle over the door of DoorScan and the panel left of it (x 0.3 .. 1.1): the door
+    // opened by 60 deg vacates the right part of it, over the whole height. Drawers stack, so
+    // the rectangle is not cut across its width.
+    Front f = DoorFront();
+    f.min.x() = Eigen::Vector3f(0.3f, 2.4f, 0.0f).dot(f.u_axis);
+    f.center.x() = 0.7f;
+    const PointCloud closed = DoorScan(0.0f, 0.0f);
+    const MotionResult m = ArticulationFromMotion(closed, DoorScan(60.0f * kDeg, 0.0f), f);
+    ASSERT_TRUE(m.found);
+    EXPECT_GT(m.vacated_points, 1000u);
+    EXPECT_EQ(m.front_min, f.min);
+    EXPECT_EQ(m.front_max, f.max);
+}
+
 TEST(Articulation, AnOpenedScanSplitsAFrontSpanningSeveralDrawers) {
     // The map took the stack of DrawerStackScan for one front, with one handle found on its top
     // drawer; the robot pulls out the third drawer from the bottom.
