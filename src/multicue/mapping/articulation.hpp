@@ -10,8 +10,10 @@
 /// edge is a door hinged at the opposite edge. The hinge axis lies in the face plane along that
 /// edge, signed so that a positive angle swings the front out of the furniture.
 ///
-/// From two scans of the same view, before and after the robot opened a front: the points in
-/// front of the closed front that were not there before are the moved front. The best plane
+/// From two scans of the same view, before and after the robot opened a front: the closed
+/// front's points that the opened scan no longer shows are the place it left (when they span a
+/// band of a rectangle that covers several drawers, the band is the front), and the points in
+/// front of it that were not there before are the moved front. The best plane
 /// through them, and the best plane parallel to the closed front, give two hypotheses: a
 /// prismatic joint (the parallel plane's distance is the travel) and a revolute joint about the
 /// line where the closed front's plane meets a tilted plane (the angle between them is the
@@ -139,14 +141,12 @@ MotionResult ArticulationFromMotion(const KdTree& closed, const PointCloud& open
 /// The front that moved between the map's cloud `closed` and a scan `opened` of the same scene
 /// with one front opened: of the fronts where ArticulationFromMotion finds a motion, the one
 /// that lost the most of its own points (`vacated_points`; ties: the most moved points; see
-/// `select_by_vacated`). Its
-/// articulation is replaced by ArticulationFromMotion's when that finds the motion. When only a
+/// `select_by_vacated`). Its articulation is replaced by ArticulationFromMotion's. When only a
 /// band of its rectangle moved (`MotionResult::front_min` / `front_max`), the front is cut down
 /// to that band, and the rest below and above it (strips at least two coverage cells tall) are
-/// appended as fronts of their own, with the points and fixtures on them (one
-/// with a fixture hinged by ArticulationFromFixtures); group and type the furniture again
-/// afterwards. Returns the front's index, or -1 when no front moved. `map` must have been built
-/// from `closed`.
+/// appended as fronts of their own, with the points and fixtures on them (one with a fixture
+/// hinged by ArticulationFromFixtures); group and type the furniture again afterwards. Returns
+/// the front's index, or -1 when no front moved. `map` must have been built from `closed`.
 int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
                                      const PointCloud& opened, const MotionParams& params = {});
 

@@ -62,12 +62,6 @@ MotionParams MotionParamsFor(KitchenSensor sensor) {
         p.plane_threshold = 0.03f;
         p.min_points = 10;
         p.coverage_cell = 0.05f;
-        // Within the laser's change distance of the face plane lie the edges of shelves and
-        // carcass and a door's part near its hinge, and its sweeps are sparse: the vacated part
-        // of a door is often a strip of it. On the tune folds it turned two laser doors into
-        // drawers (one drawer right); for the Kinect it turned two drawers right, no front
-        // wrong.
-        p.vacated_max_share = 0.0f;
     }
     return p;
 }
