@@ -525,6 +525,12 @@ TEST(Articulation, AnOpenedScanSplitsAFrontSpanningSeveralDrawers) {
         }
     }
     map.fronts = {f};
+    // A map of another cloud: refused, the map unchanged.
+    PointCloud smaller;
+    smaller.points.assign(closed.points.begin(), closed.points.begin() + 100);
+    EXPECT_THROW(UpdateArticulationFromOpenedScan(map, smaller, DrawerStackScan(0.3f)),
+                 InvalidArgument);
+    ASSERT_EQ(map.fronts.size(), 1u);
     ASSERT_EQ(UpdateArticulationFromOpenedScan(map, closed, DrawerStackScan(0.3f)), 0);
     ASSERT_EQ(map.fronts.size(), 3u);
     const Front& moved = map.fronts[0];

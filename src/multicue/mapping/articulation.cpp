@@ -530,6 +530,16 @@ void SplitAtMovedPart(KitchenMap& map, const PointCloud& cloud, std::size_t inde
 int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
                                      const PointCloud& opened, const MotionParams& p) {
     p.Validate();
+    for (std::size_t f = 0; f < map.fronts.size(); ++f) {
+        for (const Index i : map.fronts[f].indices) {
+            if (static_cast<std::size_t>(i) >= closed.size()) {
+                throw InvalidArgument(fmt::format(
+                    "opened scan: front {} has point {}, but the closed cloud has {} points (the "
+                    "map must have been built from it)",
+                    f + 1, i, closed.size()));
+            }
+        }
+    }
     int best = -1;
     std::pair<std::size_t, std::size_t> best_points{0, 0};
     MotionResult best_motion;
