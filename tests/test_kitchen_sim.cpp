@@ -1,3 +1,4 @@
+
 // Articulated models and simulated kitchens: a PartNet-Mobility-like folder written by the test
 // (URDF, semantics.txt, OBJ parts with a material), forward kinematics, the front direction, the
 // kitchen library split; with the shared kitchen models: kitchens, ground truth, the simulate
@@ -23,21 +24,11 @@
 #include "multicue/sim/kitchen_scene.hpp"
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "reduced_kinect.hpp"
 #include "test_util.hpp"
 
 namespace multicue {
 namespace {
-
-/// A 320 x 240 Kinect: enough for the kitchen tests' views.
-sim::KinectParams SmallKinect() {
-    sim::KinectParams kp;
-    kp.width = 320;
-    kp.height = 240;
-    kp.fx = kp.fy = 262.5f;
-    kp.cx = 159.5f;
-    kp.cy = 119.5f;
-    return kp;
-}
 
 /// The kitchen's ground-truth URDF parses with urdfdom and holds every joint.
 void ExpectUrdfHoldsEveryJoint(const sim::KitchenScene& k) {
@@ -348,7 +339,7 @@ TEST(KitchenScene, GroundTruthAndUrdfWithSharedModels) {
     // The URDF parses with urdfdom and holds every joint.
     ExpectUrdfHoldsEveryJoint(k);
     // A Kinect view: its points carry the kitchen's classes, and fronts have joints.
-    const sim::KinectParams kp = SmallKinect();
+    const sim::KinectParams kp = test::ReducedKinect(2);
     const auto pose = sim::KitchenCameraPoses(k, 1, 3).at(0);
     PointCloud scan = sim::ScanKinect(sim::RayCaster(k.scene), pose, kp, 1);
     sim::AddKitchenTruth(k, scan);
@@ -467,7 +458,7 @@ TEST(ProceduralUnits, MakeKitchensWithGroundTruth) {
     EXPECT_EQ(cache.Get(entries[4]), cache.Get(entries[4]));
     EXPECT_EQ(cache.Get(entries[4])->id, entries[4].id);
     ExpectUrdfHoldsEveryJoint(k);
-    const sim::KinectParams kp = SmallKinect();
+    const sim::KinectParams kp = test::ReducedKinect(2);
     PointCloud scan =
         sim::ScanKinect(sim::RayCaster(k.scene), sim::KitchenCameraPoses(k, 1, 2).at(0), kp, 1);
     sim::AddKitchenTruth(k, scan);

@@ -13,6 +13,7 @@
 #include "multicue/search/occupancy_map.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "reduced_kinect.hpp"
 #include "registration_scenes.hpp"
 #include "test_util.hpp"
 
@@ -128,12 +129,7 @@ std::filesystem::path WriteManifest(const TempDir& dir, bool noisy) {
     const sim::Scene scene = sim::MakeTableScene(table, 31);
     const auto views = sim::TableViewpoints(scene, 18, {}, 31);
     const sim::RayCaster caster(scene);
-    sim::KinectParams kinect;
-    kinect.width = 320;
-    kinect.height = 240;
-    kinect.fx = kinect.fy = 262.5f;
-    kinect.cx = 159.5f;
-    kinect.cy = 119.5f;
+    sim::KinectParams kinect = test::ReducedKinect(2);
     kinect.num_threads = 1;
     nlohmann::json frames = nlohmann::json::array();
     for (int k = 0; k < 3; ++k) {

@@ -14,6 +14,7 @@
 #include "multicue/sim/rng.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "reduced_kinect.hpp"
 #include "registration_scenes.hpp"
 
 namespace multicue {
@@ -121,12 +122,7 @@ Sequence MakeSequence(int n) {
     const sim::Scene scene = sim::MakeTableScene(table, 21);
     const auto views = sim::TableViewpoints(scene, 18, {}, 21);
     const sim::RayCaster caster(scene);
-    sim::KinectParams kinect;
-    kinect.width = 320;
-    kinect.height = 240;
-    kinect.fx = kinect.fy = 262.5f;
-    kinect.cx = 159.5f;
-    kinect.cy = 119.5f;
+    sim::KinectParams kinect = test::ReducedKinect(2);
     kinect.num_threads = 1;
     Sequence s;
     for (int k = 0; k < n; ++k) {

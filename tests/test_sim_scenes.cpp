@@ -10,6 +10,7 @@
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "reduced_kinect.hpp"
 #include "test_util.hpp"
 
 namespace multicue::sim {
@@ -305,12 +306,7 @@ TEST(SimScenes, TurntableViewsAllSeeTheObject) {
     const auto views = TurntableViews(s, 16, {});
     ASSERT_EQ(views.size(), 16u);
     const RayCaster caster(s);
-    KinectParams p;
-    p.width = 160;
-    p.height = 120;
-    p.fx = p.fy = 131.25f;
-    p.cx = 79.5f;
-    p.cy = 59.5f;
+    const KinectParams p = test::ReducedKinect(4);
     std::set<int> handle_seen;
     for (std::size_t v = 0; v < views.size(); ++v) {
         const PointCloud c = ScanKinect(caster, views[v], p, v);
@@ -332,12 +328,7 @@ TEST(SimScenes, SharedTabletopMeshesAllRender) {
     const auto folder = test::SharedData("meshes/tabletop");
     if (!std::filesystem::exists(folder / "labels.csv")) GTEST_SKIP() << "no tabletop meshes";
     ObjectSource source(ReadMeshLibrary(folder, TabletopCategories()), false);
-    KinectParams p;
-    p.width = 80;
-    p.height = 60;
-    p.fx = p.fy = 65.625f;
-    p.cx = 39.5f;
-    p.cy = 29.5f;
+    const KinectParams p = test::ReducedKinect(8);
     std::size_t rendered = 0;
     for (std::size_t i = 0; i < source.library().size(); ++i) {
         StreamRng rng(1, i);

@@ -11,6 +11,7 @@
 #include "multicue/sim/procedural.hpp"
 #include "multicue/sim/scene_gen.hpp"
 #include "multicue/sim/sensors.hpp"
+#include "reduced_kinect.hpp"
 
 namespace multicue::sim {
 namespace {
@@ -35,16 +36,6 @@ Scene PlaneScene(const Eigen::Vector3f& center, const Eigen::Vector3f& n) {
 
 /// Camera at the origin looking along world +z (identity optical frame).
 const Eigen::Isometry3f kCamera = Eigen::Isometry3f::Identity();
-
-KinectParams Small() {
-    KinectParams p;
-    p.width = 160;
-    p.height = 120;
-    p.fx = p.fy = 131.25f;
-    p.cx = 79.5f;
-    p.cy = 59.5f;
-    return p;
-}
 
 double RelativeNoise(const Scene& scene, float tilt, const KinectParams& p, float z0) {
     const Eigen::Vector3f n(0.0f, -std::sin(tilt), -std::cos(tilt));
@@ -73,7 +64,7 @@ TEST(SimKinect, AxialNoiseFollowsKhoshelham) {
     // A plane tilted by 30 degrees so that disparities cover many quantisation steps.
     const float tilt = 30.0f * kPi / 180.0f;
     for (float z0 : {0.5f, 1.0f, 2.0f}) {
-        KinectParams p = Small();
+        KinectParams p = test::ReducedKinect(4);
         p.width = 320;
         p.height = 240;
         p.fx = p.fy = 525.0f;  // the model's focal length: noise is per Kinect pixel
@@ -87,7 +78,7 @@ TEST(SimKinect, AxialNoiseFollowsKhoshelham) {
 }
 
 TEST(SimKinect, NoNoiseWithoutNoiseAndQuantisation) {
-    KinectParams p = Small();
+    KinectParams p = test::ReducedKinect(4);
     p.axial_noise = 0.0f;
     p.disparity_step = 0.0f;
     const Scene s = PlaneScene({0, 0, 1.0f}, {0, 0, -1});
@@ -100,7 +91,7 @@ TEST(SimKinect, NoNoiseWithoutNoiseAndQuantisation) {
 }
 
 TEST(SimKinect, MissingDataRisesAtGrazingAngles) {
-    KinectParams p = Small();
+    KinectParams p = test::ReducedKinect(4);
     p.max_range = 10.0f;
     std::vector<double> valid;
     for (float deg : {0.0f, 40.0f, 65.0f, 80.0f}) {
@@ -138,7 +129,7 @@ Scene BoxScene(const Eigen::Vector3f& extents, float yaw) {
 TEST(SimKinect, EveryPointLiesOnTheSurfaceItIsLabelledWith) {
     const Eigen::Vector3f e(0.2f, 0.12f, 0.15f);
     const Scene s = BoxScene(e, 0.4f);
-    KinectParams p = Small();
+    KinectParams p = test::ReducedKinect(4);
     p.axial_noise = 0.0f;
     p.disparity_step = 0.0f;
     p.lateral_noise_px = 0.0f;
@@ -193,7 +184,7 @@ TEST(SimKinect, ScannedBoxExtentsAgreeWithinNoise) {
 
 TEST(SimKinect, ProjectorShadowRemovesPointsBesideObjects) {
     const Scene s = BoxScene({0.1f, 0.1f, 0.3f}, 0.0f);
-    KinectParams p = Small();
+    KinectParams p = test::ReducedKinect(4);
     const auto T = LookAt({0.0f, -0.8f, 0.6f}, {0, 0, 0.1f});
     p.projector_shadow = false;
     const std::size_t without = ScanKinect(s, T, p, 1).CountFinite();
@@ -221,16 +212,16 @@ TEST(SimKinect, DeterministicForSeedAndThreadCount) {
 TEST(SimKinect, BadParameters) {
     const Scene s = PlaneScene({0, 0, 1}, {0, 0, -1});
     const RayCaster caster(s);
-    KinectParams p = Small();
+    KinectParams p = test::ReducedKinect(4);
     p.fx = 0;
     EXPECT_THROW(ScanKinect(caster, kCamera, p, 1), InvalidArgument);
-    p = Small();
+    p = test::ReducedKinect(4);
     p.max_range = 0.1f;
     EXPECT_THROW(ScanKinect(caster, kCamera, p, 1), InvalidArgument);
-    p = Small();
+    p = test::ReducedKinect(4);
     p.baseline = 0.0f;
     EXPECT_THROW(ScanKinect(caster, kCamera, p, 1), InvalidArgument);
-    p = Small();
+    p = test::ReducedKinect(4);
     p.max_incidence_deg = 120.0f;
     EXPECT_THROW(ScanKinect(caster, kCamera, p, 1), InvalidArgument);
 }
@@ -238,7 +229,7 @@ TEST(SimKinect, BadParameters) {
 TEST(SimKinect, EmptySceneGivesNoReturns) {
     Scene s;
     const RayCaster caster(s);
-    const PointCloud c = ScanKinect(caster, kCamera, Small(), 1);
+    const PointCloud c = ScanKinect(caster, kCamera, test::ReducedKinect(4), 1);
     EXPECT_EQ(c.CountFinite(), 0u);
     EXPECT_TRUE(c.IsOrganized());
 }
