@@ -487,6 +487,51 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, whole), InvalidArgument);
 }
 
+/// DoorScan's door (x 0.6 .. 1.1, z 0.15 .. 0.8, y = 2.4) hinged at its bottom edge instead,
+/// opened by `angle` (an oven's or a dishwasher's door), between the same panels; with `rim`, a
+/// densely seen strip 8 cm tall parallel to the face stands on the opened door's top edge (as a
+/// handle bar or a rack's front would).
+PointCloud FlapScan(float angle, bool rim = false) {
+    std::mt19937 rng(17);
+    PointCloud c;
+    test::AddPatch(c, {0.3f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    test::AddPatch(c, {1.1f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
+                   0.001f, rng);
+    PointCloud door;
+    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    // About the horizontal line z = 0.15, y = 2.4, the top edge coming out towards -y.
+    const Eigen::Vector3f hinge(0.0f, 2.4f, 0.15f);
+    const Eigen::Matrix3f R = Eigen::AngleAxisf(angle, Eigen::Vector3f::UnitX()).toRotationMatrix();
+    for (const auto& p : door.points) c.points.push_back(hinge + R * (p - hinge));
+    if (rim) {
+        const Eigen::Vector3f top = hinge + R * Eigen::Vector3f(0.0f, 0.0f, 0.65f);
+        test::AddPatch(c, {0.6f, top.y(), top.z()}, {0.5f, 0, 0}, {0, 0, 0.08f}, 0.004f, {0, -1, 0},
+                       Color{}, 0.001f, rng);
+    }
+    return c;
+}
+
+TEST(Articulation, ADoorHingedAtItsBottomIsNoDrawer) {
+    // Opened, the door and a strip standing on its top edge parallel to the face (as a slid
+    // drawer's front would) are in view: the door turned about its bottom edge.
+    const Front f = DoorFront();
+    const PointCloud closed = FlapScan(0.0f);
+    for (const float deg : {40.0f, 60.0f, 80.0f}) {
+        for (const bool rim : {false, true}) {
+            const MotionResult m = ArticulationFromMotion(closed, FlapScan(deg * kDeg, rim), f);
+            ASSERT_TRUE(m.found) << deg << rim;
+            EXPECT_EQ(m.articulation.type, JointType::kRevolute) << deg << rim;
+            EXPECT_GT(std::abs(m.articulation.axis.x()), 0.99f) << deg << rim;
+            EXPECT_NEAR(m.articulation.origin.z(), 0.15f, 0.03f) << deg << rim;
+            EXPECT_NEAR(m.opening, deg * kDeg, 3.0f * kDeg) << deg << rim;
+            EXPECT_EQ(m.front_min.y(), f.min.y()) << deg << rim;
+            EXPECT_EQ(m.front_max.y(), f.max.y()) << deg << rim;
+        }
+    }
+}
+
 TEST(Articulation, AFrontIsCutAlongItsHeightOnly) {
     // One rectangle over the door of DoorScan and the panel left of it (x 0.3 .. 1.1): the door
     // opened by 60 deg vacates the right part of it, over the whole height. Drawers stack, so
