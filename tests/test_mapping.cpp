@@ -331,9 +331,9 @@ TEST(Articulation, ANarrowFrontWithAHandleAtItsTopIsHingedAtItsSide) {
 
 /// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
 /// pulled out by `pull`, with a fixed frame around it.
-PointCloud DoorScan(float angle, float pull) {
-    std::mt19937 rng(7);
-    PointCloud c;
+/// Adds to `c` the panels at y = 2.4 left and right of a door (x 0.3 .. 0.6 and 1.1 .. 1.4, z
+/// 0.1 .. 0.9) and returns the door closed (x 0.6 .. 1.1, z 0.15 .. 0.8).
+PointCloud AddPanelsBesideDoor(PointCloud& c, std::mt19937& rng) {
     test::AddPatch(c, {0.3f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
                    0.001f, rng);
     test::AddPatch(c, {1.1f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
@@ -341,13 +341,19 @@ PointCloud DoorScan(float angle, float pull) {
     PointCloud door;
     test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
                    Color{}, 0.001f, rng);
+    return door;
+}
+
+PointCloud DoorScan(float angle, float pull) {
+    std::mt19937 rng(7);
+    PointCloud c;
+    const PointCloud door = AddPanelsBesideDoor(c, rng);
     // Opening: about the vertical line x = 0.6, y = 2.4, the free edge swinging towards -y.
     const Eigen::Vector3f hinge(0.6f, 2.4f, 0.0f);
     const Eigen::Matrix3f R =
         Eigen::AngleAxisf(angle, -Eigen::Vector3f::UnitZ()).toRotationMatrix();
-    for (auto& p : door.points) {
-        p = hinge + R * (p - hinge) - Eigen::Vector3f(0, pull, 0);
-        c.points.push_back(p);
+    for (const auto& p : door.points) {
+        c.points.push_back(hinge + R * (p - hinge) - Eigen::Vector3f(0, pull, 0));
     }
     return c;
 }
@@ -494,13 +500,7 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
 PointCloud FlapScan(float angle, bool rim = false) {
     std::mt19937 rng(17);
     PointCloud c;
-    test::AddPatch(c, {0.3f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
-                   0.001f, rng);
-    test::AddPatch(c, {1.1f, 2.4f, 0.1f}, {0.3f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0}, Color{},
-                   0.001f, rng);
-    PointCloud door;
-    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
-                   Color{}, 0.001f, rng);
+    const PointCloud door = AddPanelsBesideDoor(c, rng);
     // About the horizontal line z = 0.15, y = 2.4, the top edge coming out towards -y.
     const Eigen::Vector3f hinge(0.0f, 2.4f, 0.15f);
     const Eigen::Matrix3f R = Eigen::AngleAxisf(angle, Eigen::Vector3f::UnitX()).toRotationMatrix();
