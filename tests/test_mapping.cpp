@@ -329,8 +329,6 @@ TEST(Articulation, ANarrowFrontWithAHandleAtItsTopIsHingedAtItsSide) {
     EXPECT_THROW(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, any), InvalidArgument);
 }
 
-/// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
-/// pulled out by `pull`, with a fixed frame around it.
 /// Adds to `c` the panels at y = 2.4 left and right of a door (x 0.3 .. 0.6 and 1.1 .. 1.4, z
 /// 0.1 .. 0.9) and returns the door closed (x 0.6 .. 1.1, z 0.15 .. 0.8).
 PointCloud AddPanelsBesideDoor(PointCloud& c, std::mt19937& rng) {
@@ -344,6 +342,8 @@ PointCloud AddPanelsBesideDoor(PointCloud& c, std::mt19937& rng) {
     return door;
 }
 
+/// The door as points (x 0.6 .. 1.1, z 0.15 .. 0.8), opened by `angle` about its left edge or
+/// pulled out by `pull`, with a fixed frame around it.
 PointCloud DoorScan(float angle, float pull) {
     std::mt19937 rng(7);
     PointCloud c;
