@@ -6,12 +6,17 @@
 // feature set, before and after CAD verification; recall vs 1 - precision curves as SVG, yaw
 // errors of the fitted models, stage timings. docs/furniture.md gives the protocol and results.
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <set>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -43,7 +48,11 @@ struct Options {
     std::string kitchen = std::string(MULTICUE_SHARED_DATA_DIR) + "/meshes/kitchen";
     std::string model = "furniture_eval.mcfm";
     bool retrain = false;
-    std::string set = "test";  // test: held-out library pieces; validation: fresh procedural ones
+    // test: held-out library pieces; validation: fresh procedural ones; library: the tune half's
+    // pieces of --library-fold, held out of training
+    std::string set = "test";
+    int library_fold = 0;
+    int verifier_library_rooms = -1;  // -1: the training default
     int rooms = 21;
     std::uint64_t seed = 0;  // 0: 2000 for test, 1000 for validation
     float procedural_share = -1.0f;
@@ -238,6 +247,29 @@ int Probe(const Options& o, const FurnitureModel& model,
     return 0;
 }
 
+// The library pieces of `pieces` split into two folds (within each class, ordered by id, every
+// other piece); returns the pieces without fold `fold` and that fold's pieces.
+std::pair<std::vector<sim::FurniturePiece>, std::vector<sim::FurniturePiece>> LibraryFold(
+    const std::vector<sim::FurniturePiece>& pieces, int fold) {
+    std::map<std::string, std::vector<std::string>> ids;
+    for (const auto& p : pieces) {
+        if (!training::IsProceduralFurniture(p)) ids[p.category].push_back(p.id);
+    }
+    std::set<std::string> out_ids;
+    for (auto& [category, list] : ids) {
+        std::sort(list.begin(), list.end());
+        for (std::size_t i = 0; i < list.size(); ++i) {
+            if (static_cast<int>(i % 2) == fold) out_ids.insert(list[i]);
+        }
+    }
+    std::vector<sim::FurniturePiece> kept, held;
+    for (const auto& p : pieces) (out_ids.count(p.id) ? held : kept).push_back(p);
+    if (held.empty()) throw DataError("furniture_eval: the library fold holds no piece");
+    for (const auto& p : held)
+        std::fprintf(stderr, "held out: %s (%s)\n", p.id.c_str(), p.category.c_str());
+    return {std::move(kept), std::move(held)};
+}
+
 int Run(const Options& o) {
     InstallInterruptHandler();
     std::filesystem::create_directories(o.out);
@@ -249,34 +281,55 @@ int Run(const Options& o) {
     to.procedural_per_class = o.train_procedural;
     to.parts.frame = ParseFurniturePartFrame(o.frame);
     if (o.verifier_rooms >= 0) to.verifier_rooms = o.verifier_rooms;
+    if (o.verifier_library_rooms >= 0) to.verifier_library_rooms = o.verifier_library_rooms;
     if (!o.verifier_spec.empty()) to.verifier_spec = o.verifier_spec;
     to.verifier_fit.max_scale = o.fit_scale;
     to.verifier_fit.scale_steps = o.fit_scale_steps;
     to.verifier_fit.back_to_wall = o.back_to_wall;
     to.verifier_fit.flip_tolerance = o.flip_tolerance;
+    // The training pieces; with --set library, without the tune pieces of --library-fold, which
+    // furnish the rooms instead.
+    std::vector<sim::FurniturePiece> pieces, held_out;
+    const bool library_set = o.set == "library";
+    auto training_pieces = [&] {
+        if (!pieces.empty()) return;
+        pieces = training::FurnitureTrainingPieces(to);
+        if (library_set) std::tie(pieces, held_out) = LibraryFold(pieces, o.library_fold);
+    };
+    if (library_set) training_pieces();
     FurnitureModel model;
     auto t0 = std::chrono::steady_clock::now();
     if (!o.retrain && std::filesystem::exists(o.model)) {
         model = FurnitureModel::Load(o.model);
         if (o.retrain_verifier) {  // the verifier alone, on the loaded vocabulary and CAD models
             std::shared_ptr<const ml::Classifier> verifier;  // none with 0 rooms
+            std::optional<ml::Dataset> rows;
             if (!o.verifier_rows.empty() && std::filesystem::exists(o.verifier_rows)) {
-                verifier =
-                    training::FitFurnitureVerifier(model, ml::ReadDatasetFile(o.verifier_rows), to);
+                rows = ml::ReadDatasetFile(o.verifier_rows);
             } else if (to.verifier_rooms > 0) {
                 Progress progress("verifier rooms", static_cast<std::size_t>(to.verifier_rooms));
-                const ml::Dataset rows =
-                    training::CollectFurnitureVerifierRows(model, to, &progress);
+                rows = training::CollectFurnitureVerifierRows(model, to, &progress);
                 if (InterruptRequested()) return 130;
                 progress.Finish();
-                if (!o.verifier_rows.empty()) ml::WriteDatasetFile(rows, o.verifier_rows);
-                verifier = training::FitFurnitureVerifier(model, rows, to);
+                if (!o.verifier_rows.empty()) ml::WriteDatasetFile(*rows, o.verifier_rows);
             }
+            if (rows && to.verifier_library_rooms > 0) {  // not kept in --verifier-rows
+                training_pieces();
+                const auto procedural = static_cast<std::size_t>(
+                    std::count_if(pieces.begin(), pieces.end(), training::IsProceduralFurniture));
+                Progress more("stand-in models and verifier rooms of library pieces",
+                              procedural + pieces.size() +
+                                  static_cast<std::size_t>(to.verifier_library_rooms));
+                training::AppendFurnitureLibraryVerifierRows(*rows, model, pieces, to, &more);
+                if (InterruptRequested()) return 130;
+                more.Finish();
+            }
+            if (rows) verifier = training::FitFurnitureVerifier(model, *rows, to);
             model.SetVerifier(verifier);
             model.Save(o.model);
         }
     } else {
-        const auto pieces = training::FurnitureTrainingPieces(to);
+        training_pieces();
         Progress progress("training", training::FurnitureTrainingSteps(pieces, to));
         if (!training::TrainFurnitureModel(pieces, to, model, &progress)) return 130;
         progress.Finish();
@@ -330,16 +383,21 @@ int Run(const Options& o) {
     if (o.probe > 0) return Probe(o, model, to, dp);
     // Rooms: held-out library pieces (test) or fresh procedural pieces (validation).
     const bool test = o.set == "test";
-    std::vector<sim::FurniturePiece> library;
+    std::vector<sim::FurniturePiece> library = held_out;
     if (test) {
         for (const auto& e : sim::SelectFurnitureSplit(
                  sim::ReadFurnitureLibrary(o.furniture, o.kitchen), sim::MeshSplit::kTest)) {
             library.push_back(sim::LoadFurniturePiece(e));
         }
     }
-    const float share = o.procedural_share >= 0.0f ? o.procedural_share : (test ? 0.0f : 1.0f);
+    const float share = o.procedural_share >= 0.0f ? o.procedural_share
+                        : (test || library_set)    ? 0.0f
+                                                   : 1.0f;
     const sim::FurnitureSource source(library, share);
-    const std::uint64_t first_seed = o.seed > 0 ? o.seed : (test ? 2000 : 1000);
+    const std::uint64_t first_seed = o.seed > 0 ? o.seed
+                                                : (test          ? 2000
+                                                   : library_set ? 1500 + 100 * o.library_fold
+                                                                 : 1000);
 
     const bool learned = o.learned && model.verifier() != nullptr;
     std::vector<Variant> variants = {
@@ -666,12 +724,23 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_flag("--retrain", o.retrain, "train even when --model exists");
     app.add_option("--set", o.set,
-                   "test (held-out library pieces) or validation (fresh procedural pieces)")
-        ->check(CLI::IsMember({"test", "validation"}))
+                   "test (held-out library pieces), validation (fresh procedural pieces) or "
+                   "library (the tune half's pieces of --library-fold, left out of training)")
+        ->check(CLI::IsMember({"test", "validation", "library"}))
         ->capture_default_str();
+    app.add_option("--library-fold", o.library_fold,
+                   "--set library: the fold (0 or 1) of the tune half's pieces held out")
+        ->check(CLI::Range(0, 1))
+        ->capture_default_str();
+    app.add_option("--verifier-library-rooms", o.verifier_library_rooms,
+                   "verifier rooms of the training library's pieces, fitted by stand-in models "
+                   "that never saw them (default: the training's)")
+        ->check(CLI::NonNegativeNumber);
     app.add_option("--rooms", o.rooms, "rooms (office, seminar, kitchen in turn)")
         ->capture_default_str();
-    app.add_option("--seed", o.seed, "first room seed (default 2000 test, 1000 validation)");
+    app.add_option("--seed", o.seed,
+                   "first room seed (default 2000 test, 1000 validation, 1500 / 1600 library "
+                   "folds 0 / 1)");
     app.add_option("--procedural-share", o.procedural_share,
                    "share of procedural pieces in the rooms (default 0 test, 1 validation)");
     app.add_option("--heads", o.heads, "head positions per room")->capture_default_str();

@@ -9,10 +9,12 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -28,6 +30,7 @@
 #include "multicue/ml/serialization.hpp"
 #include "multicue/sim/furniture_scenes.hpp"
 #include "multicue/sim/raycaster.hpp"
+#include "multicue/sim/rng.hpp"
 #include "multicue/training/furniture_training.hpp"
 #include "test_paths.hpp"
 
@@ -896,6 +899,61 @@ TEST(FurnitureVerifier, RanksTheFitsOfUnseenRoomsAndTravelsInTheModelFile) {
     bad.verifier_spec = "oracle";
     EXPECT_THROW(bad.Validate(), InvalidArgument);
     std::filesystem::remove_all(dir);
+}
+
+// Verifier rows from library pieces: rooms of each half of the training library's pieces, fitted
+// by a stand-in model of the procedural pieces and the other half, give right and wrong fits, the
+// same for the same options; nothing without library pieces or with no rooms; rows of other
+// features and a negative room count are refused.
+TEST(FurnitureVerifier, LibraryRoomsAreFittedByAModelThatNeverSawTheirPieces) {
+    auto to = SmallTraining();
+    to.views.views = 4;
+    std::vector<sim::FurniturePiece> pieces = training::FurnitureTrainingPieces(to);
+    const std::size_t procedural = pieces.size();
+    int k = 0;
+    for (const std::string category : {"table", "table", "cabinet"}) {
+        sim::StreamRng rng(91 + k, std::hash<std::string>{}(category)&0xffff);
+        sim::FurniturePiece p = sim::MakeProceduralFurniture(category, rng);
+        p.id = "library/" + category + std::to_string(k++);
+        EXPECT_FALSE(training::IsProceduralFurniture(p));
+        pieces.push_back(std::move(p));
+    }
+    EXPECT_TRUE(training::IsProceduralFurniture(pieces.front()));
+    FurnitureModel model;
+    ASSERT_TRUE(training::TrainFurnitureModel(pieces, to, model));
+    auto empty = [&] {
+        return ml::Dataset::WithBlocks({{"fit", FurnitureVerifierFeatureNames(model)}});
+    };
+    // No rooms: nothing appended.
+    to.verifier_library_rooms = 0;
+    ml::Dataset rows = empty();
+    training::AppendFurnitureLibraryVerifierRows(rows, model, pieces, to);
+    EXPECT_EQ(rows.rows(), 0u);
+    to.verifier_library_rooms = 2;  // one room per half
+    to.verifier_library_seed = 7200;
+    training::AppendFurnitureLibraryVerifierRows(rows, model, pieces, to);
+    ASSERT_GT(rows.rows(), 0u);
+    const int right = rows.FindClass("right");
+    const auto n_right = std::count(rows.labels.begin(), rows.labels.end(), right);
+    EXPECT_GT(n_right, 0) << "the stand-in models fit some library pieces right";
+    EXPECT_LT(static_cast<std::size_t>(n_right), rows.rows());
+    for (const auto g : rows.groups) EXPECT_TRUE(g == 7200 || g == 7201) << g;
+    EXPECT_GT(std::count(rows.groups.begin(), rows.groups.end(), 7201), 0) << "both halves";
+    ml::Dataset again = empty();
+    training::AppendFurnitureLibraryVerifierRows(again, model, pieces, to);
+    EXPECT_EQ(again.values, rows.values);
+    EXPECT_EQ(again.labels, rows.labels);
+    // Procedural pieces alone: no library rooms.
+    const std::vector<sim::FurniturePiece> only_procedural(pieces.begin(),
+                                                           pieces.begin() + procedural);
+    ml::Dataset none = empty();
+    training::AppendFurnitureLibraryVerifierRows(none, model, only_procedural, to);
+    EXPECT_EQ(none.rows(), 0u);
+    ml::Dataset other = ml::Dataset::WithColumns(3);
+    EXPECT_THROW(training::AppendFurnitureLibraryVerifierRows(other, model, pieces, to),
+                 InvalidArgument);
+    to.verifier_library_rooms = -1;
+    EXPECT_THROW(to.Validate(), InvalidArgument);
 }
 
 /// Exit status of the CLI with `args`.

@@ -366,6 +366,10 @@ void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& glob
                     "simulated rooms of procedural pieces the learned verifier of fits is trained "
                     "on; 0: no verifier")
         ->capture_default_str();
+    cmd->add_option("--verifier-library-rooms", o->t.verifier_library_rooms,
+                    "more verifier rooms, of the library's pieces, fitted by stand-in models "
+                    "that never saw them (fits of pieces unknown to the model)")
+        ->capture_default_str();
     cmd->add_option("--verifier-classifier", o->t.verifier_spec,
                     "classifier of the verifier (spec as in `multicue ml train`)")
         ->capture_default_str();

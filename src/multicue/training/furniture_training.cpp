@@ -1,6 +1,7 @@
 #include "multicue/training/furniture_training.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <numbers>
@@ -72,6 +73,11 @@ void FurnitureTrainingOptions::Validate() const {
     if (verifier_rooms < 0) {
         throw InvalidArgument(
             fmt::format("furniture training: verifier_rooms must be >= 0, got {}", verifier_rooms));
+    }
+    if (verifier_library_rooms < 0) {
+        throw InvalidArgument(
+            fmt::format("furniture training: verifier_library_rooms must be >= 0, got {}",
+                        verifier_library_rooms));
     }
     if (verifier_rooms > 0) {
         (void)ml::CreateClassifier(verifier_spec);  // throws for a bad spec
@@ -293,9 +299,11 @@ bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
     FurnitureModel model =
         FurnitureModel::Train(std::move(all), std::move(classes), std::move(kept), o.parts, vp);
     if (o.verifier_rooms > 0) {
-        std::shared_ptr<const ml::Classifier> verifier = TrainFurnitureVerifier(model, o, progress);
-        if (!verifier) return false;
-        model.SetVerifier(std::move(verifier));
+        ml::Dataset rows = CollectFurnitureVerifierRows(model, o, progress);
+        if (InterruptRequested()) return false;
+        AppendFurnitureLibraryVerifierRows(rows, model, pieces, o, progress);
+        if (InterruptRequested()) return false;
+        model.SetVerifier(FitFurnitureVerifier(model, rows, o));
     }
     out = std::move(model);
     return true;
@@ -333,15 +341,33 @@ std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel&
 
 std::size_t FurnitureTrainingSteps(const std::vector<sim::FurniturePiece>& pieces,
                                    const FurnitureTrainingOptions& options) {
-    return pieces.size() + static_cast<std::size_t>(std::max(0, options.verifier_rooms));
+    std::size_t steps = pieces.size();
+    if (options.verifier_rooms <= 0) return steps;
+    steps += static_cast<std::size_t>(options.verifier_rooms);
+    std::size_t procedural = 0;
+    for (const auto& p : pieces) procedural += IsProceduralFurniture(p) ? 1 : 0;
+    // Two stand-ins, each of the procedural pieces and half of the library.
+    if (options.verifier_library_rooms > 0 && procedural > 0 && procedural < pieces.size()) {
+        steps += 2 * procedural + (pieces.size() - procedural) +
+                 static_cast<std::size_t>(options.verifier_library_rooms);
+    }
+    return steps;
 }
 
-ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
-                                         const FurnitureTrainingOptions& o, Progress* progress) {
-    o.Validate();
-    ml::Dataset rows = ml::Dataset::WithBlocks({{"fit", FurnitureVerifierFeatureNames(model)}});
-    rows.ClassId("right");
-    rows.ClassId("wrong");
+bool IsProceduralFurniture(const sim::FurniturePiece& piece) {
+    return piece.id.rfind("procedural/", 0) == 0;
+}
+
+namespace {
+
+// Appends to `rows` the fits of `fit_model` in `rooms` rooms furnished from `source` (seeds from
+// `first_seed`; offices, seminar rooms and kitchens in turn), the scans merged and each alone,
+// every fit labelled right when a true piece of its class stands within half its width of the
+// fitted centre; features as `model`'s verifier names them. One progress step per room.
+void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
+                        const FurnitureModel& model, const sim::FurnitureSource& source,
+                        std::uint64_t first_seed, int rooms, const FurnitureTrainingOptions& o,
+                        Progress* progress) {
     FurnitureDetectionParams dp;
     // Rows from the hypotheses above the class thresholds (those down to 0.3 of them, which
     // detection fits, gave a slightly worse verifier on the validation rooms: eval/README.md).
@@ -349,22 +375,21 @@ ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
     dp.learned = false;
     dp.fit = o.verifier_fit;
     dp.num_threads = o.num_threads;
-    const FurnitureFitContext context(model, dp.fit);
-    const sim::FurnitureSource source({}, 1.0f);
-    for (int r = 0; r < o.verifier_rooms && !InterruptRequested(); ++r) {
+    const FurnitureFitContext context(fit_model, dp.fit);
+    for (int r = 0; r < rooms && !InterruptRequested(); ++r) {
         sim::FurnitureRoomParams rp;
         rp.type = static_cast<sim::RoomType>(r % 3);
-        const std::uint64_t seed = o.verifier_seed + static_cast<std::uint64_t>(r);
+        const std::uint64_t seed = first_seed + static_cast<std::uint64_t>(r);
         const ScannedFurnitureRoom room = SimulateFurnitureRoom(rp, source, 3, o, seed);
         std::vector<FurnitureView> views;
         for (std::size_t v = 0; v < room.scans.size(); ++v)
             views.push_back({&room.scans[v], room.T_world_sensor[v]});
-        const FurnitureScene scene = PrepareFurnitureScene(views, model, dp);
+        const FurnitureScene scene = PrepareFurnitureScene(views, fit_model, dp);
         std::vector<std::vector<int>> subsets = {{}};
         for (std::size_t v = 0; v < views.size(); ++v) subsets.push_back({static_cast<int>(v)});
         for (const auto& subset : subsets) {
             const FurnitureDetectionResult det =
-                DetectFurniture(scene, subset, model, &context, dp);
+                DetectFurniture(scene, subset, fit_model, &context, dp);
             for (const auto* list : {&det.detections, &det.rejected}) {
                 for (const FurnitureDetection& d : *list) {
                     if (!d.fitted) continue;
@@ -382,6 +407,76 @@ ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
         }
         if (progress) progress->Advance();
     }
+}
+
+ml::Dataset EmptyVerifierRows(const FurnitureModel& model) {
+    ml::Dataset rows = ml::Dataset::WithBlocks({{"fit", FurnitureVerifierFeatureNames(model)}});
+    rows.ClassId("right");
+    rows.ClassId("wrong");
+    return rows;
+}
+
+}  // namespace
+
+void AppendFurnitureLibraryVerifierRows(ml::Dataset& rows, const FurnitureModel& model,
+                                        const std::vector<sim::FurniturePiece>& pieces,
+                                        const FurnitureTrainingOptions& o, Progress* progress) {
+    o.Validate();
+    if (rows.feature_names != FurnitureVerifierFeatureNames(model)) {
+        throw InvalidArgument(
+            "furniture training: the verifier rows have other features than the model's verifier");
+    }
+    if (o.verifier_library_rooms <= 0) return;
+    std::vector<sim::FurniturePiece> procedural;
+    std::array<std::vector<sim::FurniturePiece>, 2> halves;
+    {
+        std::map<std::string, std::vector<const sim::FurniturePiece*>> by_class;
+        for (const auto& p : pieces) {
+            if (IsProceduralFurniture(p)) {
+                procedural.push_back(p);
+            } else {
+                by_class[p.category].push_back(&p);
+            }
+        }
+        for (auto& [category, list] : by_class) {
+            std::sort(list.begin(), list.end(),
+                      [](const auto* a, const auto* b) { return a->id < b->id; });
+            for (std::size_t i = 0; i < list.size(); ++i) halves[i % 2].push_back(*list[i]);
+        }
+    }
+    if (procedural.empty() || halves[0].empty()) return;
+    FurnitureTrainingOptions so = o;
+    so.verifier_rooms = 0;
+    so.verifier_library_rooms = 0;
+    std::uint64_t seed = o.verifier_library_seed;
+    for (int h = 0; h < 2; ++h) {
+        const int rooms =
+            o.verifier_library_rooms / 2 + (h == 0 ? o.verifier_library_rooms % 2 : 0);
+        if (halves[h].empty() || rooms == 0) continue;
+        // The stand-in: the procedural pieces and the other half of the library.
+        std::vector<sim::FurniturePiece> train = procedural;
+        train.insert(train.end(), halves[1 - h].begin(), halves[1 - h].end());
+        FurnitureModel stand_in;
+        if (!TrainFurnitureModel(train, so, stand_in, progress)) return;
+        bool same = stand_in.classes().size() == model.classes().size();
+        for (std::size_t c = 0; same && c < model.classes().size(); ++c)
+            same = stand_in.classes()[c].name == model.classes()[c].name;
+        if (!same) {
+            throw DataError(
+                "furniture training: the procedural pieces do not hold every class of the model");
+        }
+        const sim::FurnitureSource source(halves[h], 0.0f);
+        AppendVerifierRows(rows, stand_in, model, source, seed, rooms, o, progress);
+        seed += static_cast<std::uint64_t>(rooms);
+    }
+}
+
+ml::Dataset CollectFurnitureVerifierRows(const FurnitureModel& model,
+                                         const FurnitureTrainingOptions& o, Progress* progress) {
+    o.Validate();
+    ml::Dataset rows = EmptyVerifierRows(model);
+    const sim::FurnitureSource source({}, 1.0f);
+    AppendVerifierRows(rows, model, model, source, o.verifier_seed, o.verifier_rooms, o, progress);
     return rows;
 }
 

@@ -55,6 +55,15 @@ struct FurnitureTrainingOptions {
     /// 60 rooms ranked the validation rooms' fits better than 30 (eval/README.md)
     int verifier_rooms = 60;
     std::uint64_t verifier_seed = 5000;  ///< seed of the first verifier room (the next: + 1, ...)
+    /// Rows from library pieces the fit has never seen: this many more verifier rooms furnished
+    /// with the training library's pieces (no procedural ones where the library has the class).
+    /// The library pieces are split in two halves (every other piece of a class by id); the
+    /// rooms of one half are fitted by a stand-in model trained on the procedural pieces and the
+    /// other half, so that every library piece is fitted as an unseen piece of the library would
+    /// be, >= 0; 0: none. Nothing is added when the training pieces hold no library piece or no
+    /// procedural one.
+    int verifier_library_rooms = 30;  ///< 30 chosen on the library folds (eval/README.md)
+    std::uint64_t verifier_library_seed = 6000;  ///< seed of the first of those rooms
     /// Classifier of the verifier (ml::CreateClassifier spec)
     std::string verifier_spec = "rtrees:trees=200";
     /// CAD fitting in the verifier rooms: the parameters detection will use (the verifier learns
@@ -120,6 +129,22 @@ std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(
 std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel& model,
                                                            const ml::Dataset& rows,
                                                            const FurnitureTrainingOptions& options);
+
+/// True for the pieces FurnitureTrainingPieces makes procedurally (ids "procedural/...").
+bool IsProceduralFurniture(const sim::FurniturePiece& piece);
+
+/// Appends to `rows` (CollectFurnitureVerifierRows of `model`) the rows of
+/// options.verifier_library_rooms rooms furnished with the library pieces of `pieces` (see
+/// FurnitureTrainingOptions::verifier_library_rooms): the rooms of each half of the library
+/// fitted by a model trained on the procedural pieces of `pieces` and the other half. Appends
+/// nothing when `pieces` hold no library or no procedural piece, or the option is 0. One
+/// progress step per piece a stand-in trains on and per room; stops early when interrupted.
+/// InvalidArgument when `rows` have other features than `model`'s verifier, DataError when the
+/// procedural pieces lack a class of `model`.
+void AppendFurnitureLibraryVerifierRows(ml::Dataset& rows, const FurnitureModel& model,
+                                        const std::vector<sim::FurniturePiece>& pieces,
+                                        const FurnitureTrainingOptions& options,
+                                        Progress* progress = nullptr);
 
 /// Rows of the verifier (FurnitureVerifierFeatureNames; labels "right" and "wrong"): every fit
 /// of `model` to a hypothesis above its class threshold (default detection parameters with
