@@ -6,7 +6,6 @@
 // feature set, before and after CAD verification; recall vs 1 - precision curves as SVG, yaw
 // errors of the fitted models, stage timings. docs/furniture.md gives the protocol and results.
 
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -247,21 +246,13 @@ int Probe(const Options& o, const FurnitureModel& model,
     return 0;
 }
 
-// The library pieces of `pieces` split into two folds (within each class, ordered by id, every
-// other piece); returns the pieces without fold `fold` and that fold's pieces.
+// The library pieces of `pieces` split into two folds (training::SplitFurnitureLibrary's halves);
+// returns the pieces without fold `fold`, in their order, and that fold's pieces.
 std::pair<std::vector<sim::FurniturePiece>, std::vector<sim::FurniturePiece>> LibraryFold(
     const std::vector<sim::FurniturePiece>& pieces, int fold) {
-    std::map<std::string, std::vector<std::string>> ids;
-    for (const auto& p : pieces) {
-        if (!training::IsProceduralFurniture(p)) ids[p.category].push_back(p.id);
-    }
+    const training::FurnitureLibraryHalves split = training::SplitFurnitureLibrary(pieces);
     std::set<std::string> out_ids;
-    for (auto& [category, list] : ids) {
-        std::sort(list.begin(), list.end());
-        for (std::size_t i = 0; i < list.size(); ++i) {
-            if (static_cast<int>(i % 2) == fold) out_ids.insert(list[i]);
-        }
-    }
+    for (const auto& p : split.library[fold]) out_ids.insert(p.id);
     std::vector<sim::FurniturePiece> kept, held;
     for (const auto& p : pieces) (out_ids.count(p.id) ? held : kept).push_back(p);
     if (held.empty()) throw DataError("furniture_eval: the library fold holds no piece");
@@ -315,11 +306,8 @@ int Run(const Options& o) {
             }
             if (rows && to.verifier_library_rooms > 0) {  // not kept in --verifier-rows
                 training_pieces();
-                const auto procedural = static_cast<std::size_t>(
-                    std::count_if(pieces.begin(), pieces.end(), training::IsProceduralFurniture));
                 Progress more("stand-in models and verifier rooms of library pieces",
-                              procedural + pieces.size() +
-                                  static_cast<std::size_t>(to.verifier_library_rooms));
+                              training::FurnitureLibraryVerifierSteps(pieces, to));
                 training::AppendFurnitureLibraryVerifierRows(*rows, model, pieces, to, &more);
                 if (InterruptRequested()) return 130;
                 more.Finish();

@@ -919,6 +919,11 @@ TEST(FurnitureVerifier, LibraryRoomsAreFittedByAModelThatNeverSawTheirPieces) {
         pieces.push_back(std::move(p));
     }
     EXPECT_TRUE(training::IsProceduralFurniture(pieces.front()));
+    const training::FurnitureLibraryHalves split = training::SplitFurnitureLibrary(pieces);
+    EXPECT_EQ(split.procedural.size(), procedural);
+    ASSERT_EQ(split.library[0].size(), 2u);  // the first table and the cabinet
+    ASSERT_EQ(split.library[1].size(), 1u);
+    EXPECT_EQ(split.library[1][0].id, "library/table1");
     FurnitureModel model;
     ASSERT_TRUE(training::TrainFurnitureModel(pieces, to, model));
     auto empty = [&] {

@@ -1,7 +1,6 @@
 #include "multicue/training/furniture_training.hpp"
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
 #include <numbers>
@@ -309,14 +308,6 @@ bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
     return true;
 }
 
-std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(const FurnitureModel& model,
-                                                             const FurnitureTrainingOptions& o,
-                                                             Progress* progress) {
-    const ml::Dataset rows = CollectFurnitureVerifierRows(model, o, progress);
-    if (InterruptRequested()) return nullptr;
-    return FitFurnitureVerifier(model, rows, o);
-}
-
 std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel& model,
                                                            const ml::Dataset& rows,
                                                            const FurnitureTrainingOptions& o) {
@@ -341,21 +332,42 @@ std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel&
 
 std::size_t FurnitureTrainingSteps(const std::vector<sim::FurniturePiece>& pieces,
                                    const FurnitureTrainingOptions& options) {
-    std::size_t steps = pieces.size();
-    if (options.verifier_rooms <= 0) return steps;
-    steps += static_cast<std::size_t>(options.verifier_rooms);
-    std::size_t procedural = 0;
-    for (const auto& p : pieces) procedural += IsProceduralFurniture(p) ? 1 : 0;
-    // Two stand-ins, each of the procedural pieces and half of the library.
-    if (options.verifier_library_rooms > 0 && procedural > 0 && procedural < pieces.size()) {
-        steps += 2 * procedural + (pieces.size() - procedural) +
-                 static_cast<std::size_t>(options.verifier_library_rooms);
-    }
-    return steps;
+    if (options.verifier_rooms <= 0) return pieces.size();
+    return pieces.size() + static_cast<std::size_t>(options.verifier_rooms) +
+           FurnitureLibraryVerifierSteps(pieces, options);
 }
 
 bool IsProceduralFurniture(const sim::FurniturePiece& piece) {
     return piece.id.rfind("procedural/", 0) == 0;
+}
+
+FurnitureLibraryHalves SplitFurnitureLibrary(const std::vector<sim::FurniturePiece>& pieces) {
+    FurnitureLibraryHalves out;
+    std::map<std::string, std::vector<const sim::FurniturePiece*>> by_class;
+    for (const auto& p : pieces) {
+        if (IsProceduralFurniture(p)) {
+            out.procedural.push_back(p);
+        } else {
+            by_class[p.category].push_back(&p);
+        }
+    }
+    for (auto& [category, list] : by_class) {
+        std::sort(list.begin(), list.end(),
+                  [](const auto* a, const auto* b) { return a->id < b->id; });
+        for (std::size_t i = 0; i < list.size(); ++i) out.library[i % 2].push_back(*list[i]);
+    }
+    return out;
+}
+
+std::size_t FurnitureLibraryVerifierSteps(const std::vector<sim::FurniturePiece>& pieces,
+                                          const FurnitureTrainingOptions& options) {
+    if (options.verifier_library_rooms <= 0) return 0;
+    std::size_t procedural = 0;
+    for (const auto& p : pieces) procedural += IsProceduralFurniture(p) ? 1 : 0;
+    if (procedural == 0 || procedural == pieces.size()) return 0;
+    // Two stand-ins, each of the procedural pieces and one half of the library.
+    return 2 * procedural + (pieces.size() - procedural) +
+           static_cast<std::size_t>(options.verifier_library_rooms);
 }
 
 namespace {
@@ -427,23 +439,9 @@ void AppendFurnitureLibraryVerifierRows(ml::Dataset& rows, const FurnitureModel&
             "furniture training: the verifier rows have other features than the model's verifier");
     }
     if (o.verifier_library_rooms <= 0) return;
-    std::vector<sim::FurniturePiece> procedural;
-    std::array<std::vector<sim::FurniturePiece>, 2> halves;
-    {
-        std::map<std::string, std::vector<const sim::FurniturePiece*>> by_class;
-        for (const auto& p : pieces) {
-            if (IsProceduralFurniture(p)) {
-                procedural.push_back(p);
-            } else {
-                by_class[p.category].push_back(&p);
-            }
-        }
-        for (auto& [category, list] : by_class) {
-            std::sort(list.begin(), list.end(),
-                      [](const auto* a, const auto* b) { return a->id < b->id; });
-            for (std::size_t i = 0; i < list.size(); ++i) halves[i % 2].push_back(*list[i]);
-        }
-    }
+    const FurnitureLibraryHalves split = SplitFurnitureLibrary(pieces);
+    const auto& procedural = split.procedural;
+    const auto& halves = split.library;
     if (procedural.empty() || halves[0].empty()) return;
     FurnitureTrainingOptions so = o;
     so.verifier_rooms = 0;

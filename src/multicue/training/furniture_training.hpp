@@ -6,6 +6,8 @@
 /// their shape vectors build the vocabulary. Every piece also becomes a CAD model for fitting:
 /// points on its outer surface, found by casting parallel rays at it from 40 directions.
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -116,13 +118,6 @@ bool TrainFurnitureModel(const std::vector<sim::FurniturePiece>& pieces,
 std::size_t FurnitureTrainingSteps(const std::vector<sim::FurniturePiece>& pieces,
                                    const FurnitureTrainingOptions& options);
 
-/// The verifier of `model`: CollectFurnitureVerifierRows, then a classifier of
-/// options.verifier_spec (seeded with options.seed) fitted to them. Null when interrupted;
-/// DataError when the rooms give no right or no wrong fit.
-std::shared_ptr<const ml::Classifier> TrainFurnitureVerifier(
-    const FurnitureModel& model, const FurnitureTrainingOptions& options,
-    Progress* progress = nullptr);
-
 /// A classifier of options.verifier_spec (seeded with options.seed) fitted to `rows` of
 /// CollectFurnitureVerifierRows. DataError when they hold no right or no wrong fit, or their
 /// features are not the verifier's of `model`.
@@ -132,6 +127,19 @@ std::shared_ptr<const ml::Classifier> FitFurnitureVerifier(const FurnitureModel&
 
 /// True for the pieces FurnitureTrainingPieces makes procedurally (ids "procedural/...").
 bool IsProceduralFurniture(const sim::FurniturePiece& piece);
+
+/// Pieces split for training on part of a library: the procedural ones, and the library ones in
+/// two halves (within each class, ordered by id, every other piece; half 0 takes the odd one).
+struct FurnitureLibraryHalves {
+    std::vector<sim::FurniturePiece> procedural;
+    std::array<std::vector<sim::FurniturePiece>, 2> library;
+};
+FurnitureLibraryHalves SplitFurnitureLibrary(const std::vector<sim::FurniturePiece>& pieces);
+
+/// Progress steps of AppendFurnitureLibraryVerifierRows for `pieces`: the pieces of its two
+/// stand-in models and its rooms (0 when it appends nothing).
+std::size_t FurnitureLibraryVerifierSteps(const std::vector<sim::FurniturePiece>& pieces,
+                                          const FurnitureTrainingOptions& options);
 
 /// Appends to `rows` (CollectFurnitureVerifierRows of `model`) the rows of
 /// options.verifier_library_rooms rooms furnished with the library pieces of `pieces` (see
