@@ -95,6 +95,7 @@ struct Options {
     float fit_scale = FurnitureFitParams{}.max_scale;
     int fit_scale_steps = FurnitureFitParams{}.scale_steps;
     bool back_to_wall = FurnitureFitParams{}.back_to_wall;
+    bool piece_extent = FurniturePieceParams{}.grow;
     float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
 };
 
@@ -364,6 +365,7 @@ int Run(const Options& o) {
     dp.fit.max_scale = o.fit_scale;
     dp.fit.scale_steps = o.fit_scale_steps;
     dp.fit.back_to_wall = o.back_to_wall;
+    dp.piece.grow = o.piece_extent;
     dp.fit.flip_tolerance = o.flip_tolerance;
     dp.num_threads = o.threads;
     const FurnitureFitContext context(model, dp.fit);
@@ -791,6 +793,9 @@ int main(int argc, char** argv) {
     app.add_flag(
         "!--no-back-to-wall", o.back_to_wall,
         "CAD fit: leave fits facing a wall as they are (FurnitureFitParams::back_to_wall)");
+    app.add_flag("!--no-piece-extent", o.piece_extent,
+                 "report the fitted model's box and centre, not grown to the scan's parts of the "
+                 "piece (FurniturePieceParams::grow)");
     app.add_option("--flip-tolerance", o.flip_tolerance,
                    "CAD fit: how much worse a fit turned away from a wall may score "
                    "(FurnitureFitParams::flip_tolerance)");

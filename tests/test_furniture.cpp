@@ -688,6 +688,99 @@ TEST(FurnitureShape, MeasuresThePieceAgainstTheFittedModel) {
     EXPECT_FLOAT_EQ(MeasureFurnitureShape(with_nan, cad, T).inside_share, 1.0f);
 }
 
+// The piece's box: a table model 1.2 m long fitted to one end of a 1.8 m table grows to the table
+// (its top and far legs are parts mostly within the model's footprint), its centre moves to the
+// table's; a chair beside it (a part mostly outside) and a wall part do not count; a part reaching
+// far beyond is cut at max_growth; without growth, and for a piece the model covers, the box is
+// the model's; bad parameters are refused.
+TEST(FurniturePiece, TheBoxGrowsToTheScannedPartsOfThePieceAndNotToItsNeighbours) {
+    FurnitureCad cad;
+    cad.cloud = BoxSurface(-0.6f, 0.6f, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
+    cad.extent = Eigen::Vector3f(1.2f, 0.8f, 0.75f);
+    const float yaw = 0.4f;
+    const Eigen::Vector2f at(1.0f, 2.0f);
+    FurnitureFit fit;
+    fit.cad = 0;
+    fit.yaw = yaw;
+    fit.T_world_model = Eigen::Translation3f(at.x(), at.y(), 0.0f) *
+                        Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ());
+    // The scan in the model's frame: a table from x = -0.6 to 1.2 (its top one part, each leg
+    // one part), a chair part at x 1.3-1.7 beyond its end, and a wall part behind it.
+    FurnitureParts view;
+    auto add_part = [&](const std::vector<Eigen::Vector3f>& pts) {
+        FurniturePart part;
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        for (const auto& p : pts) {
+            part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
+            view.cloud.points.push_back(fit.T_world_model * p);
+            view.cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+            sum += view.cloud.points.back();
+        }
+        part.centroid = sum / static_cast<float>(pts.size());
+        view.parts.push_back(part);
+    };
+    std::vector<Eigen::Vector3f> top, wall, chair;
+    for (float x = -0.6f; x <= 1.2f + 1e-4f; x += 0.03f) {
+        for (float y = -0.4f; y <= 0.4f + 1e-4f; y += 0.03f) top.emplace_back(x, y, 0.75f);
+    }
+    add_part(top);
+    for (float x : {-0.57f, 1.17f}) {
+        for (float y : {-0.37f, 0.37f}) {
+            std::vector<Eigen::Vector3f> leg;
+            for (float z = 0.0f; z < 0.72f; z += 0.03f) leg.emplace_back(x, y, z);
+            add_part(leg);
+        }
+    }
+    for (float x = 1.3f; x <= 1.7f; x += 0.03f) {
+        for (float y = -0.2f; y <= 0.2f; y += 0.03f) chair.emplace_back(x, y, 0.45f);
+    }
+    add_part(chair);
+    for (float x = -2.0f; x <= 3.0f; x += 0.05f) {
+        for (float z = 0.0f; z <= 2.0f; z += 0.05f) wall.emplace_back(x, -0.45f, z);
+    }
+    add_part(wall);
+    view.cloud.width = static_cast<std::uint32_t>(view.cloud.points.size());
+
+    const FurniturePieceParams params;
+    const Eigen::AlignedBox3f box = MeasureFurniturePiece({&view}, cad, fit, params);
+    ASSERT_FALSE(box.isEmpty());
+    EXPECT_NEAR(box.min().x(), -0.6f, 0.02f);
+    EXPECT_NEAR(box.max().x(), 1.2f, 0.05f);   // grown to the table, not to the chair at 1.7
+    EXPECT_NEAR(box.min().y(), -0.4f, 0.03f);  // the wall behind does not count
+    EXPECT_NEAR(box.max().y(), 0.4f, 0.03f);
+    EXPECT_NEAR(box.max().z(), 0.75f, 0.02f);
+    const Eigen::Vector3f centre = fit.T_world_model * box.center();
+    const Eigen::Vector3f table_centre = fit.T_world_model * Eigen::Vector3f(0.3f, 0.0f, 0.0f);
+    EXPECT_LT((centre - table_centre).head<2>().norm(), 0.04f);
+
+    // At most max_growth of the model's length on a side.
+    FurniturePieceParams tight;
+    tight.max_growth = 0.25f;
+    EXPECT_NEAR(MeasureFurniturePiece({&view}, cad, fit, tight).max().x(), 0.9f, 1e-4f);
+    // Without growth, or with nothing beyond the model, the box is the model's.
+    FurniturePieceParams off;
+    off.grow = false;
+    const Eigen::AlignedBox3f model_box = MeasureFurniturePiece({&view}, cad, fit, off);
+    EXPECT_NEAR(model_box.max().x(), 0.6f, 0.01f);
+    FurnitureFit covering = fit;
+    covering.T_world_model = fit.T_world_model * Eigen::Translation3f(0.3f, 0.0f, 0.0f);
+    cad.cloud = BoxSurface(-0.9f, 0.9f, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
+    const Eigen::AlignedBox3f same = MeasureFurniturePiece({&view}, cad, covering, params);
+    EXPECT_NEAR(same.min().x(), -0.9f, 0.01f);
+    EXPECT_NEAR(same.max().x(), 0.9f, 0.01f);
+    // Deterministic; no views, no fit: the model's box or nothing.
+    EXPECT_TRUE(MeasureFurniturePiece({&view}, cad, covering, params).isApprox(same));
+    EXPECT_NEAR(MeasureFurniturePiece({}, cad, fit, params).max().x(), 0.9f, 0.01f);
+    FurnitureFit none;
+    EXPECT_TRUE(MeasureFurniturePiece({&view}, cad, none, params).isEmpty());
+    FurniturePieceParams bad;
+    bad.member_share = 0.0f;
+    EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad), InvalidArgument);
+    bad = {};
+    bad.max_growth = std::nanf("");
+    EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad), InvalidArgument);
+}
+
 // Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
 // even with a few stray points (a corner's, an object's touching it) in its part; two walls
 // grown into one part around a corner, a short part and a low one are no wall.

@@ -111,11 +111,12 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     if (!d.fitted || d.fit.cad < 0) return j;
     const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
     const Eigen::Isometry3f& T = d.fit.T_world_model;
-    const Eigen::Affine3f A = d.fit.ModelToWorld();
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
-    for (const auto& p : cad.cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    if (cad.cloud.points.empty()) lo = hi = Eigen::Vector3f::Zero();
-    const Eigen::Vector3f box_centre = A * (0.5f * (lo + hi));
+    // The piece's box (the fitted model's, grown to the scan's parts of the piece) in T's frame.
+    const Eigen::AlignedBox3f box =
+        d.box.isEmpty() ? Eigen::AlignedBox3f(Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero())
+                        : d.box;
+    const Eigen::Vector3f box_centre = T * box.center();
+    const Eigen::Vector3f box_size = box.sizes();
     nlohmann::json pose = nlohmann::json::array();
     for (int r = 0; r < 4; ++r) {
         pose.push_back({T.matrix()(r, 0), T.matrix()(r, 1), T.matrix()(r, 2), T.matrix()(r, 3)});
@@ -126,9 +127,7 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     j["turned"] = d.fit.turned;
     j["scale"] = {d.fit.scale.x(), d.fit.scale.y(), d.fit.scale.z()};
     j["box"] = {{"centre", {box_centre.x(), box_centre.y(), box_centre.z()}},
-                {"size",
-                 {(hi.x() - lo.x()) * d.fit.scale.x(), (hi.y() - lo.y()) * d.fit.scale.y(),
-                  (hi.z() - lo.z()) * d.fit.scale.z()}},
+                {"size", {box_size.x(), box_size.y(), box_size.z()}},
                 {"yaw_deg", YawDeg(d.fit.yaw)}};
     j["coverage"] = d.fit.coverage;
     j["free_share"] = d.fit.free_share;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <unordered_set>
+#include <utility>
 
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
@@ -213,6 +214,7 @@ void FurnitureDetectionParams::Validate() const {
     voting.Validate();
     selection.Validate();
     fit.Validate();
+    piece.Validate();
     if (!(min_wall_length > 0.0f) || !std::isfinite(min_wall_length)) {
         throw InvalidArgument(fmt::format(
             "furniture detection: min_wall_length must be > 0, got {}", min_wall_length));
@@ -234,6 +236,90 @@ void FurnitureDetectionParams::Validate() const {
         throw InvalidArgument(fmt::format(
             "furniture detection: min_confidence must be in [0, 1], got {}", min_confidence));
     }
+}
+
+void FurniturePieceParams::Validate() const {
+    if (!(member_share > 0.0f && member_share <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("furniture piece: member_share must be in (0, 1], got {}", member_share));
+    }
+    for (const auto& [name, v] :
+         {std::pair{"margin", margin}, {"min_growth", min_growth}, {"max_growth", max_growth}}) {
+        if (!(v >= 0.0f) || !std::isfinite(v)) {
+            throw InvalidArgument(
+                fmt::format("furniture piece: {} must be finite and >= 0, got {}", name, v));
+        }
+    }
+}
+
+Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
+                                          const FurnitureCad& cad, const FurnitureFit& fit,
+                                          const FurniturePieceParams& params) {
+    params.Validate();
+    Eigen::AlignedBox3f box;  // empty
+    if (fit.cad < 0 || cad.cloud.empty() || !fit.T_world_model.matrix().allFinite() ||
+        !fit.scale.allFinite())
+        return box;
+    // The reported model's points in the frame of T_world_model are the CAD points scaled (and
+    // turned by a half turn when `turned`, which ModelToWorld holds).
+    const Eigen::Isometry3f to_model = fit.T_world_model.inverse();
+    const Eigen::Affine3f model_to_frame = to_model * fit.ModelToWorld();
+    for (const auto& p : cad.cloud.points) {
+        if (p.allFinite()) box.extend(model_to_frame * p);
+    }
+    if (box.isEmpty() || !params.grow) return box;
+    const Eigen::Vector3f size = box.sizes();
+    const float m = params.margin;
+    const float reach = 0.5f * size.head<2>().norm() + m + 1.0f;  // parts' centroids within
+    auto inside = [&](const Eigen::Vector3f& q) {
+        return q.x() >= box.min().x() - m && q.x() <= box.max().x() + m &&
+               q.y() >= box.min().y() - m && q.y() <= box.max().y() + m &&
+               q.z() <= box.max().z() + m;
+    };
+    std::vector<float> xs, ys;
+    std::vector<Eigen::Vector3f> q;
+    for (const FurnitureParts* v : views) {
+        if (v == nullptr) continue;
+        for (const FurniturePart& part : v->parts) {
+            if (part.indices.empty() || !part.centroid.allFinite() ||
+                (part.centroid.head<2>() - fit.T_world_model.translation().head<2>()).norm() >
+                    reach)
+                continue;
+            q.clear();
+            std::size_t in = 0;
+            for (Index i : part.indices) {
+                const Eigen::Vector3f& p = v->cloud.points[i];
+                if (!p.allFinite()) continue;
+                q.push_back(to_model * p);
+                in += inside(q.back()) ? 1 : 0;
+            }
+            if (q.empty() ||
+                static_cast<float>(in) < params.member_share * static_cast<float>(q.size()))
+                continue;
+            for (const auto& r : q) {
+                xs.push_back(r.x());
+                ys.push_back(r.y());
+            }
+        }
+    }
+    if (xs.empty()) return box;
+    auto quantile = [](std::vector<float>& v, double f) {
+        const auto k = static_cast<std::size_t>(f * static_cast<double>(v.size() - 1));
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+        return v[k];
+    };
+    // The parts' extent (2-98 %, against stray points) where it goes beyond the box.
+    Eigen::AlignedBox3f grown = box;
+    for (int a = 0; a < 2; ++a) {
+        std::vector<float>& v = a == 0 ? xs : ys;
+        const float lo = quantile(v, 0.02), hi = quantile(v, 0.98);
+        const float most = params.max_growth * size[a];
+        if (box.min()[a] - lo > params.min_growth)
+            grown.min()[a] = std::max(lo, box.min()[a] - most);
+        if (hi - box.max()[a] > params.min_growth)
+            grown.max()[a] = std::min(hi, box.max()[a] + most);
+    }
+    return grown;
 }
 
 FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const FurnitureCad& cad,
@@ -636,6 +722,22 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                 all[k].rejection = "overlap";
             }
             kept.push_back(winner);
+        }
+        // The accepted pieces' boxes grown to their parts, and their centres with them.
+        std::vector<const FurnitureParts*> parts;
+        for (int v : views) parts.push_back(&scene.views[static_cast<std::size_t>(v)]);
+        for (auto& d : all) {
+            if (!d.fitted) continue;
+            const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
+            const Eigen::AlignedBox3f model_box =
+                MeasureFurniturePiece(parts, cad, d.fit, {.grow = false});
+            d.box = d.accepted && params.piece.grow
+                        ? MeasureFurniturePiece(parts, cad, d.fit, params.piece)
+                        : model_box;
+            if (d.box.isEmpty() || model_box.isEmpty()) continue;
+            const Eigen::Vector3f shift = d.box.center() - model_box.center();
+            d.centre =
+                (d.fit.T_world_model * Eigen::Vector3f(shift.x(), shift.y(), 0.0f)).head<2>();
         }
         result.fit_ms = MillisecondsSince(t);
     }

@@ -33,6 +33,23 @@ struct FurnitureView {
     Eigen::Isometry3f T_world_sensor = Eigen::Isometry3f::Identity();
 };
 
+/// The extent of a detected piece from the scan: a CAD model of another size than the piece, fitted
+/// to one end of it, centres the detection off the piece's centre. The parts of the scans that lie
+/// mostly within the fitted model's footprint (grown by `margin`) belong to the piece; where they
+/// reach beyond the model's box along one of its horizontal axes, the box grows to them (by at
+/// most max_growth of the model's size on that side). The box never shrinks: a side the scans
+/// did not see looks the same as a side that is not there. Only the reported box and centre
+/// change; the tests, the verifier and the overlaps judge the fitted model.
+struct FurniturePieceParams {
+    bool grow = true;
+    float member_share = 0.6f;  ///< share of a part's points within the grown footprint, (0, 1]
+    float margin = 0.1f;        ///< footprint grown by this to take in parts [m], >= 0
+    float min_growth = 0.05f;   ///< parts reaching less far beyond the box leave it [m], >= 0
+    float max_growth = 0.5f;    ///< at most this times the model's size per side [-], >= 0
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
 struct FurnitureDetectionParams {
     FurnitureVotingParams voting{};
     /// Hypotheses down to 0.3 of their class threshold are fitted: the fit and the verifier
@@ -64,7 +81,9 @@ struct FurnitureDetectionParams {
     /// below min_confidence are rejected, the confidence is the detection's score and decides
     /// which of overlapping fits stays
     bool learned = true;
-    float min_confidence = 0.4f;  ///< [0, 1]
+    /// [0, 1]; 0.3: the lowest cut at which the merged precision of the validation rooms and the
+    /// library folds together stays at 0.9 (eval/README.md)
+    float min_confidence = 0.3f;
     /// With learned verification, the verifier also judges the fits that the coverage,
     /// free-space and wall tests rejected (its features hold the same shares): it replaces the
     /// tests. Off: a fit must pass the tests and the verifier
@@ -76,7 +95,10 @@ struct FurnitureDetectionParams {
     /// fit.max_behind_share)
     bool walls = true;
     float min_wall_length = 1.0f;  ///< upright planes this long (and taller than any piece) [m]
-    int num_threads = 0;           ///< 0 = all cores; never changes the result
+    /// The reported box and centre of each accepted detection grown to the scan's parts of the
+    /// piece (MeasureFurniturePiece)
+    FurniturePieceParams piece{};
+    int num_threads = 0;  ///< 0 = all cores; never changes the result
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -127,6 +149,14 @@ struct FurnitureShapeEvidence {
 FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const FurnitureCad& cad,
                                              const Eigen::Affine3f& T);
 
+/// The box of the piece that `fit` explains, in the frame of fit.T_world_model [m]: the fitted
+/// model's box (stretched by fit.scale), grown along the model's horizontal axes to the parts of
+/// `views` that belong to the piece (FurniturePieceParams). Empty without a fitted model. Throws
+/// InvalidArgument for bad parameters.
+Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
+                                          const FurnitureCad& cad, const FurnitureFit& fit,
+                                          const FurniturePieceParams& params);
+
 /// One detection (or a rejected hypothesis).
 struct FurnitureDetection {
     int cls = 0;
@@ -134,8 +164,13 @@ struct FurnitureDetection {
     FurnitureHypothesis hypothesis;  ///< from the vote space
     bool fitted = false;             ///< a CAD model was fitted
     FurnitureFit fit;
-    /// Centre on the floor: the fitted model's when fitted, else the hypothesis's [m]
+    /// Centre on the floor [m]: of the hypothesis; once fitted, of the fitted model; once
+    /// accepted, of the piece's box (`box`)
     Eigen::Vector2f centre = Eigen::Vector2f::Zero();
+    /// The piece's box in the frame of fit.T_world_model (MeasureFurniturePiece) [m]: the fitted
+    /// model's box, grown to the scan's parts of the piece for an accepted detection; empty
+    /// without a fit
+    Eigen::AlignedBox3f box;
     /// The hypothesis's score over its class threshold; for a fitted detection (verify) times
     /// 0.5 + coverage - free share, so that a piece explained well by a model that claims no
     /// free space outranks one that is not (and wins where two overlap); with learned

@@ -375,7 +375,7 @@ namespace {
 // Appends to `rows` the fits of `fit_model` in `rooms` rooms furnished from `source` (seeds from
 // `first_seed`; offices, seminar rooms and kitchens in turn), the scans merged and each alone,
 // every fit labelled right when a true piece of its class stands within half its width of the
-// fitted centre; features as `model`'s verifier names them. One progress step per room.
+// fitted model's centre; features as `model`'s verifier names them. One progress step per room.
 void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
                         const FurnitureModel& model, const sim::FurnitureSource& source,
                         std::uint64_t first_seed, int rooms, const FurnitureTrainingOptions& o,
@@ -386,6 +386,7 @@ void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
     dp.selection.threshold_scale = 1.0f;
     dp.learned = false;
     dp.fit = o.verifier_fit;
+    dp.piece.grow = false;  // the label judges the fitted model, which the features describe
     dp.num_threads = o.num_threads;
     const FurnitureFitContext context(fit_model, dp.fit);
     for (int r = 0; r < rooms && !InterruptRequested(); ++r) {
