@@ -85,6 +85,7 @@ struct Options {
     bool class_by_fit = true;
     bool learned = true;
     float min_confidence = FurnitureDetectionParams{}.min_confidence;
+    float min_confidence_single = FurnitureDetectionParams{}.min_confidence_single;
     bool retrain_verifier = false;
     bool learned_tests = true;
     int verifier_rooms = -1;    // -1: the training default
@@ -356,6 +357,7 @@ int Run(const Options& o) {
     dp.class_by_fit = o.class_by_fit;
     dp.learned = o.learned;
     dp.min_confidence = o.min_confidence;
+    dp.min_confidence_single = o.min_confidence_single;
     dp.learned_tests = o.learned_tests;
     dp.voting.activations = o.activations;
     dp.voting.max_height_error = o.max_height_error;
@@ -800,6 +802,9 @@ int main(int argc, char** argv) {
                    "CAD fit: how much worse a fit turned away from a wall may score "
                    "(FurnitureFitParams::flip_tolerance)");
     app.add_option("--min-confidence", o.min_confidence, "learned verifier: confidence kept")
+        ->capture_default_str();
+    app.add_option("--min-confidence-single", o.min_confidence_single,
+                   "learned verifier: confidence kept, single scans")
         ->capture_default_str();
     app.add_flag("--retrain-verifier", o.retrain_verifier,
                  "train the learned verifier of the loaded model again (written to --model)");

@@ -912,6 +912,15 @@ TEST(FurnitureVerifier, RanksTheFitsOfUnseenRoomsAndTravelsInTheModelFile) {
         confident += d.confidence >= 0.0f ? 1 : 0;
     }
     EXPECT_GT(det.detections.size() + confident, 0u);
+    // A single scan has its own cut.
+    dp.min_confidence_single = 0.6f;
+    for (const auto& d : DetectFurniture(scene, {0}, model, &context, dp).rejected) {
+        if (d.rejection == "confidence") {
+            EXPECT_LT(d.confidence, 0.6f);
+        }
+    }
+    for (const auto& d : DetectFurniture(scene, {0}, model, &context, dp).detections)
+        EXPECT_GE(d.confidence, 0.6f);
     dp.min_confidence = 1.0f;
     for (const auto& d : DetectFurniture(scene, {}, model, &context, dp).detections)
         EXPECT_EQ(d.confidence, 1.0f);
@@ -984,6 +993,9 @@ TEST(FurnitureVerifier, RanksTheFitsOfUnseenRoomsAndTravelsInTheModelFile) {
     const auto refit = training::FitFurnitureVerifier(model, rows, to);
     EXPECT_EQ(refit->feature_names(), FurnitureVerifierFeatureNames(model));
     dp.min_confidence = 1.5f;
+    EXPECT_THROW(dp.Validate(), InvalidArgument);
+    dp = {};
+    dp.min_confidence_single = -0.1f;
     EXPECT_THROW(dp.Validate(), InvalidArgument);
     auto bad = to;
     bad.verifier_rooms = -1;

@@ -46,6 +46,7 @@ struct MapFurnitureOptions {
     bool learned = true;
     bool learned_tests = true;
     float min_confidence = FurnitureDetectionParams{}.min_confidence;
+    float min_confidence_single = FurnitureDetectionParams{}.min_confidence_single;
     bool quiet = false;
     bool detect = false;  ///< `detect furniture`: the model must exist; result.json, report.html
     bool report = true;
@@ -157,6 +158,7 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     params.learned = o.learned;
     params.learned_tests = o.learned_tests;
     params.min_confidence = o.min_confidence;
+    params.min_confidence_single = o.min_confidence_single;
     params.num_threads = global.threads;
     params.Validate();  // before reading or training anything
     for (const auto& s : o.scans) CheckDistinctPaths(s, o.out);
@@ -242,6 +244,9 @@ void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
     cmd->add_option("--min-confidence", o->min_confidence,
                     "fits the model's learned verifier gives a lower probability of being right "
                     "are rejected, [0, 1]")
+        ->capture_default_str();
+    cmd->add_option("--min-confidence-single", o->min_confidence_single,
+                    "the same for a single scan, [0, 1]")
         ->capture_default_str();
     cmd->add_flag(
         "--no-learned", [o](std::int64_t) { o->learned = false; },

@@ -232,9 +232,12 @@ void FurnitureDetectionParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture detection: num_threads must be >= 0, got {}", num_threads));
     }
-    if (!(min_confidence >= 0.0f && min_confidence <= 1.0f)) {
-        throw InvalidArgument(fmt::format(
-            "furniture detection: min_confidence must be in [0, 1], got {}", min_confidence));
+    for (const auto& [name, v] : {std::pair{"min_confidence", min_confidence},
+                                  {"min_confidence_single", min_confidence_single}}) {
+        if (!(v >= 0.0f && v <= 1.0f)) {
+            throw InvalidArgument(
+                fmt::format("furniture detection: {} must be in [0, 1], got {}", name, v));
+        }
     }
 }
 
@@ -628,11 +631,13 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
                     }
                 }
                 const ml::FeatureMatrix p = verifier->PredictProba(x);
+                const float cut =
+                    views.size() == 1 ? params.min_confidence_single : params.min_confidence;
                 for (std::size_t r = 0; r < rows.size(); ++r) {
                     FurnitureDetection& d = all[rows[r]];
                     d.confidence = p(static_cast<Eigen::Index>(r), right);
                     d.score = d.confidence;
-                    const bool confident = d.confidence >= params.min_confidence;
+                    const bool confident = d.confidence >= cut;
                     if (d.accepted && !confident) {
                         d.accepted = false;
                         d.rejection = "confidence";

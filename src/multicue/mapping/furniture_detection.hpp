@@ -84,6 +84,10 @@ struct FurnitureDetectionParams {
     /// [0, 1]; 0.3: the lowest cut at which the merged precision of the validation rooms and the
     /// library folds together stays at 0.9 (eval/README.md)
     float min_confidence = 0.3f;
+    /// The same for a single view, [0, 1]: the verifier, which does not know how many views a
+    /// fit saw, is less often right about a fit to one scan; 0.35 chosen the same way on single
+    /// scans
+    float min_confidence_single = 0.35f;
     /// With learned verification, the verifier also judges the fits that the coverage,
     /// free-space and wall tests rejected (its features hold the same shares): it replaces the
     /// tests. Off: a fit must pass the tests and the verifier
