@@ -52,6 +52,7 @@ struct Options {
     std::string set = "test";
     int library_fold = 0;
     int verifier_library_rooms = -1;  // -1: the training default
+    bool verifier_piece_labels = false;  // the training default
     int rooms = 21;
     std::uint64_t seed = 0;  // 0: 2000 for test, 1000 for validation
     float procedural_share = -1.0f;
@@ -275,6 +276,7 @@ int Run(const Options& o) {
     to.parts.frame = ParseFurniturePartFrame(o.frame);
     if (o.verifier_rooms >= 0) to.verifier_rooms = o.verifier_rooms;
     if (o.verifier_library_rooms >= 0) to.verifier_library_rooms = o.verifier_library_rooms;
+    to.verifier_piece_labels = o.verifier_piece_labels;
     if (!o.verifier_spec.empty()) to.verifier_spec = o.verifier_spec;
     to.verifier_fit.max_scale = o.fit_scale;
     to.verifier_fit.scale_steps = o.fit_scale_steps;
@@ -728,6 +730,9 @@ int main(int argc, char** argv) {
                    "verifier rooms of the training library's pieces, fitted by stand-in models "
                    "that never saw them (default: the training's)")
         ->check(CLI::NonNegativeNumber);
+    app.add_flag("--verifier-piece-labels,!--no-verifier-piece-labels", o.verifier_piece_labels,
+                 "verifier rows labelled by the piece's box, not the fitted model "
+                 "(FurnitureTrainingOptions::verifier_piece_labels)");
     app.add_option("--rooms", o.rooms, "rooms (office, seminar, kitchen in turn)")
         ->capture_default_str();
     app.add_option("--seed", o.seed,

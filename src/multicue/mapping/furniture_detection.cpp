@@ -325,6 +325,16 @@ Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts
     return grown;
 }
 
+Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
+                                     const FurnitureCad& cad, const FurnitureFit& fit,
+                                     const FurniturePieceParams& params, Eigen::AlignedBox3f& box) {
+    const Eigen::AlignedBox3f model_box = MeasureFurniturePiece(views, cad, fit, {.grow = false});
+    box = params.grow ? MeasureFurniturePiece(views, cad, fit, params) : model_box;
+    if (box.isEmpty() || model_box.isEmpty()) return fit.T_world_model.translation().head<2>();
+    const Eigen::Vector3f shift = box.center() - model_box.center();
+    return (fit.T_world_model * Eigen::Vector3f(shift.x(), shift.y(), 0.0f)).head<2>();
+}
+
 FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const FurnitureCad& cad,
                                              const Eigen::Affine3f& T) {
     FurnitureShapeEvidence e;
@@ -733,16 +743,10 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         for (int v : views) parts.push_back(&scene.views[static_cast<std::size_t>(v)]);
         for (auto& d : all) {
             if (!d.fitted) continue;
-            const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
-            const Eigen::AlignedBox3f model_box =
-                MeasureFurniturePiece(parts, cad, d.fit, {.grow = false});
-            d.box = d.accepted && params.piece.grow
-                        ? MeasureFurniturePiece(parts, cad, d.fit, params.piece)
-                        : model_box;
-            if (d.box.isEmpty() || model_box.isEmpty()) continue;
-            const Eigen::Vector3f shift = d.box.center() - model_box.center();
-            d.centre =
-                (d.fit.T_world_model * Eigen::Vector3f(shift.x(), shift.y(), 0.0f)).head<2>();
+            FurniturePieceParams piece = params.piece;
+            piece.grow = piece.grow && d.accepted;
+            d.centre = FurniturePieceCentre(
+                parts, model.cads()[static_cast<std::size_t>(d.fit.cad)], d.fit, piece, d.box);
         }
         result.fit_ms = MillisecondsSince(t);
     }

@@ -161,6 +161,13 @@ Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts
                                           const FurnitureCad& cad, const FurnitureFit& fit,
                                           const FurniturePieceParams& params);
 
+/// The piece's box (MeasureFurniturePiece with `params`; the fitted model's box without growth)
+/// into `box`, and the centre on the floor [m] that it gives: the fitted model's centre moved by
+/// as much as the box's centre moved from the model's box's. The model's centre without a box.
+Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
+                                     const FurnitureCad& cad, const FurnitureFit& fit,
+                                     const FurniturePieceParams& params, Eigen::AlignedBox3f& box);
+
 /// One detection (or a rejected hypothesis).
 struct FurnitureDetection {
     int cls = 0;

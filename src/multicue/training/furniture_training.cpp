@@ -403,14 +403,27 @@ void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
         for (const auto& subset : subsets) {
             const FurnitureDetectionResult det =
                 DetectFurniture(scene, subset, fit_model, &context, dp);
+            std::vector<const FurnitureParts*> parts;
+            for (std::size_t v = 0; v < scene.views.size(); ++v) {
+                if (subset.empty() ||
+                    std::find(subset.begin(), subset.end(), static_cast<int>(v)) != subset.end())
+                    parts.push_back(&scene.views[v]);
+            }
             for (const auto* list : {&det.detections, &det.rejected}) {
                 for (const FurnitureDetection& d : *list) {
                     if (!d.fitted) continue;
+                    Eigen::AlignedBox3f box;
+                    const Eigen::Vector2f centre =
+                        o.verifier_piece_labels
+                            ? FurniturePieceCentre(
+                                  parts, fit_model.cads()[static_cast<std::size_t>(d.fit.cad)],
+                                  d.fit, FurniturePieceParams{}, box)
+                            : d.centre;
                     bool right = false;
                     for (const auto& f : room.room.furniture) {
                         right =
                             right || (f.category == d.category &&
-                                      (f.T_world_object.translation().head<2>() - d.centre).norm() <
+                                      (f.T_world_object.translation().head<2>() - centre).norm() <
                                           f.width / 2);
                     }
                     rows.AppendRow(FurnitureVerifierFeatures(d, model), right ? "right" : "wrong",

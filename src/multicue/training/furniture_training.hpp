@@ -66,6 +66,10 @@ struct FurnitureTrainingOptions {
     /// procedural one.
     int verifier_library_rooms = 30;  ///< 30 chosen on the library folds (eval/README.md)
     std::uint64_t verifier_library_seed = 6000;  ///< seed of the first of those rooms
+    /// Label a verifier row by the centre of the piece's box (FurniturePieceCentre: the fitted
+    /// model's box grown to the scan's parts of the piece, as detection reports an accepted
+    /// fit) instead of the fitted model's centre
+    bool verifier_piece_labels = false;
     /// Classifier of the verifier (ml::CreateClassifier spec)
     std::string verifier_spec = "rtrees:trees=200";
     /// CAD fitting in the verifier rooms: the parameters detection will use (the verifier learns
