@@ -752,6 +752,15 @@ TEST(FurniturePiece, TheBoxGrowsToTheScannedPartsOfThePieceAndNotToItsNeighbours
     const Eigen::Vector3f centre = fit.T_world_model * box.center();
     const Eigen::Vector3f table_centre = fit.T_world_model * Eigen::Vector3f(0.3f, 0.0f, 0.0f);
     EXPECT_LT((centre - table_centre).head<2>().norm(), 0.04f);
+    // The centre it gives: moved with the box from the model's centre; without growth, the
+    // model's centre.
+    Eigen::AlignedBox3f piece_box;
+    const Eigen::Vector2f piece_centre = FurniturePieceCentre({&view}, cad, fit, params, piece_box);
+    EXPECT_TRUE(piece_box.isApprox(box));
+    EXPECT_LT((piece_centre - table_centre.head<2>()).norm(), 0.04f);
+    FurniturePieceParams no_growth;
+    no_growth.grow = false;
+    EXPECT_LT((FurniturePieceCentre({&view}, cad, fit, no_growth, piece_box) - at).norm(), 1e-5f);
 
     // At most max_growth of the model's length on a side.
     FurniturePieceParams tight;
