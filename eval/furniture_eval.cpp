@@ -51,7 +51,7 @@ struct Options {
     // pieces of --library-fold, held out of training
     std::string set = "test";
     int library_fold = 0;
-    int verifier_library_rooms = -1;  // -1: the training default
+    int verifier_library_rooms = -1;     // -1: the training default
     bool verifier_piece_labels = false;  // the training default
     int rooms = 21;
     std::uint64_t seed = 0;  // 0: 2000 for test, 1000 for validation

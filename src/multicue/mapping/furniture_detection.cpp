@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <unordered_set>
 #include <utility>
 
@@ -112,6 +111,15 @@ float SharedEitherWay(const PlacedSurface& a, const PlacedSurface& b) {
 
 // The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
 // within `radius` of it.
+// The box of a CAD model's finite points in its own frame; empty without any.
+Eigen::AlignedBox3f CadBox(const FurnitureCad& cad) {
+    Eigen::AlignedBox3f box;
+    for (const auto& p : cad.cloud.points) {
+        if (p.allFinite()) box.extend(p);
+    }
+    return box;
+}
+
 PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis& h, float radius) {
     PointCloud out;
     for (const auto& [view, part] : h.parts) {
@@ -255,22 +263,24 @@ void FurniturePieceParams::Validate() const {
     }
 }
 
-Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
-                                          const FurnitureCad& cad, const FurnitureFit& fit,
-                                          const FurniturePieceParams& params) {
-    params.Validate();
-    Eigen::AlignedBox3f box;  // empty
-    if (fit.cad < 0 || cad.cloud.empty() || !fit.T_world_model.matrix().allFinite() ||
-        !fit.scale.allFinite())
-        return box;
-    // The reported model's points in the frame of T_world_model are the CAD points scaled (and
-    // turned by a half turn when `turned`, which ModelToWorld holds).
-    const Eigen::Isometry3f to_model = fit.T_world_model.inverse();
-    const Eigen::Affine3f model_to_frame = to_model * fit.ModelToWorld();
-    for (const auto& p : cad.cloud.points) {
-        if (p.allFinite()) box.extend(model_to_frame * p);
-    }
+namespace {
+
+// The fitted model's box in the frame of fit.T_world_model: the CAD model's box stretched by
+// fit.scale (T_world_model holds the pose as reported, turned or not). Empty without a fit.
+Eigen::AlignedBox3f FittedModelBox(const FurnitureCad& cad, const FurnitureFit& fit) {
+    if (fit.cad < 0 || !fit.T_world_model.matrix().allFinite() || !fit.scale.allFinite()) return {};
+    const Eigen::AlignedBox3f box = CadBox(cad);
+    if (box.isEmpty()) return box;
+    const Eigen::Vector3f a = box.min().cwiseProduct(fit.scale);
+    const Eigen::Vector3f b = box.max().cwiseProduct(fit.scale);
+    return {a.cwiseMin(b), a.cwiseMax(b)};
+}
+
+Eigen::AlignedBox3f GrowPieceBox(const std::vector<const FurnitureParts*>& views,
+                                 const Eigen::AlignedBox3f& box, const FurnitureFit& fit,
+                                 const FurniturePieceParams& params) {
     if (box.isEmpty() || !params.grow) return box;
+    const Eigen::Isometry3f to_model = fit.T_world_model.inverse();
     const Eigen::Vector3f size = box.sizes();
     const float m = params.margin;
     const float reach = 0.5f * size.head<2>().norm() + m + 1.0f;  // parts' centroids within
@@ -325,12 +335,22 @@ Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts
     return grown;
 }
 
+}  // namespace
+
+Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
+                                          const FurnitureCad& cad, const FurnitureFit& fit,
+                                          const FurniturePieceParams& params) {
+    params.Validate();
+    return GrowPieceBox(views, FittedModelBox(cad, fit), fit, params);
+}
+
 Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
                                      const FurnitureCad& cad, const FurnitureFit& fit,
                                      const FurniturePieceParams& params, Eigen::AlignedBox3f& box) {
-    const Eigen::AlignedBox3f model_box = MeasureFurniturePiece(views, cad, fit, {.grow = false});
-    box = params.grow ? MeasureFurniturePiece(views, cad, fit, params) : model_box;
-    if (box.isEmpty() || model_box.isEmpty()) return fit.T_world_model.translation().head<2>();
+    params.Validate();
+    const Eigen::AlignedBox3f model_box = FittedModelBox(cad, fit);
+    box = GrowPieceBox(views, model_box, fit, params);
+    if (box.isEmpty()) return fit.T_world_model.translation().head<2>();
     const Eigen::Vector3f shift = box.center() - model_box.center();
     return (fit.T_world_model * Eigen::Vector3f(shift.x(), shift.y(), 0.0f)).head<2>();
 }
@@ -340,13 +360,9 @@ FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const Fur
     FurnitureShapeEvidence e;
     if (points.empty() || cad.cloud.empty() || !T.matrix().allFinite()) return e;
     // The model's box in its own frame.
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    Eigen::Vector3f hi = -lo;
-    for (const auto& p : cad.cloud.points) {
-        if (!p.allFinite()) continue;
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-    }
+    const Eigen::AlignedBox3f cad_box = CadBox(cad);
+    if (cad_box.isEmpty()) return e;
+    const Eigen::Vector3f lo = cad_box.min(), hi = cad_box.max();
     if (!(hi.array() > lo.array()).all()) return e;
     const Eigen::Vector3f size = hi - lo;
     const Eigen::Affine3f to_model = T.inverse();

@@ -403,8 +403,8 @@ void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
         for (const auto& subset : subsets) {
             const FurnitureDetectionResult det =
                 DetectFurniture(scene, subset, fit_model, &context, dp);
-            std::vector<const FurnitureParts*> parts;
-            for (std::size_t v = 0; v < scene.views.size(); ++v) {
+            std::vector<const FurnitureParts*> parts;  // the subset's, for piece labels
+            for (std::size_t v = 0; o.verifier_piece_labels && v < scene.views.size(); ++v) {
                 if (subset.empty() ||
                     std::find(subset.begin(), subset.end(), static_cast<int>(v)) != subset.end())
                     parts.push_back(&scene.views[v]);
