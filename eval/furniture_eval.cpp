@@ -98,6 +98,8 @@ struct Options {
     int fit_scale_steps = FurnitureFitParams{}.scale_steps;
     bool back_to_wall = FurnitureFitParams{}.back_to_wall;
     bool piece_extent = FurniturePieceParams{}.grow;
+    bool piece_shrink = FurniturePieceParams{}.shrink;
+    float piece_free_share = FurniturePieceParams{}.free_share;
     float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
 };
 
@@ -370,6 +372,8 @@ int Run(const Options& o) {
     dp.fit.scale_steps = o.fit_scale_steps;
     dp.fit.back_to_wall = o.back_to_wall;
     dp.piece.grow = o.piece_extent;
+    dp.piece.shrink = o.piece_shrink;
+    dp.piece.free_share = o.piece_free_share;
     dp.fit.flip_tolerance = o.flip_tolerance;
     dp.num_threads = o.threads;
     const FurnitureFitContext context(model, dp.fit);
@@ -527,6 +531,15 @@ int Run(const Options& o) {
                             nearest->fit.turned ? 1 : 0, wall, std::min(f.extent.x(), f.extent.y()),
                             r, f.T_world_object.translation().x(),
                             f.T_world_object.translation().y());
+                        const auto& cb = nearest->box;
+                        const Eigen::Vector3f me =
+                            model.cads()[static_cast<std::size_t>(nearest->fit.cad)].extent;
+                        pose += fmt::format(
+                            " | cad {:.2f}x{:.2f}x{:.2f} box x {:.2f} {:.2f} y "
+                            "{:.2f} {:.2f} fitc {:.2f} {:.2f}",
+                            me.x(), me.y(), me.z(), cb.min().x(), cb.max().x(), cb.min().y(),
+                            cb.max().y(), nearest->fit.T_world_model.translation().x(),
+                            nearest->fit.T_world_model.translation().y());
                     }
                     // The nearest hypothesis of any class, for pieces found under another name.
                     float any = 1e9f;
@@ -540,12 +553,52 @@ int Run(const Options& o) {
                                 any_fate = d.accepted ? "ok" : d.rejection;
                         }
                     }
+                    // The class's merged votes in a window of the class width at the piece's
+                    // centre (over the class threshold), and the nearest maximum of the vote
+                    // space at any score without the footprint test.
+                    const int ci = model.ClassIndex(f.category);
+                    const auto& fc = model.classes()[static_cast<std::size_t>(ci)];
+                    const Eigen::Vector2f fc2 = f.T_world_object.translation().head<2>();
+                    double at_piece = 0.0;
+                    std::vector<FurnitureVote> all_votes;
+                    for (const auto& vs : scene.votes) {
+                        for (const auto& v : vs) {
+                            if (v.cls != ci) continue;
+                            all_votes.push_back(v);
+                            if ((v.x.head<2>() - fc2).cwiseAbs().maxCoeff() <= fc.width / 2)
+                                at_piece += v.weight;
+                        }
+                    }
+                    if (fc.threshold > 0.0f)
+                        at_piece /= static_cast<double>(scene.votes.size()) * fc.threshold;
+                    FurnitureSelectionParams sp = p.selection;
+                    sp.threshold_scale = 0.0f;
+                    sp.hull_consistency = false;
+                    float raw = 1e9f, raw_score = 0.0f;
+                    for (const auto& h : SelectFurnitureHypotheses(
+                             all_votes, static_cast<int>(scene.votes.size()), model, sp)) {
+                        const float dist = (h.centre - fc2).norm();
+                        if (dist < raw) raw = dist, raw_score = h.normalized;
+                    }
+                    float hd = 1e9f, hfit = 1e9f;
+                    std::string hfate;
+                    for (const auto* list : {&det.detections, &det.rejected}) {
+                        for (const auto& d : *list) {
+                            if (d.category != f.category) continue;
+                            const float dist = (d.hypothesis.centre - fc2).norm();
+                            if (dist < hd)
+                                hd = dist, hfit = (d.centre - fc2).norm(),
+                                hfate = d.accepted ? "ok" : d.rejection;
+                        }
+                    }
                     std::fprintf(stderr,
                                  "NEAREST %-9s w %.2f l %.2f returns %d: %.2f m score %.2f %s | "
-                                 "any %.2f m %s %s |%s\n",
+                                 "any %.2f m %s %s | votes %.2f peak %.2f m %.2f | hypothesis "
+                                 "%.2f m fit %.2f m %s |%s\n",
                                  f.category.c_str(), f.width, std::max(f.extent.x(), f.extent.y()),
                                  returns[f.label], best, score, fate.c_str(), any, any_cls.c_str(),
-                                 any_fate.c_str(), pose.c_str());
+                                 any_fate.c_str(), at_piece, raw, raw_score, hd, hfit,
+                                 hfate.c_str(), pose.c_str());
                 }
             }
             if (primary && r < o.draw) {
@@ -803,6 +856,11 @@ int main(int argc, char** argv) {
     app.add_flag("!--no-piece-extent", o.piece_extent,
                  "report the fitted model's box and centre, not grown to the scan's parts of the "
                  "piece (FurniturePieceParams::grow)");
+    app.add_flag("!--no-piece-shrink", o.piece_shrink,
+                 "do not shrink the piece's box through observed free space "
+                 "(FurniturePieceParams::shrink)");
+    app.add_option("--piece-free-share", o.piece_free_share,
+                   "share of a slice's samples in free space to cut it off the piece's box");
     app.add_option("--flip-tolerance", o.flip_tolerance,
                    "CAD fit: how much worse a fit turned away from a wall may score "
                    "(FurnitureFitParams::flip_tolerance)");

@@ -790,6 +790,75 @@ TEST(FurniturePiece, TheBoxGrowsToTheScannedPartsOfThePieceAndNotToItsNeighbours
     EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad), InvalidArgument);
 }
 
+// The piece's box shrinks: a table model 1.2 m long fitted over a 0.8 m table so that it reaches
+// 0.4 m beyond its +x end. Where a sensor saw the floor beyond the table, the box shrinks to the
+// table; without free space, or with a view that saw nothing beyond it, it stays the model's;
+// it never shrinks inside the table's parts.
+TEST(FurniturePiece, TheBoxShrinksToThePieceWhereTheScansSawFreeSpaceOnly) {
+    FurnitureCad cad;
+    cad.cloud = BoxSurface(-0.6f, 0.6f, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
+    cad.extent = Eigen::Vector3f(1.2f, 0.8f, 0.75f);
+    FurnitureFit fit;
+    fit.cad = 0;
+    fit.T_world_model = Eigen::Translation3f(0.2f, 0.0f, 0.0f) * Eigen::Isometry3f::Identity();
+    // The table, x from -0.4 to 0.4, y from -0.3 to 0.3: its top one part.
+    FurnitureParts view;
+    FurniturePart top;
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (float x = -0.4f; x <= 0.4f + 1e-4f; x += 0.03f) {
+        for (float y = -0.3f; y <= 0.3f + 1e-4f; y += 0.03f) {
+            top.indices.push_back(static_cast<Index>(view.cloud.points.size()));
+            view.cloud.points.emplace_back(x, y, 0.75f);
+            view.cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+            sum += view.cloud.points.back();
+        }
+    }
+    top.centroid = sum / static_cast<float>(top.indices.size());
+    view.parts.push_back(top);
+    view.cloud.width = static_cast<std::uint32_t>(view.cloud.points.size());
+    // A sensor 2.5 m in front of it at 1.5 m: the table top and the floor it does not hide.
+    const Eigen::Vector3f sensor(0.0f, -2.5f, 1.5f);
+    PointCloud seen = view.cloud;
+    for (float x = -2.0f; x <= 2.0f; x += 0.02f) {
+        for (float y = -2.0f; y <= 2.5f; y += 0.02f) {
+            const Eigen::Vector3f at_top = sensor + 0.5f * (Eigen::Vector3f(x, y, 0.0f) - sensor);
+            if (std::abs(at_top.x()) <= 0.4f && std::abs(at_top.y()) <= 0.3f) continue;
+            seen.points.emplace_back(x, y, 0.0f);
+        }
+    }
+    seen.width = static_cast<std::uint32_t>(seen.points.size());
+    FurnitureFreeSpace free(0.05);
+    free.AddView(seen, sensor);
+    FurnitureFreeSpace top_only(0.05);  // a view of the table top alone: nothing beyond it seen
+    top_only.AddView(view.cloud, sensor);
+
+    const FurniturePieceParams params;
+    const Eigen::AlignedBox3f model_box = MeasureFurniturePiece({&view}, cad, fit, params);
+    EXPECT_NEAR(model_box.max().x(), 0.6f, 0.01f);  // without free space: the model's box
+    const Eigen::AlignedBox3f box = MeasureFurniturePiece({&view}, cad, fit, params, {&free});
+    EXPECT_NEAR(box.max().x() + 0.2f, 0.4f, 0.06f);  // in the world: the table's +x end
+    EXPECT_GE(box.max().x() + 0.2f, 0.37f);          // not inside its top (98 % of its points)
+    EXPECT_NEAR(box.min().x(), -0.6f, 0.01f);        // the -x end fits already
+    EXPECT_GE(box.max().y(), 0.28f);                 // the y sides: not inside the top either
+    EXPECT_LE(box.min().y(), -0.28f);
+    Eigen::AlignedBox3f piece_box;
+    const Eigen::Vector2f centre =
+        FurniturePieceCentre({&view}, cad, fit, params, piece_box, {&free});
+    EXPECT_TRUE(piece_box.isApprox(box));
+    EXPECT_LT(std::abs(centre.x()), 0.04f);  // the table's centre, not the model's at 0.2
+    EXPECT_TRUE(MeasureFurniturePiece({&view}, cad, fit, params, {&top_only}).isApprox(model_box));
+    FurniturePieceParams no_shrink;
+    no_shrink.shrink = false;
+    EXPECT_TRUE(MeasureFurniturePiece({&view}, cad, fit, no_shrink, {&free}).isApprox(model_box));
+    EXPECT_TRUE(MeasureFurniturePiece({&view}, cad, fit, params, {&free}).isApprox(box));
+    FurniturePieceParams bad;
+    bad.free_share = 0.0f;
+    EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad, {&free}), InvalidArgument);
+    bad = {};
+    bad.slice = -1.0f;
+    EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad), InvalidArgument);
+}
+
 // Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
 // even with a few stray points (a corner's, an object's touching it) in its part; two walls
 // grown into one part around a corner, a short part and a low one are no wall.

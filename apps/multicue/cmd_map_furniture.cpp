@@ -112,7 +112,8 @@ nlohmann::json DetectionJson(const FurnitureDetection& d, const FurnitureModel& 
     if (!d.fitted || d.fit.cad < 0) return j;
     const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
     const Eigen::Isometry3f& T = d.fit.T_world_model;
-    // The piece's box (the fitted model's, grown to the scan's parts of the piece) in T's frame.
+    // The piece's box (the fitted model's, grown or shrunk to the scan's parts of the piece) in
+    // T's frame.
     const Eigen::AlignedBox3f box =
         d.box.isEmpty() ? Eigen::AlignedBox3f(Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero())
                         : d.box;

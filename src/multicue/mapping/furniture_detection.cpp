@@ -250,10 +250,14 @@ void FurnitureDetectionParams::Validate() const {
 }
 
 void FurniturePieceParams::Validate() const {
-    if (!(member_share > 0.0f && member_share <= 1.0f)) {
-        throw InvalidArgument(
-            fmt::format("furniture piece: member_share must be in (0, 1], got {}", member_share));
+    for (const auto& [name, v] :
+         {std::pair{"member_share", member_share}, {"free_share", free_share}}) {
+        if (!(v > 0.0f && v <= 1.0f))
+            throw InvalidArgument(
+                fmt::format("furniture piece: {} must be in (0, 1], got {}", name, v));
     }
+    if (!(slice > 0.0f) || !std::isfinite(slice))
+        throw InvalidArgument(fmt::format("furniture piece: slice must be > 0, got {}", slice));
     for (const auto& [name, v] :
          {std::pair{"margin", margin}, {"min_growth", min_growth}, {"max_growth", max_growth}}) {
         if (!(v >= 0.0f) || !std::isfinite(v)) {
@@ -276,9 +280,10 @@ Eigen::AlignedBox3f FittedModelBox(const FurnitureCad& cad, const FurnitureFit& 
     return {a.cwiseMin(b), a.cwiseMax(b)};
 }
 
-Eigen::AlignedBox3f GrowPieceBox(const std::vector<const FurnitureParts*>& views,
-                                 const Eigen::AlignedBox3f& box, const FurnitureFit& fit,
-                                 const FurniturePieceParams& params) {
+Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
+                             const Eigen::AlignedBox3f& box, const FurnitureFit& fit,
+                             const FurniturePieceParams& params,
+                             const std::vector<const FurnitureFreeSpace*>& free) {
     if (box.isEmpty() || !params.grow) return box;
     const Eigen::Isometry3f to_model = fit.T_world_model.inverse();
     const Eigen::Vector3f size = box.sizes();
@@ -289,7 +294,7 @@ Eigen::AlignedBox3f GrowPieceBox(const std::vector<const FurnitureParts*>& views
                q.y() >= box.min().y() - m && q.y() <= box.max().y() + m &&
                q.z() <= box.max().z() + m;
     };
-    std::vector<float> xs, ys;
+    std::vector<float> xs, ys, zs;
     std::vector<Eigen::Vector3f> q;
     for (const FurnitureParts* v : views) {
         if (v == nullptr) continue;
@@ -312,6 +317,7 @@ Eigen::AlignedBox3f GrowPieceBox(const std::vector<const FurnitureParts*>& views
             for (const auto& r : q) {
                 xs.push_back(r.x());
                 ys.push_back(r.y());
+                zs.push_back(r.z());
             }
         }
     }
@@ -323,14 +329,54 @@ Eigen::AlignedBox3f GrowPieceBox(const std::vector<const FurnitureParts*>& views
     };
     // The parts' extent (2-98 %, against stray points) where it goes beyond the box.
     Eigen::AlignedBox3f grown = box;
+    Eigen::Vector2f lo, hi;
     for (int a = 0; a < 2; ++a) {
         std::vector<float>& v = a == 0 ? xs : ys;
-        const float lo = quantile(v, 0.02), hi = quantile(v, 0.98);
+        lo[a] = quantile(v, 0.02), hi[a] = quantile(v, 0.98);
         const float most = params.max_growth * size[a];
-        if (box.min()[a] - lo > params.min_growth)
-            grown.min()[a] = std::max(lo, box.min()[a] - most);
-        if (hi - box.max()[a] > params.min_growth)
-            grown.max()[a] = std::min(hi, box.max()[a] + most);
+        if (box.min()[a] - lo[a] > params.min_growth)
+            grown.min()[a] = std::max(lo[a], box.min()[a] - most);
+        if (hi[a] - box.max()[a] > params.min_growth)
+            grown.max()[a] = std::min(hi[a], box.max()[a] + most);
+    }
+    if (!params.shrink || free.empty()) return grown;
+    // Where the box reaches beyond the parts: slices cut off from the outside in while the scans
+    // saw them free, at three heights up to the parts' top (a taller model's upper part is free
+    // above any piece), never inside the parts' extent.
+    const float top = std::min(box.max().z(), quantile(zs, 0.98));
+    std::vector<float> heights;
+    for (float f : {0.3f, 0.6f, 1.0f}) {
+        const float z = f * top - (f == 1.0f ? 0.05f : 0.0f);
+        if (z > 0.05f) heights.push_back(z);
+    }
+    if (heights.empty()) return grown;
+    const Eigen::AlignedBox3f outer = grown;
+    // Whether the slice centred at `at` across axis a is free.
+    auto slice_free = [&](int a, float at) {
+        const int b = 1 - a;
+        std::size_t n = 0, in_free = 0;
+        for (float t = outer.min()[b] + 0.025f; t <= outer.max()[b]; t += 0.05f) {
+            for (float z : heights) {
+                Eigen::Vector3f p;
+                p[a] = at, p[b] = t, p.z() = z;
+                const Eigen::Vector3f w = fit.T_world_model * p;
+                ++n;
+                for (const auto* f : free) {
+                    if (f != nullptr && f->IsFree(w)) {
+                        ++in_free;
+                        break;
+                    }
+                }
+            }
+        }
+        return n > 0 && static_cast<float>(in_free) >= params.free_share * static_cast<float>(n);
+    };
+    for (int a = 0; a < 2; ++a) {
+        const float s = params.slice;
+        while (grown.max()[a] - s >= hi[a] && slice_free(a, grown.max()[a] - s / 2))
+            grown.max()[a] -= s;
+        while (grown.min()[a] + s <= lo[a] && slice_free(a, grown.min()[a] + s / 2))
+            grown.min()[a] += s;
     }
     return grown;
 }
@@ -339,17 +385,19 @@ Eigen::AlignedBox3f GrowPieceBox(const std::vector<const FurnitureParts*>& views
 
 Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
                                           const FurnitureCad& cad, const FurnitureFit& fit,
-                                          const FurniturePieceParams& params) {
+                                          const FurniturePieceParams& params,
+                                          const std::vector<const FurnitureFreeSpace*>& free) {
     params.Validate();
-    return GrowPieceBox(views, FittedModelBox(cad, fit), fit, params);
+    return PieceBox(views, FittedModelBox(cad, fit), fit, params, free);
 }
 
 Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
                                      const FurnitureCad& cad, const FurnitureFit& fit,
-                                     const FurniturePieceParams& params, Eigen::AlignedBox3f& box) {
+                                     const FurniturePieceParams& params, Eigen::AlignedBox3f& box,
+                                     const std::vector<const FurnitureFreeSpace*>& free) {
     params.Validate();
     const Eigen::AlignedBox3f model_box = FittedModelBox(cad, fit);
-    box = GrowPieceBox(views, model_box, fit, params);
+    box = PieceBox(views, model_box, fit, params, free);
     if (box.isEmpty()) return fit.T_world_model.translation().head<2>();
     const Eigen::Vector3f shift = box.center() - model_box.center();
     return (fit.T_world_model * Eigen::Vector3f(shift.x(), shift.y(), 0.0f)).head<2>();
@@ -761,8 +809,9 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             if (!d.fitted) continue;
             FurniturePieceParams piece = params.piece;
             piece.grow = piece.grow && d.accepted;
-            d.centre = FurniturePieceCentre(
-                parts, model.cads()[static_cast<std::size_t>(d.fit.cad)], d.fit, piece, d.box);
+            d.centre =
+                FurniturePieceCentre(parts, model.cads()[static_cast<std::size_t>(d.fit.cad)],
+                                     d.fit, piece, d.box, space.free);
         }
         result.fit_ms = MillisecondsSince(t);
     }

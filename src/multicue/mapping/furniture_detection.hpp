@@ -37,11 +37,22 @@ struct FurnitureView {
 /// to one end of it, centres the detection off the piece's centre. The parts of the scans that lie
 /// mostly within the fitted model's footprint (grown by `margin`) belong to the piece; where they
 /// reach beyond the model's box along one of its horizontal axes, the box grows to them (by at
-/// most max_growth of the model's size on that side). The box never shrinks: a side the scans
-/// did not see looks the same as a side that is not there. Only the reported box and centre
+/// most max_growth of the model's size on that side). A model larger than the piece, fitted over
+/// one end of it, reaches beyond the piece's parts: there the box shrinks towards them (never
+/// inside them) as far as the scans saw free space, slice by slice; a side the scans did not see
+/// stays, since it looks the same as a side that is not there. Only the reported box and centre
 /// change; the tests, the verifier and the overlaps judge the fitted model.
 struct FurniturePieceParams {
+    /// Measure the piece's box at all (grow it, and shrink it when `shrink`); off: the fitted
+    /// model's box
     bool grow = true;
+    /// Shrink where the box reaches beyond the parts into observed free space (needs the views'
+    /// free space)
+    bool shrink = true;
+    float slice = 0.05f;  ///< slices of this width are cut off one after another [m], > 0
+    /// A slice goes when at least this share of its samples (5 cm apart, at three heights up to
+    /// the parts' top) lies in free space, (0, 1]
+    float free_share = 0.5f;
     float member_share = 0.6f;  ///< share of a part's points within the grown footprint, (0, 1]
     float margin = 0.1f;        ///< footprint grown by this to take in parts [m], >= 0
     float min_growth = 0.05f;   ///< parts reaching less far beyond the box leave it [m], >= 0
@@ -155,18 +166,21 @@ FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const Fur
 
 /// The box of the piece that `fit` explains, in the frame of fit.T_world_model [m]: the fitted
 /// model's box (stretched by fit.scale), grown along the model's horizontal axes to the parts of
-/// `views` that belong to the piece (FurniturePieceParams). Empty without a fitted model. Throws
+/// `views` that belong to the piece and shrunk towards them through the free space of `free`
+/// (FurniturePieceParams; no shrinking without free space). Empty without a fitted model. Throws
 /// InvalidArgument for bad parameters.
 Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
                                           const FurnitureCad& cad, const FurnitureFit& fit,
-                                          const FurniturePieceParams& params);
+                                          const FurniturePieceParams& params,
+                                          const std::vector<const FurnitureFreeSpace*>& free = {});
 
 /// The piece's box (MeasureFurniturePiece with `params`; the fitted model's box without growth)
 /// into `box`, and the centre on the floor [m] that it gives: the fitted model's centre moved by
 /// as much as the box's centre moved from the model's box's. The model's centre without a box.
 Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
                                      const FurnitureCad& cad, const FurnitureFit& fit,
-                                     const FurniturePieceParams& params, Eigen::AlignedBox3f& box);
+                                     const FurniturePieceParams& params, Eigen::AlignedBox3f& box,
+                                     const std::vector<const FurnitureFreeSpace*>& free = {});
 
 /// One detection (or a rejected hypothesis).
 struct FurnitureDetection {

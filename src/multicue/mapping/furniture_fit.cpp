@@ -197,18 +197,20 @@ void FurnitureFreeSpace::AddView(const PointCloud& world_points, const Eigen::Ve
 float FurnitureFreeSpace::FreeShare(const std::vector<Eigen::Vector3f>& points) const {
     if (maps_.empty() || points.empty()) return 0.0f;
     std::size_t free = 0;
-    const float step = static_cast<float>(resolution_);
-    for (const auto& p : points) {
-        for (std::size_t v = 0; v < maps_.size(); ++v) {
-            const Eigen::Vector3f dir = (p - origins_[v]).normalized();
-            if (maps_[v].Query(p) == Occupancy::kFree &&
-                maps_[v].Query(p + step * dir) == Occupancy::kFree) {
-                ++free;
-                break;
-            }
-        }
-    }
+    for (const auto& p : points) free += IsFree(p) ? 1 : 0;
     return static_cast<float>(free) / static_cast<float>(points.size());
+}
+
+bool FurnitureFreeSpace::IsFree(const Eigen::Vector3f& p) const {
+    // Free, and so is the next cell along the ray: a point just in front of a surface is not.
+    const float step = static_cast<float>(resolution_);
+    for (std::size_t v = 0; v < maps_.size(); ++v) {
+        const Eigen::Vector3f dir = (p - origins_[v]).normalized();
+        if (maps_[v].Query(p) == Occupancy::kFree &&
+            maps_[v].Query(p + step * dir) == Occupancy::kFree)
+            return true;
+    }
+    return false;
 }
 
 float FurnitureWall::Distance(const Eigen::Vector2f& x) const {

@@ -139,6 +139,8 @@ class FurnitureFreeSpace {
     std::size_t views() const { return maps_.size(); }
     /// Share of `points` (world frame) in free space of any view; 0 without views.
     float FreeShare(const std::vector<Eigen::Vector3f>& points) const;
+    /// Whether `p` (world frame) lies in free space of any view, as FreeShare counts it.
+    bool IsFree(const Eigen::Vector3f& p) const;
 
   private:
     double resolution_;

@@ -404,10 +404,13 @@ void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
             const FurnitureDetectionResult det =
                 DetectFurniture(scene, subset, fit_model, &context, dp);
             std::vector<const FurnitureParts*> parts;  // the subset's, for piece labels
+            std::vector<const FurnitureFreeSpace*> free;
             for (std::size_t v = 0; o.verifier_piece_labels && v < scene.views.size(); ++v) {
                 if (subset.empty() ||
-                    std::find(subset.begin(), subset.end(), static_cast<int>(v)) != subset.end())
+                    std::find(subset.begin(), subset.end(), static_cast<int>(v)) != subset.end()) {
                     parts.push_back(&scene.views[v]);
+                    if (v < scene.free_space.size()) free.push_back(&scene.free_space[v]);
+                }
             }
             for (const auto* list : {&det.detections, &det.rejected}) {
                 for (const FurnitureDetection& d : *list) {
@@ -417,7 +420,7 @@ void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
                         o.verifier_piece_labels
                             ? FurniturePieceCentre(
                                   parts, fit_model.cads()[static_cast<std::size_t>(d.fit.cad)],
-                                  d.fit, FurniturePieceParams{}, box)
+                                  d.fit, FurniturePieceParams{}, box, free)
                             : d.centre;
                     bool right = false;
                     for (const auto& f : room.room.furniture) {
