@@ -101,6 +101,7 @@ struct Options {
     bool piece_shrink = FurniturePieceParams{}.shrink;
     float piece_free_share = FurniturePieceParams{}.free_share;
     float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
+    float max_offset = FurnitureFitParams{}.max_offset;
 };
 
 struct Variant {
@@ -284,6 +285,7 @@ int Run(const Options& o) {
     to.verifier_fit.scale_steps = o.fit_scale_steps;
     to.verifier_fit.back_to_wall = o.back_to_wall;
     to.verifier_fit.flip_tolerance = o.flip_tolerance;
+    to.verifier_fit.max_offset = o.max_offset;
     // The training pieces; with --set library, without the tune pieces of --library-fold, which
     // furnish the rooms instead.
     std::vector<sim::FurniturePiece> pieces, held_out;
@@ -375,6 +377,7 @@ int Run(const Options& o) {
     dp.piece.shrink = o.piece_shrink;
     dp.piece.free_share = o.piece_free_share;
     dp.fit.flip_tolerance = o.flip_tolerance;
+    dp.fit.max_offset = o.max_offset;
     dp.num_threads = o.threads;
     const FurnitureFitContext context(model, dp.fit);
 
@@ -861,6 +864,9 @@ int main(int argc, char** argv) {
                  "(FurniturePieceParams::shrink)");
     app.add_option("--piece-free-share", o.piece_free_share,
                    "share of a slice's samples in free space to cut it off the piece's box");
+    app.add_option("--max-offset", o.max_offset,
+                   "CAD fit: how far the model's centre may lie from the hypothesis, in class "
+                   "widths (FurnitureFitParams::max_offset)");
     app.add_option("--flip-tolerance", o.flip_tolerance,
                    "CAD fit: how much worse a fit turned away from a wall may score "
                    "(FurnitureFitParams::flip_tolerance)");
