@@ -345,8 +345,7 @@ Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
     // above any piece), never inside the parts' extent.
     const float top = std::min(box.max().z(), quantile(zs, 0.98));
     std::vector<float> heights;
-    for (float f : {0.3f, 0.6f, 1.0f}) {
-        const float z = f * top - (f == 1.0f ? 0.05f : 0.0f);
+    for (float z : {0.3f * top, 0.6f * top, top - 0.05f}) {
         if (z > 0.05f) heights.push_back(z);
     }
     if (heights.empty()) return grown;
