@@ -496,103 +496,84 @@ int Run(const Options& o) {
                 }
             }
             if (primary &&
-                o.draw < 0) {  // nearest hypothesis (fitted centre) of the class per piece
+                o.draw < 0) {  // per piece: its votes, nearest hypothesis and nearest fits
                 std::map<std::uint32_t, int> returns;  // per piece, in all scans
                 for (const auto& scan : room.scans) {
                     for (std::uint32_t l : scan.labels) ++returns[l];
                 }
+                // The maxima of every class's merged vote space at any score, without the
+                // footprint test: where the votes alone would put hypotheses.
+                std::vector<FurnitureVote> room_votes;
+                for (const auto& vs : scene.votes)
+                    room_votes.insert(room_votes.end(), vs.begin(), vs.end());
+                FurnitureSelectionParams sp = p.selection;
+                sp.threshold_scale = 0.0f;
+                sp.hull_consistency = false;
+                const auto maxima = SelectFurnitureHypotheses(
+                    room_votes, static_cast<int>(scene.votes.size()), model, sp);
                 for (const auto& f : room.room.furniture) {
-                    float best = 1e9f, score = 0.0f;
-                    std::string fate;
+                    const Eigen::Vector2f fc2 = f.T_world_object.translation().head<2>();
+                    // Nearest to the piece: the fit of its class (by the detection's centre),
+                    // the hypothesis of its class (by the votes' centre) and the fit of any
+                    // class, for pieces found under another name.
+                    float best = 1e9f, score = 0.0f, hd = 1e9f, hfit = 1e9f, any = 1e9f;
+                    std::string fate, hfate, any_cls, any_fate;
                     const FurnitureDetection* nearest = nullptr;
                     for (const auto* list : {&det.detections, &det.rejected}) {
                         for (const auto& d : *list) {
+                            const char* why = d.accepted ? "ok" : d.rejection.c_str();
+                            const float dist = (fc2 - d.centre).norm();
+                            if (dist < any) any = dist, any_cls = d.category, any_fate = why;
                             if (d.category != f.category) continue;
-                            const float dist =
-                                (f.T_world_object.translation().head<2>() - d.centre).norm();
                             if (dist < best)
-                                best = dist, score = d.hypothesis.normalized,
-                                fate = d.accepted ? "ok" : d.rejection, nearest = &d;
+                                best = dist, score = d.hypothesis.normalized, fate = why,
+                                nearest = &d;
+                            const float h = (d.hypothesis.centre - fc2).norm();
+                            if (h < hd) hd = h, hfit = dist, hfate = why;
                         }
                     }
                     // The nearest fit's yaw error (a full turn), whether it was turned away from
-                    // a wall, and the nearest wall the scans saw from the piece's centre.
+                    // a wall, the nearest wall the scans saw from the piece's centre, the fitted
+                    // model's size and the piece's box.
                     std::string pose;
                     if (nearest != nullptr && nearest->fitted) {
                         float wall = 1e9f;
                         for (const auto& ws : scene.walls) {
                             for (const auto& w : ws) {
-                                const float dw =
-                                    w.Distance(f.T_world_object.translation().head<2>());
+                                const float dw = w.Distance(fc2);
                                 if (std::isfinite(dw)) wall = std::min(wall, std::abs(dw));
                             }
                         }
-                        pose = fmt::format(
-                            " yaw {:.0f} turned {} wall {:.2f} m depth {:.2f} room {} at {:.2f} "
-                            "{:.2f}",
-                            eval::YawError(nearest->fit.yaw, f.yaw, false),
-                            nearest->fit.turned ? 1 : 0, wall, std::min(f.extent.x(), f.extent.y()),
-                            r, f.T_world_object.translation().x(),
-                            f.T_world_object.translation().y());
                         const auto& cb = nearest->box;
                         const Eigen::Vector3f me =
                             model.cads()[static_cast<std::size_t>(nearest->fit.cad)].extent;
-                        pose += fmt::format(
-                            " | cad {:.2f}x{:.2f}x{:.2f} box x {:.2f} {:.2f} y "
-                            "{:.2f} {:.2f} fitc {:.2f} {:.2f}",
-                            me.x(), me.y(), me.z(), cb.min().x(), cb.max().x(), cb.min().y(),
-                            cb.max().y(), nearest->fit.T_world_model.translation().x(),
+                        pose = fmt::format(
+                            " yaw {:.0f} turned {} wall {:.2f} m depth {:.2f} room {} at {:.2f} "
+                            "{:.2f} | cad {:.2f}x{:.2f}x{:.2f} box x {:.2f} {:.2f} y {:.2f} "
+                            "{:.2f} fitc {:.2f} {:.2f}",
+                            eval::YawError(nearest->fit.yaw, f.yaw, false),
+                            nearest->fit.turned ? 1 : 0, wall, std::min(f.extent.x(), f.extent.y()),
+                            r, fc2.x(), fc2.y(), me.x(), me.y(), me.z(), cb.min().x(), cb.max().x(),
+                            cb.min().y(), cb.max().y(),
+                            nearest->fit.T_world_model.translation().x(),
                             nearest->fit.T_world_model.translation().y());
                     }
-                    // The nearest hypothesis of any class, for pieces found under another name.
-                    float any = 1e9f;
-                    std::string any_cls, any_fate;
-                    for (const auto* list : {&det.detections, &det.rejected}) {
-                        for (const auto& d : *list) {
-                            const float dist =
-                                (f.T_world_object.translation().head<2>() - d.centre).norm();
-                            if (dist < any)
-                                any = dist, any_cls = d.category,
-                                any_fate = d.accepted ? "ok" : d.rejection;
-                        }
-                    }
                     // The class's merged votes in a window of the class width at the piece's
-                    // centre (over the class threshold), and the nearest maximum of the vote
-                    // space at any score without the footprint test.
+                    // centre (over the class threshold), and the nearest maximum of them.
                     const int ci = model.ClassIndex(f.category);
                     const auto& fc = model.classes()[static_cast<std::size_t>(ci)];
-                    const Eigen::Vector2f fc2 = f.T_world_object.translation().head<2>();
                     double at_piece = 0.0;
-                    std::vector<FurnitureVote> all_votes;
-                    for (const auto& vs : scene.votes) {
-                        for (const auto& v : vs) {
-                            if (v.cls != ci) continue;
-                            all_votes.push_back(v);
-                            if ((v.x.head<2>() - fc2).cwiseAbs().maxCoeff() <= fc.width / 2)
-                                at_piece += v.weight;
-                        }
+                    for (const auto& v : room_votes) {
+                        if (v.cls == ci &&
+                            (v.x.head<2>() - fc2).cwiseAbs().maxCoeff() <= fc.width / 2)
+                            at_piece += v.weight;
                     }
                     if (fc.threshold > 0.0f)
                         at_piece /= static_cast<double>(scene.votes.size()) * fc.threshold;
-                    FurnitureSelectionParams sp = p.selection;
-                    sp.threshold_scale = 0.0f;
-                    sp.hull_consistency = false;
                     float raw = 1e9f, raw_score = 0.0f;
-                    for (const auto& h : SelectFurnitureHypotheses(
-                             all_votes, static_cast<int>(scene.votes.size()), model, sp)) {
+                    for (const auto& h : maxima) {
                         const float dist = (h.centre - fc2).norm();
-                        if (dist < raw) raw = dist, raw_score = h.normalized;
-                    }
-                    float hd = 1e9f, hfit = 1e9f;
-                    std::string hfate;
-                    for (const auto* list : {&det.detections, &det.rejected}) {
-                        for (const auto& d : *list) {
-                            if (d.category != f.category) continue;
-                            const float dist = (d.hypothesis.centre - fc2).norm();
-                            if (dist < hd)
-                                hd = dist, hfit = (d.centre - fc2).norm(),
-                                hfate = d.accepted ? "ok" : d.rejection;
-                        }
+                        if (h.cls == ci && dist < raw) raw = dist, raw_score = h.normalized;
                     }
                     std::fprintf(stderr,
                                  "NEAREST %-9s w %.2f l %.2f returns %d: %.2f m score %.2f %s | "

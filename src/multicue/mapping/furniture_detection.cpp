@@ -109,8 +109,6 @@ float SharedEitherWay(const PlacedSurface& a, const PlacedSurface& b) {
     return std::max(SharedSurface(a, b), SharedSurface(b, a));
 }
 
-// The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
-// within `radius` of it.
 // The box of a CAD model's finite points in its own frame; empty without any.
 Eigen::AlignedBox3f CadBox(const FurnitureCad& cad) {
     Eigen::AlignedBox3f box;
@@ -120,6 +118,8 @@ Eigen::AlignedBox3f CadBox(const FurnitureCad& cad) {
     return box;
 }
 
+// The points (world frame, with normals) of a hypothesis's supporting parts whose centres lie
+// within `radius` of it.
 PointCloud SupportPoints(const FurnitureScene& scene, const FurnitureHypothesis& h, float radius) {
     PointCloud out;
     for (const auto& [view, part] : h.parts) {
@@ -801,7 +801,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             }
             kept.push_back(winner);
         }
-        // The accepted pieces' boxes grown to their parts, and their centres with them.
+        // The accepted pieces' boxes grown or shrunk to their parts, and their centres with them.
         std::vector<const FurnitureParts*> parts;
         for (int v : views) parts.push_back(&scene.views[static_cast<std::size_t>(v)]);
         for (auto& d : all) {

@@ -67,9 +67,9 @@ struct FurnitureTrainingOptions {
     int verifier_library_rooms = 30;  ///< 30 chosen on the library folds (eval/README.md)
     std::uint64_t verifier_library_seed = 6000;  ///< seed of the first of those rooms
     /// Label a verifier row by the centre of the piece's box (FurniturePieceCentre: the fitted
-    /// model's box grown to the scan's parts of the piece, as detection reports an accepted
-    /// fit) instead of the fitted model's centre. Off: on the validation rooms and library folds
-    /// it found one piece fewer (eval/README.md)
+    /// model's box grown or shrunk to the scan's parts of the piece, as detection reports an
+    /// accepted fit) instead of the fitted model's centre. Off: on the validation rooms and library
+    /// folds it found one piece fewer (measured before the box could shrink; eval/README.md)
     bool verifier_piece_labels = false;
     /// Classifier of the verifier (ml::CreateClassifier spec)
     std::string verifier_spec = "rtrees:trees=200";
