@@ -99,6 +99,7 @@ struct Options {
     bool back_to_wall = FurnitureFitParams{}.back_to_wall;
     bool piece_extent = FurniturePieceParams{}.grow;
     bool piece_shrink = FurniturePieceParams{}.shrink;
+    bool piece_taken = FurniturePieceParams{}.taken;
     float piece_free_share = FurniturePieceParams{}.free_share;
     float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
     float max_offset = FurnitureFitParams{}.max_offset;
@@ -376,6 +377,7 @@ int Run(const Options& o) {
     dp.piece.grow = o.piece_extent;
     dp.piece.shrink = o.piece_shrink;
     dp.piece.free_share = o.piece_free_share;
+    dp.piece.taken = o.piece_taken;
     dp.fit.flip_tolerance = o.flip_tolerance;
     dp.fit.max_offset = o.max_offset;
     dp.num_threads = o.threads;
@@ -840,6 +842,8 @@ int main(int argc, char** argv) {
     app.add_flag("!--no-piece-extent", o.piece_extent,
                  "report the fitted model's box and centre, not grown to the scan's parts of the "
                  "piece (FurniturePieceParams::grow)");
+    app.add_flag("!--no-piece-taken", o.piece_taken,
+                 "the piece's box does not keep out of the more likely pieces' space");
     app.add_flag("!--no-piece-shrink", o.piece_shrink,
                  "do not shrink the piece's box through observed free space "
                  "(FurniturePieceParams::shrink)");

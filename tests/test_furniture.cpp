@@ -862,6 +862,69 @@ TEST(FurniturePiece, TheBoxShrinksToThePieceWhereTheScansSawFreeSpaceOnly) {
 // Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
 // even with a few stray points (a corner's, an object's touching it) in its part; two walls
 // grown into one part around a corner, a short part and a low one are no wall.
+TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
+    // A table model 1.8 m long fitted over a table 0.8 m long (x -0.9 to -0.1) and the top of a
+    // cabinet beside it (x 0.3 to 0.9), which another detection explains.
+    FurnitureCad cad;
+    cad.cloud = BoxSurface(-0.9f, 0.9f, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
+    cad.extent = Eigen::Vector3f(1.8f, 0.8f, 0.75f);
+    FurnitureFit fit;
+    fit.cad = 0;
+    fit.T_world_model = Eigen::Translation3f(1.0f, -0.5f, 0.0f) * Eigen::Isometry3f::Identity();
+    FurnitureParts view;
+    auto add_part = [&](float x0, float x1, float z) {
+        FurniturePart part;
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        for (float x = x0; x <= x1 + 1e-4f; x += 0.03f) {
+            for (float y = -0.35f; y <= 0.35f + 1e-4f; y += 0.03f) {
+                part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
+                view.cloud.points.push_back(fit.T_world_model * Eigen::Vector3f(x, y, z));
+                view.cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+                sum += view.cloud.points.back();
+            }
+        }
+        part.centroid = sum / static_cast<float>(part.indices.size());
+        view.parts.push_back(part);
+    };
+    add_part(-0.9f, -0.1f, 0.75f);  // the table's top
+    add_part(0.3f, 0.9f, 0.8f);     // the cabinet's top
+    view.cloud.width = static_cast<std::uint32_t>(view.cloud.points.size());
+    const FurniturePieceParams params;
+    // Without the cabinet's space the box keeps the model's length: the cabinet's top is a part
+    // within the model's footprint, and no scan saw the floor between them free.
+    const Eigen::AlignedBox3f alone = MeasureFurniturePiece({&view}, cad, fit, params);
+    EXPECT_GE(alone.max().x(), 0.85f);
+    FurnitureTakenSpace cabinet;
+    cabinet.T_world_box = fit.T_world_model * Eigen::Translation3f(0.6f, 0.0f, 0.0f);
+    cabinet.box = Eigen::AlignedBox3f(Eigen::Vector3f(-0.35f, -0.4f, 0.0f),
+                                      Eigen::Vector3f(0.35f, 0.4f, 0.8f));
+    EXPECT_TRUE(
+        cabinet.Contains((fit.T_world_model * Eigen::Vector3f(0.5f, 0.2f, 0.0f)).head<2>()));
+    EXPECT_FALSE(
+        cabinet.Contains((fit.T_world_model * Eigen::Vector3f(0.1f, 0.0f, 0.0f)).head<2>()));
+    // With it the cabinet's top is no part of the table, and the box shrinks through the
+    // cabinet's space up to the gap, where nothing says the space is free.
+    const Eigen::AlignedBox3f box = MeasureFurniturePiece({&view}, cad, fit, params, {}, {cabinet});
+    EXPECT_LE(box.max().x(), 0.3f);
+    EXPECT_GE(box.max().x(), 0.2f);
+    EXPECT_NEAR(box.min().x(), -0.9f, 0.01f);
+    Eigen::AlignedBox3f piece_box;
+    const Eigen::Vector2f centre =
+        FurniturePieceCentre({&view}, cad, fit, params, piece_box, {}, {cabinet});
+    EXPECT_TRUE(piece_box.isApprox(box));
+    EXPECT_LT(centre.x(), 1.0f - 0.3f);  // towards the table, away from the model's centre
+    // A piece elsewhere, or growth turned off, changes nothing.
+    FurnitureTakenSpace far = cabinet;
+    far.T_world_box = Eigen::Translation3f(5.0f, 5.0f, 0.0f) * Eigen::Isometry3f::Identity();
+    EXPECT_TRUE(MeasureFurniturePiece({&view}, cad, fit, params, {}, {far}).isApprox(alone));
+    FurniturePieceParams off;
+    off.grow = false;
+    EXPECT_NEAR(MeasureFurniturePiece({&view}, cad, fit, off, {}, {cabinet}).max().x(), 0.9f,
+                0.01f);
+    // An empty box takes no space.
+    EXPECT_FALSE(FurnitureTakenSpace{}.Contains(Eigen::Vector2f::Zero()));
+}
+
 TEST(FurnitureWalls, AWallKeepsItsStrayPointsAndACornerIsNoWall) {
     FurnitureParts v;
     v.sensor_origin = Eigen::Vector3f(0.0f, 0.0f, 1.5f);

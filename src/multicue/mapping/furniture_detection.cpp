@@ -280,10 +280,18 @@ Eigen::AlignedBox3f FittedModelBox(const FurnitureCad& cad, const FurnitureFit& 
     return {a.cwiseMin(b), a.cwiseMax(b)};
 }
 
+bool Taken(const std::vector<FurnitureTakenSpace>& taken, const Eigen::Vector2f& xy) {
+    for (const auto& t : taken) {
+        if (t.Contains(xy)) return true;
+    }
+    return false;
+}
+
 Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
                              const Eigen::AlignedBox3f& box, const FurnitureFit& fit,
                              const FurniturePieceParams& params,
-                             const std::vector<const FurnitureFreeSpace*>& free) {
+                             const std::vector<const FurnitureFreeSpace*>& free,
+                             const std::vector<FurnitureTakenSpace>& taken) {
     if (box.isEmpty() || !params.grow) return box;
     const Eigen::Isometry3f to_model = fit.T_world_model.inverse();
     const Eigen::Vector3f size = box.sizes();
@@ -304,15 +312,17 @@ Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
                     reach)
                 continue;
             q.clear();
-            std::size_t in = 0;
+            std::size_t in = 0, elsewhere = 0;
             for (Index i : part.indices) {
                 const Eigen::Vector3f& p = v->cloud.points[i];
                 if (!p.allFinite()) continue;
                 q.push_back(to_model * p);
                 in += inside(q.back()) ? 1 : 0;
+                elsewhere += !taken.empty() && Taken(taken, p.head<2>()) ? 1 : 0;
             }
-            if (q.empty() ||
-                static_cast<float>(in) < params.member_share * static_cast<float>(q.size()))
+            const float n = static_cast<float>(q.size());
+            if (q.empty() || static_cast<float>(in) < params.member_share * n ||
+                static_cast<float>(elsewhere) >= params.member_share * n)
                 continue;
             for (const auto& r : q) {
                 xs.push_back(r.x());
@@ -339,10 +349,10 @@ Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
         if (hi[a] - box.max()[a] > params.min_growth)
             grown.max()[a] = std::min(hi[a], box.max()[a] + most);
     }
-    if (!params.shrink || free.empty()) return grown;
+    if (!params.shrink || (free.empty() && taken.empty())) return grown;
     // Where the box reaches beyond the parts: slices cut off from the outside in while the scans
-    // saw them free, at three heights up to the parts' top (a taller model's upper part is free
-    // above any piece), never inside the parts' extent.
+    // saw them free or another piece takes them, at three heights up to the parts' top (a taller
+    // model's upper part is free above any piece), never inside the parts' extent.
     const float top = std::min(box.max().z(), quantile(zs, 0.98));
     std::vector<float> heights;
     for (float z : {0.3f * top, 0.6f * top, top - 0.05f}) {
@@ -360,6 +370,10 @@ Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
                 p[a] = at, p[b] = t, p.z() = z;
                 const Eigen::Vector3f w = fit.T_world_model * p;
                 ++n;
+                if (!taken.empty() && Taken(taken, w.head<2>())) {
+                    ++in_free;
+                    continue;
+                }
                 for (const auto* f : free) {
                     if (f != nullptr && f->IsFree(w)) {
                         ++in_free;
@@ -382,21 +396,30 @@ Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
 
 }  // namespace
 
+bool FurnitureTakenSpace::Contains(const Eigen::Vector2f& xy) const {
+    if (box.isEmpty()) return false;
+    const Eigen::Vector3f q = T_world_box.inverse() * Eigen::Vector3f(xy.x(), xy.y(), 0.0f);
+    return q.x() >= box.min().x() && q.x() <= box.max().x() && q.y() >= box.min().y() &&
+           q.y() <= box.max().y();
+}
+
 Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
                                           const FurnitureCad& cad, const FurnitureFit& fit,
                                           const FurniturePieceParams& params,
-                                          const std::vector<const FurnitureFreeSpace*>& free) {
+                                          const std::vector<const FurnitureFreeSpace*>& free,
+                                          const std::vector<FurnitureTakenSpace>& taken) {
     params.Validate();
-    return PieceBox(views, FittedModelBox(cad, fit), fit, params, free);
+    return PieceBox(views, FittedModelBox(cad, fit), fit, params, free, taken);
 }
 
 Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
                                      const FurnitureCad& cad, const FurnitureFit& fit,
                                      const FurniturePieceParams& params, Eigen::AlignedBox3f& box,
-                                     const std::vector<const FurnitureFreeSpace*>& free) {
+                                     const std::vector<const FurnitureFreeSpace*>& free,
+                                     const std::vector<FurnitureTakenSpace>& taken) {
     params.Validate();
     const Eigen::AlignedBox3f model_box = FittedModelBox(cad, fit);
-    box = PieceBox(views, model_box, fit, params, free);
+    box = PieceBox(views, model_box, fit, params, free, taken);
     if (box.isEmpty()) return fit.T_world_model.translation().head<2>();
     const Eigen::Vector3f shift = box.center() - model_box.center();
     return (fit.T_world_model * Eigen::Vector3f(shift.x(), shift.y(), 0.0f)).head<2>();
@@ -801,16 +824,31 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             }
             kept.push_back(winner);
         }
-        // The accepted pieces' boxes grown or shrunk to their parts, and their centres with them.
+        // The accepted pieces' boxes grown or shrunk to their parts, and their centres with them;
+        // the fitted models of the more likely accepted pieces take their space.
         std::vector<const FurnitureParts*> parts;
         for (int v : views) parts.push_back(&scene.views[static_cast<std::size_t>(v)]);
-        for (auto& d : all) {
+        std::vector<FurnitureTakenSpace> taken;
+        for (std::size_t i = 0; i < all.size(); ++i) {
+            FurnitureDetection& d = all[i];
             if (!d.fitted) continue;
             FurniturePieceParams piece = params.piece;
             piece.grow = piece.grow && d.accepted;
+            taken.clear();
+            if (d.accepted && params.piece.taken) {
+                for (std::size_t k = 0; k < all.size(); ++k) {
+                    const FurnitureDetection& o = all[k];
+                    if (k == i || !o.accepted ||
+                        !(o.score > d.score || (o.score == d.score && k < i)))
+                        continue;
+                    taken.push_back(
+                        {o.fit.T_world_model,
+                         FittedModelBox(model.cads()[static_cast<std::size_t>(o.fit.cad)], o.fit)});
+                }
+            }
             d.centre =
                 FurniturePieceCentre(parts, model.cads()[static_cast<std::size_t>(d.fit.cad)],
-                                     d.fit, piece, d.box, space.free);
+                                     d.fit, piece, d.box, space.free, taken);
         }
         result.fit_ms = MillisecondsSince(t);
     }

@@ -53,6 +53,9 @@ struct FurniturePieceParams {
     /// A slice goes when at least this share of its samples (5 cm apart, at three heights up to
     /// the parts' top) lies in free space, (0, 1]
     float free_share = 0.5f;
+    /// Detection: the fitted models of the more likely accepted pieces take their footprints'
+    /// space (FurnitureTakenSpace); a piece's box keeps out of it
+    bool taken = true;
     float member_share = 0.6f;  ///< share of a part's points within the grown footprint, (0, 1]
     float margin = 0.1f;        ///< footprint grown by this to take in parts [m], >= 0
     float min_growth = 0.05f;   ///< parts reaching less far beyond the box leave it [m], >= 0
@@ -164,15 +167,27 @@ struct FurnitureShapeEvidence {
 FurnitureShapeEvidence MeasureFurnitureShape(const PointCloud& points, const FurnitureCad& cad,
                                              const Eigen::Affine3f& T);
 
+/// Floor space that another detected piece takes: its fitted model's box `box` in the frame
+/// `T_world_box` (upright).
+struct FurnitureTakenSpace {
+    Eigen::Isometry3f T_world_box = Eigen::Isometry3f::Identity();
+    Eigen::AlignedBox3f box;
+    /// Whether the floor point `xy` (world frame) lies within the box's footprint.
+    bool Contains(const Eigen::Vector2f& xy) const;
+};
+
 /// The box of the piece that `fit` explains, in the frame of fit.T_world_model [m]: the fitted
 /// model's box (stretched by fit.scale), grown along the model's horizontal axes to the parts of
 /// `views` that belong to the piece and shrunk towards them through the free space of `free`
-/// (FurniturePieceParams; no shrinking without free space). Empty without a fitted model. Throws
-/// InvalidArgument for bad parameters.
+/// (FurniturePieceParams; no shrinking without free space). The space of `taken` belongs to
+/// other pieces: a part lying mostly there is not this piece's, and the box shrinks through it
+/// as through free space. Empty without a fitted model. Throws InvalidArgument for bad
+/// parameters.
 Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
                                           const FurnitureCad& cad, const FurnitureFit& fit,
                                           const FurniturePieceParams& params,
-                                          const std::vector<const FurnitureFreeSpace*>& free = {});
+                                          const std::vector<const FurnitureFreeSpace*>& free = {},
+                                          const std::vector<FurnitureTakenSpace>& taken = {});
 
 /// The piece's box (MeasureFurniturePiece with `params`; the fitted model's box without growth)
 /// into `box`, and the centre on the floor [m] that it gives: the fitted model's centre moved by
@@ -180,7 +195,8 @@ Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts
 Eigen::Vector2f FurniturePieceCentre(const std::vector<const FurnitureParts*>& views,
                                      const FurnitureCad& cad, const FurnitureFit& fit,
                                      const FurniturePieceParams& params, Eigen::AlignedBox3f& box,
-                                     const std::vector<const FurnitureFreeSpace*>& free = {});
+                                     const std::vector<const FurnitureFreeSpace*>& free = {},
+                                     const std::vector<FurnitureTakenSpace>& taken = {});
 
 /// One detection (or a rejected hypothesis).
 struct FurnitureDetection {
