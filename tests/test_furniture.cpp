@@ -859,9 +859,6 @@ TEST(FurniturePiece, TheBoxShrinksToThePieceWhereTheScansSawFreeSpaceOnly) {
     EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad), InvalidArgument);
 }
 
-// Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
-// even with a few stray points (a corner's, an object's touching it) in its part; two walls
-// grown into one part around a corner, a short part and a low one are no wall.
 TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
     // A table model 1.8 m long fitted over a table 0.8 m long (x -0.9 to -0.1) and the top of a
     // cabinet beside it (x 0.3 to 0.9), which another detection explains.
@@ -925,6 +922,9 @@ TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
     EXPECT_FALSE(FurnitureTakenSpace{}.Contains(Eigen::Vector2f::Zero()));
 }
 
+// Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
+// even with a few stray points (a corner's, an object's touching it) in its part; two walls
+// grown into one part around a corner, a short part and a low one are no wall.
 TEST(FurnitureWalls, AWallKeepsItsStrayPointsAndACornerIsNoWall) {
     FurnitureParts v;
     v.sensor_origin = Eigen::Vector3f(0.0f, 0.0f, 1.5f);
