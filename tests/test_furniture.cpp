@@ -790,17 +790,23 @@ TEST(FurniturePiece, TheBoxGrowsToTheScannedPartsOfThePieceAndNotToItsNeighbours
     EXPECT_THROW(MeasureFurniturePiece({&view}, cad, fit, bad), InvalidArgument);
 }
 
+// A box table model `length` long (x), 0.8 m deep and 0.75 m high, fitted unturned at `at`.
+std::pair<FurnitureCad, FurnitureFit> TableModelFit(float length, const Eigen::Vector2f& at) {
+    FurnitureCad cad;
+    cad.cloud = BoxSurface(-length / 2, length / 2, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
+    cad.extent = Eigen::Vector3f(length, 0.8f, 0.75f);
+    FurnitureFit fit;
+    fit.cad = 0;
+    fit.T_world_model = Eigen::Translation3f(at.x(), at.y(), 0.0f) * Eigen::Isometry3f::Identity();
+    return {cad, fit};
+}
+
 // The piece's box shrinks: a table model 1.2 m long fitted over a 0.8 m table so that it reaches
 // 0.4 m beyond its +x end. Where a sensor saw the floor beyond the table, the box shrinks to the
 // table; without free space, or with a view that saw nothing beyond it, it stays the model's;
 // it never shrinks inside the table's parts.
 TEST(FurniturePiece, TheBoxShrinksToThePieceWhereTheScansSawFreeSpaceOnly) {
-    FurnitureCad cad;
-    cad.cloud = BoxSurface(-0.6f, 0.6f, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
-    cad.extent = Eigen::Vector3f(1.2f, 0.8f, 0.75f);
-    FurnitureFit fit;
-    fit.cad = 0;
-    fit.T_world_model = Eigen::Translation3f(0.2f, 0.0f, 0.0f) * Eigen::Isometry3f::Identity();
+    const auto [cad, fit] = TableModelFit(1.2f, Eigen::Vector2f(0.2f, 0.0f));
     // The table, x from -0.4 to 0.4, y from -0.3 to 0.3: its top one part.
     FurnitureParts view;
     FurniturePart top;
@@ -862,12 +868,7 @@ TEST(FurniturePiece, TheBoxShrinksToThePieceWhereTheScansSawFreeSpaceOnly) {
 TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
     // A table model 1.8 m long fitted over a table 0.8 m long (x -0.9 to -0.1) and the top of a
     // cabinet beside it (x 0.3 to 0.9), which another detection explains.
-    FurnitureCad cad;
-    cad.cloud = BoxSurface(-0.9f, 0.9f, -0.4f, 0.4f, 0.75f, 0.03f, 0.0f, {0, 0});
-    cad.extent = Eigen::Vector3f(1.8f, 0.8f, 0.75f);
-    FurnitureFit fit;
-    fit.cad = 0;
-    fit.T_world_model = Eigen::Translation3f(1.0f, -0.5f, 0.0f) * Eigen::Isometry3f::Identity();
+    const auto [cad, fit] = TableModelFit(1.8f, Eigen::Vector2f(1.0f, -0.5f));
     FurnitureParts view;
     auto add_part = [&](float x0, float x1, float z) {
         FurniturePart part;
