@@ -100,6 +100,8 @@ struct Options {
     bool piece_extent = FurniturePieceParams{}.grow;
     bool piece_shrink = FurniturePieceParams{}.shrink;
     bool piece_taken = FurniturePieceParams{}.taken;
+    bool piece_walls = FurniturePieceParams{}.walls;
+    float piece_member_share = FurniturePieceParams{}.member_share;
     float piece_free_share = FurniturePieceParams{}.free_share;
     float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
     float max_offset = FurnitureFitParams{}.max_offset;
@@ -378,6 +380,8 @@ int Run(const Options& o) {
     dp.piece.shrink = o.piece_shrink;
     dp.piece.free_share = o.piece_free_share;
     dp.piece.taken = o.piece_taken;
+    dp.piece.walls = o.piece_walls;
+    dp.piece.member_share = o.piece_member_share;
     dp.fit.flip_tolerance = o.flip_tolerance;
     dp.fit.max_offset = o.max_offset;
     dp.num_threads = o.threads;
@@ -842,8 +846,14 @@ int main(int argc, char** argv) {
     app.add_flag("!--no-piece-extent", o.piece_extent,
                  "report the fitted model's box and centre, not grown to the scan's parts of the "
                  "piece (FurniturePieceParams::grow)");
+    app.add_option("--piece-member-share", o.piece_member_share,
+                   "share of a part's points within the fitted model's grown footprint for the "
+                   "part to count as the piece's (FurniturePieceParams::member_share)")
+        ->capture_default_str();
     app.add_flag("!--no-piece-taken", o.piece_taken,
                  "the piece's box does not keep out of the more likely pieces' space");
+    app.add_flag("!--no-piece-walls", o.piece_walls,
+                 "the piece's box does not keep out of the walls' bands");
     app.add_flag("!--no-piece-shrink", o.piece_shrink,
                  "do not shrink the piece's box through observed free space "
                  "(FurniturePieceParams::shrink)");

@@ -923,6 +923,49 @@ TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
     EXPECT_FALSE(FurnitureTakenSpace{}.Contains(Eigen::Vector2f::Zero()));
 }
 
+// A wall takes a band of floor along its plane: the part of the wall seen below a table's top,
+// within the fitted model's footprint, is no part of the table.
+TEST(FurniturePiece, TheBoxKeepsOutOfAWallsBand) {
+    const auto [cad, fit] = TableModelFit(1.2f, Eigen::Vector2f(0.0f, 0.0f));
+    FurnitureParts view;
+    auto add_part = [&](const std::vector<Eigen::Vector3f>& pts) {
+        FurniturePart part;
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        for (const auto& p : pts) {
+            part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
+            view.cloud.points.push_back(p);
+            view.cloud.normals.emplace_back(0.0f, 1.0f, 0.0f);
+            sum += p;
+        }
+        part.centroid = sum / static_cast<float>(pts.size());
+        view.parts.push_back(part);
+    };
+    std::vector<Eigen::Vector3f> top, below;  // the table's top; the wall at y = -0.48 below it
+    for (float x = -0.6f; x <= 0.6f + 1e-4f; x += 0.03f) {
+        for (float y = -0.4f; y <= 0.4f + 1e-4f; y += 0.03f) top.emplace_back(x, y, 0.75f);
+        for (float z = 0.0f; z <= 0.7f; z += 0.03f) below.emplace_back(x, -0.48f, z);
+    }
+    add_part(top);
+    add_part(below);
+    view.cloud.width = static_cast<std::uint32_t>(view.cloud.points.size());
+    FurnitureWall wall;
+    wall.point = Eigen::Vector2f(0.0f, -0.48f);
+    wall.normal = Eigen::Vector2f(0.0f, 1.0f);  // towards the room
+    wall.lo = -3.0f, wall.hi = 3.0f;            // along (-1, 0)
+    const FurnitureTakenSpace band = FurnitureWallBand(wall, 0.05f);
+    EXPECT_TRUE(band.Contains(Eigen::Vector2f(1.0f, -0.45f)));
+    EXPECT_TRUE(band.Contains(Eigen::Vector2f(-2.9f, -0.52f)));
+    EXPECT_FALSE(band.Contains(Eigen::Vector2f(1.0f, -0.40f)));   // 8 cm in front of it
+    EXPECT_FALSE(band.Contains(Eigen::Vector2f(-3.5f, -0.48f)));  // beyond its end
+    EXPECT_THROW(FurnitureWallBand(wall, 0.0f), InvalidArgument);
+    const FurniturePieceParams params;
+    // Without the band the wall's part grows the box to the wall; with it the box stays the
+    // table's.
+    EXPECT_NEAR(MeasureFurniturePiece({&view}, cad, fit, params).min().y(), -0.48f, 0.01f);
+    EXPECT_NEAR(MeasureFurniturePiece({&view}, cad, fit, params, {}, {band}).min().y(), -0.4f,
+                0.01f);
+}
+
 // Walls among a view's parts: a long upright part above every piece is a wall facing the sensor,
 // even with a few stray points (a corner's, an object's touching it) in its part; two walls
 // grown into one part around a corner, a short part and a low one are no wall.

@@ -396,6 +396,20 @@ Eigen::AlignedBox3f PieceBox(const std::vector<const FurnitureParts*>& views,
 
 }  // namespace
 
+FurnitureTakenSpace FurnitureWallBand(const FurnitureWall& wall, float half_width) {
+    if (!(half_width > 0.0f) || !std::isfinite(half_width)) {
+        throw InvalidArgument(
+            fmt::format("furniture wall band: half_width must be > 0, got {}", half_width));
+    }
+    FurnitureTakenSpace band;
+    band.T_world_box =
+        Eigen::Translation3f(wall.point.x(), wall.point.y(), 0.0f) *
+        Eigen::AngleAxisf(std::atan2(wall.normal.y(), wall.normal.x()), Eigen::Vector3f::UnitZ());
+    band.box = Eigen::AlignedBox3f(Eigen::Vector3f(-half_width, wall.lo, 0.0f),
+                                   Eigen::Vector3f(half_width, wall.hi, 0.0f));
+    return band;
+}
+
 bool FurnitureTakenSpace::Contains(const Eigen::Vector2f& xy) const {
     if (box.isEmpty()) return false;
     const Eigen::Vector3f q = T_world_box.inverse() * Eigen::Vector3f(xy.x(), xy.y(), 0.0f);
@@ -828,6 +842,12 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
         // the fitted models of the more likely accepted pieces take their space.
         std::vector<const FurnitureParts*> parts;
         for (int v : views) parts.push_back(&scene.views[static_cast<std::size_t>(v)]);
+        // The views' walls take a band of 5 cm on either side of their planes: a part of a wall
+        // next to a piece, say the wall seen below a table's top, is no part of the piece.
+        std::vector<FurnitureTakenSpace> wall_bands;
+        if (params.piece.walls) {
+            for (const FurnitureWall* w : walls) wall_bands.push_back(FurnitureWallBand(*w, 0.05f));
+        }
         std::vector<FurnitureTakenSpace> taken;
         for (std::size_t i = 0; i < all.size(); ++i) {
             FurnitureDetection& d = all[i];
@@ -835,6 +855,7 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             FurniturePieceParams piece = params.piece;
             piece.grow = piece.grow && d.accepted;
             taken.clear();
+            if (d.accepted) taken = wall_bands;
             if (d.accepted && params.piece.taken) {
                 for (std::size_t k = 0; k < all.size(); ++k) {
                     const FurnitureDetection& o = all[k];

@@ -56,6 +56,9 @@ struct FurniturePieceParams {
     /// Detection: the fitted models of the more likely accepted pieces take their footprints'
     /// space (FurnitureTakenSpace); a piece's box keeps out of it
     bool taken = true;
+    /// Detection: the views' walls (FindFurnitureWalls) take a band of 5 cm on either side of
+    /// their planes, as other pieces take their space
+    bool walls = true;
     float member_share = 0.6f;  ///< share of a part's points within the grown footprint, (0, 1]
     float margin = 0.1f;        ///< footprint grown by this to take in parts [m], >= 0
     float min_growth = 0.05f;   ///< parts reaching less far beyond the box leave it [m], >= 0
@@ -175,6 +178,10 @@ struct FurnitureTakenSpace {
     /// Whether the floor point `xy` (world frame) lies within the box's footprint.
     bool Contains(const Eigen::Vector2f& xy) const;
 };
+
+/// The floor band a wall takes: `half_width` on either side of its plane, along its extent
+/// (FurnitureWall::lo to hi). Throws InvalidArgument for half_width <= 0.
+FurnitureTakenSpace FurnitureWallBand(const FurnitureWall& wall, float half_width);
 
 /// The box of the piece that `fit` explains, in the frame of fit.T_world_model [m]: the fitted
 /// model's box (stretched by fit.scale), grown along the model's horizontal axes to the parts of
