@@ -688,6 +688,20 @@ TEST(FurnitureShape, MeasuresThePieceAgainstTheFittedModel) {
     EXPECT_FLOAT_EQ(MeasureFurnitureShape(with_nan, cad, T).inside_share, 1.0f);
 }
 
+// Appends `pts` (world frame) to the view's cloud as one part, normals up.
+void AddPart(FurnitureParts& view, const std::vector<Eigen::Vector3f>& pts) {
+    FurniturePart part;
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (const auto& p : pts) {
+        part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
+        view.cloud.points.push_back(p);
+        view.cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+        sum += p;
+    }
+    part.centroid = sum / static_cast<float>(pts.size());
+    view.parts.push_back(part);
+}
+
 // The piece's box: a table model 1.2 m long fitted to one end of a 1.8 m table grows to the table
 // (its top and far legs are parts mostly within the model's footprint), its centre moves to the
 // table's; a chair beside it (a part mostly outside) and a wall part do not count; a part reaching
@@ -707,17 +721,9 @@ TEST(FurniturePiece, TheBoxGrowsToTheScannedPartsOfThePieceAndNotToItsNeighbours
     // The scan in the model's frame: a table from x = -0.6 to 1.2 (its top one part, each leg
     // one part), a chair part at x 1.3-1.7 beyond its end, and a wall part behind it.
     FurnitureParts view;
-    auto add_part = [&](const std::vector<Eigen::Vector3f>& pts) {
-        FurniturePart part;
-        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        for (const auto& p : pts) {
-            part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
-            view.cloud.points.push_back(fit.T_world_model * p);
-            view.cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
-            sum += view.cloud.points.back();
-        }
-        part.centroid = sum / static_cast<float>(pts.size());
-        view.parts.push_back(part);
+    auto add_part = [&](std::vector<Eigen::Vector3f> pts) {
+        for (auto& p : pts) p = fit.T_world_model * p;
+        AddPart(view, pts);
     };
     std::vector<Eigen::Vector3f> top, wall, chair;
     for (float x = -0.6f; x <= 1.2f + 1e-4f; x += 0.03f) {
@@ -871,18 +877,12 @@ TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
     const auto [cad, fit] = TableModelFit(1.8f, Eigen::Vector2f(1.0f, -0.5f));
     FurnitureParts view;
     auto add_part = [&](float x0, float x1, float z) {
-        FurniturePart part;
-        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        std::vector<Eigen::Vector3f> pts;
         for (float x = x0; x <= x1 + 1e-4f; x += 0.03f) {
-            for (float y = -0.35f; y <= 0.35f + 1e-4f; y += 0.03f) {
-                part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
-                view.cloud.points.push_back(fit.T_world_model * Eigen::Vector3f(x, y, z));
-                view.cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
-                sum += view.cloud.points.back();
-            }
+            for (float y = -0.35f; y <= 0.35f + 1e-4f; y += 0.03f)
+                pts.push_back(fit.T_world_model * Eigen::Vector3f(x, y, z));
         }
-        part.centroid = sum / static_cast<float>(part.indices.size());
-        view.parts.push_back(part);
+        AddPart(view, pts);
     };
     add_part(-0.9f, -0.1f, 0.75f);  // the table's top
     add_part(0.3f, 0.9f, 0.8f);     // the cabinet's top
@@ -928,25 +928,13 @@ TEST(FurniturePiece, TheBoxKeepsOutOfTheSpaceAMoreLikelyPieceTakes) {
 TEST(FurniturePiece, TheBoxKeepsOutOfAWallsBand) {
     const auto [cad, fit] = TableModelFit(1.2f, Eigen::Vector2f(0.0f, 0.0f));
     FurnitureParts view;
-    auto add_part = [&](const std::vector<Eigen::Vector3f>& pts) {
-        FurniturePart part;
-        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        for (const auto& p : pts) {
-            part.indices.push_back(static_cast<Index>(view.cloud.points.size()));
-            view.cloud.points.push_back(p);
-            view.cloud.normals.emplace_back(0.0f, 1.0f, 0.0f);
-            sum += p;
-        }
-        part.centroid = sum / static_cast<float>(pts.size());
-        view.parts.push_back(part);
-    };
     std::vector<Eigen::Vector3f> top, below;  // the table's top; the wall at y = -0.48 below it
     for (float x = -0.6f; x <= 0.6f + 1e-4f; x += 0.03f) {
         for (float y = -0.4f; y <= 0.4f + 1e-4f; y += 0.03f) top.emplace_back(x, y, 0.75f);
         for (float z = 0.0f; z <= 0.7f; z += 0.03f) below.emplace_back(x, -0.48f, z);
     }
-    add_part(top);
-    add_part(below);
+    AddPart(view, top);
+    AddPart(view, below);
     view.cloud.width = static_cast<std::uint32_t>(view.cloud.points.size());
     FurnitureWall wall;
     wall.point = Eigen::Vector2f(0.0f, -0.48f);
