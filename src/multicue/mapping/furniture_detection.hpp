@@ -39,15 +39,16 @@ struct FurnitureView {
 /// reach beyond the model's box along one of its horizontal axes, the box grows to them (by at
 /// most max_growth of the model's size on that side). A model larger than the piece, fitted over
 /// one end of it, reaches beyond the piece's parts: there the box shrinks towards them (never
-/// inside them) as far as the scans saw free space, slice by slice; a side the scans did not see
-/// stays, since it looks the same as a side that is not there. Only the reported box and centre
-/// change; the tests, the verifier and the overlaps judge the fitted model.
+/// inside them) as far as the scans saw free space or other pieces and walls take the space,
+/// slice by slice; a side the scans did not see stays, since it looks the same as a side that is
+/// not there. Only the reported box and centre change; the tests, the verifier and the overlaps
+/// judge the fitted model.
 struct FurniturePieceParams {
     /// Measure the piece's box at all (grow it, and shrink it when `shrink`); off: the fitted
     /// model's box
     bool grow = true;
-    /// Shrink where the box reaches beyond the parts into observed free space (needs the views'
-    /// free space)
+    /// Shrink where the box reaches beyond the parts into observed free space or space other
+    /// pieces take (needs either)
     bool shrink = true;
     float slice = 0.05f;  ///< slices of this width are cut off one after another [m], > 0
     /// A slice goes when at least this share of its samples (5 cm apart, at three heights up to
@@ -186,8 +187,8 @@ FurnitureTakenSpace FurnitureWallBand(const FurnitureWall& wall, float half_widt
 /// The box of the piece that `fit` explains, in the frame of fit.T_world_model [m]: the fitted
 /// model's box (stretched by fit.scale), grown along the model's horizontal axes to the parts of
 /// `views` that belong to the piece and shrunk towards them through the free space of `free`
-/// (FurniturePieceParams; no shrinking without free space). The space of `taken` belongs to
-/// other pieces: a part lying mostly there is not this piece's, and the box shrinks through it
+/// (FurniturePieceParams; no shrinking without free or taken space). The space of `taken` belongs
+/// to other pieces: a part lying mostly there is not this piece's, and the box shrinks through it
 /// as through free space. Empty without a fitted model. Throws InvalidArgument for bad
 /// parameters.
 Eigen::AlignedBox3f MeasureFurniturePiece(const std::vector<const FurnitureParts*>& views,
