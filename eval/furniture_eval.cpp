@@ -105,6 +105,8 @@ struct Options {
     float piece_free_share = FurniturePieceParams{}.free_share;
     float flip_tolerance = FurnitureFitParams{}.flip_tolerance;
     float max_offset = FurnitureFitParams{}.max_offset;
+    int fit_models = FurnitureDetectionParams{}.fit_models;
+    int verifier_fit_models = 1;  ///< FurnitureTrainingOptions::verifier_fit_models
 };
 
 struct Variant {
@@ -289,6 +291,7 @@ int Run(const Options& o) {
     to.verifier_fit.back_to_wall = o.back_to_wall;
     to.verifier_fit.flip_tolerance = o.flip_tolerance;
     to.verifier_fit.max_offset = o.max_offset;
+    to.verifier_fit_models = o.verifier_fit_models;
     // The training pieces; with --set library, without the tune pieces of --library-fold, which
     // furnish the rooms instead.
     std::vector<sim::FurniturePiece> pieces, held_out;
@@ -384,6 +387,7 @@ int Run(const Options& o) {
     dp.piece.member_share = o.piece_member_share;
     dp.fit.flip_tolerance = o.flip_tolerance;
     dp.fit.max_offset = o.max_offset;
+    dp.fit_models = o.fit_models;
     dp.num_threads = o.threads;
     const FurnitureFitContext context(model, dp.fit);
 
@@ -859,6 +863,14 @@ int main(int argc, char** argv) {
                  "(FurniturePieceParams::shrink)");
     app.add_option("--piece-free-share", o.piece_free_share,
                    "share of a slice's samples in free space to cut it off the piece's box");
+    app.add_option("--fit-models", o.fit_models,
+                   "CAD fit: the best poses of this many models finished per hypothesis "
+                   "(FurnitureDetectionParams::fit_models)")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--verifier-fit-models", o.verifier_fit_models,
+                   "training: CAD models finished per hypothesis in the verifier's rooms "
+                   "(FurnitureTrainingOptions::verifier_fit_models)")
+        ->check(CLI::PositiveNumber);
     app.add_option("--max-offset", o.max_offset,
                    "CAD fit: how far the model's centre may lie from the hypothesis, in class "
                    "widths (FurnitureFitParams::max_offset)");

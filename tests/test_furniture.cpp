@@ -135,6 +135,24 @@ TEST(FurnitureFit, RecoversTheKnownPoseOfATrainingPieceAndRejectsItInFreeSpace) 
     // Upright: the model's z stays the world's z.
     EXPECT_GT(fit.T_world_model.linear()(2, 2), 0.999f);
 
+    // The best poses of several models: the first is the fit above, the others are other
+    // chairs' models, each finished and tested on its own.
+    const std::vector<FurnitureFit> fits = FitFurnitureModels(
+        points, cls, shift.head<2>() + Eigen::Vector2f(0.1f, 0.1f), context, {}, 3);
+    ASSERT_EQ(fits.size(), 3u);  // three procedural chairs, three models
+    EXPECT_EQ(fits[0].cad, fit.cad);
+    EXPECT_TRUE(fits[0].T_world_model.isApprox(fit.T_world_model));
+    EXPECT_EQ(fits[0].coverage, fit.coverage);
+    for (std::size_t k = 1; k < fits.size(); ++k) {
+        EXPECT_GE(fits[k].cad, 0);
+        EXPECT_EQ(model.cads()[static_cast<std::size_t>(fits[k].cad)].cls, cls);
+        for (std::size_t j = 0; j < k; ++j) EXPECT_NE(fits[k].cad, fits[j].cad);
+        // Another chair explains this chair's points less well than its own model does.
+        EXPECT_LE(fits[k].coverage, fit.coverage + 0.02f);
+    }
+    EXPECT_EQ(FitFurnitureModels(points, cls, shift.head<2>(), context, {}, 1).size(), 1u);
+    EXPECT_THROW(FitFurnitureModels(points, cls, shift.head<2>(), context, {}, 0), InvalidArgument);
+
     // The same points where a scan saw only the floor: the model stands in free space.
     PointCloud floor;
     for (float x = -1.5f; x <= 1.5f; x += 0.02f) {
@@ -326,11 +344,24 @@ TEST(FurnitureDetection, VotesFindAPlantedChairForAnyThreadCount) {
     ASSERT_NE(known, nullptr);
     const PieceScans ks = ScanPiece(*known, -1.1f, 3, 12);
     dp.verify = true;
+    dp.fit_models = 1;  // the best model's fit alone
     const FurnitureFitContext context(model, dp.fit);
     const auto verified = DetectFurniture(Views(ks, shift), model, &context, dp);
     ASSERT_FALSE(verified.detections.empty());
     EXPECT_EQ(verified.detections.front().category, "chair");
     EXPECT_LT((verified.detections.front().centre - shift.head<2>()).norm(), 0.15f);
+    // With the best poses of three chair models per hypothesis: still one chair, there; the
+    // other models' fits of it are overlapping fits of the same piece.
+    dp.fit_models = 3;
+    const auto several = DetectFurniture(Views(ks, shift), model, &context, dp);
+    ASSERT_FALSE(several.detections.empty());
+    std::size_t chairs_near = 0;
+    for (const auto& d : several.detections)
+        chairs_near += d.category == "chair" && (d.centre - shift.head<2>()).norm() < 0.3f;
+    EXPECT_EQ(chairs_near, 1u);
+    EXPECT_EQ(several.detections.front().category, "chair");
+    EXPECT_LT((several.detections.front().centre - shift.head<2>()).norm(), 0.15f);
+    EXPECT_GT(several.rejected.size(), verified.rejected.size());
 
     // The model file: written and read back, the same votes; a truncated file is refused.
     const auto path = std::filesystem::temp_directory_path() / "multicue_test_furniture.mcfm";
@@ -574,6 +605,9 @@ TEST(FurnitureDetection, BadParametersAndInputAreRefused) {
     EXPECT_THROW(dp.Validate(), InvalidArgument);
     dp = {};
     dp.num_threads = -1;
+    EXPECT_THROW(dp.Validate(), InvalidArgument);
+    dp = {};
+    dp.fit_models = 0;
     EXPECT_THROW(dp.Validate(), InvalidArgument);
     dp = {};
     dp.fit.min_coverage = 1.5f;
@@ -1262,6 +1296,9 @@ TEST(MapFurnitureCli, RefusesBadParametersAndScansWithoutASensorPose) {
               0);
     EXPECT_NE(Cli("map furniture " + (dir / "no_pose.pcd").string() + " --model " + model +
                   " --out " + out + " --min-confidence 1.5"),
+              0);
+    EXPECT_NE(Cli("map furniture " + (dir / "no_pose.pcd").string() + " --model " + model +
+                  " --out " + out + " --fit-models 0"),
               0);
     EXPECT_NE(Cli("map furniture " + (dir / "no_pose.pcd").string() + " --model " + model +
                   " --out " + out),

@@ -47,6 +47,7 @@ struct MapFurnitureOptions {
     bool learned_tests = true;
     float min_confidence = FurnitureDetectionParams{}.min_confidence;
     float min_confidence_single = FurnitureDetectionParams{}.min_confidence_single;
+    int fit_models = FurnitureDetectionParams{}.fit_models;
     bool quiet = false;
     bool detect = false;  ///< `detect furniture`: the model must exist; result.json, report.html
     bool report = true;
@@ -160,6 +161,7 @@ void Run(const MapFurnitureOptions& o, const GlobalOptions& global) {
     params.learned_tests = o.learned_tests;
     params.min_confidence = o.min_confidence;
     params.min_confidence_single = o.min_confidence_single;
+    params.fit_models = o.fit_models;
     params.num_threads = global.threads;
     params.Validate();  // before reading or training anything
     for (const auto& s : o.scans) CheckDistinctPaths(s, o.out);
@@ -248,6 +250,9 @@ void AddDetectionOptions(CLI::App* cmd, MapFurnitureOptions* o) {
         ->capture_default_str();
     cmd->add_option("--min-confidence-single", o->min_confidence_single,
                     "the same for a single scan, [0, 1]")
+        ->capture_default_str();
+    cmd->add_option("--fit-models", o->fit_models,
+                    "CAD models whose best poses are finished and judged per hypothesis, >= 1")
         ->capture_default_str();
     cmd->add_flag(
         "--no-learned", [o](std::int64_t) { o->learned = false; },

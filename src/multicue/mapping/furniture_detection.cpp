@@ -240,6 +240,10 @@ void FurnitureDetectionParams::Validate() const {
         throw InvalidArgument(
             fmt::format("furniture detection: num_threads must be >= 0, got {}", num_threads));
     }
+    if (fit_models < 1) {
+        throw InvalidArgument(
+            fmt::format("furniture detection: fit_models must be >= 1, got {}", fit_models));
+    }
     for (const auto& [name, v] : {std::pair{"min_confidence", min_confidence},
                                   {"min_confidence_single", min_confidence_single}}) {
         if (!(v >= 0.0f && v <= 1.0f)) {
@@ -690,31 +694,47 @@ FurnitureDetectionResult DetectFurniture(const FurnitureScene& scene,
             if (static_cast<std::size_t>(v) < scene.free_space.size())
                 space.free.push_back(&scene.free_space[static_cast<std::size_t>(v)]);
         }
+        // Each hypothesis's fits: the best model's in place, the other models' (fit_models)
+        // appended after the hypotheses as detections of their own.
+        std::vector<std::vector<FurnitureDetection>> others(all.size());
         ParallelFor(
             all.size(), params.num_threads,
             [&](std::size_t i) {
-                FurnitureDetection& d = all[i];
-                if (!d.accepted) return;  // behind a wall
-                const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(d.cls)];
+                if (!all[i].accepted) return;  // behind a wall
+                const FurnitureClass& cls = model.classes()[static_cast<std::size_t>(all[i].cls)];
                 const PointCloud pts =
-                    SupportPoints(scene, d.hypothesis, cls.length / 2 + params.support_margin);
-                d.fit = FitFurniture(pts, d.cls, d.hypothesis.centre, *context, space);
-                d.fitted = d.fit.cad >= 0;
-                if (d.fitted) {
-                    d.centre = d.fit.T_world_model.translation().head<2>();
-                    d.score *= std::max(
-                        0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
-                    const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
-                    d.explained = SharedSurface(PlaceSurface(cad.cloud, d.fit.FittedModelToWorld(),
-                                                             params.surface_overlap_distance),
-                                                PlaceSurface(pts, Eigen::Isometry3f::Identity(),
-                                                             params.surface_overlap_distance));
-                    d.shape = MeasureFurnitureShape(pts, cad, d.fit.FittedModelToWorld());
+                    SupportPoints(scene, all[i].hypothesis, cls.length / 2 + params.support_margin);
+                std::vector<FurnitureFit> fits = FitFurnitureModels(
+                    pts, all[i].cls, all[i].hypothesis.centre, *context, space, params.fit_models);
+                auto finish = [&](FurnitureDetection& d, FurnitureFit&& fit) {
+                    d.fit = std::move(fit);
+                    d.fitted = d.fit.cad >= 0;
+                    if (d.fitted) {
+                        d.centre = d.fit.T_world_model.translation().head<2>();
+                        d.score *= std::max(
+                            0.0f, 0.5f + d.fit.coverage - d.fit.free_share - d.fit.behind_share);
+                        const FurnitureCad& cad = model.cads()[static_cast<std::size_t>(d.fit.cad)];
+                        d.explained =
+                            SharedSurface(PlaceSurface(cad.cloud, d.fit.FittedModelToWorld(),
+                                                       params.surface_overlap_distance),
+                                          PlaceSurface(pts, Eigen::Isometry3f::Identity(),
+                                                       params.surface_overlap_distance));
+                        d.shape = MeasureFurnitureShape(pts, cad, d.fit.FittedModelToWorld());
+                    }
+                    d.accepted = d.fit.accepted;
+                    d.rejection = d.fit.rejection;
+                };
+                for (std::size_t k = 1; k < fits.size(); ++k) {
+                    others[i].push_back(all[i]);
+                    finish(others[i].back(), std::move(fits[k]));
                 }
-                d.accepted = d.fit.accepted;
-                d.rejection = d.fit.rejection;
+                finish(all[i], std::move(fits.front()));
             },
             1);
+        for (const auto& d : all) result.fitted_hypotheses += d.fitted ? 1 : 0;
+        for (auto& list : others) {
+            for (auto& d : list) all.push_back(std::move(d));
+        }
         if (verifier != nullptr) {
             // The verifier's probability of a right fit for every fit that passed the tests
             // and, with learned_tests, every fit they rejected: the verifier decides.

@@ -99,13 +99,13 @@ struct FurnitureDetectionParams {
     /// below min_confidence are rejected, the confidence is the detection's score and decides
     /// which of overlapping fits stays
     bool learned = true;
-    /// [0, 1]; 0.3: the lowest cut at which the merged precision of the validation rooms and the
-    /// library folds together stays at 0.9 (eval/README.md)
-    float min_confidence = 0.3f;
+    /// [0, 1]; 0.35: the lowest cut at which the merged precision of the validation rooms and
+    /// the library folds together stays at 0.9, with fit_models 3 (eval/README.md)
+    float min_confidence = 0.35f;
     /// The same for a single view, [0, 1]: the verifier, which does not know how many views a
-    /// fit saw, is less often right about a fit to one scan; 0.35 chosen the same way on single
+    /// fit saw, is less often right about a fit to one scan; 0.4 chosen the same way on single
     /// scans
-    float min_confidence_single = 0.35f;
+    float min_confidence_single = 0.4f;
     /// With learned verification, the verifier also judges the fits that the coverage,
     /// free-space and wall tests rejected (its features hold the same shares): it replaces the
     /// tests. Off: a fit must pass the tests and the verifier
@@ -113,6 +113,13 @@ struct FurnitureDetectionParams {
     /// Parts whose centre lies further from a hypothesis than half its class's length plus this
     /// are left out of its fit [m], >= 0
     float support_margin = 0.3f;
+    /// With verify: the best poses of this many CAD models of the class are finished per
+    /// hypothesis (FitFurnitureModels), each a fit of its own; overlapping fits of one piece are
+    /// then one detection, the most likely (or best explaining) staying. A model of the piece's
+    /// size placed on it can then win over a longer one that the search preferred because it
+    /// also covers a neighbour. 1: the best model's fit alone (the thesis), >= 1; 3 found more
+    /// pieces on the validation rooms and library folds (eval/README.md)
+    int fit_models = 3;
     /// Reject hypotheses and fits behind the views' walls (margin and share: fit.wall_margin,
     /// fit.max_behind_share)
     bool walls = true;
@@ -255,8 +262,9 @@ struct FurnitureDetectionResult {
     std::vector<FurnitureDetection> detections;  ///< accepted, strongest first
     std::vector<FurnitureDetection> rejected;    ///< rejected hypotheses, strongest first
     std::size_t votes = 0;
-    double selection_ms = 0.0;  ///< merging and selection [ms]
-    double fit_ms = 0.0;        ///< fitting and verification of all hypotheses [ms]
+    double selection_ms = 0.0;          ///< merging and selection [ms]
+    double fit_ms = 0.0;                ///< fitting and verification of all hypotheses [ms]
+    std::size_t fitted_hypotheses = 0;  ///< hypotheses a model was fitted to (fit_ms's count)
 };
 
 /// Detections from the views `subset` of `scene` (empty: all, merged). `context` is needed with

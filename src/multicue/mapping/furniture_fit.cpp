@@ -255,132 +255,19 @@ Penalty ModelPenalty(const PointCloud& cloud, const Eigen::Affine3f& T, std::siz
     return out;
 }
 
-}  // namespace
-
-FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
-                          const FurnitureFitContext& context, const FurnitureSpace& space) {
+// The pose (`yaw`, `t_xy`) of model `cad_index` found by the search, refined, stretched, turned
+// and tested; `fit` brings the search's counts. `s`, `sn`: the thinned scan points and normals.
+FurnitureFit FinishFit(FurnitureFit fit, int cad_index, float yaw, const Eigen::Vector2f& t_xy,
+                       const std::vector<Eigen::Vector3f>& s,
+                       const std::vector<Eigen::Vector3f>& sn, const Eigen::Vector2f& centre,
+                       float max_offset, const FurnitureFitContext& context,
+                       const FurnitureSpace& space) {
     const auto t0 = std::chrono::steady_clock::now();
     const FurnitureModel& model = context.model();
     const FurnitureFitParams& p = context.params();
-    if (cls < 0 || cls >= static_cast<int>(model.classes().size())) {
-        throw InvalidArgument(fmt::format("furniture fit: unknown class {}", cls));
-    }
-    if (points.normals.size() != points.size()) {
-        throw InvalidArgument("furniture fit: the scan points need normals");
-    }
-    FurnitureFit fit;
-    fit.rejection = "no_fit";
-    // The scan points, thinned evenly.
-    std::vector<Eigen::Vector3f> s, sn;
-    std::vector<std::size_t> usable;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        if (points.points[i].allFinite() && points.normals[i].allFinite()) usable.push_back(i);
-    }
-    const std::size_t stride =
-        std::max<std::size_t>(1, (usable.size() + p.max_scan_points - 1) / p.max_scan_points);
-    for (std::size_t k = 0; k < usable.size(); k += stride) {
-        s.push_back(points.points[usable[k]]);
-        sn.push_back(points.normals[usable[k]]);
-    }
-    fit.scan_points = s.size();
-    if (s.size() < 10) {
-        fit.ms = MsSince(t0);
-        return fit;
-    }
-    Rng rng{p.seed ^ (static_cast<std::uint64_t>(cls) << 32) ^ s.size()};
-    // The scan points checked per pose: an even share of them.
-    std::vector<Eigen::Vector3f> checked;
-    const std::size_t check_stride =
-        std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0f / p.checked_share)));
-    for (std::size_t k = 0; k < s.size(); k += check_stride) checked.push_back(s[k]);
-    const float n_checked = static_cast<float>(checked.size());
-    const std::size_t slack = checked.size() / 20;  // poses within 5 % of the best coverage
-    const float max_offset = p.max_offset * model.classes()[static_cast<std::size_t>(cls)].width;
-    const float hmin = p.min_horizontal_normal;
-    struct Pose {
-        int cad = -1;
-        std::size_t covered = 0;
-        float score = -2.0f;  ///< coverage share minus penalties
-        float yaw = 0.0f;
-        Eigen::Vector2f t = Eigen::Vector2f::Zero();
-    };
-    Pose best;
-    std::size_t global_covered = 0;
-    for (std::size_t m = 0; m < model.cads().size(); ++m) {
-        if (model.cads()[m].cls != cls) continue;
-        const auto& cad = context.cad(m);
-        const auto& cloud = model.cads()[m].cloud;
-        if (cad.points.empty()) continue;
-        ++fit.models_tried;
-        std::size_t model_covered = 0;
-        // Eq. (4.6) with the best coverage of any model so far: later models stop early.
-        int required = RequiredIterations(static_cast<double>(global_covered) / n_checked,
-                                          p.success_probability, p.max_iterations);
-        for (int it = 0; it < required; ++it) {
-            ++fit.iterations;
-            const std::size_t si = rng.Next() % s.size();
-            const Eigen::Vector3f& sp = s[si];
-            const auto lo =
-                std::lower_bound(cad.z.begin(), cad.z.end(), sp.z() - p.height_tolerance);
-            const auto hi =
-                std::upper_bound(cad.z.begin(), cad.z.end(), sp.z() + p.height_tolerance);
-            const auto n_band = static_cast<std::size_t>(hi - lo);
-            if (n_band == 0) continue;
-            const std::size_t first = static_cast<std::size_t>(lo - cad.z.begin());
-            const std::size_t tries = std::min(
-                p.max_candidates,
-                std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(
-                                             p.checked_share * static_cast<float>(n_band)))));
-            const Eigen::Vector2f sxy = sn[si].head<2>();
-            for (std::size_t c = 0; c < tries; ++c) {
-                const std::size_t mi = first + rng.Next() % n_band;
-                const Eigen::Vector2f mxy = cad.normals[mi].head<2>();
-                float yaw;
-                if (sxy.norm() >= hmin && mxy.norm() >= hmin) {
-                    yaw = std::atan2(sxy.y(), sxy.x()) - std::atan2(mxy.y(), mxy.x());
-                } else {
-                    yaw = (2.0f * rng.Uniform() - 1.0f) * kPi;  // rotation undetermined
-                }
-                const Eigen::Rotation2Df R(yaw);
-                const Eigen::Vector2f t = sp.head<2>() - R * cad.points[mi].head<2>();
-                if ((t - centre).norm() > max_offset) continue;
-                // Covered checked points, abandoned once it cannot come near this model's best.
-                const Eigen::Rotation2Df Rinv(-yaw);
-                const std::size_t bar = model_covered > slack ? model_covered - slack : 0;
-                std::size_t covered = 0;
-                bool abandoned = false;
-                for (std::size_t k = 0; k < checked.size(); ++k) {
-                    if (covered + (checked.size() - k) < bar) {
-                        abandoned = true;
-                        break;
-                    }
-                    const Eigen::Vector2f q = Rinv * (checked[k].head<2>() - t);
-                    covered += cad.Covers(Eigen::Vector3f(q.x(), q.y(), checked[k].z())) ? 1 : 0;
-                }
-                if (abandoned || covered < bar || covered == 0) continue;
-                const float score = static_cast<float>(covered) / n_checked -
-                                    ModelPenalty(cloud, UprightPose(yaw, t), p.max_search_checks,
-                                                 space, p.wall_margin)
-                                        .Sum();
-                if (covered > model_covered) {
-                    model_covered = covered;
-                    global_covered = std::max(global_covered, covered);
-                    required =
-                        std::min(required,
-                                 RequiredIterations(static_cast<double>(global_covered) / n_checked,
-                                                    p.success_probability, p.max_iterations));
-                }
-                if (score > best.score) best = {static_cast<int>(m), covered, score, yaw, t};
-            }
-        }
-    }
-    if (best.cad < 0) {
-        fit.ms = MsSince(t0);
-        return fit;
-    }
-    fit.cad = best.cad;
-    fit.yaw = best.yaw;
-    fit.T_world_model = UprightPose(best.yaw, best.t);
+    fit.cad = cad_index;
+    fit.yaw = yaw;
+    fit.T_world_model = UprightPose(yaw, t_xy);
     const auto& cad = context.cad(static_cast<std::size_t>(fit.cad));
     const auto& target = model.cads()[static_cast<std::size_t>(fit.cad)].cloud;
     // Scan points covered by the model stretched by `scale` and placed by T.
@@ -410,13 +297,13 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
                                                  fit.T_world_model.inverse().cast<double>());
         if (r.T_target_source.matrix().allFinite()) {
             const Eigen::Isometry3f T = r.T_target_source.inverse().cast<float>();
-            const float yaw = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
-            const Eigen::Isometry3f upright = UprightPose(yaw, T.translation().head<2>());
+            const float refined = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
+            const Eigen::Isometry3f upright = UprightPose(refined, T.translation().head<2>());
             const std::size_t n = coverage(upright, one);
             if (n >= fit.covered &&
                 (upright.translation().head<2>() - centre).norm() <= max_offset) {
                 fit.T_world_model = upright;
-                fit.yaw = yaw;
+                fit.yaw = refined;
                 fit.covered = n;
                 fit.refined = true;
             }
@@ -524,8 +411,161 @@ FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector
         fit.rejection.clear();
         fit.accepted = true;
     }
-    fit.ms = MsSince(t0);
+    fit.ms += MsSince(t0);
     return fit;
+}
+
+}  // namespace
+
+std::vector<FurnitureFit> FitFurnitureModels(const PointCloud& points, int cls,
+                                             const Eigen::Vector2f& centre,
+                                             const FurnitureFitContext& context,
+                                             const FurnitureSpace& space, int count) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const FurnitureModel& model = context.model();
+    const FurnitureFitParams& p = context.params();
+    if (cls < 0 || cls >= static_cast<int>(model.classes().size())) {
+        throw InvalidArgument(fmt::format("furniture fit: unknown class {}", cls));
+    }
+    if (points.normals.size() != points.size()) {
+        throw InvalidArgument("furniture fit: the scan points need normals");
+    }
+    if (count < 1) {
+        throw InvalidArgument(fmt::format("furniture fit: count must be >= 1, got {}", count));
+    }
+    FurnitureFit fit;
+    fit.rejection = "no_fit";
+    // The scan points, thinned evenly.
+    std::vector<Eigen::Vector3f> s, sn;
+    std::vector<std::size_t> usable;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        if (points.points[i].allFinite() && points.normals[i].allFinite()) usable.push_back(i);
+    }
+    const std::size_t stride =
+        std::max<std::size_t>(1, (usable.size() + p.max_scan_points - 1) / p.max_scan_points);
+    for (std::size_t k = 0; k < usable.size(); k += stride) {
+        s.push_back(points.points[usable[k]]);
+        sn.push_back(points.normals[usable[k]]);
+    }
+    fit.scan_points = s.size();
+    if (s.size() < 10) {
+        fit.ms = MsSince(t0);
+        return {fit};
+    }
+    Rng rng{p.seed ^ (static_cast<std::uint64_t>(cls) << 32) ^ s.size()};
+    // The scan points checked per pose: an even share of them.
+    std::vector<Eigen::Vector3f> checked;
+    const std::size_t check_stride =
+        std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0f / p.checked_share)));
+    for (std::size_t k = 0; k < s.size(); k += check_stride) checked.push_back(s[k]);
+    const float n_checked = static_cast<float>(checked.size());
+    const std::size_t slack = checked.size() / 20;  // poses within 5 % of the best coverage
+    const float max_offset = p.max_offset * model.classes()[static_cast<std::size_t>(cls)].width;
+    const float hmin = p.min_horizontal_normal;
+    struct Pose {
+        int cad = -1;
+        std::size_t covered = 0;
+        float score = -2.0f;  ///< coverage share minus penalties
+        float yaw = 0.0f;
+        Eigen::Vector2f t = Eigen::Vector2f::Zero();
+    };
+    Pose best;
+    std::vector<Pose> best_of(model.cads().size());  ///< each model's best pose
+    std::size_t global_covered = 0;
+    for (std::size_t m = 0; m < model.cads().size(); ++m) {
+        if (model.cads()[m].cls != cls) continue;
+        const auto& cad = context.cad(m);
+        const auto& cloud = model.cads()[m].cloud;
+        if (cad.points.empty()) continue;
+        ++fit.models_tried;
+        std::size_t model_covered = 0;
+        // Eq. (4.6) with the best coverage of any model so far: later models stop early.
+        int required = RequiredIterations(static_cast<double>(global_covered) / n_checked,
+                                          p.success_probability, p.max_iterations);
+        for (int it = 0; it < required; ++it) {
+            ++fit.iterations;
+            const std::size_t si = rng.Next() % s.size();
+            const Eigen::Vector3f& sp = s[si];
+            const auto lo =
+                std::lower_bound(cad.z.begin(), cad.z.end(), sp.z() - p.height_tolerance);
+            const auto hi =
+                std::upper_bound(cad.z.begin(), cad.z.end(), sp.z() + p.height_tolerance);
+            const auto n_band = static_cast<std::size_t>(hi - lo);
+            if (n_band == 0) continue;
+            const std::size_t first = static_cast<std::size_t>(lo - cad.z.begin());
+            const std::size_t tries = std::min(
+                p.max_candidates,
+                std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(
+                                             p.checked_share * static_cast<float>(n_band)))));
+            const Eigen::Vector2f sxy = sn[si].head<2>();
+            for (std::size_t c = 0; c < tries; ++c) {
+                const std::size_t mi = first + rng.Next() % n_band;
+                const Eigen::Vector2f mxy = cad.normals[mi].head<2>();
+                float yaw;
+                if (sxy.norm() >= hmin && mxy.norm() >= hmin) {
+                    yaw = std::atan2(sxy.y(), sxy.x()) - std::atan2(mxy.y(), mxy.x());
+                } else {
+                    yaw = (2.0f * rng.Uniform() - 1.0f) * kPi;  // rotation undetermined
+                }
+                const Eigen::Rotation2Df R(yaw);
+                const Eigen::Vector2f t = sp.head<2>() - R * cad.points[mi].head<2>();
+                if ((t - centre).norm() > max_offset) continue;
+                // Covered checked points, abandoned once it cannot come near this model's best.
+                const Eigen::Rotation2Df Rinv(-yaw);
+                const std::size_t bar = model_covered > slack ? model_covered - slack : 0;
+                std::size_t covered = 0;
+                bool abandoned = false;
+                for (std::size_t k = 0; k < checked.size(); ++k) {
+                    if (covered + (checked.size() - k) < bar) {
+                        abandoned = true;
+                        break;
+                    }
+                    const Eigen::Vector2f q = Rinv * (checked[k].head<2>() - t);
+                    covered += cad.Covers(Eigen::Vector3f(q.x(), q.y(), checked[k].z())) ? 1 : 0;
+                }
+                if (abandoned || covered < bar || covered == 0) continue;
+                const float score = static_cast<float>(covered) / n_checked -
+                                    ModelPenalty(cloud, UprightPose(yaw, t), p.max_search_checks,
+                                                 space, p.wall_margin)
+                                        .Sum();
+                if (covered > model_covered) {
+                    model_covered = covered;
+                    global_covered = std::max(global_covered, covered);
+                    required =
+                        std::min(required,
+                                 RequiredIterations(static_cast<double>(global_covered) / n_checked,
+                                                    p.success_probability, p.max_iterations));
+                }
+                if (score > best_of[m].score)
+                    best_of[m] = {static_cast<int>(m), covered, score, yaw, t};
+                if (score > best.score) best = best_of[m];
+            }
+        }
+    }
+    if (best.cad < 0) {
+        fit.ms = MsSince(t0);
+        return {fit};
+    }
+    // The models to finish: the best, then the other models' best poses by score.
+    std::vector<Pose> chosen;
+    for (const Pose& b : best_of) {
+        if (b.cad >= 0) chosen.push_back(b);
+    }
+    std::stable_sort(chosen.begin(), chosen.end(),
+                     [](const Pose& a, const Pose& b) { return a.score > b.score; });
+    if (chosen.size() > static_cast<std::size_t>(count))
+        chosen.resize(static_cast<std::size_t>(count));
+    std::vector<FurnitureFit> fits;
+    for (const Pose& pose : chosen)
+        fits.push_back(
+            FinishFit(fit, pose.cad, pose.yaw, pose.t, s, sn, centre, max_offset, context, space));
+    fits.front().ms = MsSince(t0);
+    return fits;
+}
+
+FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
+                          const FurnitureFitContext& context, const FurnitureSpace& space) {
+    return FitFurnitureModels(points, cls, centre, context, space, 1).front();
 }
 
 }  // namespace multicue

@@ -193,4 +193,14 @@ struct FurnitureFit {
 FurnitureFit FitFurniture(const PointCloud& points, int cls, const Eigen::Vector2f& centre,
                           const FurnitureFitContext& context, const FurnitureSpace& space = {});
 
+/// The same, finishing (refining, testing) the best pose of each of the `count` models that
+/// scored best in the search, best first: a shorter model placed on the piece may explain it
+/// better to the verifier than a longer one that also covers a neighbour. At least one fit (with
+/// `cad` -1 when nothing was found), at most `count` (>= 1, else InvalidArgument), of distinct
+/// models. The first is FitFurniture's.
+std::vector<FurnitureFit> FitFurnitureModels(const PointCloud& points, int cls,
+                                             const Eigen::Vector2f& centre,
+                                             const FurnitureFitContext& context,
+                                             const FurnitureSpace& space, int count);
+
 }  // namespace multicue

@@ -78,6 +78,10 @@ void FurnitureTrainingOptions::Validate() const {
             fmt::format("furniture training: verifier_library_rooms must be >= 0, got {}",
                         verifier_library_rooms));
     }
+    if (verifier_fit_models < 1) {
+        throw InvalidArgument(fmt::format(
+            "furniture training: verifier_fit_models must be >= 1, got {}", verifier_fit_models));
+    }
     if (verifier_rooms > 0) {
         (void)ml::CreateClassifier(verifier_spec);  // throws for a bad spec
         verifier_fit.Validate();
@@ -386,6 +390,7 @@ void AppendVerifierRows(ml::Dataset& rows, const FurnitureModel& fit_model,
     dp.selection.threshold_scale = 1.0f;
     dp.learned = false;
     dp.fit = o.verifier_fit;
+    dp.fit_models = o.verifier_fit_models;
     dp.piece.grow = false;  // the label judges the fitted model, which the features describe
     dp.num_threads = o.num_threads;
     const FurnitureFitContext context(fit_model, dp.fit);

@@ -76,6 +76,11 @@ struct FurnitureTrainingOptions {
     /// CAD fitting in the verifier rooms: the parameters detection will use (the verifier learns
     /// what their fits look like)
     FurnitureFitParams verifier_fit{};
+    /// CAD models finished per hypothesis in the verifier rooms (FurnitureDetectionParams::
+    /// fit_models), >= 1. 1: the verifier learns from the best model's fits alone; with the other
+    /// models' fits among its rows it ranked worse on the validation rooms and library folds
+    /// (eval/README.md)
+    int verifier_fit_models = 1;
     int num_threads = 0;  ///< 0 = all cores; never changes the model
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
