@@ -8,10 +8,11 @@
 /// points together. A pose scores the scan points it covers (a model point within
 /// inlier_distance), counted on a share of the scan points and abandoned as soon as it cannot
 /// beat the best pose of any model so far. The iteration count adapts by Eq. (4.6) with
-/// p_good = covered / all scan points, over all models of the class together. The best pose is
-/// refined by ICP (registration module, point-to-plane) and projected back to upright, then
-/// optionally stretched to the piece's size (max_scale), and turned to face the room when it faces
-/// a wall it stands against (back_to_wall).
+/// p_good = covered / all scan points, over all models of the class together. The best pose (with
+/// FitFurnitureModels, each of the best few models' best poses) is refined by ICP (registration
+/// module, point-to-plane) and projected back to upright, then optionally stretched to the
+/// piece's size (max_scale), and turned to face the room when it faces a wall it stands against
+/// (back_to_wall).
 ///
 /// Verification rejects a fit that covers less than min_coverage of the scan points, and one
 /// whose model lies in space a scan saw as free: a model point counts as in free space when its
