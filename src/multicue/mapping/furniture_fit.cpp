@@ -464,12 +464,10 @@ std::vector<FurnitureFit> FitFurnitureModels(const PointCloud& points, int cls,
     const float hmin = p.min_horizontal_normal;
     struct Pose {
         int cad = -1;
-        std::size_t covered = 0;
         float score = -2.0f;  ///< coverage share minus penalties
         float yaw = 0.0f;
         Eigen::Vector2f t = Eigen::Vector2f::Zero();
     };
-    Pose best;
     std::vector<Pose> best_of(model.cads().size());  ///< each model's best pose
     std::size_t global_covered = 0;
     for (std::size_t m = 0; m < model.cads().size(); ++m) {
@@ -536,20 +534,19 @@ std::vector<FurnitureFit> FitFurnitureModels(const PointCloud& points, int cls,
                                  RequiredIterations(static_cast<double>(global_covered) / n_checked,
                                                     p.success_probability, p.max_iterations));
                 }
-                if (score > best_of[m].score)
-                    best_of[m] = {static_cast<int>(m), covered, score, yaw, t};
-                if (score > best.score) best = best_of[m];
+                if (score > best_of[m].score) best_of[m] = {static_cast<int>(m), score, yaw, t};
             }
         }
     }
-    if (best.cad < 0) {
-        fit.ms = MsSince(t0);
-        return {fit};
-    }
-    // The models to finish: the best, then the other models' best poses by score.
+    // The models to finish: each model's best pose by score, the best first (ties: the earlier
+    // model), as many as `count`.
     std::vector<Pose> chosen;
     for (const Pose& b : best_of) {
         if (b.cad >= 0) chosen.push_back(b);
+    }
+    if (chosen.empty()) {
+        fit.ms = MsSince(t0);
+        return {fit};
     }
     std::stable_sort(chosen.begin(), chosen.end(),
                      [](const Pose& a, const Pose& b) { return a.score > b.score; });
