@@ -141,6 +141,8 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         {"recess", &m.outline.recess},
         {"step", &m.outline.step},
         {"gap_cut_support", &m.gap_fronts.cut_support},
+        {"nest_share", &p.nest_share},
+        {"nest_depth", &p.nest_depth},
         {"gap_cut_coverage", &m.gap_fronts.cut_coverage},
         {"gap_min_size", &m.gap_fronts.min_size},
         {"gap_cut_margin", &m.gap_fronts.cut_margin},
@@ -159,10 +161,12 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         m.extend_fronts = v != 0.0f;
     } else if (name == "split") {
         p.split_at_outlines = v != 0.0f;
+
     } else if (name == "gap") {
         m.gap_fronts.enabled = v != 0.0f;
     } else if (name == "gap_grow") {
         m.gap_fronts.grow_fixture_fronts = v != 0.0f;
+
     } else if (const auto it = fields.find(name); it != fields.end()) {
         *it->second = v;
     } else {
@@ -644,12 +648,27 @@ class Evaluator {
                 ++s.front_why[why];
                 if (o_.verbose) {
                     const auto inst = static_cast<std::size_t>(key >> 16) - 1;
+                    // Where its points went in the map: on a face (or a front) at all?
+                    std::size_t on_face = 0, free_face = 0, other_front = 0;
+                    const std::uint32_t mine =
+                        it == match.end() ? 0u : static_cast<std::uint32_t>(it->second.first + 1);
+                    for (std::size_t i = 0; i < f.cloud.size(); ++i) {
+                        if (!t.IsFront(i) || t.Key(i) != key) continue;
+                        const auto pc = map.point_class[i];
+                        on_face += pc == MapClass::kFace || pc == MapClass::kFront;
+                        free_face += pc == MapClass::kFace;
+                        other_front += pc == MapClass::kFront && map.point_front[i] != mine;
+                    }
                     std::fprintf(
                         stderr,
-                        "front %s %s: %s (%zu points, IoU %.2f, precision %.2f, recall %.2f)\n",
+                        "front %s %s: %s (%zu points, IoU %.2f, precision %.2f, recall "
+                        "%.2f, on a face %.2f: in no front %.2f, in another %.2f)\n",
                         f.laser ? "laser" : "kinect",
                         inst < k.instances.size() ? k.instances[inst].model->id.c_str() : "?",
-                        why.c_str(), tf.points, iou, precision, recall);
+                        why.c_str(), tf.points, iou, precision, recall,
+                        static_cast<double>(on_face) / static_cast<double>(tf.points),
+                        static_cast<double>(free_face) / static_cast<double>(tf.points),
+                        static_cast<double>(other_front) / static_cast<double>(tf.points));
                 }
             }
             if (found && it != match.end()) {

@@ -591,6 +591,81 @@ TEST(SegmentFronts, TwoKnobsNearTheEndsOfOneFrontStayOneFront) {
                  InvalidArgument);
 }
 
+TEST(MergeNestedFronts, APanelInsideADoorJoinsItAndNeighboursStay) {
+    // Faces facing -y: the doors' plane y = 2.4, a recessed panel's plane 2 cm behind it and a
+    // carcass' back 20 cm behind it.
+    RoomStructure s;
+    for (const float y : {2.4f, 2.42f, 2.6f}) {
+        PlanarComponent c;
+        c.axis = 1;
+        c.plane = Eigen::Vector4f(0.0f, -1.0f, 0.0f, y);
+        c.label = MapClass::kFace;
+        s.components.push_back(c);
+    }
+    // A front on face `face` over x0..x1, z0..z1 (u may run along -x: corners in the world).
+    auto front = [&](int face, float x0, float x1, float z0, float z1, Indices idx,
+                     std::vector<int> fx) {
+        Front f;
+        f.face = face;
+        f.indices = std::move(idx);
+        f.fixtures = std::move(fx);
+        const PlanarComponent& c = s.components[static_cast<std::size_t>(face)];
+        const float y = c.plane.w();
+        const Eigen::Vector2f a = PlaneCoordinates(c, RoomFrame{}, {x0, y, z0});
+        const Eigen::Vector2f b = PlaneCoordinates(c, RoomFrame{}, {x1, y, z1});
+        SetFrontRectangle(f, c, RoomFrame{}, a.cwiseMin(b), a.cwiseMax(b));
+        return f;
+    };
+    const std::vector<Front> input = {
+        front(0, 0.0f, 0.6f, 0.1f, 0.8f, {1, 2, 3}, {0}),  // the door's frame, its handle
+        front(1, 0.1f, 0.5f, 0.2f, 0.7f, {4, 5}, {1}),     // its recessed panel
+        front(0, 0.62f, 1.2f, 0.1f, 0.8f, {6}, {2}),       // the next door
+        front(2, 0.1f, 0.5f, 0.2f, 0.7f, {7}, {}),         // far behind the door
+        front(0, 0.3f, 0.9f, 0.85f, 1.0f, {8}, {3}),       // above, beside both doors
+        front(0, 0.7f, 0.9f, 0.3f, 0.5f, {9, 10}, {}),     // inside the next door, same face
+    };
+    auto check = [](const std::vector<Front>& out) {
+        ASSERT_EQ(out.size(), 5u);
+        std::set<Index> firsts;
+        for (const Front& f : out) firsts.insert(f.indices.front());
+        EXPECT_EQ(firsts, (std::set<Index>{1, 6, 7, 8, 9}));
+        for (const Front& f : out) {
+            if (f.indices.front() == 1) {
+                EXPECT_EQ(f.indices, (Indices{1, 2, 3, 4, 5}));
+                EXPECT_EQ(f.fixtures, std::vector<int>{0});       // the panel's fixture is no one's
+                EXPECT_NEAR(f.max.y() - f.min.y(), 0.7f, 1e-5f);  // its rectangle stays
+            }
+            // On its own face the larger front is the one in error (run on over a neighbour).
+            if (f.indices.front() == 6) {
+                EXPECT_EQ(f.indices, Indices{6});
+            }
+        }
+    };
+    std::vector<Front> fronts = input;
+    MergeNestedFronts(s, fronts);
+    check(fronts);
+    // In any order the same fronts come out.
+    std::vector<Front> reversed(input.rbegin(), input.rend());
+    MergeNestedFronts(s, reversed);
+    check(reversed);
+    // Off, or with a shallower nesting depth than the panel's recess, the panel stays its own.
+    std::vector<Front> off = input;
+    MergeNestedFronts(s, off, {.nest_share = 2.0f});
+    EXPECT_EQ(off.size(), input.size());
+    std::vector<Front> shallow = input;
+    MergeNestedFronts(s, shallow, {.nest_depth = 0.01f});
+    EXPECT_EQ(shallow.size(), input.size());
+    // No fronts, bad parameters, a front on no face.
+    std::vector<Front> none;
+    EXPECT_NO_THROW(MergeNestedFronts(s, none));
+    EXPECT_THROW(MergeNestedFronts(s, fronts, {.nest_share = 0.0f}), InvalidArgument);
+    EXPECT_THROW(MergeNestedFronts(s, fronts, {.nest_depth = -1.0f}), InvalidArgument);
+    std::vector<Front> stray = input;
+    stray[2].face = 7;
+    EXPECT_THROW(MergeNestedFronts(s, stray), InvalidArgument);
+    EXPECT_EQ(stray.size(), input.size());
+}
+
 TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     // Two overlay doors and a drawer above the right one.
     const std::vector<DoorRect> doors = {

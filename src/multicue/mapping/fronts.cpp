@@ -1,6 +1,7 @@
 #include "multicue/mapping/fronts.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -287,6 +288,11 @@ void FrontParams::Validate() const {
     }
     if (!(min_alpha >= 0.0f)) {
         throw InvalidArgument(fmt::format("fronts: min_alpha must be >= 0, got {}", min_alpha));
+    }
+    if (!(nest_share > 0.0f) || !(nest_depth >= 0.0f) || !std::isfinite(nest_depth)) {
+        throw InvalidArgument(
+            fmt::format("fronts: need nest_share > 0 and nest_depth >= 0 m (got {}, {})",
+                        nest_share, nest_depth));
     }
     if (max_rounds < 1) {
         throw InvalidArgument(fmt::format("fronts: max_rounds must be >= 1, got {}", max_rounds));
@@ -598,6 +604,85 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
         }
     }
     return fronts;
+}
+
+void MergeNestedFronts(const RoomStructure& structure, std::vector<Front>& fronts,
+                       const FrontParams& p) {
+    p.Validate();
+    const std::size_t n = fronts.size();
+    for (const Front& fr : fronts) {
+        if (fr.face < 0 || static_cast<std::size_t>(fr.face) >= structure.components.size()) {
+            throw InvalidArgument(fmt::format("fronts: a front lies on face {} of {}", fr.face,
+                                              structure.components.size()));
+        }
+    }
+    if (p.nest_share > 1.0f || n < 2) return;
+    auto area = [](const Front& f) { return (f.max - f.min).prod(); };
+    // World corners of a front's rectangle.
+    auto corners = [](const Front& f) {
+        const Eigen::Vector3f du = 0.5f * (f.max.x() - f.min.x()) * f.u_axis;
+        const Eigen::Vector3f dv = 0.5f * (f.max.y() - f.min.y()) * f.v_axis;
+        return std::array<Eigen::Vector3f, 4>{f.center - du - dv, f.center + du - dv,
+                                              f.center - du + dv, f.center + du + dv};
+    };
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return area(fronts[a]) < area(fronts[b]);
+    });
+    std::vector<std::uint8_t> gone(n, 0);
+    for (std::size_t oi = 0; oi < n; ++oi) {
+        const std::size_t i = order[oi];
+        const Front& inner = fronts[i];
+        const float a_inner = area(inner);
+        if (!(a_inner > 0.0f)) continue;
+        const auto ci = corners(inner);
+        // The smallest larger front holding it.
+        for (std::size_t oj = oi + 1; oj < n; ++oj) {
+            const std::size_t j = order[oj];
+            if (gone[j]) continue;
+            Front& outer = fronts[j];
+            const PlanarComponent& face =
+                structure.components[static_cast<std::size_t>(outer.face)];
+            // On its own face a front inside another is a neighbour the other's region ran
+            // over, not a part of it.
+            if (outer.face == inner.face) continue;
+            const PlanarComponent& other =
+                structure.components[static_cast<std::size_t>(inner.face)];
+            if (other.axis != face.axis ||
+                other.plane.head<3>().dot(face.plane.head<3>()) <= 0.0f ||
+                std::abs(outer.normal.dot(inner.center - outer.center)) > p.nest_depth) {
+                continue;
+            }
+            // The inner rectangle in the outer's face coordinates (relative to its centre).
+            Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max());
+            Eigen::Vector2f hi = -lo;
+            for (const Eigen::Vector3f& c : ci) {
+                const Eigen::Vector3f d = c - outer.center;
+                const Eigen::Vector2f q(d.dot(outer.u_axis), d.dot(outer.v_axis));
+                lo = lo.cwiseMin(q);
+                hi = hi.cwiseMax(q);
+            }
+            const Eigen::Vector2f half = 0.5f * (outer.max - outer.min);
+            const Eigen::Vector2f a = lo.cwiseMax(-half), b = hi.cwiseMin(half);
+            const float shared = std::max(0.0f, b.x() - a.x()) * std::max(0.0f, b.y() - a.y());
+            if (shared < p.nest_share * a_inner) continue;
+            outer.indices.insert(outer.indices.end(), inner.indices.begin(), inner.indices.end());
+            std::sort(outer.indices.begin(), outer.indices.end());
+            outer.indices.erase(std::unique(outer.indices.begin(), outer.indices.end()),
+                                outer.indices.end());
+            outer.overlapping = outer.overlapping || inner.overlapping;
+            gone[i] = 1;
+            break;
+        }
+    }
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (gone[i]) continue;
+        if (kept != i) fronts[kept] = std::move(fronts[i]);
+        ++kept;
+    }
+    fronts.resize(kept);
 }
 
 }  // namespace multicue::mapping

@@ -74,6 +74,15 @@ struct FrontParams {
     float pair_end_reach = 0.15f;
     /// ... as long as that region is no wider than this (one front) [m]
     float pair_max_width = 1.2f;
+    /// Fronts do not nest: a front whose rectangle lies within a larger one's in at least this
+    /// share of its area, on a parallel face up to nest_depth in front of or behind that one's,
+    /// is part of the larger one (MergeNestedFronts). A frame-and-panel door grows one front
+    /// over its frame from its handle and another over its recessed panel, a plane of its own;
+    /// a door's window does the same. A front inside another on the same face is left alone:
+    /// there the larger one is the one in error, a region run on over its neighbours. Above 1:
+    /// off [-]
+    float nest_share = 0.8f;
+    float nest_depth = 0.05f;  ///< [m]
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -90,6 +99,15 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                                  const FrontParams& params = {},
                                  const FrontEvidence* evidence = nullptr,
                                  const FrontEdgeParams& outline = {});
+
+/// Merges every front nested in a larger one on a parallel face just in front of or behind it
+/// (FrontParams::nest_share, nest_depth) into the smallest front holding it: its points join
+/// that front, whose rectangle, face and fixtures stay (the nested front's fixtures, on a
+/// panel's edge or a window's frame, are no longer any front's). Fronts are compared in the order
+/// of their rectangles' areas, so the result does not depend on their order. Throws InvalidArgument
+/// for bad parameters or a front on no face of `structure`.
+void MergeNestedFronts(const RoomStructure& structure, std::vector<Front>& fronts,
+                       const FrontParams& params = {});
 
 /// The rectangle of `points` on `face`: the `quantile` and 1 - `quantile` quantiles of their face
 /// coordinates u and v (lower corner, upper corner). `points` must not be empty.

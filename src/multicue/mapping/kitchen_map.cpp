@@ -296,6 +296,7 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
         AddFrontsFromGaps(r.cloud, map.frame, structure, map.fixtures, evidence, map.fronts,
                           p.outline, p.gap_fronts);
     }
+    MergeNestedFronts(structure, map.fronts, p.fronts);
     stage("fronts");
     // How each front opens, from its fixture.
     for (Front& f : map.fronts) {
