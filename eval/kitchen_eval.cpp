@@ -134,6 +134,8 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         {"cell_size", &p.cell_size},
         {"seed_max", &p.seed_max},
         {"rect_percentile", &p.rect_percentile},
+        {"nest_share", &p.nest_share},
+        {"nest_depth", &p.nest_depth},
         {"max_extend", &m.outline.max_extend},
         {"min_support", &m.outline.min_support},
         {"extend_support", &m.outline.extend_support},
@@ -141,8 +143,6 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         {"recess", &m.outline.recess},
         {"step", &m.outline.step},
         {"gap_cut_support", &m.gap_fronts.cut_support},
-        {"nest_share", &p.nest_share},
-        {"nest_depth", &p.nest_depth},
         {"gap_cut_coverage", &m.gap_fronts.cut_coverage},
         {"gap_min_size", &m.gap_fronts.min_size},
         {"gap_cut_margin", &m.gap_fronts.cut_margin},
@@ -161,12 +161,10 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         m.extend_fronts = v != 0.0f;
     } else if (name == "split") {
         p.split_at_outlines = v != 0.0f;
-
     } else if (name == "gap") {
         m.gap_fronts.enabled = v != 0.0f;
     } else if (name == "gap_grow") {
         m.gap_fronts.grow_fixture_fronts = v != 0.0f;
-
     } else if (const auto it = fields.find(name); it != fields.end()) {
         *it->second = v;
     } else {
