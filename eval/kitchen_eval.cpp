@@ -165,6 +165,8 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         m.gap_fronts.enabled = v != 0.0f;
     } else if (name == "gap_grow") {
         m.gap_fronts.grow_fixture_fronts = v != 0.0f;
+    } else if (name == "gap_split") {
+        m.gap_fronts.split_fixture_fronts = v != 0.0f;
     } else if (const auto it = fields.find(name); it != fields.end()) {
         *it->second = v;
     } else {

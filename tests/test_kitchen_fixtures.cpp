@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <initializer_list>
+#include <iterator>
 #include <random>
 #include <set>
 
@@ -768,6 +769,56 @@ TEST(FrontsFromGaps, AFixturesFrontGrowsToTheOutlinesHoldingItsFixture) {
     AddFrontsFromGaps(c, RoomFrame{}, s, fx.fixtures, ev, kept, {}, {.grow_fixture_fronts = false});
     EXPECT_EQ(kept[0].indices, part.indices);
     EXPECT_TRUE(kept[0].min.isApprox(part.min));
+}
+
+TEST(FrontsFromGaps, AFixturesFrontOverTwoDoorsKeepsTheDoorOfItsFixture) {
+    // Two overlay doors; the right one has a handle, the left one's was missed, and the handle's
+    // front ran on over the gap into the left door.
+    const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.93f, 1.6f, 0.1f, 0.85f}};
+    const PointCloud c = DoorsInGaps(doors, 6, true);
+    const FaceScene sc = SceneOf(c);
+    const FixtureResult& fx = sc.fx;
+    ASSERT_EQ(fx.fixtures.size(), 1u);
+    Indices measured;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        if (fx.point_face[i] == fx.fixtures[0].face) measured.push_back(static_cast<Index>(i));
+    }
+    const Front both = PartOfFace(c, sc, {0.3f, 2.4f, 0.1f}, {1.6f, 2.4f, 0.85f}, measured);
+    GapFrontParams split;
+    split.split_fixture_fronts = true;
+    std::vector<Front> fronts = {both};
+    AddFrontsFromGaps(c, RoomFrame{}, sc.s, fx.fixtures, sc.ev, fronts, {}, split);
+    ASSERT_EQ(fronts.size(), 2u);
+    EXPECT_EQ(fronts[0].fixtures, std::vector<int>{0});
+    EXPECT_NEAR(FrontXRange(fronts[0]).first, doors[1].x0, 0.025f);
+    EXPECT_NEAR(FrontXRange(fronts[0]).second, doors[1].x1, 0.025f);
+    for (const Index i : fronts[0].indices) ASSERT_GT(c.points[i].x(), doors[1].x0 - 0.02f);
+    // The left door is a front without fixtures of the points the handle's front gave up.
+    EXPECT_TRUE(fronts[1].fixtures.empty());
+    EXPECT_NEAR(FrontXRange(fronts[1]).first, doors[0].x0, 0.025f);
+    EXPECT_NEAR(FrontXRange(fronts[1]).second, doors[0].x1, 0.025f);
+    Indices shared;
+    std::set_intersection(fronts[0].indices.begin(), fronts[0].indices.end(),
+                          fronts[1].indices.begin(), fronts[1].indices.end(),
+                          std::back_inserter(shared));
+    EXPECT_TRUE(shared.empty());
+    // The same input gives the same fronts.
+    std::vector<Front> again = {both};
+    AddFrontsFromGaps(c, RoomFrame{}, sc.s, fx.fixtures, sc.ev, again, {}, split);
+    ASSERT_EQ(again.size(), 2u);
+    EXPECT_EQ(again[0].indices, fronts[0].indices);
+    EXPECT_EQ(again[1].indices, fronts[1].indices);
+    // Off (the default, and the laser's), the front spans both doors as it came.
+    std::vector<Front> off = {both};
+    AddFrontsFromGaps(c, RoomFrame{}, sc.s, fx.fixtures, sc.ev, off);
+    ASSERT_EQ(off.size(), 1u);
+    EXPECT_EQ(off[0].indices, both.indices);
+    // A door of one front with its handle is not cut.
+    const Front one = PartOfFace(c, sc, {0.93f, 2.4f, 0.1f}, {1.6f, 2.4f, 0.85f}, measured);
+    std::vector<Front> whole = {one};
+    AddFrontsFromGaps(c, RoomFrame{}, sc.s, fx.fixtures, sc.ev, whole, {}, split);
+    ASSERT_GE(whole.size(), 1u);
+    EXPECT_EQ(whole[0].indices, one.indices);
 }
 
 TEST(FrontsFromGaps, AFaceWithoutGapsWiderThanAFrontHasNone) {

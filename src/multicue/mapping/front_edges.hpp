@@ -125,6 +125,11 @@ struct GapFrontParams {
     /// a side of the front that is outline along its whole line (FrontEdgeParams::
     /// extend_support) stays where it is
     bool grow_fixture_fronts = true;
+    /// A front of a fixture that the same cuts part (searched within its rectangle, no closer
+    /// than cut_margin to its sides) keeps the rectangle holding its fixtures; its points in the
+    /// others are free for fronts without fixtures. A region grown from a handle runs on over a
+    /// gap of the front's own colour into the next door, whose handle was missed
+    bool split_fixture_fronts = false;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };

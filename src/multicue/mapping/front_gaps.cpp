@@ -126,9 +126,12 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
         }
     }
     const std::vector<std::uint8_t> is_fixture = taken;
+    std::vector<std::uint8_t> holders(cloud.size(), 0);  // fronts holding a point, at most 255
     for (const Front& fr : fronts) {
         for (const Index i : fr.indices) {
-            if (i < cloud.size()) taken[i] = 1;
+            if (i >= cloud.size()) continue;
+            taken[i] = 1;
+            holders[i] = static_cast<std::uint8_t>(std::min(255, holders[i] + 1));
         }
     }
     const std::vector<Indices> face_points = FacePoints(cloud.size(), s, ev);
@@ -140,6 +143,52 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
         if (g.nu == 0) continue;
         MaskFixtures(g, cloud, frame, face, static_cast<int>(f), fixtures, grid);
         const int margin = std::max(2, static_cast<int>(std::lround(p.cut_margin / g.cell)));
+        // Fronts of fixtures that an outline parts keep the part holding their fixtures.
+        for (std::size_t k = 0; k < known && p.split_fixture_fronts; ++k) {
+            Front& fr = fronts[k];
+            if (fr.face != static_cast<int>(f) || fr.fixtures.empty()) continue;
+            const CellRect box{
+                std::clamp(g.U(fr.min.x()), 0, g.nu - 1), std::clamp(g.U(fr.max.x()), 0, g.nu - 1),
+                std::clamp(g.V(fr.min.y()), 0, g.nv - 1), std::clamp(g.V(fr.max.y()), 0, g.nv - 1)};
+            std::vector<CellRect> parts;
+            Partition(g, box, box, margin, 0, p, parts);
+            if (parts.size() < 2) continue;
+            auto part_of = [&](const Eigen::Vector3f& x) {
+                const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
+                const int u = std::clamp(g.U(q.x()), box.u0, box.u1);
+                const int v = std::clamp(g.V(q.y()), box.v0, box.v1);
+                for (std::size_t l = 0; l < parts.size(); ++l) {
+                    if (u >= parts[l].u0 && u <= parts[l].u1 && v >= parts[l].v0 &&
+                        v <= parts[l].v1) {
+                        return static_cast<int>(l);
+                    }
+                }
+                return -1;
+            };
+            int keep = -1;
+            for (const int x : fr.fixtures) {
+                const int l = part_of(fixtures[static_cast<std::size_t>(x)].center);
+                keep = keep == -1 || keep == l ? l : -2;
+            }
+            if (keep < 0) continue;  // fixtures in several parts (a pair's front), or none
+            Indices kept;
+            for (const Index i : fr.indices) {
+                if (part_of(cloud.points[i]) == keep) {
+                    kept.push_back(i);
+                } else if (--holders[i] == 0 && !is_fixture[i]) {
+                    taken[i] = 0;
+                }
+            }
+            const CellRect& r = parts[static_cast<std::size_t>(keep)];
+            const Eigen::Vector2f lo =
+                fr.min.cwiseMax(g.origin + g.cell * Eigen::Vector2f(static_cast<float>(r.u0),
+                                                                    static_cast<float>(r.v0)));
+            const Eigen::Vector2f hi =
+                fr.max.cwiseMin(g.origin + g.cell * Eigen::Vector2f(static_cast<float>(r.u1 + 1),
+                                                                    static_cast<float>(r.v1 + 1)));
+            fr.indices = std::move(kept);
+            SetFrontRectangle(fr, face, frame, lo, hi);
+        }
         std::vector<CellRect> leaves;
         const CellRect whole{0, g.nu - 1, 0, g.nv - 1};
         Partition(g, whole, whole, margin, 0, p, leaves);
