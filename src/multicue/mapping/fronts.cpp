@@ -640,7 +640,6 @@ void MergeNestedFronts(const RoomStructure& structure, std::vector<Front>& front
         // The smallest larger front holding it.
         for (std::size_t oj = oi + 1; oj < n; ++oj) {
             const std::size_t j = order[oj];
-            if (gone[j]) continue;
             Front& outer = fronts[j];
             const PlanarComponent& face =
                 structure.components[static_cast<std::size_t>(outer.face)];
