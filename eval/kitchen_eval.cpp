@@ -82,6 +82,7 @@ struct Options {
     std::string fronts = "grow";
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
+    float min_seen_slide_coverage = -1.0f;  ///< < 0: the library's MotionParams default
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
     float flap_min_width = -1.0f;     ///< < 0: the library's ArticulationParams default
     float drawer_max_height = -1.0f;  ///< < 0: the library's ArticulationParams default
@@ -89,6 +90,7 @@ struct Options {
     float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
     float vacated_max_share = -1.0f;  ///< < 0: the library's MotionParams default
     bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
+    bool seen_coverage = mapping::MotionParams{}.seen_coverage;
     std::string load_fixtures;
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
@@ -788,6 +790,7 @@ class Evaluator {
                 sim::ScanToWorld(opened.cloud, pose);
             }
             k.SetJoint(j, closed);
+            std::size_t opened_front_points = 0;
             {
                 // A front swung out of the view (a door near the image border) shows no motion
                 // to anyone: such pairs test the aim of the sensor, not the estimate.
@@ -796,6 +799,7 @@ class Evaluator {
                 for (std::size_t i = 0; i < opened.cloud.size(); ++i) {
                     in_view += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1;
                 }
+                opened_front_points = in_view;
                 if (in_view < min_front) {
                     ++s.open_out_of_view;
                     continue;
@@ -805,10 +809,13 @@ class Evaluator {
             mapping::MotionParams mp = mapping::MotionParamsFor(
                 f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect);
             if (o_.min_slide_coverage >= 0.0f) mp.min_slide_coverage = o_.min_slide_coverage;
+            if (o_.min_seen_slide_coverage >= 0.0f)
+                mp.min_seen_slide_coverage = o_.min_seen_slide_coverage;
             if (o_.axis_snap_deg >= 0.0f) mp.axis_snap_deg = o_.axis_snap_deg;
             if (o_.max_hinge_gap >= 0.0f) mp.max_hinge_gap = o_.max_hinge_gap;
             if (o_.vacated_max_share >= 0.0f) mp.vacated_max_share = o_.vacated_max_share;
             mp.select_by_vacated = o_.select_by_vacated;
+            mp.seen_coverage = o_.seen_coverage;
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
             {
                 // Which front the map takes for the opened one, from all of its fronts.
@@ -832,12 +839,17 @@ class Evaluator {
                 std::fprintf(
                     stderr,
                     "pair %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
-                    "front %.2f x %.2f m, moved part %.2f x %.2f m)\n",
+                    "front %.2f x %.2f m, moved part %.2f x %.2f m; opened by %.2f, travel %.2f "
+                    "m; moved %zu, on the front slid %zu, turned %zu; coverage of the seen cells "
+                    "slid %.2f, turned %.2f; the front's true points in the opened scan %zu)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
                     pf.max.y() - pf.min.y(), motion.front_max.x() - motion.front_min.x(),
-                    motion.front_max.y() - motion.front_min.y());
+                    motion.front_max.y() - motion.front_min.y(), std::abs(value - closed),
+                    motion.slide_travel, motion.moved_points, motion.slide_points,
+                    motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
+                    opened_front_points);
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
@@ -1229,6 +1241,8 @@ int main(int argc, char** argv) {
              "opened pairs: share of the slid front the moved points must cover for a drawer "
              "(0: the planes' support decides)",
              1.0);
+    override("--min-seen-slide-coverage", o.min_seen_slide_coverage,
+             "opened pairs: the same share among the cells the opened scan could see", 1.0);
     override("--flap-min-width", o.flap_min_width,
              "one scan: a front narrower than this is never hinged at its bottom edge [m] (0: any)",
              100.0);
@@ -1252,6 +1266,9 @@ int main(int argc, char** argv) {
     app.add_flag("--select-by-vacated,!--select-by-moved", o.select_by_vacated,
                  "opened pairs: the map takes the front that lost the most of its own points for "
                  "the opened one (default), or the one with the most moved points");
+    app.add_flag("--seen-coverage,!--no-seen-coverage", o.seen_coverage,
+                 "opened pairs: coverages count the cells the opened scan could see (default), or "
+                 "every cell of the front's rectangle");
     app.add_option("--front-param", o.front_params,
                    "NAME=VALUE of the fronts' parameters, or fixture_NAME=VALUE of the "
                    "fixture candidates' (repeatable)");

@@ -640,6 +640,82 @@ TEST(Articulation, AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer) {
               JointType::kPrismatic);
 }
 
+/// The face of AddFaceBesideDrawers with a drawer front 25 cm tall (x 0.7 .. 0.9, z 0.45 ..
+/// 0.7) pulled out by `pull`, seen by a sensor at (0.8, 1.0, 1.5) whose field of view ends at
+/// the plane through it 40.4 deg below the horizontal (the bottom of a camera image): pulled out
+/// 0.4 m, the drawer shows its top 5 cm only.
+PointCloud DrawerLeavingTheView(float pull) {
+    std::mt19937 rng(19);
+    PointCloud c;
+    AddFaceBesideDrawers(c, rng);
+    test::AddPatch(c, {0.7f, 2.4f - pull, 0.45f}, {0.2f, 0, 0}, {0, 0, 0.25f}, 0.005f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    const Eigen::Vector3f sensor(0.8f, 1.0f, 1.5f);
+    PointCloud seen;
+    for (const auto& x : c.points) {
+        if (sensor.z() - x.z() < 0.85f * (x.y() - sensor.y())) seen.points.push_back(x);
+    }
+    seen.sensor_origin = sensor;
+    return seen;
+}
+
+TEST(Articulation, ADrawerLeavingTheFieldOfViewSlides) {
+    Front f = DrawerFront();
+    f.min.y() = 0.45f;
+    f.max.y() = 0.7f;
+    f.center.z() = 0.575f;
+    const PointCloud closed = DrawerLeavingTheView(0.0f);
+    const PointCloud opened = DrawerLeavingTheView(0.4f);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
+    EXPECT_NEAR(m.opening, 0.4f, 0.02f);
+    // The moved points cover the fifth of the slid front the sensor could see, and all of it.
+    EXPECT_LT(m.slide_coverage, 0.3f);
+    EXPECT_GT(m.slide_seen_coverage, 0.9f);
+    // A slide must cover more of what the sensor saw than of the whole front.
+    MotionParams strict;
+    strict.min_seen_slide_coverage = 0.8f;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f, strict).articulation.type,
+              JointType::kPrismatic);
+    // Without a sensor position nothing is known of what it saw.
+    PointCloud no_sensor = opened;
+    no_sensor.sensor_origin.setZero();
+    EXPECT_EQ(ArticulationFromMotion(closed, no_sensor, f).slide_seen_coverage, -1.0f);
+    strict.min_seen_slide_coverage = -0.1f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, strict), InvalidArgument);
+    // Deterministic.
+    const MotionResult again = ArticulationFromMotion(closed, opened, f);
+    EXPECT_EQ(again.slide_seen_coverage, m.slide_seen_coverage);
+    EXPECT_EQ(again.opening, m.opening);
+}
+
+TEST(Articulation, ADoorSeenEdgeOnIsADoorWhereTheSensorSeesPastIt) {
+    // The strip of AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer, seen from a sensor in
+    // front of the door, with the cupboard's back wall (y = 2.9) behind the door's closed place
+    // and the floor: the rays through the slid front reach them, so the slid front was seen,
+    // and the strip covers little of it.
+    const Front f = DoorFront();
+    const PointCloud closed = DoorScan(0.0f, 0.0f);
+    PointCloud opened;
+    for (const auto& x : closed.points) {
+        if (x.x() < 0.595f || x.x() > 1.105f) opened.points.push_back(x);
+    }
+    std::mt19937 rng(3);
+    test::AddPatch(opened, {0.82f, 2.1f, 0.15f}, {0.05f, 0, 0}, {0, 0, 0.65f}, 0.005f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    test::AddPatch(opened, {0.3f, 2.9f, 0.0f}, {1.1f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    test::AddPatch(opened, {0.3f, 1.5f, 0.0f}, {1.1f, 0, 0}, {0, 1.4f, 0}, 0.01f, {0, 0, 1},
+                   Color{}, 0.001f, rng);
+    opened.sensor_origin = Eigen::Vector3f(0.85f, 1.0f, 1.2f);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    EXPECT_EQ(m.articulation.type, JointType::kRevolute);
+    EXPECT_GE(m.slide_seen_coverage, 0.0f);
+    EXPECT_LT(m.slide_seen_coverage, 0.3f);
+}
+
 TEST(Articulation, AHingeAxisNearTheFrontsVerticalIsVertical) {
     // The door of DoorScan opened by 50 deg about an axis leaning 4 deg from the vertical (in
     // the face plane): the furniture is axis-aligned, so the lean is taken for the plane fit's.

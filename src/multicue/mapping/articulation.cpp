@@ -33,6 +33,66 @@ Articulation Hinge(const Front& f, const Eigen::Vector3f& edge_point,
     return a;
 }
 
+/// What the opened scan could see around a front: its returns binned by direction from the
+/// sensor (on the plane tangent to the direction towards the front, bins as wide as a coverage
+/// cell at the front's distance), each bin holding its farthest return. A place in a bin without
+/// returns (out of the field of view, no return) or behind the bin's farthest return (hidden by
+/// something nearer) could not be seen.
+class SeenFrom {
+  public:
+    SeenFrom() = default;  ///< knows nothing
+    SeenFrom(const PointCloud& scan, const Eigen::Vector3f& target, float cell) {
+        if (!scan.HasSensorPosition()) return;
+        origin_ = scan.sensor_origin;
+        const Eigen::Vector3f towards = target - origin_;
+        const float distance = towards.norm();
+        if (!(distance > 1e-3f) || !(cell > 0.0f)) return;
+        z_ = towards / distance;
+        x_ = z_.unitOrthogonal();
+        y_ = z_.cross(x_);
+        bin_ = cell / distance;
+        // Up to 60 deg off the direction towards the front, at most 512 bins a side.
+        side_ = std::clamp(static_cast<int>(std::ceil(2.0f * kHalfExtent / bin_)), 1, 512);
+        bin_ = 2.0f * kHalfExtent / static_cast<float>(side_);
+        farthest_.assign(static_cast<std::size_t>(side_) * static_cast<std::size_t>(side_), -1.0f);
+        for (std::size_t i = 0; i < scan.size(); ++i) {
+            if (!scan.IsFinite(i)) continue;
+            const Eigen::Vector3f d = scan.points[i] - origin_;
+            const std::ptrdiff_t b = Bin(d);
+            if (b >= 0) {
+                float& f = farthest_[static_cast<std::size_t>(b)];
+                f = std::max(f, d.norm());
+            }
+        }
+        valid_ = true;
+    }
+    bool valid() const { return valid_; }
+    /// Whether the scan saw `x` or through it, within `tolerance` [m].
+    bool Seen(const Eigen::Vector3f& x, float tolerance) const {
+        if (!valid_) return false;
+        const Eigen::Vector3f d = x - origin_;
+        const std::ptrdiff_t b = Bin(d);
+        return b >= 0 && farthest_[static_cast<std::size_t>(b)] >= d.norm() - tolerance;
+    }
+
+  private:
+    static constexpr float kHalfExtent = 1.732f;  // tan(60 deg)
+    std::ptrdiff_t Bin(const Eigen::Vector3f& d) const {
+        const float z = d.dot(z_);
+        if (!(z > 1e-3f)) return -1;
+        const float tx = d.dot(x_) / z, ty = d.dot(y_) / z;
+        const auto ix = static_cast<std::ptrdiff_t>(std::floor((tx + kHalfExtent) / bin_));
+        const auto iy = static_cast<std::ptrdiff_t>(std::floor((ty + kHalfExtent) / bin_));
+        if (ix < 0 || iy < 0 || ix >= side_ || iy >= side_) return -1;
+        return iy * side_ + ix;
+    }
+    bool valid_ = false;
+    Eigen::Vector3f origin_ = Eigen::Vector3f::Zero(), x_, y_, z_;
+    float bin_ = 0.0f;
+    int side_ = 0;
+    std::vector<float> farthest_;
+};
+
 /// Closed-scan points on front `f` that the opened scan has no point near any more (the front
 /// moved away, or its motion hides them), and the band of the rectangle they lie in: their 2 %
 /// to 98 % quantiles along the front's vertical, grown by the change distance, across the whole
@@ -131,15 +191,18 @@ void MotionParams::Validate() const {
             change_distance, min_offset, reach, plane_threshold, parallel_deg, min_points));
     }
     if (!(min_slide_coverage >= 0.0f && min_slide_coverage <= 1.0f) ||
+        !(min_seen_slide_coverage >= 0.0f && min_seen_slide_coverage <= 1.0f) ||
         !(coverage_cell > 0.0f && coverage_cell <= 0.5f) ||
         !(axis_snap_deg >= 0.0f && axis_snap_deg < 45.0f) ||
         !(max_hinge_gap >= 0.0f && max_hinge_gap <= 10.0f) ||
         !(vacated_max_share >= 0.0f && vacated_max_share <= 1.0f)) {
         throw InvalidArgument(fmt::format(
-            "motion: need min_slide_coverage in [0, 1], coverage_cell in (0, 0.5] m, "
+            "motion: need min_slide_coverage and min_seen_slide_coverage in [0, 1], "
+            "coverage_cell in (0, 0.5] m, "
             "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m and vacated_max_share in "
-            "[0, 1] (got {}, {}, {}, {}, {})",
-            min_slide_coverage, coverage_cell, axis_snap_deg, max_hinge_gap, vacated_max_share));
+            "[0, 1] (got {}, {}, {}, {}, {}, {})",
+            min_slide_coverage, min_seen_slide_coverage, coverage_cell, axis_snap_deg,
+            max_hinge_gap, vacated_max_share));
     }
 }
 
@@ -284,7 +347,12 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     struct OnFront {
         std::size_t points = 0;
         float cells = 0.0f;
+        /// The share of the cells the opened scan could see (placed by T) that moved points hit;
+        /// -1 without a sensor position or when it could see none.
+        float seen_cells = -1.0f;
     };
+    const SeenFrom seen =
+        p.seen_coverage ? SeenFrom(opened, f.center, p.coverage_cell) : SeenFrom();
     const int nu = std::clamp(static_cast<int>(std::ceil(width / p.coverage_cell)), 1, 200);
     const int nv = std::clamp(static_cast<int>(std::ceil(height / p.coverage_cell)), 1, 200);
     std::vector<char> hit(static_cast<std::size_t>(nu * nv));
@@ -303,8 +371,27 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
             if (u >= 0.0f && v >= 0.0f && u < static_cast<float>(nu) && v < static_cast<float>(nv))
                 hit[static_cast<std::size_t>(static_cast<int>(v) * nu + static_cast<int>(u))] = 1;
         }
-        r.cells = static_cast<float>(std::count(hit.begin(), hit.end(), 1)) /
-                  static_cast<float>(hit.size());
+        const auto hits = static_cast<std::size_t>(std::count(hit.begin(), hit.end(), 1));
+        r.cells = static_cast<float>(hits) / static_cast<float>(hit.size());
+        if (seen.valid()) {
+            // A cell a moved point hit was seen; another one when the ray to its centre, placed
+            // by T, reached it.
+            std::size_t visible = hits;
+            const Eigen::Vector3f corner = f.center +
+                                           f.u_axis * (f.min.x() - f.center.dot(f.u_axis)) +
+                                           f.v_axis * (f.min.y() - f.center.dot(f.v_axis));
+            const float du = width / static_cast<float>(nu), dv = height / static_cast<float>(nv);
+            for (int iv = 0; iv < nv; ++iv) {
+                for (int iu = 0; iu < nu; ++iu) {
+                    if (hit[static_cast<std::size_t>(iv * nu + iu)]) continue;
+                    const Eigen::Vector3f c = corner +
+                                              f.u_axis * ((static_cast<float>(iu) + 0.5f) * du) +
+                                              f.v_axis * ((static_cast<float>(iv) + 0.5f) * dv);
+                    visible += seen.Seen(T * c, 2.0f * p.plane_threshold);
+                }
+            }
+            if (visible > 0) r.seen_cells = static_cast<float>(hits) / static_cast<float>(visible);
+        }
         return r;
     };
     auto shift = [&](float d) {
@@ -430,7 +517,14 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         out.opening = angle;
         out.moved = fit.inliers;
     };
-    if (hinge.type != JointType::kUnknown && hinge_on.points >= slide_on.points) {
+    // Compared by the share of the cells the opened scan could see that the moved points cover
+    // when the scan has a sensor position (a drawer pulled out towards the sensor may leave the
+    // field of view, or be seen over the drawers beneath it), else by the points on the front.
+    const bool by_seen = p.seen_coverage && slide.type != JointType::kUnknown &&
+                         slide_on.seen_cells >= 0.0f &&
+                         (hinge.type == JointType::kUnknown || hinge_on.seen_cells >= 0.0f);
+    if (hinge.type != JointType::kUnknown && (by_seen ? hinge_on.seen_cells >= slide_on.seen_cells
+                                                      : hinge_on.points >= slide_on.points)) {
         tilted_turn();
     } else {
         out.articulation = slide;
@@ -438,16 +532,28 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         out.moved = slide_inliers;
     }
     // A drawer pulled out shows its whole front again, parallel to where it was: the moved points
-    // cover much of the front's rectangle slid out (not all of it: the rectangle may be larger
-    // than the drawer). A door seen edge-on, or by little more than its free edge or handle, can
-    // make a parallel plane too, but covers a strip of the rectangle only. A slide that covers
-    // less than `min_slide_coverage` of it becomes a turn: about the tilted plane's axis when
-    // there is one, else about the edge of the rectangle (and by the angle) that covers most.
-    const float slide_cover = slide_on.cells, hinge_cover = hinge_on.cells;
-    if (slide.type != JointType::kUnknown) out.slide_coverage = slide_cover;
-    if (hinge.type != JointType::kUnknown) out.turn_coverage = hinge_cover;
-    if (out.articulation.type != JointType::kPrismatic || p.min_slide_coverage <= 0.0f ||
-        slide_cover >= p.min_slide_coverage) {
+    // cover much of the front's rectangle slid out, as far as the scan could see it (not all of
+    // it: the rectangle may be larger than the drawer). A door seen edge-on, or by little more than
+    // its free edge or handle, can make a parallel plane too, but covers a strip of the rectangle
+    // only. A slide that covers less than `min_slide_coverage` of it becomes a turn: about the
+    // tilted plane's axis when there is one, else about the edge of the rectangle (and by the
+    // angle) that covers most.
+    const float slide_cover = by_seen ? slide_on.seen_cells : slide_on.cells;
+    const float hinge_cover = hinge_on.cells;
+    if (slide.type != JointType::kUnknown) {
+        out.slide_coverage = slide_on.cells;
+        out.slide_travel = travel;
+        out.slide_points = slide_on.points;
+        out.slide_seen_coverage = slide_on.seen_cells;
+    }
+    if (hinge.type != JointType::kUnknown) {
+        out.turn_coverage = hinge_cover;
+        out.turn_points = hinge_on.points;
+        out.turn_seen_coverage = hinge_on.seen_cells;
+    }
+    const float min_cover = by_seen ? p.min_seen_slide_coverage : p.min_slide_coverage;
+    if (out.articulation.type != JointType::kPrismatic || min_cover <= 0.0f ||
+        slide_cover >= min_cover) {
         return out;
     }
     if (hinge.type != JointType::kUnknown) {

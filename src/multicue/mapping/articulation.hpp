@@ -83,7 +83,15 @@ struct MotionParams {
     /// `coverage_cell`) is taken for a turn; 0: the two planes' support alone decides. Chosen on
     /// simulated kitchens of the tune half (0.25-0.35 scored alike; from 0.4 drawers fail) [-]
     float min_slide_coverage = 0.3f;
+    /// The same among the cells the opened scan could see (`seen_coverage`). Chosen on simulated
+    /// kitchens of the tune half, both sensors (0.3 lost doors, 0.5 drawers) [-]
+    float min_seen_slide_coverage = 0.4f;
     float coverage_cell = 0.03f;  ///< cell of the coverage grid on the front [m]
+    /// With a sensor position in the opened scan, the coverages count only the cells the scan
+    /// could see where the hypothesis puts them (the ray from the sensor reached them), and the
+    /// hypothesis covering the larger share wins; off, or without a sensor position, the cells
+    /// of the whole rectangle count and the one with more moved points on the front wins.
+    bool seen_coverage = true;
     /// The map's furniture is aligned with the room's axes, and so are its hinges: a hinge axis
     /// found from the tilted plane within this angle of the front's vertical or of its
     /// horizontal in-plane direction is taken to be that direction (the plane fit's tilt is
@@ -121,6 +129,15 @@ struct MotionResult {
     /// plane's travel and when turned by the tilted plane's hinge (-1: no such hypothesis or not
     /// computed).
     float slide_coverage = -1.0f, turn_coverage = -1.0f;
+    /// The parallel plane's distance in front of the face [m] (-1: no such plane), and the moved
+    /// points that lie on the front's rectangle when slid back by it or turned back about the
+    /// tilted plane's hinge.
+    float slide_travel = -1.0f;
+    std::size_t slide_points = 0, turn_points = 0;
+    /// slide_coverage and turn_coverage among the cells the opened scan could see (the ray from
+    /// its sensor reached the cell's centre, placed as the hypothesis places it); -1: not known
+    /// (no sensor position).
+    float slide_seen_coverage = -1.0f, turn_seen_coverage = -1.0f;
     /// The rectangle (face coordinates, as Front::min / max) the joint was found for: the
     /// front's, or the band of it that the motion vacated (see `vacated_max_share`).
     Eigen::Vector2f front_min = Eigen::Vector2f::Zero(), front_max = Eigen::Vector2f::Zero();
