@@ -434,14 +434,31 @@ Front DrawerFront() {
     return f;
 }
 
+/// DrawerFront's width from `bottom` to `top` (a stack of drawers, or a taller drawer).
+Front DrawerFrontBetween(float bottom, float top) {
+    Front f = DrawerFront();
+    f.min.y() = bottom;
+    f.max.y() = top;
+    f.center.z() = (bottom + top) / 2.0f;
+    return f;
+}
+
+/// Whether `m` is a slide out of the face at y = 2.4 (towards -y) by `travel`.
+::testing::AssertionResult SlidOutBy(const MotionResult& m, float travel) {
+    if (!m.found) return ::testing::AssertionFailure() << "no motion found";
+    if (m.articulation.type != JointType::kPrismatic)
+        return ::testing::AssertionFailure() << "not prismatic";
+    if (std::abs(m.opening - travel) > 0.02f)
+        return ::testing::AssertionFailure() << "travel " << m.opening << ", not " << travel;
+    if (!(m.articulation.axis.y() < -0.99f))
+        return ::testing::AssertionFailure() << "axis " << m.articulation.axis.transpose();
+    return ::testing::AssertionSuccess();
+}
+
 TEST(Articulation, ADrawerRunningOutFartherThanItsFrontIsWideSlides) {
     const Front f = DrawerFront();
     const PointCloud closed = DrawerScan(0.0f);
-    const MotionResult m = ArticulationFromMotion(closed, DrawerScan(0.45f), f);
-    ASSERT_TRUE(m.found);
-    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
-    EXPECT_NEAR(m.opening, 0.45f, 0.02f);
-    EXPECT_LT(m.articulation.axis.y(), -0.99f);
+    EXPECT_TRUE(SlidOutBy(ArticulationFromMotion(closed, DrawerScan(0.45f), f), 0.45f));
     // Out of reach, the front is not seen: its sides are no door.
     MotionParams near;
     near.reach = 0.3f;
@@ -468,17 +485,11 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
     // The stack's handles were missed and its four drawers make one front: the pulled drawer
     // covers a quarter of that rectangle, too little for a slide, but it is the part of the
     // rectangle that the motion vacated.
-    Front f = DrawerFront();
-    f.min.y() = 0.35f;
-    f.max.y() = 0.79f;
-    f.center.z() = 0.57f;
+    const Front f = DrawerFrontBetween(0.35f, 0.79f);
     const PointCloud closed = DrawerStackScan(0.0f);
     const PointCloud opened = DrawerStackScan(0.3f);
     const MotionResult m = ArticulationFromMotion(closed, opened, f);
-    ASSERT_TRUE(m.found);
-    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
-    EXPECT_NEAR(m.opening, 0.3f, 0.02f);
-    EXPECT_LT(m.articulation.axis.y(), -0.99f);
+    EXPECT_TRUE(SlidOutBy(m, 0.3f));
     EXPECT_NEAR(m.front_min.y(), 0.57f, 0.02f);
     EXPECT_NEAR(m.front_max.y(), 0.67f, 0.02f);
     EXPECT_NEAR(m.front_max.x() - m.front_min.x(), 0.2f, 0.03f);
@@ -557,10 +568,7 @@ TEST(Articulation, AnOpenedScanSplitsAFrontSpanningSeveralDrawers) {
     handle.direction = Eigen::Vector3f::UnitX();
     handle.length = 0.12f;
     map.fixtures = {handle};
-    Front f = DrawerFront();
-    f.min.y() = 0.35f;
-    f.max.y() = 0.79f;
-    f.center.z() = 0.57f;
+    Front f = DrawerFrontBetween(0.35f, 0.79f);
     f.fixtures = {0};
     for (std::size_t i = 0; i < closed.size(); ++i) {
         const Eigen::Vector3f& x = closed.points[i];
@@ -660,16 +668,11 @@ PointCloud DrawerLeavingTheView(float pull) {
 }
 
 TEST(Articulation, ADrawerLeavingTheFieldOfViewSlides) {
-    Front f = DrawerFront();
-    f.min.y() = 0.45f;
-    f.max.y() = 0.7f;
-    f.center.z() = 0.575f;
+    const Front f = DrawerFrontBetween(0.45f, 0.7f);
     const PointCloud closed = DrawerLeavingTheView(0.0f);
     const PointCloud opened = DrawerLeavingTheView(0.4f);
     const MotionResult m = ArticulationFromMotion(closed, opened, f);
-    ASSERT_TRUE(m.found);
-    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
-    EXPECT_NEAR(m.opening, 0.4f, 0.02f);
+    EXPECT_TRUE(SlidOutBy(m, 0.4f));
     // The moved points cover the fifth of the slid front the sensor could see, and all of it.
     EXPECT_LT(m.slide_coverage, 0.3f);
     EXPECT_GT(m.slide_seen_coverage, 0.9f);

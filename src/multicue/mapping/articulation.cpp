@@ -535,9 +535,10 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     // cover much of the front's rectangle slid out, as far as the scan could see it (not all of
     // it: the rectangle may be larger than the drawer). A door seen edge-on, or by little more than
     // its free edge or handle, can make a parallel plane too, but covers a strip of the rectangle
-    // only. A slide that covers less than `min_slide_coverage` of it becomes a turn: about the
-    // tilted plane's axis when there is one, else about the edge of the rectangle (and by the
-    // angle) that covers most.
+    // only. A slide that covers less than `min_seen_slide_coverage` of the cells the scan could
+    // see (`min_slide_coverage` of all of them without a sensor position) becomes a turn: about
+    // the tilted plane's axis when there is one, else about the edge of the rectangle (and by
+    // the angle) that covers most.
     const float slide_cover = by_seen ? slide_on.seen_cells : slide_on.cells;
     const float hinge_cover = hinge_on.cells;
     if (slide.type != JointType::kUnknown) {
