@@ -80,7 +80,8 @@ struct MotionParams {
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
     float parallel_deg = 8.0f;       ///< planes closer than this: prismatic [deg]
     /// A slide that covers less than this share of the front's rectangle moved out (cells of
-    /// `coverage_cell`) is taken for a turn; 0: the two planes' support alone decides. Chosen on
+    /// `coverage_cell`) is taken for a turn, where the opened scan has no sensor position or
+    /// `seen_coverage` is off; 0: the two planes' support alone decides. Chosen on
     /// simulated kitchens of the tune half (0.25-0.35 scored alike; from 0.4 drawers fail) [-]
     float min_slide_coverage = 0.3f;
     /// The same among the cells the opened scan could see (`seen_coverage`). Chosen on simulated
