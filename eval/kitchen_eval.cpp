@@ -795,12 +795,10 @@ class Evaluator {
                 // A front swung out of the view (a door near the image border) shows no motion
                 // to anyone: such pairs test the aim of the sensor, not the estimate.
                 const ScanTruth ot(opened.cloud);
-                std::size_t in_view = 0;
                 for (std::size_t i = 0; i < opened.cloud.size(); ++i) {
-                    in_view += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1;
+                    opened_front_points += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1;
                 }
-                opened_front_points = in_view;
-                if (in_view < min_front) {
+                if (opened_front_points < min_front) {
                     ++s.open_out_of_view;
                     continue;
                 }

@@ -23,6 +23,36 @@ struct CellRect {
     int u0, u1, v0, v1;
 };
 
+/// The cells of `g` under the face rectangle [lo, hi], clamped to the grid.
+CellRect CellsUnder(const OutlineGrid& g, const Eigen::Vector2f& lo, const Eigen::Vector2f& hi) {
+    return {std::clamp(g.U(lo.x()), 0, g.nu - 1), std::clamp(g.U(hi.x()), 0, g.nu - 1),
+            std::clamp(g.V(lo.y()), 0, g.nv - 1), std::clamp(g.V(hi.y()), 0, g.nv - 1)};
+}
+
+/// Which of disjoint cell rectangles of a grid holds a point of the face.
+class CellParts {
+  public:
+    CellParts(const OutlineGrid& g, const std::vector<CellRect>& parts)
+        : g_(g), part_(static_cast<std::size_t>(g.nu) * static_cast<std::size_t>(g.nv), -1) {
+        for (std::size_t l = 0; l < parts.size(); ++l) {
+            for (int v = parts[l].v0; v <= parts[l].v1; ++v) {
+                for (int u = parts[l].u0; u <= parts[l].u1; ++u)
+                    part_[static_cast<std::size_t>(v * g.nu + u)] = static_cast<std::int32_t>(l);
+            }
+        }
+    }
+    /// The part holding the cell of face coordinates `q`, clamped into `within`; -1: none.
+    std::int32_t At(const Eigen::Vector2f& q, const CellRect& within) const {
+        const int u = std::clamp(g_.U(q.x()), within.u0, within.u1);
+        const int v = std::clamp(g_.V(q.y()), within.v0, within.v1);
+        return part_[static_cast<std::size_t>(v * g_.nu + u)];
+    }
+
+  private:
+    const OutlineGrid& g_;
+    std::vector<std::int32_t> part_;
+};
+
 /// A cut: a run of lines (columns or rows, bounds inclusive) and the outline share they scored.
 struct Cut {
     int first = -1, last = -1;
@@ -147,23 +177,13 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
         for (std::size_t k = 0; k < known && p.split_fixture_fronts; ++k) {
             Front& fr = fronts[k];
             if (fr.face != static_cast<int>(f) || fr.fixtures.empty()) continue;
-            const CellRect box{
-                std::clamp(g.U(fr.min.x()), 0, g.nu - 1), std::clamp(g.U(fr.max.x()), 0, g.nu - 1),
-                std::clamp(g.V(fr.min.y()), 0, g.nv - 1), std::clamp(g.V(fr.max.y()), 0, g.nv - 1)};
+            const CellRect box = CellsUnder(g, fr.min, fr.max);
             std::vector<CellRect> parts;
             Partition(g, box, box, margin, 0, p, parts);
             if (parts.size() < 2) continue;
+            const CellParts cell_parts(g, parts);
             auto part_of = [&](const Eigen::Vector3f& x) {
-                const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
-                const int u = std::clamp(g.U(q.x()), box.u0, box.u1);
-                const int v = std::clamp(g.V(q.y()), box.v0, box.v1);
-                for (std::size_t l = 0; l < parts.size(); ++l) {
-                    if (u >= parts[l].u0 && u <= parts[l].u1 && v >= parts[l].v0 &&
-                        v <= parts[l].v1) {
-                        return static_cast<int>(l);
-                    }
-                }
-                return -1;
+                return cell_parts.At(PlaneCoordinates(face, frame, x), box);
             };
             int keep = -1;
             for (const int x : fr.fixtures) {
@@ -195,18 +215,9 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
         if (leaves.empty()) continue;
         // The free face points of each leaf.
         std::vector<Indices> members(leaves.size());
-        std::vector<std::int32_t> leaf_of(static_cast<std::size_t>(g.nu) * g.nv, -1);
-        for (std::size_t l = 0; l < leaves.size(); ++l) {
-            for (int v = leaves[l].v0; v <= leaves[l].v1; ++v) {
-                for (int u = leaves[l].u0; u <= leaves[l].u1; ++u)
-                    leaf_of[static_cast<std::size_t>(v * g.nu + u)] = static_cast<std::int32_t>(l);
-            }
-        }
+        const CellParts leaf_of(g, leaves);
         auto leaf_at = [&](const Eigen::Vector3f& x) {
-            const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
-            const int u = std::clamp(g.U(q.x()), 0, g.nu - 1);
-            const int v = std::clamp(g.V(q.y()), 0, g.nv - 1);
-            return leaf_of[static_cast<std::size_t>(v * g.nu + u)];
+            return leaf_of.At(PlaneCoordinates(face, frame, x), whole);
         };
         for (const Index i : face_points[f]) {
             if (taken[i]) continue;
@@ -236,10 +247,7 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
                     PointsRectangle(cloud, frame, face, members[l], kRectQuantile);
                 Eigen::Vector2f lo = fr.min.cwiseMin(leaf_lo), hi = fr.max.cwiseMax(leaf_hi);
                 // A side already on an outline (the door's edge, a frame beyond it) stays.
-                const int u0 = std::clamp(g.U(fr.min.x()), 0, g.nu - 1);
-                const int u1 = std::clamp(g.U(fr.max.x()), 0, g.nu - 1);
-                const int v0 = std::clamp(g.V(fr.min.y()), 0, g.nv - 1);
-                const int v1 = std::clamp(g.V(fr.max.y()), 0, g.nv - 1);
+                const auto [u0, u1, v0, v1] = CellsUnder(g, fr.min, fr.max);
                 auto outline = [&](bool columns, int line, int from, int to) {
                     return IsOutline(CountLine(g, columns, line, from, to), to - from + 1,
                                      grid.min_coverage, grid.extend_support);
@@ -270,10 +278,7 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
             if (size.minCoeff() < p.min_size || size.x() > p.max_width || size.y() > p.max_height)
                 continue;
             // Seen whole: cells of the rectangle holding points.
-            const int cu0 = std::clamp(g.U(lo.x()), 0, g.nu - 1);
-            const int cu1 = std::clamp(g.U(hi.x()), 0, g.nu - 1);
-            const int cv0 = std::clamp(g.V(lo.y()), 0, g.nv - 1);
-            const int cv1 = std::clamp(g.V(hi.y()), 0, g.nv - 1);
+            const auto [cu0, cu1, cv0, cv1] = CellsUnder(g, lo, hi);
             int cells = 0, filled = 0;
             for (int v = cv0; v <= cv1; ++v) {
                 for (int u = cu0; u <= cu1; ++u) {
