@@ -84,11 +84,12 @@ struct Options {
     float min_slide_coverage = -1.0f;       ///< < 0: the library's MotionParams default
     float min_seen_slide_coverage = -1.0f;  ///< < 0: the library's MotionParams default
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
-    float flap_min_width = -1.0f;     ///< < 0: the library's ArticulationParams default
-    float drawer_max_height = -1.0f;  ///< < 0: the library's ArticulationParams default
-    float axis_snap_deg = -1.0f;      ///< < 0: the library's MotionParams default
-    float max_hinge_gap = -1.0f;      ///< < 0: the library's MotionParams default
-    float vacated_max_share = -1.0f;  ///< < 0: the library's MotionParams default
+    float flap_min_width = -1.0f;         ///< < 0: the library's ArticulationParams default
+    float drawer_max_height = -1.0f;      ///< < 0: the library's ArticulationParams default
+    float axis_snap_deg = -1.0f;          ///< < 0: the library's MotionParams default
+    float max_hinge_gap = -1.0f;          ///< < 0: the library's MotionParams default
+    float vacated_max_share = -1.0f;      ///< < 0: the library's MotionParams default
+    float max_beyond_turn_share = -1.0f;  ///< < 0: the library's MotionParams default
     bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
     bool seen_coverage = mapping::MotionParams{}.seen_coverage;
     std::string load_fixtures;
@@ -812,6 +813,8 @@ class Evaluator {
             if (o_.axis_snap_deg >= 0.0f) mp.axis_snap_deg = o_.axis_snap_deg;
             if (o_.max_hinge_gap >= 0.0f) mp.max_hinge_gap = o_.max_hinge_gap;
             if (o_.vacated_max_share >= 0.0f) mp.vacated_max_share = o_.vacated_max_share;
+            if (o_.max_beyond_turn_share >= 0.0f)
+                mp.max_beyond_turn_share = o_.max_beyond_turn_share;
             mp.select_by_vacated = o_.select_by_vacated;
             mp.seen_coverage = o_.seen_coverage;
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
@@ -839,7 +842,8 @@ class Evaluator {
                     "pair %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
                     "front %.2f x %.2f m, moved part %.2f x %.2f m; opened by %.2f, travel %.2f "
                     "m; moved %zu, on the front slid %zu, turned %zu; coverage of the seen cells "
-                    "slid %.2f, turned %.2f; the front's true points in the opened scan %zu)\n",
+                    "slid %.2f, turned %.2f; the front's true points in the opened scan %zu; "
+                    "within the outline %zu moved, %zu beyond the turn's reach %.2f m%s)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
@@ -847,7 +851,8 @@ class Evaluator {
                     motion.front_max.y() - motion.front_min.y(), std::abs(value - closed),
                     motion.slide_travel, motion.moved_points, motion.slide_points,
                     motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
-                    opened_front_points);
+                    opened_front_points, motion.outline_points, motion.beyond_turn_points,
+                    motion.turn_reach, motion.turn_flap ? ", a flap" : "");
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
@@ -1260,6 +1265,10 @@ int main(int argc, char** argv) {
     override("--vacated-share", o.vacated_max_share,
              "opened pairs: the part of a front's rectangle the motion vacated is taken for the "
              "front when it covers less than this share of it (0: off)",
+             1.0);
+    override("--beyond-turn-share", o.max_beyond_turn_share,
+             "opened pairs: a turn is taken for a slide when this share of the moved points "
+             "within the front's outline lie beyond its reach (0: off)",
              1.0);
     app.add_flag("--select-by-vacated,!--select-by-moved", o.select_by_vacated,
                  "opened pairs: the map takes the front that lost the most of its own points for "

@@ -459,11 +459,16 @@ TEST(Articulation, ADrawerRunningOutFartherThanItsFrontIsWideSlides) {
     const Front f = DrawerFront();
     const PointCloud closed = DrawerScan(0.0f);
     EXPECT_TRUE(SlidOutBy(ArticulationFromMotion(closed, DrawerScan(0.45f), f), 0.45f));
-    // Out of reach, the front is not seen: its sides are no door.
+    // Out of reach, the front is not seen, and its box's bottom passes for a flap; but the box
+    // runs out farther than a flap of the front's height could (ADrawerWhoseBoxAloneIsSeenSlides).
     MotionParams near;
     near.reach = 0.3f;
+    near.max_beyond_turn_share = 0.0f;
     const MotionResult n = ArticulationFromMotion(closed, DrawerScan(0.45f), f, near);
     EXPECT_NE(n.articulation.type, JointType::kPrismatic);
+    near.max_beyond_turn_share = MotionParams{}.max_beyond_turn_share;
+    EXPECT_EQ(ArticulationFromMotion(closed, DrawerScan(0.45f), f, near).articulation.type,
+              JointType::kPrismatic);
     near.min_slide_coverage = 1.5f;
     EXPECT_THROW(ArticulationFromMotion(closed, closed, f, near), InvalidArgument);
 }
@@ -493,13 +498,18 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
     EXPECT_NEAR(m.front_min.y(), 0.57f, 0.02f);
     EXPECT_NEAR(m.front_max.y(), 0.67f, 0.02f);
     EXPECT_NEAR(m.front_max.x() - m.front_min.x(), 0.2f, 0.03f);
-    // The whole rectangle: a quarter of it slid, taken for a turn.
+    // The whole rectangle: a quarter of it slid, taken for a turn, unless the moved points
+    // lie farther out than that turn reaches (ADrawerWhoseBoxAloneIsSeenSlides).
     MotionParams whole;
     whole.vacated_max_share = 0.0f;
+    whole.max_beyond_turn_share = 0.0f;
     const MotionResult n = ArticulationFromMotion(closed, opened, f, whole);
     ASSERT_TRUE(n.found);
     EXPECT_EQ(n.articulation.type, JointType::kRevolute);
     EXPECT_EQ(n.front_max.y(), f.max.y());
+    whole.max_beyond_turn_share = MotionParams{}.max_beyond_turn_share;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f, whole).articulation.type,
+              JointType::kPrismatic);
     whole.vacated_max_share = 1.5f;
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, whole), InvalidArgument);
 }
@@ -717,6 +727,73 @@ TEST(Articulation, ADoorSeenEdgeOnIsADoorWhereTheSensorSeesPastIt) {
     EXPECT_EQ(m.articulation.type, JointType::kRevolute);
     EXPECT_GE(m.slide_seen_coverage, 0.0f);
     EXPECT_LT(m.slide_seen_coverage, 0.3f);
+}
+
+/// The face of AddFaceBesideDrawers with a drawer 15 cm tall (x 0.7 .. 0.9, z 0.5 .. 0.65)
+/// pulled out by `pull`, its front out of view: what is seen of it is its box's bottom and sides
+/// (out to `pull` from the face), as where a drawer pulled towards a camera leaves the image.
+PointCloud DrawerBoxAlone(float pull) {
+    std::mt19937 rng(23);
+    PointCloud c;
+    AddFaceBesideDrawers(c, rng);
+    PointCloud drawer;
+    AddDrawer(drawer, 0.5f, 0.15f, 0.02f, 0.12f, pull, rng);
+    for (const auto& x : drawer.points) {
+        if (pull <= 0.0f || x.y() > 2.4f - pull + 0.01f) c.points.push_back(x);
+    }
+    return c;
+}
+
+TEST(Articulation, ADrawerWhoseBoxAloneIsSeenSlides) {
+    const Front f = DrawerFront();
+    const PointCloud closed = DrawerScan(0.0f);
+    const PointCloud opened = DrawerBoxAlone(0.45f);
+    // Taken for a flap opened downwards, the box's bottom turned back covers the front; but a
+    // flap 15 cm tall reaches no more than 20 cm out, and the bottom runs out 45 cm.
+    MotionParams off;
+    off.max_beyond_turn_share = 0.0f;
+    const MotionResult flap = ArticulationFromMotion(closed, opened, f, off);
+    ASSERT_TRUE(flap.found);
+    EXPECT_EQ(flap.articulation.type, JointType::kRevolute);
+    EXPECT_TRUE(flap.turn_flap);
+    EXPECT_NEAR(flap.turn_reach, 0.15f, 0.03f);
+    EXPECT_GT(flap.beyond_turn_points, flap.outline_points / 2);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
+    EXPECT_LT(m.articulation.axis.y(), -0.99f);
+    EXPECT_NEAR(m.opening, 0.45f, 0.03f);
+    EXPECT_EQ(m.moved.size(), m.outline_points);
+    // Deterministic; a bad share is refused.
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f).opening, m.opening);
+    off.max_beyond_turn_share = 1.5f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, off), InvalidArgument);
+}
+
+TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
+    // The door of DoorScan hinged at its bottom edge (z = 0.15) and opened downwards by 80 deg:
+    // nothing of it lies beyond its height out of the face.
+    const Front f = DoorFront();
+    const PointCloud closed = DoorScan(0.0f, 0.0f);
+    PointCloud opened;
+    for (const auto& x : closed.points) {
+        if (x.x() < 0.595f || x.x() > 1.105f) opened.points.push_back(x);
+    }
+    PointCloud door;
+    std::mt19937 rng(29);
+    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    const Eigen::Vector3f hinge(0.85f, 2.4f, 0.15f);
+    const Eigen::Matrix3f R =
+        Eigen::AngleAxisf(80.0f * kDeg, Eigen::Vector3f::UnitX()).toRotationMatrix();
+    for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    ASSERT_EQ(m.articulation.type, JointType::kRevolute);
+    EXPECT_TRUE(m.turn_flap);
+    EXPECT_GT(std::abs(m.articulation.axis.x()), 0.99f);
+    EXPECT_EQ(m.beyond_turn_points, 0u);
+    EXPECT_NEAR(m.opening / kDeg, 80.0f, 3.0f);
 }
 
 TEST(Articulation, AHingeAxisNearTheFrontsVerticalIsVertical) {

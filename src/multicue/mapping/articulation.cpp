@@ -195,14 +195,17 @@ void MotionParams::Validate() const {
         !(coverage_cell > 0.0f && coverage_cell <= 0.5f) ||
         !(axis_snap_deg >= 0.0f && axis_snap_deg < 45.0f) ||
         !(max_hinge_gap >= 0.0f && max_hinge_gap <= 10.0f) ||
-        !(vacated_max_share >= 0.0f && vacated_max_share <= 1.0f)) {
+        !(vacated_max_share >= 0.0f && vacated_max_share <= 1.0f) ||
+        !(turn_reach_margin >= 0.0f && turn_reach_margin <= 1.0f) ||
+        !(max_beyond_turn_share >= 0.0f && max_beyond_turn_share <= 1.0f)) {
         throw InvalidArgument(fmt::format(
             "motion: need min_slide_coverage and min_seen_slide_coverage in [0, 1], "
             "coverage_cell in (0, 0.5] m, "
-            "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m and vacated_max_share in "
-            "[0, 1] (got {}, {}, {}, {}, {}, {})",
+            "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m, vacated_max_share in "
+            "[0, 1], turn_reach_margin in [0, 1] m and max_beyond_turn_share in [0, 1] (got {}, "
+            "{}, {}, {}, {}, {}, {}, {})",
             min_slide_coverage, min_seen_slide_coverage, coverage_cell, axis_snap_deg,
-            max_hinge_gap, vacated_max_share));
+            max_hinge_gap, vacated_max_share, turn_reach_margin, max_beyond_turn_share));
     }
 }
 
@@ -303,6 +306,9 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     const float swing = std::min(p.reach, std::max(width, height) + 0.05f);
     const float outline_margin = 0.05f;
     Indices moved;
+    // The moved points within the front's outline, and how far each lies out of the face.
+    Indices outline_moved;
+    std::vector<float> outline_out;
     for (std::size_t i = 0; i < opened.size(); ++i) {
         if (!opened.IsFinite(i)) continue;
         const Eigen::Vector3f& x = opened.points[i];
@@ -318,6 +324,10 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         float d2 = 0.0f;
         if (before.SearchNearest(x, nn, d2) && d2 < p.change_distance * p.change_distance) continue;
         moved.push_back(static_cast<Index>(i));
+        if (in_slide) {
+            outline_moved.push_back(static_cast<Index>(i));
+            outline_out.push_back(h);
+        }
     }
     out.moved_points = moved.size();
     if (moved.size() < p.min_points) return out;
@@ -553,15 +563,56 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         out.turn_seen_coverage = hinge_on.seen_cells;
     }
     const float min_cover = by_seen ? p.min_seen_slide_coverage : p.min_slide_coverage;
-    if (out.articulation.type != JointType::kPrismatic || min_cover <= 0.0f ||
-        slide_cover >= min_cover) {
+    if (out.articulation.type == JointType::kPrismatic && min_cover > 0.0f &&
+        slide_cover < min_cover) {
+        if (hinge.type != JointType::kUnknown) {
+            tilted_turn();
+        } else {
+            edge_turn(nullptr);
+        }
+    }
+    // The turn taken cannot bring any part of the rectangle farther out of the face than its
+    // farthest corner from the hinge axis. Moved points straight out of the rectangle beyond that
+    // are something else. Where the turn is a flap's, whose reach is the height of the band the
+    // motion vacated, they are a drawer's box, pulled out so far that its front left the view,
+    // whose bottom the turn explains as a flap opened downwards.
+    out.outline_points = outline_out.size();
+    if (out.articulation.type != JointType::kRevolute) return out;
+    const Articulation& a = out.articulation;
+    out.turn_flap = std::abs(a.axis.dot(f.u_axis)) > std::abs(a.axis.dot(f.v_axis));
+    float reach_out = 0.0f;
+    for (const float u : {f.min.x(), f.max.x()}) {
+        for (const float v : {f.min.y(), f.max.y()}) {
+            const Eigen::Vector3f c = f.u_axis * u + f.v_axis * v - f.normal * plane_d;
+            const Eigen::Vector3f d = c - a.origin;
+            reach_out = std::max(reach_out, (d - d.dot(a.axis) * a.axis).norm());
+        }
+    }
+    out.turn_reach = reach_out;
+    out.beyond_turn_points = static_cast<std::size_t>(
+        std::count_if(outline_out.begin(), outline_out.end(),
+                      [&](float h) { return h > reach_out + p.turn_reach_margin; }));
+    if (p.max_beyond_turn_share <= 0.0f || !out.turn_flap ||
+        out.beyond_turn_points < p.min_points ||
+        static_cast<float>(out.beyond_turn_points) <
+            p.max_beyond_turn_share * static_cast<float>(outline_out.size())) {
         return out;
     }
-    if (hinge.type != JointType::kUnknown) {
-        tilted_turn();
-        return out;
-    }
-    edge_turn(nullptr);
+    // A slide, at least as far as the box is seen out of the face (98 % of the moved points
+    // within the outline; the parallel plane may be a panel inside the box).
+    std::vector<float> depth = outline_out;
+    const auto k = static_cast<std::ptrdiff_t>(0.98f * static_cast<float>(depth.size() - 1));
+    std::nth_element(depth.begin(), depth.begin() + k, depth.end());
+    Articulation box;
+    box.type = JointType::kPrismatic;
+    box.axis = f.normal;
+    box.origin = f.center;
+    box.source = "motion";
+    box.upper = std::max(slide.type == JointType::kUnknown ? 0.0f : travel,
+                         depth[static_cast<std::size_t>(k)]);
+    out.articulation = box;
+    out.opening = box.upper;
+    out.moved = outline_moved;
     return out;
 }
 
