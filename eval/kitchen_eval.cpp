@@ -843,7 +843,8 @@ class Evaluator {
                     "front %.2f x %.2f m, moved part %.2f x %.2f m; opened by %.2f, travel %.2f "
                     "m; moved %zu, on the front slid %zu, turned %zu; coverage of the seen cells "
                     "slid %.2f, turned %.2f; the front's true points in the opened scan %zu; "
-                    "within the outline %zu moved, %zu beyond the turn's reach %.2f m%s)\n",
+                    "within the outline %zu moved, %zu beyond the turn's reach %.2f m, %zu of "
+                    "them off its plane%s)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
@@ -852,7 +853,8 @@ class Evaluator {
                     motion.slide_travel, motion.moved_points, motion.slide_points,
                     motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
                     opened_front_points, motion.outline_points, motion.beyond_turn_points,
-                    motion.turn_reach, motion.turn_flap ? ", a flap" : "");
+                    motion.turn_reach, motion.beyond_off_plane,
+                    motion.turn_flap ? ", a flap" : "");
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);

@@ -589,9 +589,17 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         }
     }
     out.turn_reach = reach_out;
-    out.beyond_turn_points = static_cast<std::size_t>(
-        std::count_if(outline_out.begin(), outline_out.end(),
-                      [&](float h) { return h > reach_out + p.turn_reach_margin; }));
+    // The turned front's plane: a flap's own points beyond its rectangle (the rectangle shorter
+    // than the door) lie on it; a drawer's box has sides across it.
+    const Eigen::Isometry3f turned = turn(a.origin, a.axis, out.opening);
+    const Eigen::Vector3f turned_n = turned.linear() * f.normal;
+    const float turned_d = -turned_n.dot(turned * f.center);
+    for (std::size_t k = 0; k < outline_out.size(); ++k) {
+        if (outline_out[k] <= reach_out + p.turn_reach_margin) continue;
+        ++out.beyond_turn_points;
+        const Eigen::Vector3f& x = opened.points[outline_moved[k]];
+        out.beyond_off_plane += std::abs(turned_n.dot(x) + turned_d) > 2.0f * p.plane_threshold;
+    }
     if (p.max_beyond_turn_share <= 0.0f || !out.turn_flap ||
         out.beyond_turn_points < p.min_points ||
         static_cast<float>(out.beyond_turn_points) <

@@ -163,6 +163,8 @@ struct MotionResult {
     /// the rectangle (its farthest corner from the hinge axis) by more than `turn_reach_margin`:
     /// a drawer's box, seen where its front is not (0 without a turn hypothesis).
     std::size_t outline_points = 0, beyond_turn_points = 0;
+    /// Of beyond_turn_points, those off the turned front's plane (by twice `plane_threshold`).
+    std::size_t beyond_off_plane = 0;
     /// How far the turned rectangle reaches out of the face (-1: no turn hypothesis) [m].
     float turn_reach = -1.0f;
     /// Whether the turn taken is a flap's: about an axis along the front's horizontal.
