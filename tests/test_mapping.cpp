@@ -464,9 +464,10 @@ TEST(Articulation, ADrawerRunningOutFartherThanItsFrontIsWideSlides) {
     // (ADrawerWhoseBoxAloneIsSeenSlides) it slides.
     MotionParams near;
     near.reach = 0.3f;
+    near.max_beyond_turn_share = 0.0f;
     const MotionResult n = ArticulationFromMotion(closed, DrawerScan(0.45f), f, near);
     EXPECT_NE(n.articulation.type, JointType::kPrismatic);
-    near.max_beyond_turn_share = 0.15f;
+    near.max_beyond_turn_share = MotionParams{}.max_beyond_turn_share;
     EXPECT_EQ(ArticulationFromMotion(closed, DrawerScan(0.45f), f, near).articulation.type,
               JointType::kPrismatic);
     near.min_slide_coverage = 1.5f;
@@ -502,11 +503,12 @@ TEST(Articulation, ADrawerOfAStackFoundAsOneFrontSlides) {
     // moved points lie farther out than that turn reaches (ADrawerWhoseBoxAloneIsSeenSlides).
     MotionParams whole;
     whole.vacated_max_share = 0.0f;
+    whole.max_beyond_turn_share = 0.0f;
     const MotionResult n = ArticulationFromMotion(closed, opened, f, whole);
     ASSERT_TRUE(n.found);
     EXPECT_EQ(n.articulation.type, JointType::kRevolute);
     EXPECT_EQ(n.front_max.y(), f.max.y());
-    whole.max_beyond_turn_share = 0.15f;
+    whole.max_beyond_turn_share = MotionParams{}.max_beyond_turn_share;
     EXPECT_EQ(ArticulationFromMotion(closed, opened, f, whole).articulation.type,
               JointType::kPrismatic);
     whole.vacated_max_share = 1.5f;
@@ -748,31 +750,40 @@ TEST(Articulation, ADrawerWhoseBoxAloneIsSeenSlides) {
     const PointCloud closed = DrawerScan(0.0f);
     const PointCloud opened = DrawerBoxAlone(0.45f);
     // Taken for a flap opened downwards, the box's bottom turned back covers the front; but a
-    // flap 15 cm tall reaches no more than 20 cm out, and the bottom runs out 45 cm.
+    // flap 15 cm tall reaches no more than 20 cm out, the bottom runs out 45 cm, and the box's
+    // sides stand across the flap's plane.
     MotionParams off;
+    off.max_beyond_turn_share = 0.0f;
     const MotionResult flap = ArticulationFromMotion(closed, opened, f, off);
     ASSERT_TRUE(flap.found);
     EXPECT_EQ(flap.articulation.type, JointType::kRevolute);
     EXPECT_TRUE(flap.turn_flap);
     EXPECT_NEAR(flap.turn_reach, 0.15f, 0.03f);
     EXPECT_GT(flap.beyond_turn_points, flap.outline_points / 2);
-    MotionParams box;
-    box.max_beyond_turn_share = 0.15f;
-    const MotionResult m = ArticulationFromMotion(closed, opened, f, box);
+    EXPECT_GT(flap.beyond_off_plane, flap.beyond_turn_points / 4);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
     ASSERT_TRUE(m.found);
     EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
     EXPECT_LT(m.articulation.axis.y(), -0.99f);
     EXPECT_NEAR(m.opening, 0.45f, 0.03f);
     EXPECT_EQ(m.moved.size(), m.outline_points);
-    // Deterministic; a bad share is refused.
-    EXPECT_EQ(ArticulationFromMotion(closed, opened, f, box).opening, m.opening);
+    // The bottom lies on the flap's plane: with every point beyond required off it, a flap.
+    MotionParams all_off;
+    all_off.min_beyond_off_plane = 1.0f;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f, all_off).articulation.type,
+              JointType::kRevolute);
+    // Deterministic; bad shares are refused.
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f).opening, m.opening);
     off.max_beyond_turn_share = 1.5f;
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, off), InvalidArgument);
+    all_off.min_beyond_off_plane = -0.5f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, all_off), InvalidArgument);
 }
 
 TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     // The door of DoorScan hinged at its bottom edge (z = 0.15) and opened downwards by 80 deg:
-    // nothing of it lies beyond its height out of the face.
+    // nothing of it lies beyond its height out of the face. Found shorter than it is (its lower
+    // 30 cm), it reaches beyond its rectangle, but on its own plane: still a flap.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
     PointCloud opened;
@@ -787,15 +798,26 @@ TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     const Eigen::Matrix3f R =
         Eigen::AngleAxisf(80.0f * kDeg, Eigen::Vector3f::UnitX()).toRotationMatrix();
     for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
-    MotionParams box;
-    box.max_beyond_turn_share = 0.15f;
-    const MotionResult m = ArticulationFromMotion(closed, opened, f, box);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
     ASSERT_TRUE(m.found);
     ASSERT_EQ(m.articulation.type, JointType::kRevolute);
     EXPECT_TRUE(m.turn_flap);
     EXPECT_GT(std::abs(m.articulation.axis.x()), 0.99f);
     EXPECT_EQ(m.beyond_turn_points, 0u);
     EXPECT_NEAR(m.opening / kDeg, 80.0f, 3.0f);
+    Front lower = f;
+    lower.max.y() = 0.45f;
+    lower.center.z() = 0.3f;
+    const MotionResult s = ArticulationFromMotion(closed, opened, lower);
+    ASSERT_TRUE(s.found);
+    EXPECT_EQ(s.articulation.type, JointType::kRevolute);
+    EXPECT_GT(s.beyond_turn_points, s.outline_points / 4);
+    EXPECT_LT(s.beyond_off_plane, s.beyond_turn_points / 10);
+    // Without the plane test the flap passes for a drawer's box.
+    MotionParams any_plane;
+    any_plane.min_beyond_off_plane = 0.0f;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, lower, any_plane).articulation.type,
+              JointType::kPrismatic);
 }
 
 TEST(Articulation, AHingeAxisNearTheFrontsVerticalIsVertical) {

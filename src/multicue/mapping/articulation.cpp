@@ -197,15 +197,17 @@ void MotionParams::Validate() const {
         !(max_hinge_gap >= 0.0f && max_hinge_gap <= 10.0f) ||
         !(vacated_max_share >= 0.0f && vacated_max_share <= 1.0f) ||
         !(turn_reach_margin >= 0.0f && turn_reach_margin <= 1.0f) ||
-        !(max_beyond_turn_share >= 0.0f && max_beyond_turn_share <= 1.0f)) {
+        !(max_beyond_turn_share >= 0.0f && max_beyond_turn_share <= 1.0f) ||
+        !(min_beyond_off_plane >= 0.0f && min_beyond_off_plane <= 1.0f)) {
         throw InvalidArgument(fmt::format(
             "motion: need min_slide_coverage and min_seen_slide_coverage in [0, 1], "
             "coverage_cell in (0, 0.5] m, "
             "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m, vacated_max_share in "
-            "[0, 1], turn_reach_margin in [0, 1] m and max_beyond_turn_share in [0, 1] (got {}, "
-            "{}, {}, {}, {}, {}, {}, {})",
+            "[0, 1], turn_reach_margin in [0, 1] m, max_beyond_turn_share and "
+            "min_beyond_off_plane in [0, 1] (got {}, {}, {}, {}, {}, {}, {}, {}, {})",
             min_slide_coverage, min_seen_slide_coverage, coverage_cell, axis_snap_deg,
-            max_hinge_gap, vacated_max_share, turn_reach_margin, max_beyond_turn_share));
+            max_hinge_gap, vacated_max_share, turn_reach_margin, max_beyond_turn_share,
+            min_beyond_off_plane));
     }
 }
 
@@ -590,7 +592,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     }
     out.turn_reach = reach_out;
     // The turned front's plane: a flap's own points beyond its rectangle (the rectangle shorter
-    // than the door) lie on it; a drawer's box has sides across it.
+    // than the door) lie on it; a drawer's box has sides across it, and a back.
     const Eigen::Isometry3f turned = turn(a.origin, a.axis, out.opening);
     const Eigen::Vector3f turned_n = turned.linear() * f.normal;
     const float turned_d = -turned_n.dot(turned * f.center);
@@ -603,7 +605,9 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     if (p.max_beyond_turn_share <= 0.0f || !out.turn_flap ||
         out.beyond_turn_points < p.min_points ||
         static_cast<float>(out.beyond_turn_points) <
-            p.max_beyond_turn_share * static_cast<float>(outline_out.size())) {
+            p.max_beyond_turn_share * static_cast<float>(outline_out.size()) ||
+        static_cast<float>(out.beyond_off_plane) <
+            p.min_beyond_off_plane * static_cast<float>(out.beyond_turn_points)) {
         return out;
     }
     // A slide, at least as far as the box is seen out of the face (98 % of the moved points

