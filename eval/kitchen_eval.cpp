@@ -853,8 +853,7 @@ class Evaluator {
                     motion.slide_travel, motion.moved_points, motion.slide_points,
                     motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
                     opened_front_points, motion.outline_points, motion.beyond_turn_points,
-                    motion.turn_reach, motion.beyond_off_plane,
-                    motion.turn_flap ? ", a flap" : "");
+                    motion.turn_reach, motion.beyond_off_plane, motion.turn_flap ? ", a flap" : "");
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);

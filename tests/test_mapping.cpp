@@ -358,6 +358,28 @@ PointCloud DoorScan(float angle, float pull) {
     return c;
 }
 
+/// DoorScan's closed scan with the door taken away (its closed place empty), the frame kept.
+PointCloud FrameWithoutTheDoor(const PointCloud& closed) {
+    PointCloud frame;
+    for (const auto& x : closed.points) {
+        if (x.x() < 0.595f || x.x() > 1.105f) frame.points.push_back(x);
+    }
+    return frame;
+}
+
+/// DoorScan's frame with its door (x 0.6 .. 1.1, z 0.15 .. 0.8, y = 2.4, drawn with `seed`)
+/// turned by `R` about `hinge`.
+PointCloud DoorTurned(const PointCloud& closed, const Eigen::Vector3f& hinge,
+                      const Eigen::Matrix3f& R, unsigned seed) {
+    PointCloud opened = FrameWithoutTheDoor(closed);
+    PointCloud door;
+    std::mt19937 rng(seed);
+    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
+    return opened;
+}
+
 TEST(Articulation, FromASyntheticOpenedDoorAndDrawer) {
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
@@ -639,13 +661,7 @@ TEST(Articulation, AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer) {
     // shows of it is a strip along its free edge, parallel to the face 0.3 m out.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
-    PointCloud opened = DoorScan(0.0f, 0.0f);
-    // Take the door away (its closed place is empty now), keep the frame.
-    PointCloud frame;
-    for (std::size_t i = 0; i < opened.size(); ++i) {
-        const Eigen::Vector3f& x = opened.points[i];
-        if (x.x() < 0.595f || x.x() > 1.105f) frame.points.push_back(x);
-    }
+    PointCloud frame = FrameWithoutTheDoor(closed);
     std::mt19937 rng(3);
     test::AddPatch(frame, {0.82f, 2.1f, 0.15f}, {0.05f, 0, 0}, {0, 0, 0.65f}, 0.005f, {0, -1, 0},
                    Color{}, 0.001f, rng);
@@ -711,10 +727,7 @@ TEST(Articulation, ADoorSeenEdgeOnIsADoorWhereTheSensorSeesPastIt) {
     // and the strip covers little of it.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
-    PointCloud opened;
-    for (const auto& x : closed.points) {
-        if (x.x() < 0.595f || x.x() > 1.105f) opened.points.push_back(x);
-    }
+    PointCloud opened = FrameWithoutTheDoor(closed);
     std::mt19937 rng(3);
     test::AddPatch(opened, {0.82f, 2.1f, 0.15f}, {0.05f, 0, 0}, {0, 0, 0.65f}, 0.005f, {0, -1, 0},
                    Color{}, 0.001f, rng);
@@ -786,18 +799,9 @@ TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     // 30 cm), it reaches beyond its rectangle, but on its own plane: still a flap.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
-    PointCloud opened;
-    for (const auto& x : closed.points) {
-        if (x.x() < 0.595f || x.x() > 1.105f) opened.points.push_back(x);
-    }
-    PointCloud door;
-    std::mt19937 rng(29);
-    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
-                   Color{}, 0.001f, rng);
-    const Eigen::Vector3f hinge(0.85f, 2.4f, 0.15f);
-    const Eigen::Matrix3f R =
-        Eigen::AngleAxisf(80.0f * kDeg, Eigen::Vector3f::UnitX()).toRotationMatrix();
-    for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
+    const PointCloud opened = DoorTurned(
+        closed, {0.85f, 2.4f, 0.15f},
+        Eigen::AngleAxisf(80.0f * kDeg, Eigen::Vector3f::UnitX()).toRotationMatrix(), 29);
     const MotionResult m = ArticulationFromMotion(closed, opened, f);
     ASSERT_TRUE(m.found);
     ASSERT_EQ(m.articulation.type, JointType::kRevolute);
@@ -825,19 +829,10 @@ TEST(Articulation, AHingeAxisNearTheFrontsVerticalIsVertical) {
     // the face plane): the furniture is axis-aligned, so the lean is taken for the plane fit's.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
-    PointCloud opened;
-    PointCloud door;
-    std::mt19937 rng(5);
-    test::AddPatch(door, {0.6f, 2.4f, 0.15f}, {0.5f, 0, 0}, {0, 0, 0.65f}, 0.01f, {0, -1, 0},
-                   Color{}, 0.001f, rng);
-    for (const auto& x : closed.points) {
-        if (x.x() < 0.595f || x.x() > 1.105f) opened.points.push_back(x);
-    }
-    const Eigen::Vector3f hinge(0.6f, 2.4f, 0.475f);
     const Eigen::Vector3f lean =
         Eigen::AngleAxisf(4.0f * kDeg, Eigen::Vector3f::UnitY()) * Eigen::Vector3f::UnitZ();
-    const Eigen::Matrix3f R = Eigen::AngleAxisf(50.0f * kDeg, -lean).toRotationMatrix();
-    for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
+    const PointCloud opened = DoorTurned(
+        closed, {0.6f, 2.4f, 0.475f}, Eigen::AngleAxisf(50.0f * kDeg, -lean).toRotationMatrix(), 5);
     const MotionResult m = ArticulationFromMotion(closed, opened, f);
     ASSERT_TRUE(m.found);
     ASSERT_EQ(m.articulation.type, JointType::kRevolute);
