@@ -1268,8 +1268,9 @@ int main(int argc, char** argv) {
              "front when it covers less than this share of it (0: off)",
              1.0);
     override("--beyond-turn-share", o.max_beyond_turn_share,
-             "opened pairs: a turn is taken for a slide when this share of the moved points "
-             "within the front's outline lie beyond its reach (0: off)",
+             "opened pairs: a flap's turn is taken for a slide when this share of the moved "
+             "points within the front's outline lie beyond its reach, a quarter of them off its "
+             "plane (0: off)",
              1.0);
     app.add_flag("--select-by-vacated,!--select-by-moved", o.select_by_vacated,
                  "opened pairs: the map takes the front that lost the most of its own points for "

@@ -656,15 +656,22 @@ TEST(Articulation, AnOpenedScanSplitsAFrontSpanningSeveralDrawers) {
     EXPECT_EQ(map.fronts.size(), 3u);
 }
 
+/// DoorScan's door opened by 60 deg about its left edge (x = 0.6) and seen edge-on: the frame,
+/// and of the door a strip along its free edge, parallel to the face 0.3 m out.
+PointCloud DoorSeenEdgeOn(const PointCloud& closed, std::mt19937& rng) {
+    PointCloud opened = FrameWithoutTheDoor(closed);
+    test::AddPatch(opened, {0.82f, 2.1f, 0.15f}, {0.05f, 0, 0}, {0, 0, 0.65f}, 0.005f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    return opened;
+}
+
 TEST(Articulation, AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer) {
     // A door opened by 60 deg about its left edge (x = 0.6) and seen edge-on: what the sensor
     // shows of it is a strip along its free edge, parallel to the face 0.3 m out.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
-    PointCloud frame = FrameWithoutTheDoor(closed);
     std::mt19937 rng(3);
-    test::AddPatch(frame, {0.82f, 2.1f, 0.15f}, {0.05f, 0, 0}, {0, 0, 0.65f}, 0.005f, {0, -1, 0},
-                   Color{}, 0.001f, rng);
+    const PointCloud frame = DoorSeenEdgeOn(closed, rng);
     const MotionResult m = ArticulationFromMotion(closed, frame, f);
     ASSERT_TRUE(m.found);
     EXPECT_EQ(m.articulation.type, JointType::kRevolute);
@@ -727,10 +734,8 @@ TEST(Articulation, ADoorSeenEdgeOnIsADoorWhereTheSensorSeesPastIt) {
     // and the strip covers little of it.
     const Front f = DoorFront();
     const PointCloud closed = DoorScan(0.0f, 0.0f);
-    PointCloud opened = FrameWithoutTheDoor(closed);
     std::mt19937 rng(3);
-    test::AddPatch(opened, {0.82f, 2.1f, 0.15f}, {0.05f, 0, 0}, {0, 0, 0.65f}, 0.005f, {0, -1, 0},
-                   Color{}, 0.001f, rng);
+    PointCloud opened = DoorSeenEdgeOn(closed, rng);
     test::AddPatch(opened, {0.3f, 2.9f, 0.0f}, {1.1f, 0, 0}, {0, 0, 0.8f}, 0.01f, {0, -1, 0},
                    Color{}, 0.001f, rng);
     test::AddPatch(opened, {0.3f, 1.5f, 0.0f}, {1.1f, 0, 0}, {0, 1.4f, 0}, 0.01f, {0, 0, 1},

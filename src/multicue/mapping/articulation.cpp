@@ -33,6 +33,13 @@ Articulation Hinge(const Front& f, const Eigen::Vector3f& edge_point,
     return a;
 }
 
+/// The `q` quantile of `values` (reordered; not empty).
+float Quantile(std::vector<float>& values, float q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<float>(values.size() - 1));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return values[static_cast<std::size_t>(k)];
+}
+
 /// What the opened scan could see around a front: its returns binned by direction from the
 /// sensor (on the plane tangent to the direction towards the front, bins as wide as a coverage
 /// cell at the front's distance), each bin holding its farthest return. A place in a bin without
@@ -139,15 +146,10 @@ Vacated VacatedPart(const KdTree& before, const PointCloud& opened, const Front&
     }
     out.points = vs.size();
     if (p.vacated_max_share <= 0.0f || vs.size() < p.min_points) return out;
-    auto quantile = [&vs](float q) {
-        const auto k = static_cast<std::ptrdiff_t>(q * static_cast<float>(vs.size() - 1));
-        std::nth_element(vs.begin(), vs.begin() + k, vs.end());
-        return vs[static_cast<std::size_t>(k)];
-    };
     // What the moved front left within change_distance of a surface that stayed (the drawer's
     // sides and bottom cross the face plane) was not counted: the band reaches that much farther.
-    const float lo = std::max(f.min.y(), quantile(0.02f) - p.change_distance);
-    const float hi = std::min(f.max.y(), quantile(0.98f) + p.change_distance);
+    const float lo = std::max(f.min.y(), Quantile(vs, 0.02f) - p.change_distance);
+    const float hi = std::min(f.max.y(), Quantile(vs, 0.98f) + p.change_distance);
     if (hi - lo < 2.0f * p.coverage_cell ||
         hi - lo >= p.vacated_max_share * (f.max.y() - f.min.y())) {
         return out;
@@ -415,7 +417,16 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         return Eigen::Isometry3f(Eigen::Translation3f(origin) * Eigen::AngleAxisf(a, axis) *
                                  Eigen::Translation3f(-origin));
     };
-    // The prismatic hypothesis.
+    // The prismatic hypothesis: out along the face normal by `t`.
+    auto slide_by = [&](float t) {
+        Articulation a;
+        a.type = JointType::kPrismatic;
+        a.axis = f.normal;
+        a.origin = f.center;
+        a.upper = t;
+        a.source = "motion";
+        return a;
+    };
     Articulation slide;
     float travel = 0.0f;
     OnFront slide_on;
@@ -425,11 +436,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
         std::abs(fit.plane.head<3>().dot(f.normal)) >= cos_par ? fit : fit_parallel;
     if (pf.found && pf.inliers.size() >= p.min_points) {
         travel = std::max(0.0f, f.normal.dot(centroid_of(pf.inliers)) + plane_d);
-        slide.type = JointType::kPrismatic;
-        slide.axis = f.normal;
-        slide.origin = f.center;
-        slide.upper = travel;
-        slide.source = "motion";
+        slide = slide_by(travel);
         slide_on = on_front(shift(travel));
         slide_inliers = pf.inliers;
     }
@@ -612,18 +619,8 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     }
     // A slide, at least as far as the box is seen out of the face (98 % of the moved points
     // within the outline; the parallel plane may be a panel inside the box).
-    std::vector<float> depth = outline_out;
-    const auto k = static_cast<std::ptrdiff_t>(0.98f * static_cast<float>(depth.size() - 1));
-    std::nth_element(depth.begin(), depth.begin() + k, depth.end());
-    Articulation box;
-    box.type = JointType::kPrismatic;
-    box.axis = f.normal;
-    box.origin = f.center;
-    box.source = "motion";
-    box.upper = std::max(slide.type == JointType::kUnknown ? 0.0f : travel,
-                         depth[static_cast<std::size_t>(k)]);
-    out.articulation = box;
-    out.opening = box.upper;
+    out.opening = std::max(travel, Quantile(outline_out, 0.98f));
+    out.articulation = slide_by(out.opening);
     out.moved = outline_moved;
     return out;
 }

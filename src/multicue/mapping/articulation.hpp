@@ -164,13 +164,13 @@ struct MotionResult {
     /// `change_distance`: the place the front left (or its motion hides).
     std::size_t vacated_points = 0;
     /// Moved points straight out of the front's rectangle (within its outline, 5 cm margin),
-    /// and of them those farther out of the face than the turn hypothesis can bring any part of
-    /// the rectangle (its farthest corner from the hinge axis) by more than `turn_reach_margin`:
-    /// a drawer's box, seen where its front is not (0 without a turn hypothesis).
+    /// and of them those farther out of the face than the turn taken can bring any part of the
+    /// rectangle (its farthest corner from the hinge axis) by more than `turn_reach_margin`: a
+    /// drawer's box, seen where its front is not (beyond_turn_points 0 when no turn was taken).
     std::size_t outline_points = 0, beyond_turn_points = 0;
     /// Of beyond_turn_points, those off the turned front's plane (by twice `plane_threshold`).
     std::size_t beyond_off_plane = 0;
-    /// How far the turned rectangle reaches out of the face (-1: no turn hypothesis) [m].
+    /// How far the turned rectangle reaches out of the face (-1: no turn taken) [m].
     float turn_reach = -1.0f;
     /// Whether the turn taken is a flap's: about an axis along the front's horizontal.
     bool turn_flap = false;
