@@ -275,6 +275,10 @@ struct Scores {
     /// Pairs not scored: opening swung the front out of the sensor's view (fewer points of it
     /// in the opened scan than a visible front has).
     std::size_t open_out_of_view = 0;
+    /// Wrong pairs whose front's points in the opened scan lie mostly behind the face plane of
+    /// the matched front: its front panel left the view and the inside of its box, seen through
+    /// the front's place, is what shows (ArticulationFromMotion reads points in front of the face).
+    std::size_t open_wrong_behind = 0;
     /// The same for the pairs of fronts without a fixture (found from their outlines alone).
     std::size_t open_correct_bare = 0, open_total_bare = 0, open_missed_bare = 0;
     std::map<std::string, std::size_t> open_confusion;  ///< "true -> predicted"
@@ -792,10 +796,10 @@ class Evaluator {
             }
             k.SetJoint(j, closed);
             std::size_t opened_front_points = 0;
+            const ScanTruth ot(opened.cloud);
             {
                 // A front swung out of the view (a door near the image border) shows no motion
                 // to anyone: such pairs test the aim of the sensor, not the estimate.
-                const ScanTruth ot(opened.cloud);
                 for (std::size_t i = 0; i < opened.cloud.size(); ++i) {
                     opened_front_points += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1;
                 }
@@ -818,6 +822,14 @@ class Evaluator {
             mp.select_by_vacated = o_.select_by_vacated;
             mp.seen_coverage = o_.seen_coverage;
             const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
+            std::size_t front_behind = 0;
+            {
+                const float plane_d = -pf.normal.dot(pf.center);
+                for (std::size_t i = 0; i < opened.cloud.size(); ++i) {
+                    front_behind += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1 &&
+                                    pf.normal.dot(opened.cloud.points[i]) + plane_d < mp.min_offset;
+                }
+            }
             {
                 // Which front the map takes for the opened one, from all of its fronts.
                 mapping::KitchenMap copy = map;
@@ -842,9 +854,9 @@ class Evaluator {
                     "pair %s %s: slide coverage %.2f, turn coverage %.2f -> %s (axis %.1f deg, "
                     "front %.2f x %.2f m, moved part %.2f x %.2f m; opened by %.2f, travel %.2f "
                     "m; moved %zu, on the front slid %zu, turned %zu; coverage of the seen cells "
-                    "slid %.2f, turned %.2f; the front's true points in the opened scan %zu; "
-                    "within the outline %zu moved, %zu beyond the turn's reach %.2f m, %zu of "
-                    "them off its plane%s)\n",
+                    "slid %.2f, turned %.2f; the front's true points in the opened scan %zu, %zu "
+                    "of them behind the face; within the outline %zu moved, %zu beyond the turn's "
+                    "reach %.2f m, %zu of them off its plane%s)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
@@ -852,8 +864,9 @@ class Evaluator {
                     motion.front_max.y() - motion.front_min.y(), std::abs(value - closed),
                     motion.slide_travel, motion.moved_points, motion.slide_points,
                     motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
-                    opened_front_points, motion.outline_points, motion.beyond_turn_points,
-                    motion.turn_reach, motion.beyond_off_plane, motion.turn_flap ? ", a flap" : "");
+                    opened_front_points, front_behind, motion.outline_points,
+                    motion.beyond_turn_points, motion.turn_reach, motion.beyond_off_plane,
+                    motion.turn_flap ? ", a flap" : "");
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);
@@ -861,6 +874,7 @@ class Evaluator {
                                mapping::JointTypeName(pt)];
             s.open_correct += correct;
             s.open_correct_bare += bare && correct;
+            s.open_wrong_behind += !correct && 2 * front_behind > opened_front_points;
             if (!correct) continue;
             const Axis& gt = axes.at(kj.name);
             const Axis pred{motion.articulation.origin, motion.articulation.axis};
@@ -1125,6 +1139,10 @@ class Evaluator {
                     s.open_correct_bare, s.open_total_bare, s.open_missed_bare);
         std::printf("  opened front found among all fronts: %zu of %zu\n", s.open_picked_right,
                     s.open_picked_total);
+        std::printf(
+            "  wrong pairs whose front's points in the opened scan lie mostly behind the face "
+            "(its box seen, its front out of view): %zu\n",
+            s.open_wrong_behind);
         std::printf("  opened pairs (true -> estimated):");
         for (const auto& [c, n] : s.open_confusion) std::printf(" [%s] %zu", c.c_str(), n);
         std::printf("\n");
@@ -1133,6 +1151,7 @@ class Evaluator {
                        {"pairs", s.open_total},
                        {"no_motion", s.open_missed},
                        {"out_of_view", s.open_out_of_view},
+                       {"wrong_mostly_behind_face", s.open_wrong_behind},
                        {"bare",
                         {{"correct", s.open_correct_bare},
                          {"pairs", s.open_total_bare},
