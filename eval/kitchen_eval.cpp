@@ -795,19 +795,6 @@ class Evaluator {
                 sim::ScanToWorld(opened.cloud, pose);
             }
             k.SetJoint(j, closed);
-            std::size_t opened_front_points = 0;
-            const ScanTruth ot(opened.cloud);
-            {
-                // A front swung out of the view (a door near the image border) shows no motion
-                // to anyone: such pairs test the aim of the sensor, not the estimate.
-                for (std::size_t i = 0; i < opened.cloud.size(); ++i) {
-                    opened_front_points += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1;
-                }
-                if (opened_front_points < min_front) {
-                    ++s.open_out_of_view;
-                    continue;
-                }
-            }
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(match.at(key).first)];
             mapping::MotionParams mp = mapping::MotionParamsFor(
                 f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect);
@@ -821,15 +808,24 @@ class Evaluator {
                 mp.max_beyond_turn_share = o_.max_beyond_turn_share;
             mp.select_by_vacated = o_.select_by_vacated;
             mp.seen_coverage = o_.seen_coverage;
-            const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
-            std::size_t front_behind = 0;
+            // The front's points in the opened scan, and those behind the matched front's face.
+            // A front swung out of the view (a door near the image border) shows no motion to
+            // anyone: such pairs test the aim of the sensor, not the estimate.
+            std::size_t opened_front_points = 0, front_behind = 0;
             {
+                const ScanTruth ot(opened.cloud);
                 const float plane_d = -pf.normal.dot(pf.center);
                 for (std::size_t i = 0; i < opened.cloud.size(); ++i) {
-                    front_behind += opened.cloud.IsFinite(i) && ot.joint[i] == j + 1 &&
-                                    pf.normal.dot(opened.cloud.points[i]) + plane_d < mp.min_offset;
+                    if (!opened.cloud.IsFinite(i) || ot.joint[i] != j + 1) continue;
+                    ++opened_front_points;
+                    front_behind += pf.normal.dot(opened.cloud.points[i]) + plane_d < mp.min_offset;
                 }
             }
+            if (opened_front_points < min_front) {
+                ++s.open_out_of_view;
+                continue;
+            }
+            const auto motion = mapping::ArticulationFromMotion(f.cloud, opened.cloud, pf, mp);
             {
                 // Which front the map takes for the opened one, from all of its fronts.
                 mapping::KitchenMap copy = map;
