@@ -190,6 +190,27 @@ std::vector<Indices> FacePoints(std::size_t num_points, const RoomStructure& s,
     return out;
 }
 
+namespace {
+
+/// A line counts as outline when it or a line beside it holds the gap, so the first outline
+/// line met walking out of a front lies a cell before the gap. The gap's own line is the one of
+/// `k` and the next two (in steps of `dir`) with the most gap cells of its own (the nearest of
+/// equals): the side goes there, to the middle of the gap between two fronts.
+int GapLine(const OutlineGrid& g, bool columns, int k, int dir, int a, int b) {
+    const int limit = columns ? g.nu : g.nv;
+    int best = k, best_gap = -1;
+    for (int step = 0; step <= 2; ++step) {
+        const int line = k + step * dir;
+        if (line < 0 || line >= limit) break;
+        int gap = 0;
+        for (int t = a; t <= b; ++t) gap += (columns ? g.At(line, t) : g.At(t, line)) == kGapCell;
+        if (gap > best_gap) best = line, best_gap = gap;
+    }
+    return best;
+}
+
+}  // namespace
+
 /// Searches from line `start` in steps of `dir` (+1 or -1) for a side: along u (columns, over
 /// rows [a, b]) when `columns`, else along v (rows, over columns [a, b]). Returns the index of
 /// the side's line (or of the last line with points when the face ends first).
@@ -232,7 +253,8 @@ int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a
         }
         empty_run = 0;
         last_seen = k;
-        if (IsOutline(n, b - a + 1, p.min_coverage, p.extend_support)) return k;
+        if (IsOutline(n, b - a + 1, p.min_coverage, p.extend_support))
+            return GapLine(g, columns, k, dir, a, b);
     }
     // The face's last points lie within reach: it ends there.
     if (last_seen != start && (last_seen + dir < 0 || last_seen + dir >= limit)) return last_seen;
