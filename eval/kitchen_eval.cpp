@@ -147,6 +147,7 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         {"step", &m.outline.step},
         {"gap_cut_support", &m.gap_fronts.cut_support},
         {"gap_cut_coverage", &m.gap_fronts.cut_coverage},
+        {"gap_cut_run", &m.gap_fronts.cut_run},
         {"gap_min_size", &m.gap_fronts.min_size},
         {"gap_cut_margin", &m.gap_fronts.cut_margin},
         {"gap_min_fill", &m.gap_fronts.min_fill},
@@ -263,6 +264,9 @@ struct Scores {
     /// points on the true front (precision) and of the true front's points covered (recall).
     Stats front_precision, front_recall;
     Stats front_on_face;  ///< share of those fronts' true points the map put on a face
+    /// Where the rest went: true points on the face in no front, in another front; the front's
+    /// points of another true front, of none.
+    Stats front_lost_free, front_lost_other, front_extra_other, front_extra_none;
     std::size_t joint_correct = 0, joint_total = 0;
     std::size_t joint_none = 0;  ///< matched fronts without a fixture (no joint)
     std::size_t sign_correct = 0;
@@ -659,39 +663,68 @@ class Evaluator {
                     std::size_t on_face = 0, free_face = 0, other_front = 0;
                     const std::uint32_t mine =
                         it == match.end() ? 0u : static_cast<std::uint32_t>(it->second.first + 1);
+                    std::map<std::uint32_t, std::size_t> others;  // map front + 1 -> points
                     for (std::size_t i = 0; i < f.cloud.size(); ++i) {
                         if (!t.IsFront(i) || t.Key(i) != key) continue;
                         const auto pc = map.point_class[i];
                         on_face += pc == MapClass::kFace || pc == MapClass::kFront;
                         free_face += pc == MapClass::kFace;
-                        other_front += pc == MapClass::kFront && map.point_front[i] != mine;
+                        const bool other = pc == MapClass::kFront && map.point_front[i] != mine;
+                        other_front += other;
+                        if (other) ++others[map.point_front[i]];
+                    }
+                    // The other front holding most of it: with fixtures or from the outlines,
+                    // and how much of it lies on this front (a split) or beyond (a neighbour).
+                    std::string other_what;
+                    if (!others.empty()) {
+                        const auto best = std::max_element(
+                            others.begin(), others.end(),
+                            [](const auto& a, const auto& b) { return a.second < b.second; });
+                        const mapping::Front& of = map.fronts[best->first - 1];
+                        other_what = fmt::format(
+                            "; the other front has {} fixtures, {:.2f} of it on this front",
+                            of.fixtures.size(),
+                            static_cast<double>(best->second) /
+                                static_cast<double>(std::max<std::size_t>(1, of.indices.size())));
                     }
                     std::fprintf(
                         stderr,
                         "front %s %s: %s (%zu points, IoU %.2f, precision %.2f, recall "
-                        "%.2f, on a face %.2f: in no front %.2f, in another %.2f)\n",
+                        "%.2f, on a face %.2f: in no front %.2f, in another %.2f%s)\n",
                         f.laser ? "laser" : "kinect",
                         inst < k.instances.size() ? k.instances[inst].model->id.c_str() : "?",
                         why.c_str(), tf.points, iou, precision, recall,
                         static_cast<double>(on_face) / static_cast<double>(tf.points),
                         static_cast<double>(free_face) / static_cast<double>(tf.points),
-                        static_cast<double>(other_front) / static_cast<double>(tf.points));
+                        static_cast<double>(other_front) / static_cast<double>(tf.points),
+                        other_what.c_str());
                 }
             }
             if (found && it != match.end()) {
                 const auto& pidx = map.fronts[static_cast<std::size_t>(it->second.first)].indices;
-                std::size_t hit = 0;
-                for (const Index i : pidx) hit += t.IsFront(i) && t.Key(i) == key;
-                s.front_precision.Add(static_cast<double>(hit) /
-                                      static_cast<double>(std::max<std::size_t>(1, pidx.size())));
-                s.front_recall.Add(static_cast<double>(hit) / static_cast<double>(tf.points));
-                std::size_t on_face = 0;
+                std::size_t hit = 0, other_true = 0;
+                for (const Index i : pidx) {
+                    hit += t.IsFront(i) && t.Key(i) == key;
+                    other_true += t.IsFront(i) && t.Key(i) != key;
+                }
+                const double np = static_cast<double>(std::max<std::size_t>(1, pidx.size()));
+                const double nt = static_cast<double>(tf.points);
+                s.front_precision.Add(static_cast<double>(hit) / np);
+                s.front_recall.Add(static_cast<double>(hit) / nt);
+                s.front_extra_other.Add(static_cast<double>(other_true) / np);
+                s.front_extra_none.Add(static_cast<double>(pidx.size() - hit - other_true) / np);
+                std::size_t on_face = 0, free_face = 0, elsewhere = 0;
+                const auto mine = static_cast<std::uint32_t>(it->second.first + 1);
                 for (std::size_t i = 0; i < f.cloud.size(); ++i) {
                     if (!t.IsFront(i) || t.Key(i) != key) continue;
                     const auto pc = map.point_class[i];
                     on_face += pc == MapClass::kFace || pc == MapClass::kFront;
+                    free_face += pc == MapClass::kFace;
+                    elsewhere += pc == MapClass::kFront && map.point_front[i] != mine;
                 }
-                s.front_on_face.Add(static_cast<double>(on_face) / static_cast<double>(tf.points));
+                s.front_on_face.Add(static_cast<double>(on_face) / nt);
+                s.front_lost_free.Add(static_cast<double>(free_face) / nt);
+                s.front_lost_other.Add(static_cast<double>(elsewhere) / nt);
             }
             if (it == match.end() || iou < 0.5f || tf.joint < 0) continue;
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(it->second.first)];
@@ -1079,9 +1112,18 @@ class Evaluator {
             "  matched fronts of those: point precision mean %.3f, recall mean %.3f (on a face "
             "%.3f)\n",
             s.front_precision.Mean(), s.front_recall.Mean(), s.front_on_face.Mean());
+        std::printf(
+            "  their true points on a face but in no front %.3f, in another front %.3f; their "
+            "points of another true front %.3f, of none %.3f\n",
+            s.front_lost_free.Mean(), s.front_lost_other.Mean(), s.front_extra_other.Mean(),
+            s.front_extra_none.Mean());
         j["front_iou"] = {{"fixture_detected", s.front_iou_found.Json()},
                           {"found_precision", s.front_precision.Json()},
                           {"found_recall", s.front_recall.Json()},
+                          {"found_lost_in_no_front", s.front_lost_free.Json()},
+                          {"found_lost_in_another_front", s.front_lost_other.Json()},
+                          {"found_extra_of_another_front", s.front_extra_other.Json()},
+                          {"found_extra_of_no_front", s.front_extra_none.Json()},
                           {"with_fixture", s.front_iou_detectable.Json()},
                           {"all", s.front_iou_all.Json()}};
         const double jacc =

@@ -738,6 +738,41 @@ TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {
     EXPECT_NEAR(with_frame[0].min.y(), 0.1f, 0.01f);
 }
 
+TEST(FrontsFromGaps, ADashedLineAcrossADoorCutsItOnlyWithoutTheRunRule) {
+    // One door without a handle, crossed at z = 0.45 by dashes 4 cm long, 2 cm apart, 2 cm deep
+    // (texture, noise): outline along two thirds of the row, but no run longer than a dash.
+    const DoorRect door{0.6f, 1.1f, 0.1f, 0.85f};
+    PointCloud c = DoorsInGaps({door});
+    for (Eigen::Vector3f& q : c.points) {
+        if (std::abs(q.z() - 0.45f) < 0.001f && q.x() > door.x0 && q.x() < door.x1 &&
+            std::fmod(q.x() - door.x0, 0.06f) < 0.04f) {
+            q.y() += 0.02f;
+        }
+    }
+    const FaceScene sc = SceneOf(c);
+    ASSERT_TRUE(sc.fx.fixtures.empty());
+    // The fronts over the door (the carcass beside it gives fronts of its own).
+    auto on_door = [&](const std::vector<Front>& fronts) {
+        std::vector<Front> out;
+        for (const Front& f : fronts) {
+            const auto [x0, x1] = FrontXRange(f);
+            if (0.5f * (x0 + x1) > door.x0 && 0.5f * (x0 + x1) < door.x1) out.push_back(f);
+        }
+        return out;
+    };
+    std::vector<Front> runs;
+    AddFrontsFromGaps(c, RoomFrame{}, sc.s, {}, sc.ev, runs);
+    const std::vector<Front> door_runs = on_door(runs);
+    ASSERT_EQ(door_runs.size(), 1u);
+    EXPECT_NEAR(door_runs[0].min.y(), door.z0, 0.025f);
+    EXPECT_NEAR(door_runs[0].max.y(), door.z1, 0.025f);
+    std::vector<Front> shares;
+    AddFrontsFromGaps(c, RoomFrame{}, sc.s, {}, sc.ev, shares, {}, {.cut_run = 0.0f});
+    EXPECT_EQ(on_door(shares).size(), 2u);
+    EXPECT_THROW(AddFrontsFromGaps(c, RoomFrame{}, sc.s, {}, sc.ev, shares, {}, {.cut_run = 1.5f}),
+                 InvalidArgument);
+}
+
 TEST(FrontsFromGaps, AFixturesFrontGrowsToTheOutlinesHoldingItsFixture) {
     // Two overlay doors; the right one has a handle, and its front was grown over a part only.
     const std::vector<DoorRect> doors = {{0.3f, 0.9f, 0.1f, 0.85f}, {0.93f, 1.6f, 0.1f, 0.85f}};

@@ -107,6 +107,10 @@ struct GapFrontParams {
     /// the cells along it that hold points [-]
     float cut_support = 0.6f;
     float cut_coverage = 0.5f;  ///< ... and whose cells hold points along this share of it [-]
+    /// ... and whose longest unbroken run of outline cells spans this share of its cells with
+    /// points: the gap between two fronts runs along their whole edge, while noise, texture and
+    /// shading scatter outline cells over a front [-]
+    float cut_run = 0.4f;
     /// No cut lies closer than this to a side of the rectangle it cuts: near a front's edge,
     /// shading and texture look like outlines too, so a narrow frame around the doors stays
     /// with them [m]

@@ -82,6 +82,7 @@ Cut BestCut(const OutlineGrid& g, const CellRect& r, bool columns, int margin,
         }
         const float share = static_cast<float>(n.gap) / static_cast<float>(n.points);
         if (share < p.cut_support) continue;
+        if (static_cast<float>(n.run) < p.cut_run * static_cast<float>(n.points)) continue;
         shares[static_cast<std::size_t>(k - first)] = share;
         best = std::max(best, share);
     }
@@ -126,18 +127,18 @@ void Partition(const OutlineGrid& g, const CellRect& search, const CellRect& own
 
 void GapFrontParams::Validate() const {
     if (!(cut_support > 0.0f && cut_support <= 1.0f) ||
-        !(cut_coverage >= 0.0f && cut_coverage <= 1.0f) || !(cut_margin >= 0.0f) ||
-        !(min_size > 0.0f) || !(max_width >= min_size) || !(max_height >= min_size) ||
-        !std::isfinite(max_width) || !std::isfinite(max_height) ||
+        !(cut_coverage >= 0.0f && cut_coverage <= 1.0f) || !(cut_run >= 0.0f && cut_run <= 1.0f) ||
+        !(cut_margin >= 0.0f) || !(min_size > 0.0f) || !(max_width >= min_size) ||
+        !(max_height >= min_size) || !std::isfinite(max_width) || !std::isfinite(max_height) ||
         !(min_fill >= 0.0f && min_fill <= 1.0f) || !(max_taken >= 0.0f && max_taken <= 1.0f) ||
         min_points < 1 || max_depth < 0) {
         throw InvalidArgument(
-            fmt::format("gap fronts: need cut_support in (0, 1], cut_coverage in [0, 1], "
-                        "cut_margin >= 0, 0 < min_size <= max_width, max_height (finite), min_fill "
-                        "and max_taken in [0, 1], min_points >= 1, "
-                        "max_depth >= 0 (got {}, {}, {}, {}, {}, {}, {}, {}, {}, {})",
-                        cut_support, cut_coverage, cut_margin, min_size, max_width, max_height,
-                        min_fill, max_taken, min_points, max_depth));
+            fmt::format("gap fronts: need cut_support in (0, 1], cut_coverage and cut_run in "
+                        "[0, 1], cut_margin >= 0, 0 < min_size <= max_width, max_height (finite), "
+                        "min_fill and max_taken in [0, 1], min_points >= 1, "
+                        "max_depth >= 0 (got {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {})",
+                        cut_support, cut_coverage, cut_run, cut_margin, min_size, max_width,
+                        max_height, min_fill, max_taken, min_points, max_depth));
     }
 }
 

@@ -156,6 +156,7 @@ void MaskFixtures(OutlineGrid& g, const PointCloud& cloud, const RoomFrame& fram
 
 LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b) {
     LineCount n;
+    int run = 0;
     for (int t = a; t <= b; ++t) {
         bool points = false, gap = false;
         for (int d = -1; d <= 1; ++d) {
@@ -166,6 +167,9 @@ LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b) {
         }
         n.points += points;
         n.gap += gap;
+        // Cells without points (hidden, masked) neither break a run nor add to it.
+        if (points) run = gap ? run + 1 : 0;
+        n.run = std::max(n.run, run);
     }
     return n;
 }

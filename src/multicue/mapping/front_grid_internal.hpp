@@ -58,9 +58,10 @@ void MaskFixtures(OutlineGrid& g, const PointCloud& cloud, const RoomFrame& fram
                   const FrontEdgeParams& p);
 
 /// The cells of line `k` (a column when `columns`, else a row) over [a, b], each with the lines
-/// either side: how many hold points, how many are gap, and whether any is masked.
+/// either side: how many hold points, how many are gap, the longest run of gap cells (cells
+/// without points bridge it), and whether any is masked.
 struct LineCount {
-    int points = 0, gap = 0;
+    int points = 0, gap = 0, run = 0;
     bool masked = false;
 };
 LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b);
