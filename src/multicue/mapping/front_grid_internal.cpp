@@ -208,7 +208,10 @@ int GapLine(const OutlineGrid& g, bool columns, int k, int dir, int a, int b) {
         if (line < 0 || line >= limit) break;
         int gap = 0;
         for (int t = a; t <= b; ++t) gap += (columns ? g.At(line, t) : g.At(t, line)) == kGapCell;
-        if (gap > best_gap) best = line, best_gap = gap;
+        if (gap > best_gap) {
+            best = line;
+            best_gap = gap;
+        }
     }
     return best;
 }

@@ -82,8 +82,9 @@ int FindSide(const OutlineGrid& g, bool columns, int start, int dir, int a, int 
              const FrontEdgeParams& p);
 
 /// Like FindSide, but walks at most `max_steps` lines and needs params.extend_support: the index
-/// of the first line that is outline, or of the last line with points when the face ends first;
-/// -1 when neither happens within max_steps.
+/// of the gap's own line at the first line that is outline (that line or one of the next two,
+/// whichever holds the most gap cells itself), or of the last line with points when the face
+/// ends first; -1 when neither happens within max_steps.
 int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a, int b,
                    int max_steps, const FrontEdgeParams& p);
 
