@@ -609,6 +609,27 @@ class Evaluator {
         const auto fronts = TrueFronts(f.cloud, t);
         const auto match = MatchFronts(map, t, fronts);
         std::map<int, std::map<int, std::size_t>> furniture_votes;  // instance -> furniture
+        // Where a true front's points went in the map: on a face (or a front) at all, on the
+        // face in no front, in a front other than `mine` (map front + 1; 0: none), and per such
+        // front how many.
+        struct WhereItWent {
+            std::size_t on_face = 0, free_face = 0, other_front = 0;
+            std::map<std::uint32_t, std::size_t> others;  // map front + 1 -> points
+        };
+        auto where_it_went = [&](std::uint32_t key, std::uint32_t mine) {
+            WhereItWent w;
+            for (std::size_t i = 0; i < f.cloud.size(); ++i) {
+                if (!t.IsFront(i) || t.Key(i) != key) continue;
+                const auto pc = map.point_class[i];
+                w.on_face += pc == MapClass::kFace || pc == MapClass::kFront;
+                w.free_face += pc == MapClass::kFace;
+                if (pc == MapClass::kFront && map.point_front[i] != mine) {
+                    ++w.other_front;
+                    ++w.others[map.point_front[i]];
+                }
+            }
+            return w;
+        };
         for (const auto& [key, tf] : fronts) {
             if (tf.points < min_front) continue;
             const auto it = match.find(key);
@@ -659,26 +680,15 @@ class Evaluator {
                 ++s.front_why[why];
                 if (o_.verbose) {
                     const auto inst = static_cast<std::size_t>(key >> 16) - 1;
-                    // Where its points went in the map: on a face (or a front) at all?
-                    std::size_t on_face = 0, free_face = 0, other_front = 0;
-                    const std::uint32_t mine =
-                        it == match.end() ? 0u : static_cast<std::uint32_t>(it->second.first + 1);
-                    std::map<std::uint32_t, std::size_t> others;  // map front + 1 -> points
-                    for (std::size_t i = 0; i < f.cloud.size(); ++i) {
-                        if (!t.IsFront(i) || t.Key(i) != key) continue;
-                        const auto pc = map.point_class[i];
-                        on_face += pc == MapClass::kFace || pc == MapClass::kFront;
-                        free_face += pc == MapClass::kFace;
-                        const bool other = pc == MapClass::kFront && map.point_front[i] != mine;
-                        other_front += other;
-                        if (other) ++others[map.point_front[i]];
-                    }
+                    const WhereItWent w = where_it_went(
+                        key,
+                        it == match.end() ? 0u : static_cast<std::uint32_t>(it->second.first + 1));
                     // The other front holding most of it: with fixtures or from the outlines,
                     // and how much of it lies on this front (a split) or beyond (a neighbour).
                     std::string other_what;
-                    if (!others.empty()) {
+                    if (!w.others.empty()) {
                         const auto best = std::max_element(
-                            others.begin(), others.end(),
+                            w.others.begin(), w.others.end(),
                             [](const auto& a, const auto& b) { return a.second < b.second; });
                         const mapping::Front& of = map.fronts[best->first - 1];
                         other_what = fmt::format(
@@ -694,9 +704,9 @@ class Evaluator {
                         f.laser ? "laser" : "kinect",
                         inst < k.instances.size() ? k.instances[inst].model->id.c_str() : "?",
                         why.c_str(), tf.points, iou, precision, recall,
-                        static_cast<double>(on_face) / static_cast<double>(tf.points),
-                        static_cast<double>(free_face) / static_cast<double>(tf.points),
-                        static_cast<double>(other_front) / static_cast<double>(tf.points),
+                        static_cast<double>(w.on_face) / static_cast<double>(tf.points),
+                        static_cast<double>(w.free_face) / static_cast<double>(tf.points),
+                        static_cast<double>(w.other_front) / static_cast<double>(tf.points),
                         other_what.c_str());
                 }
             }
@@ -713,18 +723,11 @@ class Evaluator {
                 s.front_recall.Add(static_cast<double>(hit) / nt);
                 s.front_extra_other.Add(static_cast<double>(other_true) / np);
                 s.front_extra_none.Add(static_cast<double>(pidx.size() - hit - other_true) / np);
-                std::size_t on_face = 0, free_face = 0, elsewhere = 0;
-                const auto mine = static_cast<std::uint32_t>(it->second.first + 1);
-                for (std::size_t i = 0; i < f.cloud.size(); ++i) {
-                    if (!t.IsFront(i) || t.Key(i) != key) continue;
-                    const auto pc = map.point_class[i];
-                    on_face += pc == MapClass::kFace || pc == MapClass::kFront;
-                    free_face += pc == MapClass::kFace;
-                    elsewhere += pc == MapClass::kFront && map.point_front[i] != mine;
-                }
-                s.front_on_face.Add(static_cast<double>(on_face) / nt);
-                s.front_lost_free.Add(static_cast<double>(free_face) / nt);
-                s.front_lost_other.Add(static_cast<double>(elsewhere) / nt);
+                const WhereItWent w =
+                    where_it_went(key, static_cast<std::uint32_t>(it->second.first + 1));
+                s.front_on_face.Add(static_cast<double>(w.on_face) / nt);
+                s.front_lost_free.Add(static_cast<double>(w.free_face) / nt);
+                s.front_lost_other.Add(static_cast<double>(w.other_front) / nt);
             }
             if (it == match.end() || iou < 0.5f || tf.joint < 0) continue;
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(it->second.first)];

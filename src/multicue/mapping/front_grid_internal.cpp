@@ -174,6 +174,17 @@ LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b) {
     return n;
 }
 
+OwnLineCount CountOwnLine(const OutlineGrid& g, bool columns, int k, int a, int b) {
+    OwnLineCount n;
+    for (int t = a; t <= b; ++t) {
+        const std::uint8_t m = columns ? g.At(k, t) : g.At(t, k);
+        n.points += m == kFaceCell || m == kGapCell;
+        n.gap += m == kGapCell;
+        n.masked += m == kMasked;
+    }
+    return n;
+}
+
 bool IsOutline(const LineCount& n, int length, float coverage, float support) {
     return n.points > 0 && static_cast<float>(n.points) >= coverage * static_cast<float>(length) &&
            static_cast<float>(n.gap) >= support * static_cast<float>(n.points);
@@ -206,8 +217,7 @@ int GapLine(const OutlineGrid& g, bool columns, int k, int dir, int a, int b) {
     for (int step = 0; step <= 2; ++step) {
         const int line = k + step * dir;
         if (line < 0 || line >= limit) break;
-        int gap = 0;
-        for (int t = a; t <= b; ++t) gap += (columns ? g.At(line, t) : g.At(t, line)) == kGapCell;
+        const int gap = CountOwnLine(g, columns, line, a, b).gap;
         if (gap > best_gap) {
             best = line;
             best_gap = gap;

@@ -66,6 +66,13 @@ struct LineCount {
 };
 LineCount CountLine(const OutlineGrid& g, bool columns, int k, int a, int b);
 
+/// The cells of line `k` alone over [a, b] (no lines either side): how many hold points, how
+/// many are gap, how many are masked.
+struct OwnLineCount {
+    int points = 0, gap = 0, masked = 0;
+};
+OwnLineCount CountOwnLine(const OutlineGrid& g, bool columns, int k, int a, int b);
+
 /// Whether a counted line of `length` cells is an outline: points along at least `coverage` of
 /// it, and at least `support` of its cells with points are gap.
 bool IsOutline(const LineCount& n, int length, float coverage, float support);

@@ -105,18 +105,12 @@ float LineGapShare(const front_grid_internal::OutlineGrid& g, bool columns, int 
     // count towards the line's coverage, not its share. A gap beside a door's handle runs through
     // the handle's mask over most of the door's height.
     constexpr int kMinCells = 5;
-    int points = 0, gap = 0, masked = 0;
-    for (int t = t0; t <= t1; ++t) {
-        const std::uint8_t m = columns ? g.At(k, t) : g.At(t, k);
-        points += m == kFaceCell || m == kGapCell;
-        gap += m == kGapCell;
-        masked += m == kMasked;
-    }
-    if (points < std::min(kMinCells, t1 - t0 + 1) ||
-        static_cast<float>(points + masked) < coverage * static_cast<float>(t1 - t0 + 1)) {
+    const OwnLineCount n = CountOwnLine(g, columns, k, t0, t1);
+    if (n.points < std::min(kMinCells, t1 - t0 + 1) ||
+        static_cast<float>(n.points + n.masked) < coverage * static_cast<float>(t1 - t0 + 1)) {
         return -1.0f;
     }
-    return static_cast<float>(gap) / static_cast<float>(points);
+    return static_cast<float>(n.gap) / static_cast<float>(n.points);
 }
 
 /// The lower and upper corner of a footprint.
