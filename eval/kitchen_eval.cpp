@@ -139,6 +139,8 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         {"rect_percentile", &p.rect_percentile},
         {"nest_share", &p.nest_share},
         {"nest_depth", &p.nest_depth},
+        {"claim_front", &p.claim_front},
+        {"claim_behind", &p.claim_behind},
         {"max_extend", &m.outline.max_extend},
         {"min_support", &m.outline.min_support},
         {"extend_support", &m.outline.extend_support},
@@ -267,6 +269,9 @@ struct Scores {
     /// Where the rest went: true points on the face in no front, in another front; the front's
     /// points of another true front, of none.
     Stats front_lost_free, front_lost_other, front_extra_other, front_extra_none;
+    /// Those fronts' true points the map put off every face, by the class it gave them.
+    std::array<std::size_t, mapping::kNumMapClasses> front_off_face{};
+    std::size_t front_true_points = 0;
     std::size_t joint_correct = 0, joint_total = 0;
     std::size_t joint_none = 0;  ///< matched fronts without a fixture (no joint)
     std::size_t sign_correct = 0;
@@ -614,7 +619,8 @@ class Evaluator {
         // front how many.
         struct WhereItWent {
             std::size_t on_face = 0, free_face = 0, other_front = 0;
-            std::map<std::uint32_t, std::size_t> others;  // map front + 1 -> points
+            std::map<std::uint32_t, std::size_t> others;                  // map front + 1 -> points
+            std::array<std::size_t, mapping::kNumMapClasses> off_face{};  // by map class
         };
         auto where_it_went = [&](std::uint32_t key, std::uint32_t mine) {
             WhereItWent w;
@@ -623,6 +629,8 @@ class Evaluator {
                 const auto pc = map.point_class[i];
                 w.on_face += pc == MapClass::kFace || pc == MapClass::kFront;
                 w.free_face += pc == MapClass::kFace;
+                if (pc != MapClass::kFace && pc != MapClass::kFront)
+                    ++w.off_face[static_cast<std::size_t>(pc)];
                 if (pc == MapClass::kFront && map.point_front[i] != mine) {
                     ++w.other_front;
                     ++w.others[map.point_front[i]];
@@ -728,6 +736,9 @@ class Evaluator {
                 s.front_on_face.Add(static_cast<double>(w.on_face) / nt);
                 s.front_lost_free.Add(static_cast<double>(w.free_face) / nt);
                 s.front_lost_other.Add(static_cast<double>(w.other_front) / nt);
+                for (std::size_t c = 0; c < w.off_face.size(); ++c)
+                    s.front_off_face[c] += w.off_face[c];
+                s.front_true_points += tf.points;
             }
             if (it == match.end() || iou < 0.5f || tf.joint < 0) continue;
             const mapping::Front& pf = map.fronts[static_cast<std::size_t>(it->second.first)];
@@ -876,6 +887,17 @@ class Evaluator {
             if (!motion.found) {
                 ++s.open_missed;
                 s.open_missed_bare += bare;
+                if (o_.verbose) {
+                    std::fprintf(stderr,
+                                 "pair %s %s %s: no motion (front %.2f x %.2f m, %zu points; "
+                                 "opened by %.2f; moved %zu; the front's true points in the opened "
+                                 "scan %zu)\n",
+                                 f.laser ? "laser" : "kinect", ModelIdOf(k, key >> 16, "?").c_str(),
+                                 revolute ? "revolute" : "prismatic", pf.max.x() - pf.min.x(),
+                                 pf.max.y() - pf.min.y(), pf.indices.size(),
+                                 std::abs(value - closed), motion.moved_points,
+                                 opened_front_points);
+                }
                 continue;
             }
             const auto pt = motion.articulation.type;
@@ -1120,6 +1142,14 @@ class Evaluator {
             "points of another true front %.3f, of none %.3f\n",
             s.front_lost_free.Mean(), s.front_lost_other.Mean(), s.front_extra_other.Mean(),
             s.front_extra_none.Mean());
+        std::printf("  their true points off every face, by the map's class (share of all):");
+        for (std::size_t c = 0; c < s.front_off_face.size(); ++c) {
+            if (s.front_off_face[c] == 0) continue;
+            std::printf(" %s %.3f", mapping::MapClassNames()[c].c_str(),
+                        static_cast<double>(s.front_off_face[c]) /
+                            static_cast<double>(std::max<std::size_t>(1, s.front_true_points)));
+        }
+        std::printf("\n");
         j["front_iou"] = {{"fixture_detected", s.front_iou_found.Json()},
                           {"found_precision", s.front_precision.Json()},
                           {"found_recall", s.front_recall.Json()},

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <initializer_list>
 #include <iterator>
+#include <limits>
+#include <map>
 #include <random>
 #include <set>
 
@@ -667,6 +669,80 @@ TEST(MergeNestedFronts, APanelInsideADoorJoinsItAndNeighboursStay) {
     stray[2].face = 7;
     EXPECT_THROW(MergeNestedFronts(s, stray), InvalidArgument);
     EXPECT_EQ(stray.size(), input.size());
+}
+
+TEST(ClaimUnexplainedPoints, NoisyPointsInsideARectangleJoinItsFront) {
+    // One face facing -y at y = 2.4 with two doors side by side and a small front nested in the
+    // first; points no component explains around them.
+    RoomStructure s;
+    PlanarComponent c;
+    c.axis = 1;
+    c.plane = Eigen::Vector4f(0.0f, -1.0f, 0.0f, 2.4f);
+    c.label = MapClass::kFace;
+    s.components.push_back(c);
+    auto front = [&](float x0, float x1, float z0, float z1, Index own) {
+        Front f;
+        f.face = 0;
+        f.indices = {own};
+        const Eigen::Vector2f a = PlaneCoordinates(c, RoomFrame{}, {x0, 2.4f, z0});
+        const Eigen::Vector2f b = PlaneCoordinates(c, RoomFrame{}, {x1, 2.4f, z1});
+        SetFrontRectangle(f, c, RoomFrame{}, a.cwiseMin(b), a.cwiseMax(b));
+        return f;
+    };
+    const std::vector<Front> input = {front(0.0f, 0.6f, 0.1f, 0.8f, 20),
+                                      front(0.62f, 1.2f, 0.1f, 0.8f, 21),
+                                      front(0.1f, 0.3f, 0.2f, 0.4f, 22)};
+    PointCloud cloud;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    cloud.points = {
+        {0.3f, 2.385f, 0.5f},  // 0: 1.5 cm out of the first door
+        {0.3f, 2.42f, 0.5f},   // 1: 2 cm behind it
+        {0.3f, 2.33f, 0.5f},   // 2: 7 cm out: something else
+        {0.61f, 2.4f, 0.5f},   // 3: between the doors
+        {0.2f, 2.39f, 0.3f},   // 4: in the nested front
+        {0.9f, 2.39f, 0.5f},   // 5: explained by the face
+        {0.9f, 2.39f, 0.6f},   // 6: a fixture's
+        {0.9f, 2.395f, 0.4f},  // 7: on the second door
+        {nan, nan, nan},       // 8
+    };
+    cloud.width = static_cast<std::uint32_t>(cloud.points.size());
+    cloud.height = 1;
+    s.point_component.assign(cloud.size(), -1);
+    s.point_component[5] = 0;
+    Fixture handle;
+    handle.face = 0;
+    handle.indices = {6};
+    const FrontParams p;  // 3 cm out of the face and behind it
+    auto claims = [&](std::vector<Front> fronts) {
+        ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {handle}, fronts, p);
+        std::map<Index, Indices> by_own;  // the front's own point -> its points
+        for (const Front& f : fronts) by_own[f.indices.back()] = f.indices;
+        return by_own;
+    };
+    const std::map<Index, Indices> expected = {{20, {0, 1, 20}}, {21, {7, 21}}, {22, {4, 22}}};
+    EXPECT_EQ(claims(input), expected);
+    // In any order the same points join the same fronts.
+    EXPECT_EQ(claims(std::vector<Front>(input.rbegin(), input.rend())), expected);
+    // Off, and points behind the face not claimed when claim_behind is 0.
+    std::vector<Front> off = input;
+    ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {handle}, off, {.claim_front = 0.0f});
+    for (std::size_t f = 0; f < off.size(); ++f) EXPECT_EQ(off[f].indices, input[f].indices);
+    std::vector<Front> front_only = input;
+    ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {handle}, front_only,
+                           {.claim_front = 0.03f, .claim_behind = 0.0f});
+    EXPECT_EQ(front_only[0].indices, (Indices{0, 20}));
+    // No fronts, bad parameters, a front on no face.
+    std::vector<Front> none;
+    EXPECT_NO_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, none, p));
+    std::vector<Front> bad = input;
+    EXPECT_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, bad, {.claim_front = -0.01f}),
+                 InvalidArgument);
+    EXPECT_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, bad,
+                                        {.claim_front = 0.03f, .claim_behind = nan}),
+                 InvalidArgument);
+    bad[1].face = 3;
+    EXPECT_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, bad, p), InvalidArgument);
+    EXPECT_EQ(bad[0].indices, input[0].indices);  // nothing changed
 }
 
 TEST(FrontsFromGaps, DoorsWithoutHandlesBetweenTheirGaps) {

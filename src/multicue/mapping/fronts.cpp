@@ -6,6 +6,7 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <numeric>
 #include <tuple>
 
 #include <fmt/format.h>
@@ -273,6 +274,12 @@ void FrontParams::Validate() const {
             fmt::format("fronts: split_support must be in (0, 1], got {}", split_support));
     }
     positive("local_alpha", local_alpha);
+    if (!(claim_front >= 0.0f) || !std::isfinite(claim_front) || !(claim_behind >= 0.0f) ||
+        !std::isfinite(claim_behind)) {
+        throw InvalidArgument(
+            fmt::format("fronts: claim_front and claim_behind must be >= 0 m, got {} and {}",
+                        claim_front, claim_behind));
+    }
     positive("min_offset_alpha", min_offset_alpha);
     positive("alpha_mads", alpha_mads);
     positive("stable_change", stable_change);
@@ -598,6 +605,58 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
         }
     }
     return fronts;
+}
+
+void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
+                            const RoomStructure& structure, const std::vector<Fixture>& fixtures,
+                            std::vector<Front>& fronts, const FrontParams& p) {
+    p.Validate();
+    for (const Front& fr : fronts) {
+        if (fr.face < 0 || static_cast<std::size_t>(fr.face) >= structure.components.size()) {
+            throw InvalidArgument(fmt::format("fronts: a front lies on face {} of {}", fr.face,
+                                              structure.components.size()));
+        }
+    }
+    if (p.claim_front <= 0.0f || fronts.empty()) return;
+    std::vector<bool> fixture_point(cloud.size(), false);
+    for (const Fixture& fx : fixtures) {
+        for (const Index i : fx.indices) {
+            if (i < cloud.size()) fixture_point[i] = true;
+        }
+    }
+    // Smallest rectangle first, so that a point in nested rectangles joins the inner one.
+    std::vector<std::size_t> order(fronts.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return (fronts[a].max - fronts[a].min).prod() < (fronts[b].max - fronts[b].min).prod();
+    });
+    std::vector<Indices> claimed(fronts.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (fixture_point[i] || !cloud.IsFinite(i) ||
+            (i < structure.point_component.size() && structure.point_component[i] >= 0)) {
+            continue;
+        }
+        const Eigen::Vector3f& x = cloud.points[i];
+        for (const std::size_t f : order) {
+            const PlanarComponent& face =
+                structure.components[static_cast<std::size_t>(fronts[f].face)];
+            const float h = face.plane.head<3>().dot(x) + face.plane.w();
+            if (h > p.claim_front || h < -p.claim_behind) continue;
+            const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
+            if ((q.array() >= fronts[f].min.array()).all() &&
+                (q.array() <= fronts[f].max.array()).all()) {
+                claimed[f].push_back(static_cast<Index>(i));
+                break;
+            }
+        }
+    }
+    for (std::size_t f = 0; f < fronts.size(); ++f) {
+        if (claimed[f].empty()) continue;
+        Indices& idx = fronts[f].indices;
+        idx.insert(idx.end(), claimed[f].begin(), claimed[f].end());
+        std::sort(idx.begin(), idx.end());
+        idx.erase(std::unique(idx.begin(), idx.end()), idx.end());
+    }
 }
 
 void MergeNestedFronts(const RoomStructure& structure, std::vector<Front>& fronts,

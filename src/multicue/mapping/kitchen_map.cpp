@@ -300,6 +300,7 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
                           p.outline, p.gap_fronts);
     }
     MergeNestedFronts(structure, map.fronts, p.fronts);
+    ClaimUnexplainedPoints(r.cloud, map.frame, structure, map.fixtures, map.fronts, p.fronts);
     stage("fronts");
     // How each front opens, from its fixture.
     for (Front& f : map.fronts) {
