@@ -141,6 +141,7 @@ void SetMapParam(mapping::MapKitchenParams& m, const std::string& assignment) {
         {"nest_depth", &p.nest_depth},
         {"claim_front", &p.claim_front},
         {"claim_behind", &p.claim_behind},
+        {"claim_margin", &p.claim_margin},
         {"max_extend", &m.outline.max_extend},
         {"min_support", &m.outline.min_support},
         {"extend_support", &m.outline.extend_support},

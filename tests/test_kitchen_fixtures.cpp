@@ -673,7 +673,8 @@ TEST(MergeNestedFronts, APanelInsideADoorJoinsItAndNeighboursStay) {
 
 TEST(ClaimUnexplainedPoints, NoisyPointsInsideARectangleJoinItsFront) {
     // One face facing -y at y = 2.4 with two doors side by side and a small front nested in the
-    // first; points no component explains around them.
+    // first; points no component explains around them (claimed within 3 cm of the face, and
+    // within 4 cm beside a rectangle).
     RoomStructure s;
     PlanarComponent c;
     c.axis = 1;
@@ -698,12 +699,14 @@ TEST(ClaimUnexplainedPoints, NoisyPointsInsideARectangleJoinItsFront) {
         {0.3f, 2.385f, 0.5f},  // 0: 1.5 cm out of the first door
         {0.3f, 2.42f, 0.5f},   // 1: 2 cm behind it
         {0.3f, 2.33f, 0.5f},   // 2: 7 cm out: something else
-        {0.61f, 2.4f, 0.5f},   // 3: between the doors
+        {0.605f, 2.4f, 0.5f},  // 3: in the gap between the doors, nearer the first
         {0.2f, 2.39f, 0.3f},   // 4: in the nested front
         {0.9f, 2.39f, 0.5f},   // 5: explained by the face
         {0.9f, 2.39f, 0.6f},   // 6: a fixture's
         {0.9f, 2.395f, 0.4f},  // 7: on the second door
         {nan, nan, nan},       // 8
+        {1.23f, 2.39f, 0.5f},  // 9: 3 cm beside the second door
+        {1.3f, 2.39f, 0.5f},   // 10: 10 cm beside it
     };
     cloud.width = static_cast<std::uint32_t>(cloud.points.size());
     cloud.height = 1;
@@ -719,7 +722,8 @@ TEST(ClaimUnexplainedPoints, NoisyPointsInsideARectangleJoinItsFront) {
         for (const Front& f : fronts) by_own[f.indices.back()] = f.indices;
         return by_own;
     };
-    const std::map<Index, Indices> expected = {{20, {0, 1, 20}}, {21, {7, 21}}, {22, {4, 22}}};
+    const std::map<Index, Indices> expected = {
+        {20, {0, 1, 3, 20}}, {21, {7, 9, 21}}, {22, {4, 22}}};
     EXPECT_EQ(claims(input), expected);
     // In any order the same points join the same fronts.
     EXPECT_EQ(claims(std::vector<Front>(input.rbegin(), input.rend())), expected);
@@ -729,8 +733,9 @@ TEST(ClaimUnexplainedPoints, NoisyPointsInsideARectangleJoinItsFront) {
     for (std::size_t f = 0; f < off.size(); ++f) EXPECT_EQ(off[f].indices, input[f].indices);
     std::vector<Front> front_only = input;
     ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {handle}, front_only,
-                           {.claim_front = 0.03f, .claim_behind = 0.0f});
+                           {.claim_front = 0.03f, .claim_behind = 0.0f, .claim_margin = 0.0f});
     EXPECT_EQ(front_only[0].indices, (Indices{0, 20}));
+    EXPECT_EQ(front_only[1].indices, (Indices{7, 21}));  // nothing beside the rectangles
     // No fronts, bad parameters, a front on no face.
     std::vector<Front> none;
     EXPECT_NO_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, none, p));
@@ -739,6 +744,8 @@ TEST(ClaimUnexplainedPoints, NoisyPointsInsideARectangleJoinItsFront) {
                  InvalidArgument);
     EXPECT_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, bad,
                                         {.claim_front = 0.03f, .claim_behind = nan}),
+                 InvalidArgument);
+    EXPECT_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, bad, {.claim_margin = -1.0f}),
                  InvalidArgument);
     bad[1].face = 3;
     EXPECT_THROW(ClaimUnexplainedPoints(cloud, RoomFrame{}, s, {}, bad, p), InvalidArgument);

@@ -275,10 +275,10 @@ void FrontParams::Validate() const {
     }
     positive("local_alpha", local_alpha);
     if (!(claim_front >= 0.0f) || !std::isfinite(claim_front) || !(claim_behind >= 0.0f) ||
-        !std::isfinite(claim_behind)) {
-        throw InvalidArgument(
-            fmt::format("fronts: claim_front and claim_behind must be >= 0 m, got {} and {}",
-                        claim_front, claim_behind));
+        !std::isfinite(claim_behind) || !(claim_margin >= 0.0f) || !std::isfinite(claim_margin)) {
+        throw InvalidArgument(fmt::format(
+            "fronts: claim_front, claim_behind and claim_margin must be >= 0 m, got {}, {} and {}",
+            claim_front, claim_behind, claim_margin));
     }
     positive("min_offset_alpha", min_offset_alpha);
     positive("alpha_mads", alpha_mads);
@@ -637,18 +637,28 @@ void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
             continue;
         }
         const Eigen::Vector3f& x = cloud.points[i];
+        // The smallest rectangle holding it, else the nearest within claim_margin.
+        std::size_t best = fronts.size();
+        float best_out = p.claim_margin;
         for (const std::size_t f : order) {
             const PlanarComponent& face =
                 structure.components[static_cast<std::size_t>(fronts[f].face)];
             const float h = face.plane.head<3>().dot(x) + face.plane.w();
             if (h > p.claim_front || h < -p.claim_behind) continue;
             const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
-            if ((q.array() >= fronts[f].min.array()).all() &&
-                (q.array() <= fronts[f].max.array()).all()) {
-                claimed[f].push_back(static_cast<Index>(i));
+            const float out =
+                std::max({fronts[f].min.x() - q.x(), q.x() - fronts[f].max.x(),
+                          fronts[f].min.y() - q.y(), q.y() - fronts[f].max.y(), 0.0f});
+            if (out <= 0.0f) {
+                best = f;
                 break;
             }
+            if (out < best_out) {
+                best = f;
+                best_out = out;
+            }
         }
+        if (best < fronts.size()) claimed[best].push_back(static_cast<Index>(i));
     }
     for (std::size_t f = 0; f < fronts.size(); ++f) {
         if (claimed[f].empty()) continue;

@@ -58,11 +58,14 @@ struct FrontParams {
     bool fill_rectangle = true;
     float min_fill = 0.6f;  ///< [-]
     /// Points no planar component explains (range noise off the face's plane, normals bent at
-    /// a door's edge) join the front whose rectangle holds them when they lie at most
-    /// claim_front out of its face and claim_behind behind it (ClaimUnexplainedPoints); 0: off.
-    /// Chosen on simulated kitchens of the tune half (3 cm and 5 cm scored alike, 2 cm lower) [m]
+    /// a door's edge) join the front whose rectangle holds them, or lies nearest within
+    /// claim_margin, when they lie at most claim_front out of its face and claim_behind behind
+    /// it (ClaimUnexplainedPoints); claim_front 0: off. Chosen on simulated kitchens of the tune
+    /// half (3 cm and 5 cm out and behind scored alike, 2 cm lower; margins of 4-8 cm alike,
+    /// 2 cm and none lower) [m]
     float claim_front = 0.03f;
     float claim_behind = 0.03f;  ///< [m]
+    float claim_margin = 0.04f;  ///< [m]
     /// Overlapping regions of two fixtures side by side (or one above the other) are split at
     /// the line between them that is outline (FrontEvidence, as ExtendFrontsToOutlines reads
     /// it) in the largest share of its cells with points, when that share reaches
@@ -117,10 +120,11 @@ void MergeNestedFronts(const RoomStructure& structure, std::vector<Front>& front
 
 /// Points of `cloud` that no component of `structure` explains (point_component -1) and no
 /// fixture holds join the front whose rectangle holds them (the smallest, where rectangles
-/// overlap), when they lie at most params.claim_front out of its face's plane and
-/// params.claim_behind behind it: the rectangle stands for the front (thesis section 4.1.2), and
-/// range noise carries some of a door's points off its plane. Off when claim_front is 0. Throws
-/// InvalidArgument for bad parameters or a front on no face of `structure`.
+/// overlap; else the front whose rectangle lies nearest, within params.claim_margin), when they
+/// lie at most params.claim_front out of its face's plane and params.claim_behind behind it: the
+/// rectangle stands for the front (thesis section 4.1.2), and range noise carries some of a
+/// door's points off its plane. Off when claim_front is 0. Throws InvalidArgument for bad
+/// parameters or a front on no face of `structure`.
 void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
                             const RoomStructure& structure, const std::vector<Fixture>& fixtures,
                             std::vector<Front>& fronts, const FrontParams& params = {});
