@@ -607,16 +607,25 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
     return fronts;
 }
 
-void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
-                            const RoomStructure& structure, const std::vector<Fixture>& fixtures,
-                            std::vector<Front>& fronts, const FrontParams& p) {
-    p.Validate();
+namespace {
+
+/// Throws InvalidArgument for a front on no face of `structure`.
+void CheckFrontFaces(const RoomStructure& structure, const std::vector<Front>& fronts) {
     for (const Front& fr : fronts) {
         if (fr.face < 0 || static_cast<std::size_t>(fr.face) >= structure.components.size()) {
             throw InvalidArgument(fmt::format("fronts: a front lies on face {} of {}", fr.face,
                                               structure.components.size()));
         }
     }
+}
+
+}  // namespace
+
+void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
+                            const RoomStructure& structure, const std::vector<Fixture>& fixtures,
+                            std::vector<Front>& fronts, const FrontParams& p) {
+    p.Validate();
+    CheckFrontFaces(structure, fronts);
     if (p.claim_front <= 0.0f || fronts.empty()) return;
     std::vector<bool> fixture_point(cloud.size(), false);
     for (const Fixture& fx : fixtures) {
@@ -673,12 +682,7 @@ void MergeNestedFronts(const RoomStructure& structure, std::vector<Front>& front
                        const FrontParams& p) {
     p.Validate();
     const std::size_t n = fronts.size();
-    for (const Front& fr : fronts) {
-        if (fr.face < 0 || static_cast<std::size_t>(fr.face) >= structure.components.size()) {
-            throw InvalidArgument(fmt::format("fronts: a front lies on face {} of {}", fr.face,
-                                              structure.components.size()));
-        }
-    }
+    CheckFrontFaces(structure, fronts);
     if (p.nest_share > 1.0f || n < 2) return;
     auto area = [](const Front& f) { return (f.max - f.min).prod(); };
     // World corners of a front's rectangle.
