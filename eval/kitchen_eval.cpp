@@ -1144,11 +1144,13 @@ class Evaluator {
             s.front_lost_free.Mean(), s.front_lost_other.Mean(), s.front_extra_other.Mean(),
             s.front_extra_none.Mean());
         std::printf("  their true points off every face, by the map's class (share of all):");
+        nlohmann::json off_face = nlohmann::json::object();
         for (std::size_t c = 0; c < s.front_off_face.size(); ++c) {
             if (s.front_off_face[c] == 0) continue;
-            std::printf(" %s %.3f", mapping::MapClassNames()[c].c_str(),
-                        static_cast<double>(s.front_off_face[c]) /
-                            static_cast<double>(std::max<std::size_t>(1, s.front_true_points)));
+            const double share = static_cast<double>(s.front_off_face[c]) /
+                                 static_cast<double>(std::max<std::size_t>(1, s.front_true_points));
+            std::printf(" %s %.3f", mapping::MapClassNames()[c].c_str(), share);
+            off_face[mapping::MapClassNames()[c]] = share;
         }
         std::printf("\n");
         j["front_iou"] = {{"fixture_detected", s.front_iou_found.Json()},
@@ -1158,6 +1160,7 @@ class Evaluator {
                           {"found_lost_in_another_front", s.front_lost_other.Json()},
                           {"found_extra_of_another_front", s.front_extra_other.Json()},
                           {"found_extra_of_no_front", s.front_extra_none.Json()},
+                          {"found_off_face_by_class", off_face},
                           {"with_fixture", s.front_iou_detectable.Json()},
                           {"all", s.front_iou_all.Json()}};
         const double jacc =
