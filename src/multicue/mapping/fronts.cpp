@@ -639,6 +639,16 @@ void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
         return (fronts[a].max - fronts[a].min).prod() < (fronts[b].max - fronts[b].min).prod();
     });
+    // Each front's face plane and in-plane axes, once.
+    struct FaceFrame {
+        Eigen::Vector4f plane;
+        Eigen::Vector3f u, v;
+    };
+    std::vector<FaceFrame> faces(fronts.size());
+    for (std::size_t f = 0; f < fronts.size(); ++f) {
+        const PlanarComponent& c = structure.components[static_cast<std::size_t>(fronts[f].face)];
+        faces[f] = {c.plane, PlaneU(c, frame), PlaneV(c, frame)};
+    }
     std::vector<Indices> claimed(fronts.size());
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         if (fixture_point[i] || !cloud.IsFinite(i) ||
@@ -650,11 +660,10 @@ void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
         std::size_t best = fronts.size();
         float best_out = p.claim_margin;
         for (const std::size_t f : order) {
-            const PlanarComponent& face =
-                structure.components[static_cast<std::size_t>(fronts[f].face)];
+            const FaceFrame& face = faces[f];
             const float h = face.plane.head<3>().dot(x) + face.plane.w();
             if (h > p.claim_front || h < -p.claim_behind) continue;
-            const Eigen::Vector2f q = PlaneCoordinates(face, frame, x);
+            const Eigen::Vector2f q(x.dot(face.u), x.dot(face.v));
             const float out =
                 std::max({fronts[f].min.x() - q.x(), q.x() - fronts[f].max.x(),
                           fronts[f].min.y() - q.y(), q.y() - fronts[f].max.y(), 0.0f});
