@@ -911,7 +911,7 @@ class Evaluator {
                     "m; moved %zu, on the front slid %zu, turned %zu; coverage of the seen cells "
                     "slid %.2f, turned %.2f; the front's true points in the opened scan %zu, %zu "
                     "of them behind the face; within the outline %zu moved, %zu beyond the turn's "
-                    "reach %.2f m, %zu of them off its plane%s)\n",
+                    "reach %.2f m, %zu of them off its plane%s; one scan: %s)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
@@ -921,7 +921,8 @@ class Evaluator {
                     motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
                     opened_front_points, front_behind, motion.outline_points,
                     motion.beyond_turn_points, motion.turn_reach, motion.beyond_off_plane,
-                    motion.turn_flap ? ", a flap" : "");
+                    motion.turn_flap ? ", a flap" : "",
+                    mapping::JointTypeName(pf.articulation.type));
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
                                  (!revolute && pt == mapping::JointType::kPrismatic);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <numbers>
 
@@ -232,6 +233,34 @@ TEST(SimKinect, EmptySceneGivesNoReturns) {
     const PointCloud c = ScanKinect(caster, kCamera, test::ReducedKinect(4), 1);
     EXPECT_EQ(c.CountFinite(), 0u);
     EXPECT_TRUE(c.IsOrganized());
+}
+
+TEST(RayCaster, OccludedBatchReadsActiveRaysOnly) {
+    // A plane at z = 1. Rays from z = 0 up to z = 2 cross it, rays up to z = 0.5 do not; the
+    // inactive lanes hold NaNs, huge values and a reach (a caller fills active rays only), which
+    // must change nothing and reach no kernel (Embree's checks reject such rays).
+    const Scene s = PlaneScene({0.0f, 0.0f, 1.0f}, Eigen::Vector3f::UnitZ());
+    const RayCaster caster(s);
+    constexpr std::size_t n = 19;  // two full packets and a part
+    const float nan = std::numeric_limits<float>::quiet_NaN(), huge = 1e30f;
+    std::vector<Eigen::Vector3f> origins(n), dirs(n);
+    std::vector<float> t_far(n);
+    bool active[n], occluded[n];
+    for (std::size_t i = 0; i < n; ++i) {
+        active[i] = i % 3 != 1;
+        origins[i] = active[i] ? Eigen::Vector3f(0.1f * static_cast<float>(i), 0.0f, 0.0f)
+                               : Eigen::Vector3f(Eigen::Vector3f::Constant(i % 2 ? nan : huge));
+        dirs[i] = active[i] ? Eigen::Vector3f(Eigen::Vector3f::UnitZ())
+                            : Eigen::Vector3f(Eigen::Vector3f::Constant(i % 2 ? huge : nan));
+        t_far[i] = active[i] ? (i % 2 == 0 ? 2.0f : 0.5f) : 5.0f;
+    }
+    caster.OccludedBatch(origins.data(), dirs.data(), t_far.data(), active, n, 0.0f, occluded);
+    for (std::size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(occluded[i], active[i] && i % 2 == 0) << i;
+        if (active[i]) {
+            EXPECT_EQ(occluded[i], caster.Occluded(origins[i], dirs[i], 0.0f, t_far[i])) << i;
+        }
+    }
 }
 
 TEST(SimLaser, OrganizedByTiltStepWithRangeNoise) {

@@ -1,8 +1,10 @@
 #include "multicue/sim/raycaster.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <map>
 #include <mutex>
+#include <string>
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
@@ -12,11 +14,21 @@
 namespace multicue::sim {
 namespace {
 
-/// One Embree device for the process: creating one per scene costs thread start-up.
+/// One Embree device for the process: creating one per scene costs thread start-up. Its
+/// configuration string gets MULTICUE_EMBREE_CONFIG appended when that is set (Embree picks its
+/// kernels by the CPU's instruction set, and they round differently: "isa=avx2" on two machines
+/// gives both the same kernels).
 RTCDevice SharedDevice() {
     static RTCDevice device = [] {
-        RTCDevice d = rtcNewDevice("verbose=0");
-        if (d == nullptr) throw Error("cannot create an Embree device");
+        std::string config = "verbose=0";
+        if (const char* extra = std::getenv("MULTICUE_EMBREE_CONFIG"); extra && *extra) {
+            config += std::string(",") + extra;
+        }
+        RTCDevice d = rtcNewDevice(config.c_str());
+        if (d == nullptr) {
+            throw Error(
+                fmt::format("cannot create an Embree device (configuration \"{}\")", config));
+        }
         return d;
     }();
     return device;
@@ -161,7 +173,8 @@ void RayCaster::IntersectBatch(const Eigen::Vector3f& origin, const Eigen::Vecto
             rh.ray.dir_y[k] = d.y();
             rh.ray.dir_z[k] = d.z();
             rh.ray.tnear[k] = t_near;
-            rh.ray.tfar[k] = t_far;
+            // A lane past the end ends before it starts (see OccludedBatch).
+            rh.ray.tfar[k] = on ? t_far : std::min(t_near, 0.0f) - 1.0f;
             rh.ray.time[k] = 0.0f;
             rh.ray.mask[k] = 0xffffffffu;
             rh.ray.id[k] = static_cast<unsigned>(k);
@@ -201,15 +214,20 @@ void RayCaster::OccludedBatch(const Eigen::Vector3f* origins, const Eigen::Vecto
             const bool on = k < m && active[b + k];
             any = any || on;
             valid[k] = on ? -1 : 0;
-            const std::size_t i = b + (k < m ? k : 0);
-            ray.org_x[k] = origins[i].x();
-            ray.org_y[k] = origins[i].y();
-            ray.org_z[k] = origins[i].z();
-            ray.dir_x[k] = dirs[i].x();
-            ray.dir_y[k] = dirs[i].y();
-            ray.dir_z[k] = dirs[i].z();
+            // An inactive lane's data may be anything (the caller fills active rays only).
+            // Embree gets a finite ray there that ends before it starts: a device without
+            // 8-wide kernels traces a packet as a stream, which skips such rays only and
+            // ignores `valid`.
+            const Eigen::Vector3f org = on ? origins[b + k] : Eigen::Vector3f::Zero();
+            const Eigen::Vector3f dir = on ? dirs[b + k] : Eigen::Vector3f::UnitZ();
+            ray.org_x[k] = org.x();
+            ray.org_y[k] = org.y();
+            ray.org_z[k] = org.z();
+            ray.dir_x[k] = dir.x();
+            ray.dir_y[k] = dir.y();
+            ray.dir_z[k] = dir.z();
             ray.tnear[k] = t_near;
-            ray.tfar[k] = t_far[i];
+            ray.tfar[k] = on ? t_far[b + k] : std::min(t_near, 0.0f) - 1.0f;
             ray.time[k] = 0.0f;
             ray.mask[k] = 0xffffffffu;
             ray.id[k] = static_cast<unsigned>(k);

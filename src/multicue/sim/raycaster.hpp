@@ -47,7 +47,8 @@ class RayCaster {
     /// an image row). `hits` receives n entries, equal to what Intersect would give.
     void IntersectBatch(const Eigen::Vector3f& origin, const Eigen::Vector3f* dirs, std::size_t n,
                         float t_near, float t_far, RayHit* hits) const;
-    /// Occlusion of `n` rays; rays with active[i] == false are skipped (occluded[i] = false).
+    /// Occlusion of `n` rays; rays with active[i] == false are skipped (occluded[i] = false) and
+    /// their origins, directions and reaches never read.
     void OccludedBatch(const Eigen::Vector3f* origins, const Eigen::Vector3f* dirs,
                        const float* t_far, const bool* active, std::size_t n, float t_near,
                        bool* occluded) const;
