@@ -120,10 +120,7 @@ std::vector<Front> FrontsFromEdges(const PointCloud& cloud, const RoomFrame& fra
     std::vector<Front> fronts;
     if (cloud.empty() || fixtures.empty()) return fronts;
     const std::vector<bool> panel = PanelKnobs(fixtures);
-    std::vector<std::uint8_t> is_fixture(cloud.size(), 0);
-    for (const Fixture& fx : fixtures) {
-        for (const Index i : fx.indices) is_fixture[i] = 1;
-    }
+    const std::vector<std::uint8_t> is_fixture = FixturePoints(cloud.size(), fixtures);
     // The points measured against each face.
     const std::vector<Indices> face_points = FacePoints(cloud.size(), s, ev);
     for (std::size_t f = 0; f < s.components.size(); ++f) {

@@ -16,12 +16,7 @@ void ExtendFrontsToOutlines(const PointCloud& cloud, const RoomFrame& frame, con
     p.Validate();
     CheckEvidence(ev, cloud.size());
     if (cloud.empty() || fronts.empty()) return;
-    std::vector<std::uint8_t> is_fixture(cloud.size(), 0);
-    for (const Fixture& fx : fixtures) {
-        for (const Index i : fx.indices) {
-            if (i < cloud.size()) is_fixture[i] = 1;
-        }
-    }
+    const std::vector<std::uint8_t> is_fixture = FixturePoints(cloud.size(), fixtures);
     // Which front holds each point now: extensions take no point of another front.
     std::vector<std::int32_t> owner(cloud.size(), -1);
     for (std::size_t r = 0; r < fronts.size(); ++r) {

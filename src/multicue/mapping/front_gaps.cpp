@@ -150,13 +150,8 @@ void AddFrontsFromGaps(const PointCloud& cloud, const RoomFrame& frame, const Ro
     p.Validate();
     CheckEvidence(ev, cloud.size());
     if (cloud.empty()) return;
-    std::vector<std::uint8_t> taken(cloud.size(), 0);
-    for (const Fixture& fx : fixtures) {
-        for (const Index i : fx.indices) {
-            if (i < cloud.size()) taken[i] = 1;
-        }
-    }
-    const std::vector<std::uint8_t> is_fixture = taken;
+    const std::vector<std::uint8_t> is_fixture = FixturePoints(cloud.size(), fixtures);
+    std::vector<std::uint8_t> taken = is_fixture;
     std::vector<std::uint8_t> holders(cloud.size(), 0);  // fronts holding a point, at most 255
     for (const Front& fr : fronts) {
         for (const Index i : fr.indices) {

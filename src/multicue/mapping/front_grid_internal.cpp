@@ -190,6 +190,17 @@ bool IsOutline(const LineCount& n, int length, float coverage, float support) {
            static_cast<float>(n.gap) >= support * static_cast<float>(n.points);
 }
 
+std::vector<std::uint8_t> FixturePoints(std::size_t num_points,
+                                        const std::vector<Fixture>& fixtures) {
+    std::vector<std::uint8_t> is_fixture(num_points, 0);
+    for (const Fixture& fx : fixtures) {
+        for (const Index i : fx.indices) {
+            if (i < num_points) is_fixture[i] = 1;
+        }
+    }
+    return is_fixture;
+}
+
 std::vector<Indices> FacePoints(std::size_t num_points, const RoomStructure& s,
                                 const FrontEvidence& ev) {
     std::vector<Indices> out(s.components.size());

@@ -95,6 +95,11 @@ int FindSide(const OutlineGrid& g, bool columns, int start, int dir, int a, int 
 int FindSideWithin(const OutlineGrid& g, bool columns, int start, int dir, int a, int b,
                    int max_steps, const FrontEdgeParams& p);
 
+/// Per point of a cloud of `num_points`: 1 where a fixture of `fixtures` holds it (indices out of
+/// range are ignored), else 0.
+std::vector<std::uint8_t> FixturePoints(std::size_t num_points,
+                                        const std::vector<Fixture>& fixtures);
+
 /// Throws InvalidArgument unless every evidence vector is empty or holds `num_points` entries.
 void CheckEvidence(const FrontEvidence& ev, std::size_t num_points);
 

@@ -359,12 +359,7 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
     std::vector<std::uint8_t> is_fixture;
     if (evidence) {
         face_points = front_grid_internal::FacePoints(cloud.size(), s, *evidence);
-        is_fixture.assign(cloud.size(), 0);
-        for (const Fixture& fx : fixtures) {
-            for (const Index i : fx.indices) {
-                if (i < cloud.size()) is_fixture[i] = 1;
-            }
-        }
+        is_fixture = front_grid_internal::FixturePoints(cloud.size(), fixtures);
     }
     for (std::size_t f = 0; f < s.components.size(); ++f) {
         const PlanarComponent& face = s.components[f];
@@ -627,12 +622,8 @@ void ClaimUnexplainedPoints(const PointCloud& cloud, const RoomFrame& frame,
     p.Validate();
     CheckFrontFaces(structure, fronts);
     if (p.claim_front <= 0.0f || fronts.empty()) return;
-    std::vector<bool> fixture_point(cloud.size(), false);
-    for (const Fixture& fx : fixtures) {
-        for (const Index i : fx.indices) {
-            if (i < cloud.size()) fixture_point[i] = true;
-        }
-    }
+    const std::vector<std::uint8_t> fixture_point =
+        front_grid_internal::FixturePoints(cloud.size(), fixtures);
     // Smallest rectangle first, so that a point in nested rectangles joins the inner one.
     std::vector<std::size_t> order(fronts.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
