@@ -85,6 +85,7 @@ struct Options {
     float min_seen_slide_coverage = -1.0f;  ///< < 0: the library's MotionParams default
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
     float flap_min_width = -1.0f;         ///< < 0: the library's ArticulationParams default
+    float side_share = -1.0f;             ///< < 0: the library's ArticulationParams default
     float drawer_max_height = -1.0f;      ///< < 0: the library's ArticulationParams default
     float axis_snap_deg = -1.0f;          ///< < 0: the library's MotionParams default
     float max_hinge_gap = -1.0f;          ///< < 0: the library's MotionParams default
@@ -356,6 +357,7 @@ class Evaluator {
         if (o_.drawer_max_height >= 0.0f)
             params.articulation.drawer_max_height = o_.drawer_max_height;
         if (o_.flap_min_width >= 0.0f) params.articulation.flap_min_width = o_.flap_min_width;
+        if (o_.side_share >= 0.0f) params.articulation.side_share = o_.side_share;
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -1345,6 +1347,10 @@ int main(int argc, char** argv) {
     override("--flap-min-width", o.flap_min_width,
              "one scan: a front narrower than this is never hinged at its bottom edge [m] (0: any)",
              100.0);
+    override("--side-share", o.side_share,
+             "one scan: a horizontal handle of a wall cupboard's front within this share of "
+             "its width from a side edge marks a door hinged at the other side (0: off)",
+             0.49);
     override("--drawer-max-height", o.drawer_max_height,
              "one scan: a front taller than this with a horizontal handle is a door [m]", 100.0);
     app.add_flag("--wall-drawers", o.wall_drawers,

@@ -174,12 +174,13 @@ void ArticulationParams::Validate() const {
     }
     if (!(door_min_height > 0.0f) || !(top_share > 0.0f && top_share < 1.0f) ||
         !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f) || !(drawer_max_height > 0.0f) ||
-        !(flap_min_width >= 0.0f)) {
+        !(flap_min_width >= 0.0f) || !(side_share >= 0.0f && side_share < 0.5f)) {
         throw InvalidArgument(fmt::format(
             "articulation: need door_min_height > 0, top_share in (0, 1), limits > 0 and "
-            "drawer_max_height > 0, flap_min_width >= 0 (got {}, {}, {}, {}, {}, {})",
+            "drawer_max_height > 0, flap_min_width >= 0, side_share in [0, 0.5) (got {}, {}, {}, "
+            "{}, {}, {}, {})",
             door_min_height, top_share, revolute_upper, prismatic_upper, drawer_max_height,
-            flap_min_width));
+            flap_min_width, side_share));
     }
 }
 
@@ -254,6 +255,12 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             if (width >= p.flap_min_width) {
                 return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
             }
+            return side_door();
+        }
+        if (horizontal && f.min.y() - base > p.flap_min_bottom &&
+            (ru < p.side_share || ru > 1.0f - p.side_share)) {
+            // A wall cupboard's handle at a side edge: a door's free edge, hinged at the other
+            // side (a flap carries its handle centred).
             return side_door();
         }
         if (f.min.y() - base > p.flap_min_bottom && rv < p.top_share &&

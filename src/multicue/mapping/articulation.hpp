@@ -44,6 +44,12 @@ struct ArticulationParams {
     /// vertical edge [m]
     float flap_min_width = 0.4f;
     float top_share = 0.35f;  ///< "near the top": within this share of the height [-]
+    /// On a wall cupboard (above flap_min_bottom), a horizontal handle whose centre lies within
+    /// this share of the front's width from a side edge marks a door hinged at the other side
+    /// edge (a door's handle sits at its free edge; a flap carries its handle centred), unless
+    /// the front is hinged at its bottom edge (wide, tall, handle near its top). Lower fronts
+    /// keep their rules: drawers carry handles off their centre too. 0: off [-]
+    float side_share = 0.2f;
     /// Fronts whose bottom lies above this height are wall cupboards': with a horizontal handle
     /// they are flaps, hinged at the horizontal edge farther from it [m above the floor]
     float flap_min_bottom = 1.2f;
