@@ -134,6 +134,18 @@ TEST(RoomStructure, AStripOfFloorAndACounterAwayFromTheWalls) {
     EXPECT_THROW(SegmentRoomStructure(c, RoomFrame{}, {.worktop_face_height = -1.0f}),
                  InvalidArgument);
     EXPECT_THROW(SegmentRoomStructure(c, RoomFrame{}, {.min_ceiling_area = 0.0f}), InvalidArgument);
+    // Seen from 1.6 m, the table top lies 0.85 m below the sensor. With the floor strip too
+    // small, the table is no floor: the counter's front, the legs and the strip lie below it.
+    c.sensor_origin.z() = 1.6f;
+    const RoomStructure high = SegmentRoomStructure(c, RoomFrame{}, {.min_floor_area = 0.3f});
+    EXPECT_TRUE(std::isnan(high.floor_height));
+    EXPECT_EQ(label_at(high, 0.75f), MapClass::kTable);
+    EXPECT_NEAR(SegmentRoomStructure(c, RoomFrame{}, {}).floor_height, 0.0f, 0.01f);
+    const RoomStructure off = SegmentRoomStructure(
+        c, RoomFrame{}, {.min_floor_area = 0.3f, .max_below_floor_share = 1.0f});
+    EXPECT_NEAR(off.floor_height, 0.75f, 0.01f);
+    EXPECT_THROW(SegmentRoomStructure(c, RoomFrame{}, {.max_below_floor_share = -0.1f}),
+                 InvalidArgument);
 }
 
 TEST(Fixtures, HandleVersusKnob) {

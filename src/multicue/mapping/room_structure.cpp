@@ -208,6 +208,13 @@ void RoomStructureParams::Validate() const {
         throw InvalidArgument(fmt::format(
             "room structure: max_behind_share must be in [0, 1), got {}", max_behind_share));
     }
+    if (!(max_below_floor_share >= 0.0f && max_below_floor_share <= 1.0f) ||
+        !(floor_below_margin >= 0.0f)) {
+        throw InvalidArgument(fmt::format(
+            "room structure: need max_below_floor_share in [0, 1] and floor_below_margin >= 0, "
+            "got {} and {}",
+            max_below_floor_share, floor_below_margin));
+    }
     if (num_threads < 0) {
         throw InvalidArgument(
             fmt::format("room structure: num_threads must be >= 0, got {}", num_threads));
@@ -329,10 +336,27 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
     const PlaneInfo* ceiling = nullptr;
     const float sensor_height = cloud.HasSensorPosition() ? cloud.sensor_origin.dot(up)
                                                           : std::numeric_limits<float>::infinity();
+    std::size_t num_finite = 0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) num_finite += cloud.IsFinite(i);
+    const auto finite = static_cast<float>(num_finite);
+    // The points more than `margin` behind a plane (on the side its normal points away from).
+    auto behind = [&](const PlaneInfo& pl, float margin) {
+        const Eigen::Vector3f n = pl.plane.sign * frame.axes.col(pl.plane.axis);
+        const float d = -pl.plane.sign * pl.plane.offset;
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (cloud.IsFinite(i)) count += n.dot(cloud.points[i]) + d < -margin;
+        }
+        return static_cast<float>(count);
+    };
     for (const auto& pl : planes) {
-        if (pl.plane.axis != 2 || plane_area(pl) < p.min_floor_area) continue;
+        if (pl.plane.axis != 2 || pl.plane.sign <= 0 || plane_area(pl) < p.min_floor_area) continue;
         if (pl.plane.offset > sensor_height - p.min_floor_depth) continue;
-        if (pl.plane.sign > 0 && (!floor || pl.plane.offset < floor->plane.offset)) floor = &pl;
+        if (floor && pl.plane.offset >= floor->plane.offset) continue;
+        // The floor has (almost) nothing below it; a table top taken for it, where the view
+        // holds too little floor, has the furniture under it.
+        if (behind(pl, p.floor_below_margin) > p.max_below_floor_share * finite) continue;
+        floor = &pl;
     }
     for (const auto& pl : planes) {
         if (pl.plane.axis != 2 || pl.plane.sign > 0 || plane_area(pl) < p.min_ceiling_area) {
@@ -356,8 +380,6 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
 
     // Walls: vertical planes reaching the ceiling; with no ceiling in view, large vertical planes
     // with (almost) nothing behind them.
-    std::size_t finite = 0;
-    for (std::size_t i = 0; i < cloud.size(); ++i) finite += cloud.IsFinite(i);
     std::vector<const PlaneInfo*> walls;
     for (const auto& pl : planes) {
         if (pl.plane.axis == 2 || pl.components.empty() || plane_area(pl) < p.min_wall_area) {
@@ -370,15 +392,7 @@ RoomStructure SegmentRoomStructure(const PointCloud& cloud, const RoomFrame& fra
                 wall = wall || comp.max.y() >= out.ceiling_height - p.wall_ceiling_gap;
             }
         }
-        if (!wall) {
-            const Eigen::Vector3f n = pl.plane.sign * frame.axes.col(pl.plane.axis);
-            const float d = -pl.plane.sign * pl.plane.offset;
-            std::size_t behind = 0;
-            for (std::size_t i = 0; i < cloud.size(); ++i) {
-                if (cloud.IsFinite(i)) behind += n.dot(cloud.points[i]) + d < -p.behind_margin;
-            }
-            wall = static_cast<float>(behind) <= p.max_behind_share * static_cast<float>(finite);
-        }
+        if (!wall) wall = behind(pl, p.behind_margin) <= p.max_behind_share * finite;
         if (!wall) continue;
         walls.push_back(&pl);
         for (const int c : pl.components) {

@@ -37,6 +37,12 @@ struct RoomStructureParams {
     float min_ceiling_area = 0.3f;
     /// With a sensor position: the floor lies at least this far below the sensor [m]
     float min_floor_depth = 0.8f;
+    /// A plane with more than this share of the finite points at least floor_below_margin below
+    /// it is no floor: a table top taken for it where little floor is in view has the furniture
+    /// under it, while range noise and stray returns put few points below a real floor. 1: off
+    /// [-]
+    float max_below_floor_share = 0.02f;
+    float floor_below_margin = 0.1f;      ///< [m]
     float min_room_height = 1.8f;         ///< the ceiling lies at least this above the floor [m]
     float wall_ceiling_gap = 0.15f;       ///< a wall reaches this close to the ceiling [m]
     float min_wall_area = 0.4f;           ///< a wall plane has this much area [m^2]
