@@ -341,26 +341,33 @@ TEST(Articulation, ANarrowFrontWithAHandleAtItsTopIsHingedAtItsSide) {
     EXPECT_THROW(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, any), InvalidArgument);
 }
 
-TEST(Articulation, AHorizontalHandleAtASideEdgeMarksASideDoor) {
-    // A wide wall cupboard front (x 0 .. 1.2, z 0.15 .. 0.6 above a floor 1.3 m lower) with a
-    // short horizontal handle in its lower right corner: a door hinged at its left edge, not a
-    // flap hinged at its top (CabinetUpper/46744 of the model library).
+/// DoorFront resized to x 0 .. width, z 0.15 .. 0.15 + height.
+Front FrontOfSize(float width, float height) {
     Front f = DoorFront();
     const Eigen::Vector2f a(Eigen::Vector3f(0.0f, 2.4f, 0.15f).dot(f.u_axis), 0.15f);
-    const Eigen::Vector2f b(Eigen::Vector3f(1.2f, 2.4f, 0.6f).dot(f.u_axis), 0.6f);
+    const Eigen::Vector2f b(Eigen::Vector3f(width, 2.4f, 0.15f + height).dot(f.u_axis),
+                            0.15f + height);
     f.min = a.cwiseMin(b);
     f.max = a.cwiseMax(b);
-    f.center = Eigen::Vector3f(0.6f, 2.4f, 0.375f);
+    f.center = Eigen::Vector3f(width / 2, 2.4f, 0.15f + height / 2);
+    return f;
+}
+
+TEST(Articulation, AHorizontalHandleAtASideEdgeMarksASideDoor) {
+    // A wide wall cupboard front (1.2 x 0.45 m, 1.3 m above the floor) with a short horizontal
+    // handle in its lower right corner: a door hinged at its left edge, not a flap hinged at its
+    // top (CabinetUpper/46744 of the model library).
+    const Front wide = FrontOfSize(1.2f, 0.45f);
     Fixture h = HandleAt({1.12f, 2.365f, 0.2f}, false);
     h.length = 0.05f;
-    Articulation door = ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f);
+    Articulation door = ArticulationFromFixtures(wide, {h}, RoomFrame{}, -1.3f);
     ASSERT_EQ(door.type, JointType::kRevolute);
     EXPECT_GT(std::abs(door.axis.z()), 0.999f);
     EXPECT_NEAR(door.origin.x(), 0.0f, 0.01f);
     EXPECT_LT(Opened(door, {1.2f, 2.4f, 0.3f}, 0.1f).y(), 2.39f);
     // The same handle centred: a flap hinged at the top edge.
     h.center.x() = 0.6f;
-    const Articulation flap = ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f);
+    const Articulation flap = ArticulationFromFixtures(wide, {h}, RoomFrame{}, -1.3f);
     ASSERT_EQ(flap.type, JointType::kRevolute);
     EXPECT_GT(std::abs(flap.axis.x()), 0.999f);
     EXPECT_NEAR(flap.origin.z(), 0.6f, 0.01f);
@@ -368,26 +375,37 @@ TEST(Articulation, AHorizontalHandleAtASideEdgeMarksASideDoor) {
     h.center.x() = 0.08f;
     ArticulationParams off;
     off.side_share = 0.0f;
-    const Articulation offed = ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f, off);
+    const Articulation offed = ArticulationFromFixtures(wide, {h}, RoomFrame{}, -1.3f, off);
     ASSERT_EQ(offed.type, JointType::kRevolute);
     EXPECT_GT(std::abs(offed.axis.x()), 0.999f);
     // At the left edge: hinged at the right edge.
-    door = ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f);
+    door = ArticulationFromFixtures(wide, {h}, RoomFrame{}, -1.3f);
     ASSERT_EQ(door.type, JointType::kRevolute);
     EXPECT_GT(std::abs(door.axis.z()), 0.999f);
     EXPECT_NEAR(door.origin.x(), 1.2f, 0.01f);
-    // Low down the same front is a drawer: drawers carry handles off their centre too.
-    EXPECT_EQ(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f).type, JointType::kPrismatic);
-    // A wide, tall front with its handle near the top, off-centre (as a dishwasher's): hinged
-    // at its bottom edge.
-    f.max.y() = 0.85f;
-    h.center.z() = 0.8f;
-    const Articulation bottom = ArticulationFromFixtures(f, {h}, RoomFrame{}, -1.3f);
+    // Low down, a drawer's height (0.3 m) with the handle at its edge: still a drawer.
+    h.center.z() = 0.3f;
+    EXPECT_EQ(ArticulationFromFixtures(FrontOfSize(1.2f, 0.3f), {h}, RoomFrame{}, 0.0f).type,
+              JointType::kPrismatic);
+    // A cupboard door 0.45 x 0.75 m with a short handle in its upper right corner: hinged at its
+    // left edge, not at its bottom as an oven's door; 0.86 m wide (a dishwasher's), at its
+    // bottom.
+    h.center = Eigen::Vector3f(0.4f, 2.365f, 0.85f);
+    door = ArticulationFromFixtures(FrontOfSize(0.45f, 0.75f), {h}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(door.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(door.axis.z()), 0.999f);
+    EXPECT_NEAR(door.origin.x(), 0.0f, 0.01f);
+    h.center.x() = 0.78f;
+    const Articulation bottom =
+        ArticulationFromFixtures(FrontOfSize(0.86f, 0.75f), {h}, RoomFrame{}, 0.0f);
     ASSERT_EQ(bottom.type, JointType::kRevolute);
     EXPECT_GT(std::abs(bottom.axis.x()), 0.999f);
     EXPECT_NEAR(bottom.origin.z(), 0.15f, 0.01f);
     off.side_share = 0.5f;
-    EXPECT_THROW(ArticulationFromFixtures(f, {h}, RoomFrame{}, 0.0f, off), InvalidArgument);
+    EXPECT_THROW(ArticulationFromFixtures(wide, {h}, RoomFrame{}, 0.0f, off), InvalidArgument);
+    off.side_share = 0.2f;
+    off.edge_flap_min_width = -1.0f;
+    EXPECT_THROW(ArticulationFromFixtures(wide, {h}, RoomFrame{}, 0.0f, off), InvalidArgument);
 }
 
 /// Adds to `c` the panels at y = 2.4 left and right of a door (x 0.3 .. 0.6 and 1.1 .. 1.4, z

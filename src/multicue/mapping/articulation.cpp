@@ -174,13 +174,14 @@ void ArticulationParams::Validate() const {
     }
     if (!(door_min_height > 0.0f) || !(top_share > 0.0f && top_share < 1.0f) ||
         !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f) || !(drawer_max_height > 0.0f) ||
-        !(flap_min_width >= 0.0f) || !(side_share >= 0.0f && side_share < 0.5f)) {
+        !(flap_min_width >= 0.0f) || !(edge_flap_min_width >= 0.0f) ||
+        !(side_share >= 0.0f && side_share < 0.5f)) {
         throw InvalidArgument(fmt::format(
             "articulation: need door_min_height > 0, top_share in (0, 1), limits > 0 and "
-            "drawer_max_height > 0, flap_min_width >= 0, side_share in [0, 0.5) (got {}, {}, {}, "
-            "{}, {}, {}, {})",
+            "drawer_max_height > 0, flap_min_width and edge_flap_min_width >= 0, side_share in "
+            "[0, 0.5) (got {}, {}, {}, {}, {}, {}, {}, {})",
             door_min_height, top_share, revolute_upper, prismatic_upper, drawer_max_height,
-            flap_min_width, side_share));
+            flap_min_width, edge_flap_min_width, side_share));
     }
 }
 
@@ -248,23 +249,25 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
         return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
                           : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
     };
+    const bool wall = f.min.y() - base > p.flap_min_bottom;
+    // A horizontal handle at a side edge: a door's free edge (flaps, drawers and appliance doors
+    // carry theirs centred, or are wide).
+    const bool edge_handle = horizontal && (ru < p.side_share || ru > 1.0f - p.side_share);
     if (horizontal || (!handle && !side)) {
         if (height >= p.door_min_height && rv > 1.0f - p.top_share) {
             // Hinged at the bottom edge: an oven or dishwasher door; too narrow for one, a door
             // hinged at the vertical edge farther from the fixture.
-            if (width >= p.flap_min_width) {
+            if (width >= p.flap_min_width && (!edge_handle || width >= p.edge_flap_min_width)) {
                 return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
             }
             return side_door();
         }
-        if (horizontal && f.min.y() - base > p.flap_min_bottom &&
-            (ru < p.side_share || ru > 1.0f - p.side_share)) {
-            // A wall cupboard's handle at a side edge: a door's free edge, hinged at the other
-            // side (a flap carries its handle centred).
+        if (edge_handle && (wall || height >= p.door_min_height)) {
+            // A door-sized front (or a wall cupboard's: no drawers there) with its handle at a
+            // side edge, hinged at the other side.
             return side_door();
         }
-        if (f.min.y() - base > p.flap_min_bottom && rv < p.top_share &&
-            height >= 0.6f * p.door_min_height) {
+        if (wall && rv < p.top_share && height >= 0.6f * p.door_min_height) {
             // A flap hinged at the top edge (wall cupboards).
             return Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
         }
@@ -273,7 +276,7 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             // at the vertical edge farther from the fixture.
             return side_door();
         }
-        if (!p.wall_drawers && f.min.y() - base > p.flap_min_bottom) {
+        if (!p.wall_drawers && wall) {
             // No drawers hang on the wall: a flap, hinged at the horizontal edge farther from
             // the fixture.
             return rv >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p)

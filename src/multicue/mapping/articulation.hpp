@@ -43,12 +43,16 @@ struct ArticulationParams {
     /// are at least this wide; a narrower front with a handle near its top is hinged at a
     /// vertical edge [m]
     float flap_min_width = 0.4f;
+    /// ... and with the handle at a side edge (side_share), at least this wide: an oven's or a
+    /// dishwasher's door may carry its handle off its centre, a cupboard door's handle near its
+    /// top corner marks its free edge [m]
+    float edge_flap_min_width = 0.55f;
     float top_share = 0.35f;  ///< "near the top": within this share of the height [-]
-    /// On a wall cupboard (above flap_min_bottom), a horizontal handle whose centre lies within
-    /// this share of the front's width from a side edge marks a door hinged at the other side
-    /// edge (a door's handle sits at its free edge; a flap carries its handle centred), unless
-    /// the front is hinged at its bottom edge (wide, tall, handle near its top). Lower fronts
-    /// keep their rules: drawers carry handles off their centre too. 0: off [-]
+    /// A horizontal handle whose centre lies within this share of the front's width from a side
+    /// edge marks a door hinged at the other side edge (a door's handle sits at its free edge;
+    /// flaps carry theirs centred) on a wall cupboard's front (no drawers there) and on a front
+    /// at least door_min_height tall (drawers are lower), unless the front is hinged at its
+    /// bottom edge (see edge_flap_min_width). Chosen on the tune half; 0: off [-]
     float side_share = 0.2f;
     /// Fronts whose bottom lies above this height are wall cupboards': with a horizontal handle
     /// they are flaps, hinged at the horizontal edge farther from it [m above the floor]
