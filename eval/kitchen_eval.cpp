@@ -1348,8 +1348,8 @@ int main(int argc, char** argv) {
              "one scan: a front narrower than this is never hinged at its bottom edge [m] (0: any)",
              100.0);
     override("--side-share", o.side_share,
-             "one scan: a horizontal handle of a wall cupboard's front within this share of "
-             "its width from a side edge marks a door hinged at the other side (0: off)",
+             "one scan: a horizontal handle within this share of its front's width from a side "
+             "edge marks a door hinged at the other side (0: off)",
              0.49);
     override("--drawer-max-height", o.drawer_max_height,
              "one scan: a front taller than this with a horizontal handle is a door [m]", 100.0);
