@@ -86,6 +86,8 @@ struct Options {
     bool wall_drawers = mapping::ArticulationParams{}.wall_drawers;
     float flap_min_width = -1.0f;         ///< < 0: the library's ArticulationParams default
     float side_share = -1.0f;             ///< < 0: the library's ArticulationParams default
+    float stack_tolerance = -1.0f;        ///< < 0: the library's ArticulationParams default
+    float stack_centre_share = -1.0f;     ///< < 0: the library's ArticulationParams default
     float drawer_max_height = -1.0f;      ///< < 0: the library's ArticulationParams default
     float axis_snap_deg = -1.0f;          ///< < 0: the library's MotionParams default
     float max_hinge_gap = -1.0f;          ///< < 0: the library's MotionParams default
@@ -358,6 +360,10 @@ class Evaluator {
             params.articulation.drawer_max_height = o_.drawer_max_height;
         if (o_.flap_min_width >= 0.0f) params.articulation.flap_min_width = o_.flap_min_width;
         if (o_.side_share >= 0.0f) params.articulation.side_share = o_.side_share;
+        if (o_.stack_tolerance >= 0.0f) params.articulation.stack_tolerance = o_.stack_tolerance;
+        if (o_.stack_centre_share >= 0.0f) {
+            params.articulation.stack_centre_share = o_.stack_centre_share;
+        }
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
         return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
     }
@@ -1351,6 +1357,12 @@ int main(int argc, char** argv) {
              "one scan: a horizontal handle within this share of its front's width from a side "
              "edge marks a door hinged at the other side (0: off)",
              0.49);
+    override("--stack-tolerance", o.stack_tolerance,
+             "one scan: a front with its handle near the top and a drawer as wide (edges within "
+             "this) directly above or below it is a drawer, not a flap [m] (0: off)",
+             0.2);
+    override("--stack-centre-share", o.stack_centre_share,
+             "one scan: ... when both handles are centred within this share of the width", 0.49);
     override("--drawer-max-height", o.drawer_max_height,
              "one scan: a front taller than this with a horizontal handle is a door [m]", 100.0);
     app.add_flag("--wall-drawers", o.wall_drawers,

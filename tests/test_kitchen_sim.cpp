@@ -446,6 +446,27 @@ TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
     EXPECT_THROW(sim::ProceduralKitchenEntries(sim::kMaxProceduralPerKind + 1, 1), InvalidArgument);
 }
 
+TEST(ProceduralUnits, SomeDrawerUnitsHoldAPanDrawer) {
+    // A fifth of the drawer units end in a pan drawer as tall as a low door (over 45 cm); no
+    // drawer is taller than 60 cm.
+    int pans = 0;
+    for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+        const sim::ArticulatedModel m = sim::MakeProceduralUnit("drawer_unit", seed);
+        const auto closed = m.LinkPoses(m.ClosedState());
+        bool pan = false;
+        for (const sim::ArticulatedJoint& jt : m.joints) {
+            const std::size_t l = static_cast<std::size_t>(jt.child);
+            Eigen::AlignedBox3f box;
+            for (const auto& v : m.links[l].mesh->mesh.vertices) box.extend(closed[l] * v);
+            EXPECT_LT(box.sizes().z(), 0.6f) << m.id;
+            pan = pan || box.sizes().z() > 0.45f;
+        }
+        pans += pan;
+    }
+    EXPECT_GE(pans, 2);
+    EXPECT_LE(pans, 16);
+}
+
 TEST(ProceduralUnits, MakeKitchensWithGroundTruth) {
     const auto entries = sim::ProceduralKitchenEntries(3, 11);
     ASSERT_EQ(entries.size(), 3 * sim::ProceduralUnitKinds().size());

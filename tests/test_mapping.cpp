@@ -408,6 +408,68 @@ TEST(Articulation, AHorizontalHandleAtASideEdgeMarksASideDoor) {
     EXPECT_THROW(ArticulationFromFixtures(wide, {h}, RoomFrame{}, 0.0f, off), InvalidArgument);
 }
 
+/// `f` moved up by `dz`.
+Front Raised(Front f, float dz) {
+    f.min.y() += dz;
+    f.max.y() += dz;
+    f.center.z() += dz;
+    return f;
+}
+
+TEST(Articulation, ADeepFrontInAStackOfDrawersIsADrawer) {
+    // A pan drawer 0.92 x 0.5 m with a handle centred near its top (MiniFridgeBase/45746 of the
+    // model library): alone, an oven's door hinged at its bottom edge; with a drawer as wide
+    // directly above it (3 mm gap), a drawer.
+    std::vector<Front> fronts = {FrontOfSize(0.92f, 0.5f),
+                                 Raised(FrontOfSize(0.92f, 0.3f), 0.503f)};
+    fronts[1].fixtures = {1};
+    const std::vector<Fixture> fx = {HandleAt({0.46f, 2.365f, 0.6f}, false),
+                                     HandleAt({0.46f, 2.365f, 0.9f}, false)};
+    const Articulation alone = ArticulationFromFixtures(fronts[0], fx, RoomFrame{}, 0.0f);
+    ASSERT_EQ(alone.type, JointType::kRevolute);
+    EXPECT_GT(std::abs(alone.axis.x()), 0.999f);
+    const Articulation stacked = ArticulationFromFixtures(fronts, 0, fx, RoomFrame{}, 0.0f);
+    ASSERT_EQ(stacked.type, JointType::kPrismatic);
+    EXPECT_LT((stacked.axis - fronts[0].normal).norm(), 1e-5f);
+    EXPECT_EQ(ArticulationFromFixtures(fronts, 1, fx, RoomFrame{}, 0.0f).type,
+              JointType::kPrismatic);
+    // Off: the flap.
+    ArticulationParams off;
+    off.stack_tolerance = 0.0f;
+    EXPECT_EQ(ArticulationFromFixtures(fronts, 0, fx, RoomFrame{}, 0.0f, off).type,
+              JointType::kRevolute);
+    // No stack: the front above narrower, or 10 cm higher up, or with a vertical handle, or an
+    // oven's door taller than any drawer.
+    auto joint_with = [&](const Front& below, const Fixture& handle, const Front& above,
+                          const Fixture& its_handle) {
+        const std::vector<Front> two = {below, above};
+        return ArticulationFromFixtures(two, 0, {handle, its_handle}, RoomFrame{}, 0.0f).type;
+    };
+    Front narrow = Raised(FrontOfSize(0.6f, 0.3f), 0.503f);
+    narrow.fixtures = {1};
+    EXPECT_EQ(joint_with(fronts[0], fx[0], narrow, fx[1]), JointType::kRevolute);
+    EXPECT_EQ(joint_with(fronts[0], fx[0], Raised(fronts[1], 0.1f), fx[1]), JointType::kRevolute);
+    EXPECT_EQ(joint_with(fronts[0], fx[0], fronts[1], HandleAt({0.85f, 2.365f, 0.8f}, true)),
+              JointType::kRevolute);
+    // A door under a drawer with a handle running across its top near its free edge (centre 12
+    // cm off the middle), or a drawer above with its handle off the middle: no stack.
+    EXPECT_EQ(joint_with(fronts[0], HandleAt({0.58f, 2.365f, 0.6f}, false), fronts[1], fx[1]),
+              JointType::kRevolute);
+    EXPECT_EQ(joint_with(fronts[0], fx[0], fronts[1], HandleAt({0.3f, 2.365f, 0.9f}, false)),
+              JointType::kRevolute);
+    Front over_tall = Raised(FrontOfSize(0.92f, 0.2f), 0.703f);
+    over_tall.fixtures = {1};
+    EXPECT_EQ(joint_with(FrontOfSize(0.92f, 0.7f), HandleAt({0.46f, 2.365f, 0.8f}, false),
+                         over_tall, fx[1]),
+              JointType::kRevolute);
+    // Bad parameters.
+    off.stack_tolerance = -0.01f;
+    EXPECT_THROW(ArticulationFromFixtures(fronts, 0, fx, RoomFrame{}, 0.0f, off), InvalidArgument);
+    off.stack_tolerance = 0.04f;
+    off.stack_centre_share = 0.5f;
+    EXPECT_THROW(ArticulationFromFixtures(fronts, 0, fx, RoomFrame{}, 0.0f, off), InvalidArgument);
+}
+
 /// Adds to `c` the panels at y = 2.4 left and right of a door (x 0.3 .. 0.6 and 1.1 .. 1.4, z
 /// 0.1 .. 0.9) and returns the door closed (x 0.6 .. 1.1, z 0.15 .. 0.8).
 PointCloud AddPanelsBesideDoor(PointCloud& c, std::mt19937& rng) {

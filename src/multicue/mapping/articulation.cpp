@@ -33,6 +33,18 @@ Articulation Hinge(const Front& f, const Eigen::Vector3f& edge_point,
     return a;
 }
 
+/// A drawer: prismatic, out of the face.
+Articulation Drawer(const Front& f, const ArticulationParams& p) {
+    Articulation a;
+    a.type = JointType::kPrismatic;
+    a.origin = f.center;
+    a.axis = f.normal;
+    a.lower = 0.0f;
+    a.upper = p.prismatic_upper;
+    a.source = "fixture";
+    return a;
+}
+
 /// The `q` quantile of `values` (reordered; not empty).
 float Quantile(std::vector<float>& values, float q) {
     const auto k = static_cast<std::ptrdiff_t>(q * static_cast<float>(values.size() - 1));
@@ -175,13 +187,16 @@ void ArticulationParams::Validate() const {
     if (!(door_min_height > 0.0f) || !(top_share > 0.0f && top_share < 1.0f) ||
         !(revolute_upper > 0.0f) || !(prismatic_upper > 0.0f) || !(drawer_max_height > 0.0f) ||
         !(flap_min_width >= 0.0f) || !(edge_flap_min_width >= 0.0f) ||
-        !(side_share >= 0.0f && side_share < 0.5f)) {
+        !(side_share >= 0.0f && side_share < 0.5f) ||
+        !(stack_tolerance >= 0.0f && stack_tolerance <= 0.2f) ||
+        !(stack_centre_share >= 0.0f && stack_centre_share < 0.5f)) {
         throw InvalidArgument(fmt::format(
             "articulation: need door_min_height > 0, top_share in (0, 1), limits > 0 and "
             "drawer_max_height > 0, flap_min_width and edge_flap_min_width >= 0, side_share in "
-            "[0, 0.5) (got {}, {}, {}, {}, {}, {}, {}, {})",
+            "[0, 0.5), stack_tolerance in [0, 0.2] m, stack_centre_share in [0, 0.5) (got {}, {}, "
+            "{}, {}, {}, {}, {}, {}, {}, {})",
             door_min_height, top_share, revolute_upper, prismatic_upper, drawer_max_height,
-            flap_min_width, edge_flap_min_width, side_share));
+            flap_min_width, edge_flap_min_width, side_share, stack_tolerance, stack_centre_share));
     }
 }
 
@@ -215,13 +230,10 @@ void MotionParams::Validate() const {
     }
 }
 
-Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>& fixtures,
-                                      const RoomFrame& frame, float floor_height,
-                                      const ArticulationParams& p) {
-    p.Validate();
-    Articulation none;
-    if (f.fixtures.empty()) return none;
-    // The front's main fixture: its longest handle, else its first knob.
+namespace {
+
+/// The front's main fixture: its longest handle, else its first knob (null without fixtures).
+const Fixture* MainFixture(const Front& f, const std::vector<Fixture>& fixtures) {
     const Fixture* fx = nullptr;
     for (const int i : f.fixtures) {
         const Fixture& c = fixtures.at(static_cast<std::size_t>(i));
@@ -230,6 +242,25 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             fx = &c;
         }
     }
+    return fx;
+}
+
+bool IsHorizontalHandle(const Fixture& fx, const Eigen::Vector3f& up, const ArticulationParams& p) {
+    return fx.type == FixtureType::kHandle &&
+           std::abs(fx.direction.dot(up)) <
+               std::sin(p.horizontal_handle_deg * kArticulationDegToRad);
+}
+
+/// ArticulationFromFixtures; `bottom_hinged` (if not null) tells whether the front was hinged at
+/// its bottom edge for a horizontal handle near its top.
+Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtures,
+                               const RoomFrame& frame, float floor_height,
+                               const ArticulationParams& p, bool* bottom_hinged) {
+    p.Validate();
+    if (bottom_hinged) *bottom_hinged = false;
+    Articulation none;
+    const Fixture* fx = MainFixture(f, fixtures);
+    if (!fx) return none;
     const Eigen::Vector3f up = frame.Up();
     const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
     const Eigen::Vector2f at(fx->center.dot(f.u_axis), fx->center.dot(f.v_axis));
@@ -241,8 +272,7 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
     };
     const float base = std::isnan(floor_height) ? 0.0f : floor_height;
     const bool handle = fx->type == FixtureType::kHandle;
-    const bool horizontal = handle && std::abs(fx->direction.dot(up)) <
-                                          std::sin(p.horizontal_handle_deg * kArticulationDegToRad);
+    const bool horizontal = IsHorizontalHandle(*fx, up, p);
     const bool side = ru < p.top_share || ru > 1.0f - p.top_share;
     // A door hinged at the vertical edge farther from the fixture.
     auto side_door = [&]() {
@@ -258,6 +288,7 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             // Hinged at the bottom edge: an oven or dishwasher door; too narrow for one, a door
             // hinged at the vertical edge farther from the fixture.
             if (width >= p.flap_min_width && (!edge_handle || width >= p.edge_flap_min_width)) {
+                if (bottom_hinged) *bottom_hinged = true;
                 return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
             }
             return side_door();
@@ -282,17 +313,65 @@ Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>
             return rv >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p)
                               : Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
         }
-        Articulation a;
-        a.type = JointType::kPrismatic;
-        a.origin = f.center;
-        a.axis = f.normal;
-        a.lower = 0.0f;
-        a.upper = p.prismatic_upper;
-        a.source = "fixture";
-        return a;
+        return Drawer(f, p);
     }
     // Vertical handle or a knob off the centre: hinged at the farther vertical edge.
     return side_door();
+}
+
+/// Whether the front's main fixture is a horizontal handle centred across it (within
+/// `stack_centre_share` of its width).
+bool CentredHorizontalHandle(const Front& f, const std::vector<Fixture>& fixtures,
+                             const Eigen::Vector3f& up, const ArticulationParams& p) {
+    const Fixture* fx = MainFixture(f, fixtures);
+    if (!fx || !IsHorizontalHandle(*fx, up, p)) return false;
+    const float width = f.max.x() - f.min.x();
+    return std::abs(fx->center.dot(f.u_axis) - 0.5f * (f.min.x() + f.max.x())) <=
+           p.stack_centre_share * width;
+}
+
+/// Whether front `index` carries a centred horizontal handle and a front of `fronts` as wide
+/// (both side edges within `stack_tolerance`, on a parallel face within that distance) lies
+/// directly above or below it with one too.
+bool InDrawerStack(const std::vector<Front>& fronts, std::size_t index,
+                   const std::vector<Fixture>& fixtures, const Eigen::Vector3f& up,
+                   const ArticulationParams& p) {
+    const Front& f = fronts[index];
+    if (!CentredHorizontalHandle(f, fixtures, up, p)) return false;
+    const float tol = p.stack_tolerance;
+    for (std::size_t j = 0; j < fronts.size(); ++j) {
+        const Front& g = fronts[j];
+        if (j == index || g.normal.dot(f.normal) < 0.98f || g.u_axis.dot(f.u_axis) < 0.98f ||
+            std::abs(f.normal.dot(g.center - f.center)) > tol ||
+            std::abs(g.min.x() - f.min.x()) > tol || std::abs(g.max.x() - f.max.x()) > tol) {
+            continue;
+        }
+        const float gap = std::max(g.min.y() - f.max.y(), f.min.y() - g.max.y());
+        if (gap < -tol || gap > tol) continue;
+        if (CentredHorizontalHandle(g, fixtures, up, p)) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+Articulation ArticulationFromFixtures(const Front& f, const std::vector<Fixture>& fixtures,
+                                      const RoomFrame& frame, float floor_height,
+                                      const ArticulationParams& p) {
+    return JointFromFixtures(f, fixtures, frame, floor_height, p, nullptr);
+}
+
+Articulation ArticulationFromFixtures(const std::vector<Front>& fronts, std::size_t index,
+                                      const std::vector<Fixture>& fixtures, const RoomFrame& frame,
+                                      float floor_height, const ArticulationParams& p) {
+    const Front& f = fronts.at(index);
+    bool bottom_hinged = false;
+    Articulation a = JointFromFixtures(f, fixtures, frame, floor_height, p, &bottom_hinged);
+    if (bottom_hinged && p.stack_tolerance > 0.0f && f.max.y() - f.min.y() <= p.drawer_max_height &&
+        InDrawerStack(fronts, index, fixtures, frame.Up(), p)) {
+        return Drawer(f, p);
+    }
+    return a;
 }
 
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,

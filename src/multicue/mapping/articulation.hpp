@@ -4,7 +4,8 @@
 /// From one scan, from the fixture: a horizontal handle on a low front is a drawer (prismatic,
 /// out of the face) unless the front is taller than any drawer; a horizontal handle near the top
 /// of a tall front is a door hinged at its bottom edge (an oven, a dishwasher; a front too narrow
-/// for one is hinged at a side), near the bottom of a front above the worktop a door hinged
+/// for one is hinged at a side; one with a drawer as wide directly above or below it is a deep
+/// drawer), near the bottom of a front above the worktop a door hinged
 /// at its top edge, and on any other front above the worktop (wall cupboards hold no drawers) a
 /// door hinged at the horizontal edge farther from it; a vertical handle (or a knob) near one side
 /// edge is a door hinged at the opposite edge. The hinge axis lies in the face plane along that
@@ -63,6 +64,17 @@ struct ArticulationParams {
     /// Wall cupboards' fronts may be drawers (a horizontal handle away from their bottom and
     /// sides); off, they are doors
     bool wall_drawers = false;
+    /// Ovens and dishwashers do not stack, drawers do: a front the fixture rules hinge at its
+    /// bottom edge (a horizontal handle near its top), no taller than drawer_max_height, is a
+    /// drawer when another front as wide (both side edges within this distance) lies directly
+    /// above or below it (gap within this distance, on a parallel face as near), both with their
+    /// handle centred (stack_centre_share); 0: off. Used by the overload that sees all of a
+    /// map's fronts [m]
+    float stack_tolerance = 0.04f;
+    /// A drawer's handle is centred across it: within this share of the width of the front's
+    /// middle. A door under a row of drawers may carry a handle running across at its free edge,
+    /// which a deep drawer's does not [-]
+    float stack_centre_share = 0.05f;
     float revolute_upper = 1.5708f;  ///< upper limit given to revolute fronts from one scan [rad]
     float prismatic_upper = 0.4f;    ///< upper limit given to drawers from one scan [m]
     /// A hinge lies this far behind the front's surface (the door's thickness to its hinge
@@ -78,6 +90,11 @@ struct ArticulationParams {
 Articulation ArticulationFromFixtures(const Front& front, const std::vector<Fixture>& fixtures,
                                       const RoomFrame& frame, float floor_height,
                                       const ArticulationParams& params = {});
+/// The same for `fronts[index]`, with the other fronts around it: a front in a stack of drawers
+/// is a drawer, not a flap (see ArticulationParams::stack_tolerance).
+Articulation ArticulationFromFixtures(const std::vector<Front>& fronts, std::size_t index,
+                                      const std::vector<Fixture>& fixtures, const RoomFrame& frame,
+                                      float floor_height, const ArticulationParams& params = {});
 
 struct MotionParams {
     float change_distance = 0.02f;  ///< opened-scan points this far from every closed-scan point

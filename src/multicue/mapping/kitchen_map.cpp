@@ -302,10 +302,11 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     MergeNestedFronts(structure, map.fronts, p.fronts);
     ClaimUnexplainedPoints(r.cloud, map.frame, structure, map.fixtures, map.fronts, p.fronts);
     stage("fronts");
-    // How each front opens, from its fixture.
-    for (Front& f : map.fronts) {
-        f.articulation =
-            ArticulationFromFixtures(f, map.fixtures, map.frame, map.floor_height, p.articulation);
+    // How each front opens, from its fixture and the fronts around it (which are read for their
+    // rectangles and fixtures only, so the order does not matter).
+    for (std::size_t i = 0; i < map.fronts.size(); ++i) {
+        map.fronts[i].articulation = ArticulationFromFixtures(
+            map.fronts, i, map.fixtures, map.frame, map.floor_height, p.articulation);
     }
     stage("articulation");
     // Furniture pieces, kitchenettes and container types.

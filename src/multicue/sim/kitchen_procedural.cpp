@@ -271,17 +271,29 @@ Layout RandomLayout(const std::string& kind, StreamRng& rng, float gap) {
     const int door_columns = L.width < 0.58f ? 1 : L.width > 0.75f ? 2 : rng.UniformInt(1, 2);
     using T = FrontRect::Type;
     if (kind == "drawer_unit") {
-        const int n = rng.UniformInt(2, 6);
-        std::vector<float> share(static_cast<std::size_t>(n), 1.0f);
+        int n = rng.UniformInt(2, 6);
         const double style = rng.Uniform();
+        // Pan drawers: two or three, the lowest as tall as a low door.
+        const bool pans = style >= 0.8;
+        if (pans) n = 2 + n % 2;
+        std::vector<float> share(static_cast<std::size_t>(n), 1.0f);
         if (style < 0.35) {
             for (int i = 0; i < n; ++i) share[static_cast<std::size_t>(i)] = 1.0f + 0.35f * i;
         } else if (style < 0.6 && n >= 3) {
             share[0] = 0.5f;
         }
+        const float usable = (z1 - z0) - gap * static_cast<float>(n - 1);
+        if (pans) {
+            // The pan drawer 40-56 cm (leaving at least 12 cm to each drawer above), the
+            // drawers above it alike.
+            const float pan = std::min(U(0.4, 0.56), usable - 0.12f * static_cast<float>(n - 1));
+            for (int i = 0; i + 1 < n; ++i) {
+                share[static_cast<std::size_t>(i)] = (usable - pan) / static_cast<float>(n - 1);
+            }
+            share.back() = pan;
+        }
         float total = 0;
         for (const float s : share) total += s;
-        const float usable = (z1 - z0) - gap * static_cast<float>(n - 1);
         float top = z1;
         const bool split_top = L.width > 0.8f && rng.Uniform() < 0.3;
         for (int i = 0; i < n; ++i) {
