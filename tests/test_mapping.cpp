@@ -433,6 +433,14 @@ TEST(Articulation, ADeepFrontInAStackOfDrawersIsADrawer) {
     EXPECT_LT((stacked.axis - fronts[0].normal).norm(), 1e-5f);
     EXPECT_EQ(ArticulationFromFixtures(fronts, 1, fx, RoomFrame{}, 0.0f).type,
               JointType::kPrismatic);
+    // The drawer above found 5 cm short at one side: its handle, centred on the deep front,
+    // still makes a stack.
+    Front short_above = Raised(FrontOfSize(0.87f, 0.3f), 0.503f);
+    short_above.fixtures = {1};
+    EXPECT_EQ(ArticulationFromFixtures(std::vector<Front>{fronts[0], short_above}, 0, fx,
+                                       RoomFrame{}, 0.0f)
+                  .type,
+              JointType::kPrismatic);
     // Off: the flap.
     ArticulationParams off;
     off.stack_tolerance = 0.0f;

@@ -319,36 +319,41 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
     return side_door();
 }
 
-/// Whether the front's main fixture is a horizontal handle centred across it (within
-/// `stack_centre_share` of its width).
-bool CentredHorizontalHandle(const Front& f, const std::vector<Fixture>& fixtures,
-                             const Eigen::Vector3f& up, const ArticulationParams& p) {
-    const Fixture* fx = MainFixture(f, fixtures);
+/// Whether front `g`'s main fixture is a horizontal handle centred across front `f` (within
+/// `stack_centre_share` of f's width of its middle).
+bool HandleCentredOn(const Front& g, const Front& f, const std::vector<Fixture>& fixtures,
+                     const Eigen::Vector3f& up, const ArticulationParams& p) {
+    const Fixture* fx = MainFixture(g, fixtures);
     if (!fx || !IsHorizontalHandle(*fx, up, p)) return false;
     const float width = f.max.x() - f.min.x();
     return std::abs(fx->center.dot(f.u_axis) - 0.5f * (f.min.x() + f.max.x())) <=
            p.stack_centre_share * width;
 }
 
-/// Whether front `index` carries a centred horizontal handle and a front of `fronts` as wide
-/// (both side edges within `stack_tolerance`, on a parallel face within that distance) lies
-/// directly above or below it with one too.
+/// Whether front `index` carries a horizontal handle centred across it and a front of `fronts`
+/// in the same column (on a parallel face within `stack_tolerance`, overlapping all of its width
+/// but twice that and no wider by more) lies directly above or below it (gap within
+/// `stack_tolerance`) with a horizontal handle centred across it too. The neighbour's handle is
+/// measured against this front's middle: a rectangle found a few centimetres short does not
+/// move it.
 bool InDrawerStack(const std::vector<Front>& fronts, std::size_t index,
                    const std::vector<Fixture>& fixtures, const Eigen::Vector3f& up,
                    const ArticulationParams& p) {
     const Front& f = fronts[index];
-    if (!CentredHorizontalHandle(f, fixtures, up, p)) return false;
+    if (!HandleCentredOn(f, f, fixtures, up, p)) return false;
     const float tol = p.stack_tolerance;
+    const float width = f.max.x() - f.min.x();
     for (std::size_t j = 0; j < fronts.size(); ++j) {
         const Front& g = fronts[j];
         if (j == index || g.normal.dot(f.normal) < 0.98f || g.u_axis.dot(f.u_axis) < 0.98f ||
-            std::abs(f.normal.dot(g.center - f.center)) > tol ||
-            std::abs(g.min.x() - f.min.x()) > tol || std::abs(g.max.x() - f.max.x()) > tol) {
+            std::abs(f.normal.dot(g.center - f.center)) > tol) {
             continue;
         }
+        const float overlap = std::min(f.max.x(), g.max.x()) - std::max(f.min.x(), g.min.x());
+        if (overlap < width - 2.0f * tol || g.max.x() - g.min.x() > width + 2.0f * tol) continue;
         const float gap = std::max(g.min.y() - f.max.y(), f.min.y() - g.max.y());
         if (gap < -tol || gap > tol) continue;
-        if (CentredHorizontalHandle(g, fixtures, up, p)) return true;
+        if (HandleCentredOn(g, f, fixtures, up, p)) return true;
     }
     return false;
 }
