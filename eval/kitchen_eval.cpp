@@ -1358,11 +1358,13 @@ int main(int argc, char** argv) {
              "edge marks a door hinged at the other side (0: off)",
              0.49);
     override("--stack-tolerance", o.stack_tolerance,
-             "one scan: a front with its handle near the top and a drawer as wide (edges within "
-             "this) directly above or below it is a drawer, not a flap [m] (0: off)",
+             "one scan: a front with its handle near the top is a drawer, not a flap, when a "
+             "front of its column (all of its width but twice this) lies within this above or "
+             "below it [m] (0: off)",
              0.2);
     override("--stack-centre-share", o.stack_centre_share,
-             "one scan: ... when both handles are centred within this share of the width", 0.49);
+             "one scan: ... and both handles lie within this share of its width of its middle",
+             0.49);
     override("--drawer-max-height", o.drawer_max_height,
              "one scan: a front taller than this with a horizontal handle is a door [m]", 100.0);
     app.add_flag("--wall-drawers", o.wall_drawers,

@@ -4,12 +4,12 @@
 /// From one scan, from the fixture: a horizontal handle on a low front is a drawer (prismatic,
 /// out of the face) unless the front is taller than any drawer; a horizontal handle near the top
 /// of a tall front is a door hinged at its bottom edge (an oven, a dishwasher; a front too narrow
-/// for one is hinged at a side; one with a drawer as wide directly above or below it is a deep
-/// drawer), near the bottom of a front above the worktop a door hinged
-/// at its top edge, and on any other front above the worktop (wall cupboards hold no drawers) a
-/// door hinged at the horizontal edge farther from it; a vertical handle (or a knob) near one side
-/// edge is a door hinged at the opposite edge. The hinge axis lies in the face plane along that
-/// edge, signed so that a positive angle swings the front out of the furniture.
+/// for one is hinged at a side; one in a column of drawers, a front directly above or below it
+/// and both handles centred, is a deep drawer), near the bottom of a front above the worktop a door
+/// hinged at its top edge, and on any other front above the worktop (wall cupboards hold no
+/// drawers) a door hinged at the horizontal edge farther from it; a vertical handle (or a knob)
+/// near one side edge is a door hinged at the opposite edge. The hinge axis lies in the face plane
+/// along that edge, signed so that a positive angle swings the front out of the furniture.
 ///
 /// From two scans of the same view, before and after the robot opened a front: the closed
 /// front's points that the opened scan no longer shows are the place it left (when they span a
