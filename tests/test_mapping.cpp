@@ -446,8 +446,8 @@ TEST(Articulation, ADeepFrontInAStackOfDrawersIsADrawer) {
     off.stack_tolerance = 0.0f;
     EXPECT_EQ(ArticulationFromFixtures(fronts, 0, fx, RoomFrame{}, 0.0f, off).type,
               JointType::kRevolute);
-    // No stack: the front above narrower, or 10 cm higher up, or with a vertical handle, or an
-    // oven's door taller than any drawer.
+    // No stack: the front above narrower, or 10 cm higher up, or on another face, or with a
+    // vertical handle, or an oven's door taller than any drawer.
     auto joint_with = [&](const Front& below, const Fixture& handle, const Front& above,
                           const Fixture& its_handle) {
         const std::vector<Front> two = {below, above};
@@ -457,6 +457,9 @@ TEST(Articulation, ADeepFrontInAStackOfDrawersIsADrawer) {
     narrow.fixtures = {1};
     EXPECT_EQ(joint_with(fronts[0], fx[0], narrow, fx[1]), JointType::kRevolute);
     EXPECT_EQ(joint_with(fronts[0], fx[0], Raised(fronts[1], 0.1f), fx[1]), JointType::kRevolute);
+    Front elsewhere = fronts[1];
+    elsewhere.face = 3;  // on another face (another piece of furniture)
+    EXPECT_EQ(joint_with(fronts[0], fx[0], elsewhere, fx[1]), JointType::kRevolute);
     EXPECT_EQ(joint_with(fronts[0], fx[0], fronts[1], HandleAt({0.85f, 2.365f, 0.8f}, true)),
               JointType::kRevolute);
     // A door under a drawer with a handle running across its top near its free edge (centre 12

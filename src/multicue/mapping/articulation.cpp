@@ -331,11 +331,11 @@ bool HandleCentredOn(const Front& g, const Front& f, const std::vector<Fixture>&
 }
 
 /// Whether front `index` carries a horizontal handle centred across it and a front of `fronts`
-/// in the same column (on a parallel face within `stack_tolerance`, overlapping all of its width
-/// but twice that and no wider by more) lies directly above or below it (gap within
-/// `stack_tolerance`) with a horizontal handle centred across it too. The neighbour's handle is
-/// measured against this front's middle: a rectangle found a few centimetres short does not
-/// move it.
+/// in the same column (on the same face, as GroupFurniture stacks fronts; overlapping all of its
+/// width but twice `stack_tolerance` and no wider by more) lies directly above or below it (gap
+/// within `stack_tolerance`) with a horizontal handle centred across it too. The neighbour's
+/// handle is measured against this front's middle: a rectangle found a few centimetres short
+/// does not move it.
 bool InDrawerStack(const std::vector<Front>& fronts, std::size_t index,
                    const std::vector<Fixture>& fixtures, const Eigen::Vector3f& up,
                    const ArticulationParams& p) {
@@ -345,10 +345,7 @@ bool InDrawerStack(const std::vector<Front>& fronts, std::size_t index,
     const float width = f.max.x() - f.min.x();
     for (std::size_t j = 0; j < fronts.size(); ++j) {
         const Front& g = fronts[j];
-        if (j == index || g.normal.dot(f.normal) < 0.98f || g.u_axis.dot(f.u_axis) < 0.98f ||
-            std::abs(f.normal.dot(g.center - f.center)) > tol) {
-            continue;
-        }
+        if (j == index || g.face != f.face) continue;
         const float overlap = std::min(f.max.x(), g.max.x()) - std::max(f.min.x(), g.min.x());
         if (overlap < width - 2.0f * tol || g.max.x() - g.min.x() > width + 2.0f * tol) continue;
         const float gap = std::max(g.min.y() - f.max.y(), f.min.y() - g.max.y());

@@ -66,9 +66,9 @@ struct ArticulationParams {
     bool wall_drawers = false;
     /// Ovens and dishwashers do not stack, drawers do: a front the fixture rules hinge at its
     /// bottom edge (a horizontal handle near its top), no taller than drawer_max_height, is a
-    /// drawer when another front of its column (overlapping all of its width but twice this
-    /// distance, no wider by more) lies directly above or below it (gap within this distance, on
-    /// a parallel face as near), both with a handle centred on the front's middle
+    /// drawer when another front of its column (on its face, overlapping all of its width but
+    /// twice this distance, no wider by more) lies directly above or below it (gap within this
+    /// distance), both with a handle centred on the front's middle
     /// (stack_centre_share); 0: off. Used by the overload that sees all of a map's fronts [m]
     float stack_tolerance = 0.04f;
     /// A drawer's handle is centred across it: within this share of the front's width of its
