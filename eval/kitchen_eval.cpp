@@ -93,6 +93,7 @@ struct Options {
     float max_hinge_gap = -1.0f;          ///< < 0: the library's MotionParams default
     float vacated_max_share = -1.0f;      ///< < 0: the library's MotionParams default
     float max_beyond_turn_share = -1.0f;  ///< < 0: the library's MotionParams default
+    float min_through_share = -1.0f;      ///< < 0: the library's MotionParams default
     bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
     bool seen_coverage = mapping::MotionParams{}.seen_coverage;
     std::string load_fixtures;
@@ -862,6 +863,7 @@ class Evaluator {
             if (o_.vacated_max_share >= 0.0f) mp.vacated_max_share = o_.vacated_max_share;
             if (o_.max_beyond_turn_share >= 0.0f)
                 mp.max_beyond_turn_share = o_.max_beyond_turn_share;
+            if (o_.min_through_share >= 0.0f) mp.min_through_share = o_.min_through_share;
             mp.select_by_vacated = o_.select_by_vacated;
             mp.seen_coverage = o_.seen_coverage;
             // The front's points in the opened scan, and those behind the matched front's face.
@@ -919,7 +921,9 @@ class Evaluator {
                     "m; moved %zu, on the front slid %zu, turned %zu; coverage of the seen cells "
                     "slid %.2f, turned %.2f; the front's true points in the opened scan %zu, %zu "
                     "of them behind the face; within the outline %zu moved, %zu beyond the turn's "
-                    "reach %.2f m, %zu of them off its plane%s; one scan: %s)\n",
+                    "reach %.2f m, %zu of them off its plane%s; turned plane %zu out, %zu behind; "
+                    "one scan: "
+                    "%s)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
@@ -929,7 +933,7 @@ class Evaluator {
                     motion.turn_points, motion.slide_seen_coverage, motion.turn_seen_coverage,
                     opened_front_points, front_behind, motion.outline_points,
                     motion.beyond_turn_points, motion.turn_reach, motion.beyond_off_plane,
-                    motion.turn_flap ? ", a flap" : "",
+                    motion.turn_flap ? ", a flap" : "", motion.turned_points, motion.through_points,
                     mapping::JointTypeName(pf.articulation.type));
             }
             const bool correct = (revolute && pt == mapping::JointType::kRevolute) ||
@@ -1387,6 +1391,10 @@ int main(int argc, char** argv) {
              "points within the front's outline lie beyond its reach, a quarter of them off its "
              "plane (0: off)",
              1.0);
+    override("--through-share", o.min_through_share,
+             "opened pairs: a flap's turn is taken for a slide when the new points behind the "
+             "face on its plane number this share of its points out of the face (0: off)",
+             100.0);
     app.add_flag("--select-by-vacated,!--select-by-moved", o.select_by_vacated,
                  "opened pairs: the map takes the front that lost the most of its own points for "
                  "the opened one (default), or the one with the most moved points");

@@ -467,6 +467,35 @@ TEST(ProceduralUnits, SomeDrawerUnitsHoldAPanDrawer) {
     EXPECT_LE(pans, 16);
 }
 
+TEST(ProceduralUnits, SomeDrawerUnitsAreDeep) {
+    // A quarter of the drawer units are 0.8-1.0 m deep, with drawer boxes to match; the rest,
+    // and every cupboard, no deeper than 0.62 m (carcasses; the fronts and handles add some).
+    int deep = 0;
+    for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+        const sim::ArticulatedModel m = sim::MakeProceduralUnit("drawer_unit", seed);
+        const float d = m.bounds.sizes().x();
+        // The carcass, the fronts and the handles standing out of them.
+        EXPECT_LE(d, 1.1f) << m.id;
+        EXPECT_TRUE(d < 0.75f || d > 0.8f) << m.id << " " << d;
+        if (d < 0.8f) continue;
+        ++deep;
+        const auto closed = m.LinkPoses(m.ClosedState());
+        for (const sim::ArticulatedJoint& jt : m.joints) {
+            const std::size_t l = static_cast<std::size_t>(jt.child);
+            Eigen::AlignedBox3f box;
+            for (const auto& v : m.links[l].mesh->mesh.vertices) box.extend(closed[l] * v);
+            EXPECT_GT(box.sizes().x(), 0.6f) << m.id;
+        }
+        // Identical to the unit drawn again.
+        EXPECT_EQ(sim::MakeProceduralUnit("drawer_unit", seed).bounds.sizes().x(), d);
+    }
+    EXPECT_GE(deep, 3);
+    EXPECT_LE(deep, 18);
+    for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+        EXPECT_LT(sim::MakeProceduralUnit("cupboard", seed).bounds.sizes().x(), 0.75f);
+    }
+}
+
 TEST(ProceduralUnits, MakeKitchensWithGroundTruth) {
     const auto entries = sim::ProceduralKitchenEntries(3, 11);
     ASSERT_EQ(entries.size(), 3 * sim::ProceduralUnitKinds().size());

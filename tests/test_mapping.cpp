@@ -950,6 +950,64 @@ TEST(Articulation, ADrawerWhoseBoxAloneIsSeenSlides) {
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, all_off), InvalidArgument);
 }
 
+/// AddFaceBesideDrawers' face with a drawer 40 cm tall (x 0.7 .. 0.9, z 0.45 .. 0.85) in it,
+/// closed (`pull` 0) or pulled out by `pull` with its front out of view: what is seen of it is
+/// its box's bottom and sides, 10 cm tall, and, where the box is `depth` deep and runs on behind
+/// the face, its back.
+PointCloud DeepDrawerScan(float pull, float depth) {
+    std::mt19937 rng(31);
+    PointCloud c;
+    AddFaceBesideDrawers(c, rng);
+    if (pull <= 0.0f) {
+        test::AddPatch(c, {0.7f, 2.4f, 0.45f}, {0.2f, 0, 0}, {0, 0, 0.4f}, 0.005f, {0, -1, 0},
+                       Color{}, 0.001f, rng);
+        return c;
+    }
+    const float y0 = 2.4f - pull + 0.01f, y1 = 2.4f - pull + depth;
+    for (const float x : {0.705f, 0.895f}) {
+        test::AddPatch(c, {x, y0, 0.47f}, {0, y1 - y0, 0}, {0, 0, 0.1f}, 0.005f,
+                       {x < 0.8f ? 1.0f : -1.0f, 0, 0}, Color{}, 0.001f, rng);
+    }
+    test::AddPatch(c, {0.705f, y0, 0.47f}, {0.19f, 0, 0}, {0, y1 - y0, 0}, 0.005f, {0, 0, 1},
+                   Color{}, 0.001f, rng);
+    if (y1 > 2.4f) {
+        test::AddPatch(c, {0.705f, y1, 0.47f}, {0.19f, 0, 0}, {0, 0, 0.1f}, 0.005f, {0, -1, 0},
+                       Color{}, 0.001f, rng);
+    }
+    return c;
+}
+
+TEST(Articulation, ADeepDrawersBoxRunningOnBehindTheFaceSlides) {
+    const Front f = DrawerFrontBetween(0.45f, 0.85f);
+    const PointCloud closed = DeepDrawerScan(0.0f, 0.0f);
+    // Pulled out 30 cm, a box 80 cm deep: its bottom, out of the face no farther than the 40 cm
+    // flap could reach, passes for a flap opened downwards, but runs on 50 cm behind the face.
+    const PointCloud opened = DeepDrawerScan(0.3f, 0.8f);
+    MotionParams off;
+    off.min_through_share = 0.0f;
+    const MotionResult flap = ArticulationFromMotion(closed, opened, f, off);
+    ASSERT_TRUE(flap.found);
+    ASSERT_EQ(flap.articulation.type, JointType::kRevolute);
+    EXPECT_TRUE(flap.turn_flap);
+    EXPECT_EQ(flap.beyond_turn_points, 0u);
+    EXPECT_GT(flap.through_points, flap.turned_points);
+    const MotionResult m = ArticulationFromMotion(closed, opened, f);
+    ASSERT_TRUE(m.found);
+    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
+    EXPECT_LT(m.articulation.axis.y(), -0.99f);
+    EXPECT_NEAR(m.opening, 0.3f, 0.03f);
+    EXPECT_EQ(m.through_points, flap.through_points);
+    // A box no deeper than its pull shows nothing behind the face: a flap, as before.
+    const MotionResult shallow = ArticulationFromMotion(closed, DeepDrawerScan(0.3f, 0.3f), f);
+    ASSERT_TRUE(shallow.found);
+    EXPECT_EQ(shallow.articulation.type, JointType::kRevolute);
+    EXPECT_EQ(shallow.through_points, 0u);
+    // Deterministic; a bad share is refused.
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f).through_points, m.through_points);
+    off.min_through_share = -0.1f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, f, off), InvalidArgument);
+}
+
 TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     // The door of DoorScan hinged at its bottom edge (z = 0.15) and opened downwards by 80 deg:
     // nothing of it lies beyond its height out of the face. Found shorter than it is (its lower
@@ -965,6 +1023,18 @@ TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     EXPECT_TRUE(m.turn_flap);
     EXPECT_GT(std::abs(m.articulation.axis.x()), 0.99f);
     EXPECT_EQ(m.beyond_turn_points, 0u);
+    // The cupboard's inside seen behind the face (its bottom 2 cm over the hinge, its back 50
+    // cm in): the flap's plane ends at the hinge, so it stays a flap.
+    PointCloud inside = opened;
+    std::mt19937 rng(41);
+    test::AddPatch(inside, {0.62f, 2.41f, 0.17f}, {0.46f, 0, 0}, {0, 0.49f, 0}, 0.01f, {0, 0, 1},
+                   Color{}, 0.001f, rng);
+    test::AddPatch(inside, {0.62f, 2.9f, 0.17f}, {0.46f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0},
+                   Color{}, 0.001f, rng);
+    const MotionResult in = ArticulationFromMotion(closed, inside, f);
+    ASSERT_TRUE(in.found);
+    EXPECT_EQ(in.articulation.type, JointType::kRevolute);
+    EXPECT_LT(in.through_points, in.turned_points / 10);
     EXPECT_NEAR(m.opening / kDeg, 80.0f, 3.0f);
     Front lower = f;
     lower.max.y() = 0.45f;

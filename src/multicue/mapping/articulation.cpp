@@ -217,16 +217,18 @@ void MotionParams::Validate() const {
         !(vacated_max_share >= 0.0f && vacated_max_share <= 1.0f) ||
         !(turn_reach_margin >= 0.0f && turn_reach_margin <= 1.0f) ||
         !(max_beyond_turn_share >= 0.0f && max_beyond_turn_share <= 1.0f) ||
-        !(min_beyond_off_plane >= 0.0f && min_beyond_off_plane <= 1.0f)) {
+        !(min_beyond_off_plane >= 0.0f && min_beyond_off_plane <= 1.0f) ||
+        !(min_through_share >= 0.0f && min_through_share <= 100.0f)) {
         throw InvalidArgument(fmt::format(
             "motion: need min_slide_coverage and min_seen_slide_coverage in [0, 1], "
             "coverage_cell in (0, 0.5] m, "
             "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m, vacated_max_share in "
             "[0, 1], turn_reach_margin in [0, 1] m, max_beyond_turn_share and "
-            "min_beyond_off_plane in [0, 1] (got {}, {}, {}, {}, {}, {}, {}, {}, {})",
+            "min_beyond_off_plane in [0, 1], min_through_share in [0, 100] (got {}, {}, {}, {}, "
+            "{}, {}, {}, {}, {}, {})",
             min_slide_coverage, min_seen_slide_coverage, coverage_cell, axis_snap_deg,
             max_hinge_gap, vacated_max_share, turn_reach_margin, max_beyond_turn_share,
-            min_beyond_off_plane));
+            min_beyond_off_plane, min_through_share));
     }
 }
 
@@ -404,12 +406,21 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     // The moved points within the front's outline, and how far each lies out of the face.
     Indices outline_moved;
     std::vector<float> outline_out;
+    // New points behind the face within the outline: what the opened front lets the scan see.
+    Indices behind;
     for (std::size_t i = 0; i < opened.size(); ++i) {
         if (!opened.IsFinite(i)) continue;
         const Eigen::Vector3f& x = opened.points[i];
         const float h = f.normal.dot(x) + plane_d;
-        if (h < p.min_offset || h > p.reach) continue;
+        if (h > p.reach || h < -p.reach || std::abs(h) < p.min_offset) continue;
         const float u = x.dot(f.u_axis), v = x.dot(f.v_axis);
+        if (h < 0.0f) {
+            if (u >= f.min.x() - outline_margin && u <= f.max.x() + outline_margin &&
+                v >= f.min.y() - outline_margin && v <= f.max.y() + outline_margin) {
+                behind.push_back(static_cast<Index>(i));
+            }
+            continue;
+        }
         const bool in_swing = h <= swing && u >= f.min.x() - swing && u <= f.max.x() + swing &&
                               v >= f.min.y() - swing && v <= f.max.y() + swing;
         const bool in_slide = u >= f.min.x() - outline_margin && u <= f.max.x() + outline_margin &&
@@ -675,7 +686,8 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     // farthest corner from the hinge axis. Moved points straight out of the rectangle beyond that
     // are something else. Where the turn is a flap's, whose reach is the height of the band the
     // motion vacated, they are a drawer's box, pulled out so far that its front left the view,
-    // whose bottom the turn explains as a flap opened downwards.
+    // whose bottom the turn explains as a flap opened downwards. So is a flap's plane that runs
+    // on behind the face: a deep box pulled out less far than the flap would reach.
     out.outline_points = outline_out.size();
     if (out.articulation.type != JointType::kRevolute) return out;
     const Articulation& a = out.articulation;
@@ -694,23 +706,40 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     const Eigen::Isometry3f turned = turn(a.origin, a.axis, out.opening);
     const Eigen::Vector3f turned_n = turned.linear() * f.normal;
     const float turned_d = -turned_n.dot(turned * f.center);
+    // A turned front ends at its hinge, in front of the face; a drawer's box runs on behind it
+    // (its bottom and sides from where the front is to the box's back). New points behind the
+    // face on the turned front's plane extended.
+    for (const Index i : behind) {
+        const Eigen::Vector3f& x = opened.points[i];
+        if (std::abs(turned_n.dot(x) + turned_d) > p.plane_threshold) continue;
+        Index nn = 0;
+        float d2 = 0.0f;
+        if (before.SearchNearest(x, nn, d2) && d2 < p.change_distance * p.change_distance) continue;
+        ++out.through_points;
+    }
+    out.turned_points = out.moved.size();
     for (std::size_t k = 0; k < outline_out.size(); ++k) {
         if (outline_out[k] <= reach_out + p.turn_reach_margin) continue;
         ++out.beyond_turn_points;
         const Eigen::Vector3f& x = opened.points[outline_moved[k]];
         out.beyond_off_plane += std::abs(turned_n.dot(x) + turned_d) > 2.0f * p.plane_threshold;
     }
-    if (p.max_beyond_turn_share <= 0.0f || !out.turn_flap ||
-        out.beyond_turn_points < p.min_points ||
-        static_cast<float>(out.beyond_turn_points) <
-            p.max_beyond_turn_share * static_cast<float>(outline_out.size()) ||
-        static_cast<float>(out.beyond_off_plane) <
-            p.min_beyond_off_plane * static_cast<float>(out.beyond_turn_points)) {
-        return out;
-    }
+    const bool beyond = p.max_beyond_turn_share > 0.0f && out.beyond_turn_points >= p.min_points &&
+                        static_cast<float>(out.beyond_turn_points) >=
+                            p.max_beyond_turn_share * static_cast<float>(outline_out.size()) &&
+                        static_cast<float>(out.beyond_off_plane) >=
+                            p.min_beyond_off_plane * static_cast<float>(out.beyond_turn_points);
+    // A box's bottom passes for a flap hinged low and opened downwards; a flap hinged high meets
+    // the carcass's top behind the face.
+    const bool hinged_low = a.origin.dot(f.v_axis) < 0.5f * (f.min.y() + f.max.y());
+    const bool through = p.min_through_share > 0.0f && hinged_low &&
+                         out.through_points >= p.min_points &&
+                         static_cast<float>(out.through_points) >=
+                             p.min_through_share * static_cast<float>(out.turned_points);
+    if (!out.turn_flap || (!beyond && !through)) return out;
     // A slide, at least as far as the box is seen out of the face (98 % of the moved points
     // within the outline; the parallel plane may be a panel inside the box).
-    out.opening = std::max(travel, Quantile(outline_out, 0.98f));
+    out.opening = outline_out.empty() ? travel : std::max(travel, Quantile(outline_out, 0.98f));
     out.articulation = slide_by(out.opening);
     out.moved = outline_moved;
     return out;

@@ -360,7 +360,15 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
     StreamRng rng(seed, 0x70726f63ull);
     const float gap = static_cast<float>(rng.Uniform(0.002, 0.005));
     const float thickness = static_cast<float>(rng.Uniform(0.016, 0.024));
-    const Layout L = RandomLayout(kind, rng, gap);
+    Layout L = RandomLayout(kind, rng, gap);
+    if (kind == "drawer_unit") {
+        // A quarter of the drawer units are as deep as the library's deepest (mini fridge bases,
+        // 0.97 m), with boxes to match: pulled out, the front may leave the view while the box's
+        // inside is seen behind the face. Drawn from a stream of their own, so that every other
+        // draw of the unit stays as it was.
+        StreamRng deep(seed, 0x64656570ull);
+        if (deep.Uniform() < 0.25) L.depth = static_cast<float>(deep.Uniform(0.8, 1.0));
+    }
     const Paint front = RandomFinish(rng);
     const Paint body = rng.Uniform() < 0.5 ? front : RandomFinish(rng);
     const Paint inside = MakePaint(226, 224, 218);
