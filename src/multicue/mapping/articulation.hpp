@@ -127,8 +127,9 @@ struct MotionParams {
     /// at least this share of the moved points on that plane out of the face (and `min_points`),
     /// the front slid instead: a deep drawer pulled out, its front out of view, whose bottom
     /// passes for a flap opened downwards. Chosen on simulated kitchens of the tune half, where
-    /// such drawers showed 0.28-2.3 and flaps hinged low (ovens, dishwashers) at most 0.24; 0: off
-    /// [-]
+    /// such drawers showed 0.21-2.3 points behind per point out and flaps hinged low (ovens,
+    /// dishwashers) at most 0.24, but for one dishwasher door seen mostly out of view (1.28); 0.5
+    /// turned four drawers right and that door wrong. 0: off [-]
     float min_through_share = 0.5f;
     float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
