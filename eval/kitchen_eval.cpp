@@ -922,8 +922,7 @@ class Evaluator {
                     "slid %.2f, turned %.2f; the front's true points in the opened scan %zu, %zu "
                     "of them behind the face; within the outline %zu moved, %zu beyond the turn's "
                     "reach %.2f m, %zu of them off its plane%s; turned plane %zu out, %zu behind; "
-                    "one scan: "
-                    "%s)\n",
+                    "one scan: %s)\n",
                     Who(f, k, kj).c_str(), revolute ? "revolute" : "prismatic",
                     motion.slide_coverage, motion.turn_coverage, mapping::JointTypeName(pt),
                     LineAngleDeg(motion.articulation.axis, gt.direction), pf.max.x() - pf.min.x(),
