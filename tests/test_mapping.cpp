@@ -900,6 +900,11 @@ TEST(Articulation, ADoorSeenEdgeOnIsADoorWhereTheSensorSeesPastIt) {
     EXPECT_LT(m.slide_seen_coverage, 0.3f);
 }
 
+/// Whether a motion was found and taken for a flap's turn (about a horizontal axis).
+bool IsFlapTurn(const MotionResult& m) {
+    return m.found && m.articulation.type == JointType::kRevolute && m.turn_flap;
+}
+
 /// The face of AddFaceBesideDrawers with a drawer 15 cm tall (x 0.7 .. 0.9, z 0.5 .. 0.65)
 /// pulled out by `pull`, its front out of view: what is seen of it is its box's bottom and sides
 /// (out to `pull` from the face), as where a drawer pulled towards a camera leaves the image.
@@ -925,9 +930,7 @@ TEST(Articulation, ADrawerWhoseBoxAloneIsSeenSlides) {
     MotionParams off;
     off.max_beyond_turn_share = 0.0f;
     const MotionResult flap = ArticulationFromMotion(closed, opened, f, off);
-    ASSERT_TRUE(flap.found);
-    EXPECT_EQ(flap.articulation.type, JointType::kRevolute);
-    EXPECT_TRUE(flap.turn_flap);
+    ASSERT_TRUE(IsFlapTurn(flap));
     EXPECT_NEAR(flap.turn_reach, 0.15f, 0.03f);
     EXPECT_GT(flap.beyond_turn_points, flap.outline_points / 2);
     EXPECT_GT(flap.beyond_off_plane, flap.beyond_turn_points / 4);
@@ -986,9 +989,7 @@ TEST(Articulation, ADeepDrawersBoxRunningOnBehindTheFaceSlides) {
     MotionParams off;
     off.min_through_share = 0.0f;
     const MotionResult flap = ArticulationFromMotion(closed, opened, f, off);
-    ASSERT_TRUE(flap.found);
-    ASSERT_EQ(flap.articulation.type, JointType::kRevolute);
-    EXPECT_TRUE(flap.turn_flap);
+    ASSERT_TRUE(IsFlapTurn(flap));
     EXPECT_EQ(flap.beyond_turn_points, 0u);
     EXPECT_GT(flap.through_points, flap.turned_points);
     const MotionResult m = ArticulationFromMotion(closed, opened, f);
@@ -1018,9 +1019,7 @@ TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
         closed, {0.85f, 2.4f, 0.15f},
         Eigen::AngleAxisf(80.0f * kDeg, Eigen::Vector3f::UnitX()).toRotationMatrix(), 29);
     const MotionResult m = ArticulationFromMotion(closed, opened, f);
-    ASSERT_TRUE(m.found);
-    ASSERT_EQ(m.articulation.type, JointType::kRevolute);
-    EXPECT_TRUE(m.turn_flap);
+    ASSERT_TRUE(IsFlapTurn(m));
     EXPECT_GT(std::abs(m.articulation.axis.x()), 0.99f);
     EXPECT_EQ(m.beyond_turn_points, 0u);
     // The cupboard's inside seen behind the face (its bottom 2 cm over the hinge, its back 50
@@ -1032,8 +1031,7 @@ TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     test::AddPatch(inside, {0.62f, 2.9f, 0.17f}, {0.46f, 0, 0}, {0, 0, 0.6f}, 0.01f, {0, -1, 0},
                    Color{}, 0.001f, rng);
     const MotionResult in = ArticulationFromMotion(closed, inside, f);
-    ASSERT_TRUE(in.found);
-    EXPECT_EQ(in.articulation.type, JointType::kRevolute);
+    ASSERT_TRUE(IsFlapTurn(in));
     EXPECT_LT(in.through_points, in.turned_points / 10);
     EXPECT_NEAR(m.opening / kDeg, 80.0f, 3.0f);
     Front lower = f;
