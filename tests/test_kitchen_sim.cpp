@@ -446,18 +446,27 @@ TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
     EXPECT_THROW(sim::ProceduralKitchenEntries(sim::kMaxProceduralPerKind + 1, 1), InvalidArgument);
 }
 
+/// The box of every jointed link (door, drawer) of `m`, closed, in the model frame.
+std::vector<Eigen::AlignedBox3f> MovingLinkBoxes(const sim::ArticulatedModel& m) {
+    const auto closed = m.LinkPoses(m.ClosedState());
+    std::vector<Eigen::AlignedBox3f> boxes;
+    for (const sim::ArticulatedJoint& jt : m.joints) {
+        const std::size_t l = static_cast<std::size_t>(jt.child);
+        Eigen::AlignedBox3f box;
+        for (const auto& v : m.links[l].mesh->mesh.vertices) box.extend(closed[l] * v);
+        boxes.push_back(box);
+    }
+    return boxes;
+}
+
 TEST(ProceduralUnits, SomeDrawerUnitsHoldAPanDrawer) {
     // A fifth of the drawer units end in a pan drawer as tall as a low door (over 45 cm); no
     // drawer is taller than 60 cm.
     int pans = 0;
     for (std::uint64_t seed = 1; seed <= 40; ++seed) {
         const sim::ArticulatedModel m = sim::MakeProceduralUnit("drawer_unit", seed);
-        const auto closed = m.LinkPoses(m.ClosedState());
         bool pan = false;
-        for (const sim::ArticulatedJoint& jt : m.joints) {
-            const std::size_t l = static_cast<std::size_t>(jt.child);
-            Eigen::AlignedBox3f box;
-            for (const auto& v : m.links[l].mesh->mesh.vertices) box.extend(closed[l] * v);
+        for (const Eigen::AlignedBox3f& box : MovingLinkBoxes(m)) {
             EXPECT_LT(box.sizes().z(), 0.6f) << m.id;
             pan = pan || box.sizes().z() > 0.45f;
         }
@@ -479,11 +488,7 @@ TEST(ProceduralUnits, SomeDrawerUnitsAreDeep) {
         EXPECT_TRUE(d < 0.75f || d > 0.8f) << m.id << " " << d;
         if (d < 0.8f) continue;
         ++deep;
-        const auto closed = m.LinkPoses(m.ClosedState());
-        for (const sim::ArticulatedJoint& jt : m.joints) {
-            const std::size_t l = static_cast<std::size_t>(jt.child);
-            Eigen::AlignedBox3f box;
-            for (const auto& v : m.links[l].mesh->mesh.vertices) box.extend(closed[l] * v);
+        for (const Eigen::AlignedBox3f& box : MovingLinkBoxes(m)) {
             EXPECT_GT(box.sizes().x(), 0.6f) << m.id;
         }
         // Identical to the unit drawn again.

@@ -408,27 +408,27 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     std::vector<float> outline_out;
     // New points behind the face within the outline: what the opened front lets the scan see.
     Indices behind;
+    // An opened-scan point the closed scan had no point within `change_distance` of.
+    auto is_new = [&](const Eigen::Vector3f& x) {
+        Index nn = 0;
+        float d2 = 0.0f;
+        return !before.SearchNearestWithin(x, p.change_distance, nn, d2);
+    };
     for (std::size_t i = 0; i < opened.size(); ++i) {
         if (!opened.IsFinite(i)) continue;
         const Eigen::Vector3f& x = opened.points[i];
         const float h = f.normal.dot(x) + plane_d;
         if (h > p.reach || h < -p.reach || std::abs(h) < p.min_offset) continue;
         const float u = x.dot(f.u_axis), v = x.dot(f.v_axis);
+        const bool in_slide = u >= f.min.x() - outline_margin && u <= f.max.x() + outline_margin &&
+                              v >= f.min.y() - outline_margin && v <= f.max.y() + outline_margin;
         if (h < 0.0f) {
-            if (u >= f.min.x() - outline_margin && u <= f.max.x() + outline_margin &&
-                v >= f.min.y() - outline_margin && v <= f.max.y() + outline_margin) {
-                behind.push_back(static_cast<Index>(i));
-            }
+            if (in_slide) behind.push_back(static_cast<Index>(i));
             continue;
         }
         const bool in_swing = h <= swing && u >= f.min.x() - swing && u <= f.max.x() + swing &&
                               v >= f.min.y() - swing && v <= f.max.y() + swing;
-        const bool in_slide = u >= f.min.x() - outline_margin && u <= f.max.x() + outline_margin &&
-                              v >= f.min.y() - outline_margin && v <= f.max.y() + outline_margin;
-        if (!in_swing && !in_slide) continue;
-        Index nn = 0;
-        float d2 = 0.0f;
-        if (before.SearchNearest(x, nn, d2) && d2 < p.change_distance * p.change_distance) continue;
+        if ((!in_swing && !in_slide) || !is_new(x)) continue;
         moved.push_back(static_cast<Index>(i));
         if (in_slide) {
             outline_moved.push_back(static_cast<Index>(i));
@@ -711,11 +711,8 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     // face on the turned front's plane extended.
     for (const Index i : behind) {
         const Eigen::Vector3f& x = opened.points[i];
-        if (std::abs(turned_n.dot(x) + turned_d) > p.plane_threshold) continue;
-        Index nn = 0;
-        float d2 = 0.0f;
-        if (before.SearchNearest(x, nn, d2) && d2 < p.change_distance * p.change_distance) continue;
-        ++out.through_points;
+        out.through_points +=
+            std::abs(turned_n.dot(x) + turned_d) <= p.plane_threshold && is_new(x);
     }
     out.turned_points = out.moved.size();
     for (std::size_t k = 0; k < outline_out.size(); ++k) {

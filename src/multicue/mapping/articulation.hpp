@@ -26,7 +26,9 @@
 /// axis or, without one, about the edge of the rectangle that the moved points cover best. A
 /// tilted plane no moved point of which comes near its axis does not hang there: its turn is
 /// taken about the rectangle's edge along that axis; an axis near the front's vertical or
-/// horizontal is taken to be that direction.
+/// horizontal is taken to be that direction. A flap's turn that a drawer's box explains better
+/// (moved points beyond the flap's reach and across its plane, or its plane running on behind the
+/// face, where a turned front never is) is taken for a slide.
 
 #include <cstddef>
 #include <cstdint>
