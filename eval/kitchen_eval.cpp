@@ -281,6 +281,10 @@ struct Scores {
     std::size_t joint_none = 0;  ///< matched fronts without a fixture (no joint)
     std::size_t sign_correct = 0;
     Stats axis_angle, axis_position;
+    /// Hinge positions of the fronts whose hinge edge the scan saw, and how many it did not
+    /// (the edge out of the view or hidden).
+    Stats axis_position_seen;
+    std::size_t hinge_unseen = 0;
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
@@ -775,8 +779,22 @@ class Evaluator {
                 const Axis& gt = axes.at(kj.name);
                 const Axis pred{pf.articulation.origin, pf.articulation.axis};
                 s.axis_angle.Add(LineAngleDeg(pred.direction, gt.direction));
-                s.axis_position.Add(LineDistanceAt(pred, gt, pf.center));
+                const float position = LineDistanceAt(pred, gt, pf.center);
+                s.axis_position.Add(position);
                 s.sign_correct += pred.direction.dot(gt.direction) > 0;
+                // The hinge edge was seen when as many of the front's points as a visible
+                // fixture needs lie within 5 cm of the true hinge line.
+                std::size_t near_hinge = 0;
+                const Eigen::Vector3f gd = gt.direction.normalized();
+                for (std::size_t i = 0; i < f.cloud.size() && near_hinge < min_fixture; ++i) {
+                    if (!t.IsFront(i) || t.Key(i) != key) continue;
+                    const Eigen::Vector3f to_point = f.cloud.points[i] - gt.point;
+                    near_hinge += (to_point - gd * gd.dot(to_point)).norm() <= 0.05f;
+                }
+                if (near_hinge >= min_fixture)
+                    s.axis_position_seen.Add(position);
+                else
+                    ++s.hinge_unseen;
                 if (o_.verbose) {
                     // Where the true hinge lies from the estimated one: into the front (from its
                     // edge towards its centre) and behind its surface.
@@ -787,9 +805,10 @@ class Evaluator {
                     std::fprintf(
                         stderr,
                         "hinge %s: true hinge %.3f m into the front, %.3f m behind it, %.0f "
-                        "deg\n",
+                        "deg%s\n",
                         Who(f, k, kj).c_str(), off.dot(into.normalized()), -off.dot(pf.normal),
-                        LineAngleDeg(pred.direction, gt.direction));
+                        LineAngleDeg(pred.direction, gt.direction),
+                        near_hinge >= min_fixture ? "" : " (edge not seen)");
                 }
             }
         }
@@ -1187,6 +1206,11 @@ class Evaluator {
             s.axis_angle.Mean(), s.axis_angle.Median(), s.axis_angle.Max(), s.axis_position.Mean(),
             s.axis_position.Median(), s.axis_position.Max(), s.axis_position.AtMost(0.03),
             s.sign_correct, s.axis_angle.v.size());
+        std::printf(
+            "  hinges whose edge the scan saw: position median %.3f m (%zu of %zu within 3 cm); "
+            "%zu more with the edge out of view or hidden\n",
+            s.axis_position_seen.Median(), s.axis_position_seen.AtMost(0.03),
+            s.axis_position_seen.v.size(), s.hinge_unseen);
         j["joint_type_accuracy"] = jacc;
         j["joint_total"] = s.joint_total;
         j["joint_none"] = s.joint_none;
@@ -1194,6 +1218,9 @@ class Evaluator {
         j["hinge_position_m"] = s.axis_position.Json();
         j["hinge_position_within_3cm"] = s.axis_position.AtMost(0.03);
         j["hinge_sign_correct"] = s.sign_correct;
+        j["hinge_position_edge_seen_m"] = s.axis_position_seen.Json();
+        j["hinge_position_edge_seen_within_3cm"] = s.axis_position_seen.AtMost(0.03);
+        j["hinge_edge_unseen"] = s.hinge_unseen;
         std::size_t correct = 0, total = 0;
         const auto& names = mapping::ContainerTypeNames();
         std::printf("container types (rows true, columns predicted):\n  %-12s", "");
