@@ -285,6 +285,10 @@ struct Scores {
     /// (the edge out of the view or hidden).
     Stats axis_position_seen;
     std::size_t hinge_unseen = 0;
+    /// The map's own word (Articulation::hinge_seen) against the truth's: [truth][map].
+    std::array<std::array<std::size_t, 2>, 2> hinge_seen_flag{};
+    /// Hinge positions of the fronts the map says it saw the hinge edge of, and of the others.
+    Stats axis_position_flagged, axis_position_flagged_unseen;
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
@@ -795,6 +799,10 @@ class Evaluator {
                     s.axis_position_seen.Add(position);
                 else
                     ++s.hinge_unseen;
+                ++s.hinge_seen_flag[near_hinge >= min_fixture][pf.articulation.hinge_seen];
+                (pf.articulation.hinge_seen ? s.axis_position_flagged
+                                            : s.axis_position_flagged_unseen)
+                    .Add(position);
                 if (o_.verbose) {
                     // Where the true hinge lies from the estimated one: into the front (from its
                     // edge towards its centre) and behind its surface.
@@ -1211,6 +1219,16 @@ class Evaluator {
             "%zu more with the edge out of view or hidden\n",
             s.axis_position_seen.Median(), s.axis_position_seen.AtMost(0.03),
             s.axis_position_seen.v.size(), s.hinge_unseen);
+        std::printf(
+            "  the map's flag (hinge_seen): seen for %zu of the %zu with the true edge seen and "
+            "%zu "
+            "of the %zu others; position median over those it flags seen %.3f m (%zu of %zu "
+            "within 3 cm), over the others %.3f m (%zu of %zu)\n",
+            s.hinge_seen_flag[1][1], s.hinge_seen_flag[1][0] + s.hinge_seen_flag[1][1],
+            s.hinge_seen_flag[0][1], s.hinge_seen_flag[0][0] + s.hinge_seen_flag[0][1],
+            s.axis_position_flagged.Median(), s.axis_position_flagged.AtMost(0.03),
+            s.axis_position_flagged.v.size(), s.axis_position_flagged_unseen.Median(),
+            s.axis_position_flagged_unseen.AtMost(0.03), s.axis_position_flagged_unseen.v.size());
         j["joint_type_accuracy"] = jacc;
         j["joint_total"] = s.joint_total;
         j["joint_none"] = s.joint_none;
@@ -1221,6 +1239,12 @@ class Evaluator {
         j["hinge_position_edge_seen_m"] = s.axis_position_seen.Json();
         j["hinge_position_edge_seen_within_3cm"] = s.axis_position_seen.AtMost(0.03);
         j["hinge_edge_unseen"] = s.hinge_unseen;
+        j["hinge_seen_flag"] = {{"seen_flagged_seen", s.hinge_seen_flag[1][1]},
+                                {"seen_flagged_unseen", s.hinge_seen_flag[1][0]},
+                                {"unseen_flagged_seen", s.hinge_seen_flag[0][1]},
+                                {"unseen_flagged_unseen", s.hinge_seen_flag[0][0]}};
+        j["hinge_position_flagged_seen_m"] = s.axis_position_flagged.Json();
+        j["hinge_position_flagged_unseen_m"] = s.axis_position_flagged_unseen.Json();
         std::size_t correct = 0, total = 0;
         const auto& names = mapping::ContainerTypeNames();
         std::printf("container types (rows true, columns predicted):\n  %-12s", "");

@@ -879,6 +879,96 @@ TEST(Articulation, ADrawerLeavingTheFieldOfViewSlides) {
     EXPECT_EQ(again.opening, m.opening);
 }
 
+/// The face y = 2.4 from x = `x0` to 1.4 (z 0.1 .. 0.85) as a grid of 1 cm, row by row from the
+/// top: organized (its left column the image's border) or not, seen from (0.85, 1.0, 1.5).
+PointCloud FaceGrid(float x0, bool organized) {
+    PointCloud c;
+    const int columns = static_cast<int>(std::lround((1.4f - x0) / 0.01f)) + 1;
+    const int rows = 76;
+    for (int v = 0; v < rows; ++v) {
+        for (int u = 0; u < columns; ++u) {
+            c.points.emplace_back(x0 + 0.01f * static_cast<float>(u), 2.4f,
+                                  0.85f - 0.01f * static_cast<float>(v));
+        }
+    }
+    if (organized) {
+        c.width = static_cast<std::uint32_t>(columns);
+        c.height = static_cast<std::uint32_t>(rows);
+    } else {
+        c.SetUnorganized();
+    }
+    c.sensor_origin = Eigen::Vector3f(0.85f, 1.0f, 1.5f);
+    return c;
+}
+
+/// DoorFront() hinged at its left edge (x = 0.6) by a vertical handle near its right edge, its
+/// points those of `scan` within its rectangle.
+Front HingedDoorIn(const PointCloud& scan) {
+    Front f = DoorFront();
+    f.articulation =
+        ArticulationFromFixtures(f, {HandleAt({1.05f, 2.365f, 0.5f}, true)}, RoomFrame{}, 0.0f);
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+        const Eigen::Vector3f& x = scan.points[i];
+        if (x.x() >= 0.6f - 1e-4f && x.x() <= 1.1f + 1e-4f && x.z() >= 0.15f - 1e-4f &&
+            x.z() <= 0.8f + 1e-4f) {
+            f.indices.push_back(static_cast<Index>(i));
+        }
+    }
+    return f;
+}
+
+TEST(Articulation, AHingeEdgeAtTheBorderOfTheViewIsNotSeen) {
+    for (const bool organized : {true, false}) {
+        SCOPED_TRACE(organized ? "organized" : "unorganized");
+        // The face beyond the hinge edge in view: seen.
+        const PointCloud wide = FaceGrid(0.3f, organized);
+        const Front in_view = HingedDoorIn(wide);
+        ASSERT_EQ(in_view.articulation.type, JointType::kRevolute);
+        ASSERT_NEAR(in_view.articulation.origin.x(), 0.6f, 0.01f);
+        EXPECT_TRUE(HingeEdgeSeen(in_view, {wide}, {0}));
+        // The view ends at the hinge edge: not seen.
+        const PointCloud cut = FaceGrid(0.6f, organized);
+        const Front cut_front = HingedDoorIn(cut);
+        EXPECT_FALSE(HingeEdgeSeen(cut_front, {cut}, {0}));
+        EXPECT_EQ(HingeEdgeSeen(cut_front, {cut}, {0}), HingeEdgeSeen(cut_front, {cut}, {0}));
+        // One scan of two that saw it is enough (the second scan's points follow the first's).
+        Front both = cut_front;
+        for (std::size_t i = 0; i < wide.size(); ++i) {
+            const Eigen::Vector3f& x = wide.points[i];
+            if (x.x() >= 0.6f - 1e-4f && x.x() <= 1.1f + 1e-4f && x.z() >= 0.15f - 1e-4f &&
+                x.z() <= 0.8f + 1e-4f) {
+                both.indices.push_back(static_cast<Index>(cut.size() + i));
+            }
+        }
+        EXPECT_TRUE(HingeEdgeSeen(both, {cut, wide}, {0, cut.size()}));
+        EXPECT_FALSE(HingeEdgeSeen(cut_front, {cut, wide}, {0, cut.size()}));
+        // The free edge is in view either way; the hinge at it would be seen.
+        Front other_side = cut_front;
+        other_side.articulation = ArticulationFromFixtures(
+            other_side, {HandleAt({0.65f, 2.365f, 0.5f}, true)}, RoomFrame{}, 0.0f);
+        ASSERT_NEAR(other_side.articulation.origin.x(), 1.1f, 0.01f);
+        EXPECT_TRUE(HingeEdgeSeen(other_side, {cut}, {0}));
+    }
+    // An unorganized scan without a sensor position cannot tell; nor can an empty front.
+    PointCloud blind = FaceGrid(0.6f, false);
+    blind.sensor_origin.setZero();
+    EXPECT_TRUE(HingeEdgeSeen(HingedDoorIn(blind), {blind}, {0}));
+    Front empty = HingedDoorIn(blind);
+    empty.indices.clear();
+    EXPECT_TRUE(HingeEdgeSeen(empty, {blind}, {0}));
+    // Drawers have no hinge.
+    const PointCloud cut = FaceGrid(0.6f, true);
+    Front drawer = HingedDoorIn(cut);
+    drawer.articulation.type = JointType::kPrismatic;
+    EXPECT_TRUE(HingeEdgeSeen(drawer, {cut}, {0}));
+    // Contracts.
+    EXPECT_THROW(HingeEdgeSeen(HingedDoorIn(cut), {cut}, {}), InvalidArgument);
+    EXPECT_THROW(HingeEdgeSeen(HingedDoorIn(cut), {cut}, {0}, {.edge_band = 0.0f}),
+                 InvalidArgument);
+    EXPECT_THROW(HingeEdgeSeen(HingedDoorIn(cut), {cut}, {0}, {.edge_border = -1}),
+                 InvalidArgument);
+}
+
 TEST(Articulation, ADoorSeenEdgeOnIsADoorWhereTheSensorSeesPastIt) {
     // The strip of AParallelStripCoveringLittleOfTheFrontIsADoorNotADrawer, seen from a sensor in
     // front of the door, with the cupboard's back wall (y = 2.9) behind the door's closed place
@@ -1269,6 +1359,13 @@ TEST(MapExport, UrdfRoundTripAndWellFormedOwl) {
         }
         const Eigen::Vector3d world = pose[j->child].linear() * j->axis;
         EXPECT_TRUE(world.cast<float>().isApprox(r.map.fronts[f].articulation.axis, 1e-4f));
+    }
+    // The map's JSON says of every joint whether the scan saw its hinge's edge.
+    const auto json = KitchenMapJson(r.map);
+    ASSERT_EQ(json["fronts"].size(), r.map.fronts.size());
+    for (std::size_t f = 0; f < r.map.fronts.size(); ++f) {
+        EXPECT_EQ(json["fronts"][f]["joint"]["hinge_seen"].get<bool>(),
+                  r.map.fronts[f].articulation.hinge_seen);
     }
     const std::string owl = KitchenMapOwl(r.map, "test_kitchen");
     TiXmlDocument doc;

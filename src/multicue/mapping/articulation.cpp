@@ -180,6 +180,12 @@ void ArticulationParams::Validate() const {
             fmt::format("articulation: horizontal_handle_deg must be in (0, 90), got {}",
                         horizontal_handle_deg));
     }
+    if (!(edge_band > 0.0f && edge_band < 0.5f) || !(edge_border >= 0 && edge_border < 100)) {
+        throw InvalidArgument(fmt::format(
+            "articulation: need edge_band in (0, 0.5) m and edge_border in [0, 100) pixels, got "
+            "{} and {}",
+            edge_band, edge_border));
+    }
     if (!(hinge_depth >= 0.0f && hinge_depth < 0.5f)) {
         throw InvalidArgument(
             fmt::format("articulation: hinge_depth must be in [0, 0.5) m, got {}", hinge_depth));
@@ -376,6 +382,93 @@ Articulation ArticulationFromFixtures(const std::vector<Front>& fronts, std::siz
         return Drawer(f, p);
     }
     return a;
+}
+
+bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
+                   const std::vector<std::size_t>& scan_offsets, const ArticulationParams& p) {
+    p.Validate();
+    const Articulation& a = front.articulation;
+    if (a.type != JointType::kRevolute || front.indices.empty()) return true;
+    if (scan_offsets.size() != scans.size()) {
+        throw InvalidArgument(fmt::format("articulation: {} scan offsets for {} scans",
+                                          scan_offsets.size(), scans.size()));
+    }
+    const Eigen::Vector3f d = a.axis.normalized();
+    const Eigen::Vector3f n = front.normal.normalized();
+    // Within the face: from the hinge line out to a place, and the front's extent along it.
+    auto across = [&](const Eigen::Vector3f& x) {
+        Eigen::Vector3f r = x - a.origin;
+        r -= d * d.dot(r) + n * n.dot(r);
+        return r;
+    };
+    struct Near {
+        std::size_t scan, local;
+        float distance, along;
+    };
+    std::vector<Near> points;
+    points.reserve(front.indices.size());
+    float nearest = std::numeric_limits<float>::infinity();
+    float t_min = nearest, t_max = -nearest;
+    for (const Index i : front.indices) {
+        const auto it =
+            std::upper_bound(scan_offsets.begin(), scan_offsets.end(), static_cast<std::size_t>(i));
+        if (it == scan_offsets.begin()) continue;
+        const auto s = static_cast<std::size_t>(it - scan_offsets.begin() - 1);
+        const std::size_t local = static_cast<std::size_t>(i) - scan_offsets[s];
+        if (local >= scans[s].size() || !scans[s].IsFinite(local)) continue;
+        const Eigen::Vector3f& x = scans[s].points[local];
+        const float dist = across(x).norm();
+        const float t = d.dot(x - a.origin);
+        points.push_back({s, local, dist, t});
+        nearest = std::min(nearest, dist);
+        t_min = std::min(t_min, t);
+        t_max = std::max(t_max, t);
+    }
+    if (points.empty()) return true;
+    // Out of the front, across the hinge edge.
+    const Eigen::Vector3f inward = across(front.center);
+    if (!(inward.norm() > 1e-4f)) return true;
+    const Eigen::Vector3f outward = -inward.normalized();
+    bool told = false;
+    for (std::size_t s = 0; s < scans.size(); ++s) {
+        const PointCloud& scan = scans[s];
+        // Along the edge in steps of `edge_band`: where this scan saw the front near the edge,
+        // and where those points lie at its image border.
+        const auto steps = static_cast<std::size_t>((t_max - t_min) / p.edge_band) + 1;
+        std::vector<char> near_edge(steps, 0), at_border(steps, 0);
+        for (const Near& q : points) {
+            if (q.scan != s || q.distance > nearest + p.edge_band) continue;
+            const auto k =
+                std::min(steps - 1, static_cast<std::size_t>((q.along - t_min) / p.edge_band));
+            near_edge[k] = 1;
+            if (scan.IsOrganized()) {
+                const auto b = static_cast<std::size_t>(p.edge_border);
+                const std::size_t u = q.local % scan.width, v = q.local / scan.width;
+                at_border[k] |= u < b || v < b || u + b >= scan.width || v + b >= scan.height;
+            }
+        }
+        const auto seen_steps = std::count(near_edge.begin(), near_edge.end(), 1);
+        if (seen_steps == 0) continue;
+        if (scan.IsOrganized()) {
+            told = true;
+            if (std::count(at_border.begin(), at_border.end(), 1) * 2 < seen_steps) return true;
+        } else if (scan.HasSensorPosition()) {
+            const SeenFrom seen(scan, front.center, p.edge_band);
+            if (!seen.valid()) continue;
+            told = true;
+            // Five places along the edge, `edge_band` beyond it, on the front's surface.
+            constexpr int kPlaces = 5;
+            int reached = 0;
+            for (int k = 0; k < kPlaces; ++k) {
+                const float t = t_min + (t_max - t_min) * (0.1f + 0.2f * static_cast<float>(k));
+                const Eigen::Vector3f x =
+                    a.origin + d * t + outward * p.edge_band + n * p.hinge_depth;
+                reached += seen.Seen(x, p.edge_band);
+            }
+            if (reached * 2 > kPlaces) return true;
+        }
+    }
+    return !told;
 }
 
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,

@@ -83,6 +83,12 @@ struct ArticulationParams {
     /// line): the median over the revolute fronts of simulated kitchens of the tune half, 1.9-2.0
     /// cm on either fold for the Kinect, 1.2-1.9 cm for the laser [m]
     float hinge_depth = 0.019f;
+    /// HingeEdgeSeen: the front's points within this of its point nearest the hinge edge show
+    /// that edge, and the view is checked this far beyond it [m].
+    float edge_band = 0.03f;
+    /// HingeEdgeSeen: points this close to an organized scan's image border lie at the border
+    /// of the view [pixels].
+    int edge_border = 2;
     /// Throws InvalidArgument naming the first out-of-range field.
     void Validate() const;
 };
@@ -97,6 +103,18 @@ Articulation ArticulationFromFixtures(const Front& front, const std::vector<Fixt
 Articulation ArticulationFromFixtures(const std::vector<Front>& fronts, std::size_t index,
                                       const std::vector<Fixture>& fixtures, const RoomFrame& frame,
                                       float floor_height, const ArticulationParams& params = {});
+
+/// Whether `scans` saw the edge that revolute front `front`'s hinge lies on (true for other
+/// joints). `front` indexes the scans merged in order, scan k starting at `scan_offsets[k]`.
+/// A scan says so from the front's points nearest that edge (within `edge_band`): an organized
+/// scan saw the edge unless such points lie at its image border (`edge_border`) along most of
+/// the stretch of the edge where it has them (steps of `edge_band`); an unorganized
+/// one with a sensor position, if its rays reached the place `edge_band` beyond the edge, or
+/// went past it, along most of the edge (out of the field of view, or hidden by something
+/// nearer, it did not). One scan that saw it is enough; true when no scan can tell.
+bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
+                   const std::vector<std::size_t>& scan_offsets,
+                   const ArticulationParams& params = {});
 
 struct MotionParams {
     float change_distance = 0.02f;  ///< opened-scan points this far from every closed-scan point

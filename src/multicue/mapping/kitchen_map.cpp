@@ -307,6 +307,8 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     for (std::size_t i = 0; i < map.fronts.size(); ++i) {
         map.fronts[i].articulation = ArticulationFromFixtures(
             map.fronts, i, map.fixtures, map.frame, map.floor_height, p.articulation);
+        map.fronts[i].articulation.hinge_seen =
+            HingeEdgeSeen(map.fronts[i], scans, r.scan_offsets, p.articulation);
     }
     stage("articulation");
     // Furniture pieces, kitchenettes and container types.

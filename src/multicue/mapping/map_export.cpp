@@ -32,7 +32,8 @@ ordered_json JointJson(const Articulation& a) {
             {"axis", V3(a.axis)},
             {"lower", a.lower},
             {"upper", a.upper},
-            {"source", a.source}};
+            {"source", a.source},
+            {"hinge_seen", a.hinge_seen}};
 }
 
 Eigen::Isometry3d Pose(const Eigen::Matrix3f& R, const Eigen::Vector3f& t) {

@@ -86,6 +86,10 @@ struct Articulation {
     float upper = 0.0f;
     /// "fixture" (from the handle's orientation and place), "motion" (from two scans), "none".
     std::string source = "none";
+    /// Whether the scans saw the edge a revolute front's hinge lies on. False when that edge
+    /// lay at the border of the view, out of it or hidden: the front may run on beyond what was
+    /// seen, and the hinge's place is then a lower bound of the front's size, not a measurement.
+    bool hinge_seen = true;
 };
 
 /// A door or drawer front: the region grown from a fixture's footprint (section 4.1.2) and its
