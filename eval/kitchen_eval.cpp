@@ -289,6 +289,8 @@ struct Scores {
     std::array<std::array<std::size_t, 2>, 2> hinge_seen_flag{};
     /// Hinge positions of the fronts the map says it saw the hinge edge of, and of the others.
     Stats axis_position_flagged, axis_position_flagged_unseen;
+    /// Points pooled over frames: [true class][map class].
+    std::map<std::pair<int, int>, std::size_t> point_confusion;
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
@@ -468,6 +470,8 @@ class Evaluator {
         for (std::size_t i = 0; i < f.cloud.size(); ++i) {
             if (!f.cloud.IsFinite(i)) continue;
             const int a = TrueIouClass(t.Class(i)), b = PredIouClass(map.point_class[i]);
+            ++s.point_confusion[{static_cast<int>(t.Class(i)),
+                                 static_cast<int>(map.point_class[i])}];
             if (a >= 0 && a == b) inter[static_cast<std::size_t>(a)] += 1;
             if (a >= 0) uni[static_cast<std::size_t>(a)] += 1;
             if (b >= 0 && b != a) uni[static_cast<std::size_t>(b)] += 1;
@@ -1111,6 +1115,21 @@ class Evaluator {
                         s.frame_iou[c].Min());
             j["iou"][kIouClasses[c]] = {{"pooled", iou}, {"frames", s.frame_iou[c].Json()}};
         }
+        if (o_.verbose) {
+            // Where each true class's points went, pooled over the frames.
+            const auto& tn = sim::KitchenClassNames();
+            const auto& mn = mapping::MapClassNames();
+            for (int tc = 0; tc < static_cast<int>(tn.size()); ++tc) {
+                std::string row;
+                for (const auto& [key, n] : s.point_confusion) {
+                    if (key.first == tc)
+                        row += fmt::format(" {} {}", mn[static_cast<std::size_t>(key.second)], n);
+                }
+                if (!row.empty())
+                    std::fprintf(stderr, "points true %s -> map:%s\n",
+                                 tn[static_cast<std::size_t>(tc)].c_str(), row.c_str());
+            }
+        }
         auto pr = [&](const char* what, std::size_t tp, std::size_t fp, std::size_t fn) {
             const double p = ratio(static_cast<double>(tp), static_cast<double>(tp + fp));
             const double r = ratio(static_cast<double>(tp), static_cast<double>(tp + fn));
@@ -1221,8 +1240,7 @@ class Evaluator {
             s.axis_position_seen.v.size(), s.hinge_unseen);
         std::printf(
             "  the map's flag (hinge_seen): seen for %zu of the %zu with the true edge seen and "
-            "%zu "
-            "of the %zu others; position median over those it flags seen %.3f m (%zu of %zu "
+            "%zu of the %zu others; position median over those it flags seen %.3f m (%zu of %zu "
             "within 3 cm), over the others %.3f m (%zu of %zu)\n",
             s.hinge_seen_flag[1][1], s.hinge_seen_flag[1][0] + s.hinge_seen_flag[1][1],
             s.hinge_seen_flag[0][1], s.hinge_seen_flag[0][0] + s.hinge_seen_flag[0][1],

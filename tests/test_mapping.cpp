@@ -1192,6 +1192,78 @@ TEST(Articulation, AHingeFarFromTheMovedPlaneIsTakenAtTheFrontsEdge) {
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, believe), InvalidArgument);
 }
 
+/// A tilting laser at the origin in a box room (walls at x = 3 and y = +-2, floor 1.4 m below,
+/// ceiling 1.1 m above): rows are tilts from -40 to 60 deg about the y axis every 0.5 deg,
+/// columns beams from 0 to 180 deg every 0.25 deg in the scan plane, 1 cm range noise (the
+/// simulator's laser). Beams along y meet at every tilt.
+PointCloud TiltingLaserRoom() {
+    std::mt19937 rng(31);
+    std::normal_distribution<float> noise(0.0f, 0.01f);
+    PointCloud c;
+    const int rows = 201, columns = 721;
+    for (int r = 0; r < rows; ++r) {
+        const float tilt = static_cast<float>(r - 80) * 0.5f * std::numbers::pi_v<float> / 180.0f;
+        for (int k = 0; k < columns; ++k) {
+            const float beam = static_cast<float>(k) * 0.25f * std::numbers::pi_v<float> / 180.0f;
+            const Eigen::Vector3f in_plane(std::sin(beam), std::cos(beam), 0.0f);
+            const Eigen::Vector3f d = Eigen::AngleAxisf(tilt, Eigen::Vector3f::UnitY()) * in_plane;
+            float t = std::numeric_limits<float>::infinity();
+            if (d.x() > 1e-6f) t = std::min(t, 3.0f / d.x());
+            if (std::abs(d.y()) > 1e-6f) t = std::min(t, 2.0f / std::abs(d.y()));
+            if (d.z() < -1e-6f) t = std::min(t, -1.4f / d.z());
+            if (d.z() > 1e-6f) t = std::min(t, 1.1f / d.z());
+            c.points.push_back(d * (t + noise(rng)));
+        }
+    }
+    c.width = columns;
+    c.height = rows;
+    c.sensor_origin = Eigen::Vector3f(0.0f, 0.0f, 1e-6f);
+    return c;
+}
+
+TEST(MapKitchen, NormalsWhereATiltingLasersScanLinesMeet) {
+    const PointCloud scan = TiltingLaserRoom();
+    // The side walls' points within 20 cm of the sensor's height, where the rows converge.
+    auto wrong_share = [&](const MapKitchenParams& p) {
+        std::vector<std::size_t> offsets;
+        std::vector<float> ranges;
+        const PointCloud merged = MergeScansWithNormals({scan}, p, offsets, ranges);
+        std::size_t n = 0, wrong = 0;
+        for (std::size_t i = 0; i < merged.size(); ++i) {
+            const Eigen::Vector3f& x = merged.points[i];
+            if (std::abs(std::abs(x.y()) - 2.0f) > 0.02f || std::abs(x.z()) > 0.2f || x.x() > 2.9f)
+                continue;
+            ++n;
+            const Eigen::Vector3f& nm = merged.normals[i];
+            wrong += !nm.allFinite() || std::abs(nm.y()) < std::cos(20.0f * 0.0174533f);
+        }
+        EXPECT_GT(n, 1000u);
+        return static_cast<double>(wrong) / static_cast<double>(std::max<std::size_t>(1, n));
+    };
+    MapKitchenParams windows = KitchenParamsFor(KitchenSensor::kLaser);
+    windows.organized_normals = true;
+    const double before = wrong_share(windows);
+    const double after = wrong_share(KitchenParamsFor(KitchenSensor::kLaser));
+    EXPECT_GT(before, 0.2);
+    EXPECT_LT(after, 0.05);
+    // The far wall's normals are right either way (within 20 deg).
+    std::vector<std::size_t> offsets;
+    std::vector<float> ranges;
+    const PointCloud a = MergeScansWithNormals({scan}, windows, offsets, ranges);
+    const PointCloud b =
+        MergeScansWithNormals({scan}, KitchenParamsFor(KitchenSensor::kLaser), offsets, ranges);
+    std::size_t far = 0, right = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        if (a.points[i].x() < 2.98f || std::abs(a.points[i].y()) > 1.5f ||
+            std::abs(a.points[i].z()) > 0.9f)
+            continue;
+        ++far;
+        right += std::abs(a.normals[i].x()) > 0.94f && std::abs(b.normals[i].x()) > 0.94f;
+    }
+    EXPECT_GT(far, 1000u);
+    EXPECT_GT(static_cast<double>(right), 0.98 * static_cast<double>(far));
+}
+
 MapKitchenResult MapSynthetic(int threads = 0) {
     test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
     MapKitchenParams p = KitchenParamsFor(KitchenSensor::kKinect);

@@ -81,8 +81,9 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.gap_fronts.split_fixture_fronts = true;
     }
     if (sensor == KitchenSensor::kLaser) {
-        // Centimetre range noise and sparse rows: thicker planes, looser clusters.
-        p.normal_half_window = 3;
+        // Centimetre range noise and sparse rows: thicker planes, looser clusters; normals from
+        // neighbourhoods in space, not from rows meeting at the tilt axis.
+        p.organized_normals = false;
         p.normal_radius = 0.06f;
         p.structure.distance_threshold = 0.03f;
         p.structure.component_tolerance = 0.08f;
@@ -149,7 +150,7 @@ PointCloud MergeScansWithNormals(const std::vector<PointCloud>& scans, const Map
         for (const auto& x : s.points) ranges.push_back((x - s.sensor_origin).norm());
         offsets.push_back(out.points.size());
         NormalsResult nr;
-        if (s.IsOrganized()) {
+        if (s.IsOrganized() && p.organized_normals) {
             OrganizedNormalParams np;
             np.half_window = p.normal_half_window;
             np.depth_dependent_window = true;

@@ -39,6 +39,12 @@ struct MapKitchenParams {
     /// normals within normal_radius.
     int normal_half_window = 5;
     float normal_radius = 0.04f;  ///< [m]
+    /// Organized scans' normals from their pixel windows; off: from the k-d tree within
+    /// normal_radius, as for unorganized ones. Off for the tilting laser: near the beams that
+    /// point along its tilt axis (at the sensor's height, on the walls to either side) its scan
+    /// lines converge, a window of rows spans little more than the range noise across them, and
+    /// the window's normal comes out nearly across the surface.
+    bool organized_normals = true;
     RoomAxesParams axes;
     RoomStructureParams structure;
     FixtureParams fixtures;
@@ -95,7 +101,8 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
                             const ml::Classifier* classifier = nullptr,
                             const ml::Classifier* fixture_classifier = nullptr);
 
-/// Merges scans into one cloud with normals (organized scans keep image-space normals): colours
+/// Merges scans into one cloud with normals (image-space normals for organized scans when
+/// `organized_normals`, else k-d tree normals): colours
 /// of scans without colours get alpha 0, intensities of scans without intensity NaN. `offsets`
 /// receives the first point of each scan, `ranges` each point's distance to its scan's sensor.
 /// Throws DataError when there are no scans.
