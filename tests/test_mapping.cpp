@@ -1217,7 +1217,6 @@ PointCloud TiltingLaserRoom() {
     }
     c.width = columns;
     c.height = rows;
-    c.sensor_origin = Eigen::Vector3f(0.0f, 0.0f, 1e-6f);
     return c;
 }
 

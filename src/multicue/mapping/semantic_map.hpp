@@ -88,7 +88,7 @@ struct Articulation {
     std::string source = "none";
     /// Whether the scans saw the edge a revolute front's hinge lies on. False when that edge
     /// lay at the border of the view, out of it or hidden: the front may run on beyond what was
-    /// seen, and the hinge's place is then a lower bound of the front's size, not a measurement.
+    /// seen, so the hinge's place is a guess, not a measurement.
     bool hinge_seen = true;
 };
 
