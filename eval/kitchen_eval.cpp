@@ -284,13 +284,14 @@ struct Scores {
     /// Hinge positions of the fronts whose hinge edge the scan saw, and how many it did not
     /// (the edge out of the view or hidden).
     Stats axis_position_seen;
-    std::size_t hinge_unseen = 0;
     /// The map's own word (Articulation::hinge_seen) against the truth's: [truth][map].
     std::array<std::array<std::size_t, 2>, 2> hinge_seen_flag{};
     /// Hinge positions of the fronts the map says it saw the hinge edge of, and of the others.
     Stats axis_position_flagged, axis_position_flagged_unseen;
     /// Points pooled over frames: [true class][map class].
-    std::map<std::pair<int, int>, std::size_t> point_confusion;
+    std::vector<std::array<std::size_t, mapping::kNumMapClasses>> point_confusion =
+        std::vector<std::array<std::size_t, mapping::kNumMapClasses>>(
+            sim::KitchenClassNames().size());
     std::vector<std::vector<std::size_t>> confusion =
         std::vector<std::vector<std::size_t>>(7, std::vector<std::size_t>(7, 0));
     std::size_t open_correct = 0, open_total = 0, open_missed = 0;
@@ -470,8 +471,8 @@ class Evaluator {
         for (std::size_t i = 0; i < f.cloud.size(); ++i) {
             if (!f.cloud.IsFinite(i)) continue;
             const int a = TrueIouClass(t.Class(i)), b = PredIouClass(map.point_class[i]);
-            ++s.point_confusion[{static_cast<int>(t.Class(i)),
-                                 static_cast<int>(map.point_class[i])}];
+            ++s.point_confusion.at(
+                static_cast<std::size_t>(t.Class(i)))[static_cast<std::size_t>(map.point_class[i])];
             if (a >= 0 && a == b) inter[static_cast<std::size_t>(a)] += 1;
             if (a >= 0) uni[static_cast<std::size_t>(a)] += 1;
             if (b >= 0 && b != a) uni[static_cast<std::size_t>(b)] += 1;
@@ -799,10 +800,7 @@ class Evaluator {
                     const Eigen::Vector3f to_point = f.cloud.points[i] - gt.point;
                     near_hinge += (to_point - gd * gd.dot(to_point)).norm() <= 0.05f;
                 }
-                if (near_hinge >= min_fixture)
-                    s.axis_position_seen.Add(position);
-                else
-                    ++s.hinge_unseen;
+                if (near_hinge >= min_fixture) s.axis_position_seen.Add(position);
                 ++s.hinge_seen_flag[near_hinge >= min_fixture][pf.articulation.hinge_seen];
                 (pf.articulation.hinge_seen ? s.axis_position_flagged
                                             : s.axis_position_flagged_unseen)
@@ -1119,15 +1117,14 @@ class Evaluator {
             // Where each true class's points went, pooled over the frames.
             const auto& tn = sim::KitchenClassNames();
             const auto& mn = mapping::MapClassNames();
-            for (int tc = 0; tc < static_cast<int>(tn.size()); ++tc) {
+            for (std::size_t tc = 0; tc < tn.size(); ++tc) {
                 std::string row;
-                for (const auto& [key, n] : s.point_confusion) {
-                    if (key.first == tc)
-                        row += fmt::format(" {} {}", mn[static_cast<std::size_t>(key.second)], n);
+                for (std::size_t mc = 0; mc < mn.size(); ++mc) {
+                    const std::size_t n = s.point_confusion[tc][mc];
+                    if (n > 0) row += fmt::format(" {} {}", mn[mc], n);
                 }
                 if (!row.empty())
-                    std::fprintf(stderr, "points true %s -> map:%s\n",
-                                 tn[static_cast<std::size_t>(tc)].c_str(), row.c_str());
+                    std::fprintf(stderr, "points true %s -> map:%s\n", tn[tc].c_str(), row.c_str());
             }
         }
         auto pr = [&](const char* what, std::size_t tp, std::size_t fp, std::size_t fn) {
@@ -1237,7 +1234,7 @@ class Evaluator {
             "  hinges whose edge the scan saw: position median %.3f m (%zu of %zu within 3 cm); "
             "%zu more with the edge out of view or hidden\n",
             s.axis_position_seen.Median(), s.axis_position_seen.AtMost(0.03),
-            s.axis_position_seen.v.size(), s.hinge_unseen);
+            s.axis_position_seen.v.size(), s.hinge_seen_flag[0][0] + s.hinge_seen_flag[0][1]);
         std::printf(
             "  the map's flag (hinge_seen): seen for %zu of the %zu with the true edge seen and "
             "%zu of the %zu others; position median over those it flags seen %.3f m (%zu of %zu "
@@ -1256,7 +1253,7 @@ class Evaluator {
         j["hinge_sign_correct"] = s.sign_correct;
         j["hinge_position_edge_seen_m"] = s.axis_position_seen.Json();
         j["hinge_position_edge_seen_within_3cm"] = s.axis_position_seen.AtMost(0.03);
-        j["hinge_edge_unseen"] = s.hinge_unseen;
+        j["hinge_edge_unseen"] = s.hinge_seen_flag[0][0] + s.hinge_seen_flag[0][1];
         j["hinge_seen_flag"] = {{"seen_flagged_seen", s.hinge_seen_flag[1][1]},
                                 {"seen_flagged_unseen", s.hinge_seen_flag[1][0]},
                                 {"unseen_flagged_seen", s.hinge_seen_flag[0][1]},

@@ -429,12 +429,13 @@ bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
     const Eigen::Vector3f inward = across(front.center);
     if (!(inward.norm() > 1e-4f)) return true;
     const Eigen::Vector3f outward = -inward.normalized();
+    // Along the edge in steps of `edge_band`: where a scan saw the front near the edge, and
+    // where those points lie at its image border.
+    const auto steps = static_cast<std::size_t>((t_max - t_min) / p.edge_band) + 1;
+    const auto b = static_cast<std::size_t>(p.edge_border);
     bool told = false;
     for (std::size_t s = 0; s < scans.size(); ++s) {
         const PointCloud& scan = scans[s];
-        // Along the edge in steps of `edge_band`: where this scan saw the front near the edge,
-        // and where those points lie at its image border.
-        const auto steps = static_cast<std::size_t>((t_max - t_min) / p.edge_band) + 1;
         std::vector<char> near_edge(steps, 0), at_border(steps, 0);
         for (const Near& q : points) {
             if (q.scan != s || q.distance > nearest + p.edge_band) continue;
@@ -442,7 +443,6 @@ bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
                 std::min(steps - 1, static_cast<std::size_t>((q.along - t_min) / p.edge_band));
             near_edge[k] = 1;
             if (scan.IsOrganized()) {
-                const auto b = static_cast<std::size_t>(p.edge_border);
                 const std::size_t u = q.local % scan.width, v = q.local / scan.width;
                 at_border[k] |= u < b || v < b || u + b >= scan.width || v + b >= scan.height;
             }
