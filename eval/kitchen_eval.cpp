@@ -59,7 +59,7 @@ using mapping::MapClass;
 
 struct Options {
     int kitchens = 10;
-    int train_kitchens = 12;
+    int train_kitchens = 48;
     int views = 3;
     int laser_views = 1;
     int open = 3;
@@ -113,6 +113,8 @@ struct Options {
     int procedural = training::FixtureTrainingOptions{}.procedural;  ///< per kind, training
     float procedural_share = training::FixtureTrainingOptions{}.procedural_share;
     int scored_procedural = 0;  ///< per kind, scored kitchens (tune half only)
+    /// per cupboard and appliance kind, container training only (beside `procedural`)
+    int container_procedural = 20;
 };
 
 /// The library id of a kitchen's model instance as the truth's `model` field numbers it (1 +
@@ -838,6 +840,21 @@ class Evaluator {
             const int pr = TypeIndex(map.furniture[static_cast<std::size_t>(best)].type);
             if (gt < 7 && pr < 7)
                 ++s.confusion[static_cast<std::size_t>(gt)][static_cast<std::size_t>(pr)];
+            if (o_.verbose) {
+                const auto x = mapping::ContainerFeatures(map, static_cast<std::size_t>(best));
+                std::string features;
+                for (std::size_t c = 0; c < x.size(); ++c) {
+                    features +=
+                        fmt::format(" {}={:.2f}", mapping::ContainerFeatureNames()[c], x[c]);
+                }
+                std::fprintf(stderr, "container %s %s: %s -> %s;%s\n", f.laser ? "laser" : "kinect",
+                             k.instances[static_cast<std::size_t>(inst)].model->id.c_str(),
+                             sim::ContainerTypeOfKind(
+                                 k.instances[static_cast<std::size_t>(inst)].model->kind)
+                                 .c_str(),
+                             map.furniture[static_cast<std::size_t>(best)].type.c_str(),
+                             features.c_str());
+            }
         }
         // Opened-front pairs: the robot opens matched fronts of this view one at a time.
         if (o_.open <= 0) return;
@@ -997,6 +1014,10 @@ class Evaluator {
         for (auto& e : sim::ProceduralKitchenEntries(o_.procedural, sim::SubSeed(o_.seed, 98))) {
             train_lib.push_back(std::move(e));
         }
+        for (auto& e : sim::ProceduralKitchenEntries(o_.container_procedural,
+                                                     sim::SubSeed(o_.seed, 96), true)) {
+            train_lib.push_back(std::move(e));
+        }
         for (auto& e :
              sim::ProceduralKitchenEntries(o_.scored_procedural, sim::SubSeed(o_.seed, 99))) {
             test_lib.push_back(std::move(e));
@@ -1034,9 +1055,17 @@ class Evaluator {
                 classifier->Fit(data);
                 if (!o_.save_containers.empty()) classifier->Save(o_.save_containers);
             }
-            std::printf("container classifier: %zu training pieces from %d kitchens (%s half)\n",
+            std::vector<int> per_type(data.num_classes(), 0);
+            for (const int l : data.labels) {
+                if (l != ml::kNoLabel) ++per_type[static_cast<std::size_t>(l)];
+            }
+            std::string types;
+            for (std::size_t c = 0; c < per_type.size(); ++c) {
+                types += fmt::format(" {} {}", data.class_names[c], per_type[c]);
+            }
+            std::printf("container classifier: %zu training pieces from %d kitchens (%s half):%s\n",
                         train_rows, o_.train_kitchens,
-                        std::string(sim::MeshSplitName(train_split)).c_str());
+                        std::string(sim::MeshSplitName(train_split)).c_str(), types.c_str());
         }
         Scores kinect, laser;
         for (int i = 0; i < o_.kitchens; ++i) {
@@ -1083,6 +1112,7 @@ class Evaluator {
                               {"procedural", o_.procedural},
                               {"procedural_share", o_.procedural_share},
                               {"scored_procedural", o_.scored_procedural},
+                              {"container_procedural", o_.container_procedural},
                               {"fixture_confidence", o_.fixture_confidence},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
@@ -1397,6 +1427,11 @@ int main(int argc, char** argv) {
                    "chance that a unit of a kind with procedural and library models is procedural")
         ->capture_default_str()
         ->check(CLI::Range(0.0, 1.0));
+    app.add_option("--container-procedural", o.container_procedural,
+                   "procedural units per cupboard and appliance kind added to the container "
+                   "training's models alone (beside --procedural's)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, sim::kMaxProceduralPerKind));
     app.add_option("--scored-procedural", o.scored_procedural,
                    "procedural units per cupboard kind added to the scored kitchens' models, of "
                    "other seeds than training's (--split tune only)")

@@ -373,7 +373,9 @@ TEST(KitchenScene, GroundTruthAndUrdfWithSharedModels) {
 
 TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
     int handles = 0, fronts = 0;
-    for (const std::string& kind : sim::ProceduralUnitKinds()) {
+    std::vector<std::string> kinds = sim::ProceduralUnitKinds();
+    for (const auto& kind : sim::ProceduralApplianceKinds()) kinds.push_back(kind);
+    for (const std::string& kind : kinds) {
         int prismatic = 0;
         for (std::uint64_t seed = 1; seed <= 12; ++seed) {
             const sim::ArticulatedModel m = sim::MakeProceduralUnit(kind, seed);
@@ -386,7 +388,8 @@ TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
             EXPECT_NEAR(m.bounds.min().z(), 0.0f, 1e-4f);
             EXPECT_GT(m.bounds.sizes().y(), 0.25f);
             EXPECT_LT(m.bounds.sizes().y(), 1.3f);
-            EXPECT_LT(m.bounds.sizes().z(), kind == "tall_cupboard" ? 2.3f : 1.0f);
+            EXPECT_LT(m.bounds.sizes().z(),
+                      kind == "tall_cupboard" || kind == "fridge" ? 2.3f : 1.0f);
             ASSERT_FALSE(m.joints.empty());
             const auto closed = m.LinkPoses(m.ClosedState());
             for (std::size_t j = 0; j < m.joints.size(); ++j) {
@@ -441,7 +444,7 @@ TEST(ProceduralUnits, FollowTheModelFrameAndOpenTowardsTheFront) {
     const auto c = sim::MakeProceduralUnit("drawer_unit", 6);
     EXPECT_EQ(a.links[1].mesh->mesh.vertices, b.links[1].mesh->mesh.vertices);
     EXPECT_FALSE(a.bounds.isApprox(c.bounds));
-    EXPECT_THROW(sim::MakeProceduralUnit("fridge", 1), InvalidArgument);
+    EXPECT_THROW(sim::MakeProceduralUnit("microwave", 1), InvalidArgument);
     EXPECT_THROW(sim::ProceduralKitchenEntries(-1, 1), InvalidArgument);
     EXPECT_THROW(sim::ProceduralKitchenEntries(sim::kMaxProceduralPerKind + 1, 1), InvalidArgument);
 }
@@ -457,6 +460,60 @@ std::vector<Eigen::AlignedBox3f> MovingLinkBoxes(const sim::ArticulatedModel& m)
         boxes.push_back(box);
     }
     return boxes;
+}
+
+TEST(ProceduralUnits, AppliancesOpenAsTheirKindDoes) {
+    int knobs_on_ovens = 0, split_fridges = 0, tall_fridges = 0;
+    for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+        for (const std::string& kind : sim::ProceduralApplianceKinds()) {
+            const sim::ArticulatedModel m = sim::MakeProceduralUnit(kind, seed);
+            SCOPED_TRACE(m.id);
+            EXPECT_EQ(sim::ContainerTypeOfKind(kind), kind);
+            int flaps = 0, doors = 0, drawers = 0;
+            for (const sim::ArticulatedJoint& jt : m.joints) {
+                if (jt.type == io::UrdfJointType::kPrismatic) {
+                    ++drawers;
+                } else if (std::abs(jt.axis.z()) > 0.99f) {
+                    ++doors;
+                } else {
+                    // Hinged at its bottom edge: it opens downwards, to level at most.
+                    EXPECT_GT(jt.axis.y(), 0.99f);
+                    EXPECT_LE(jt.upper, 1.56f);
+                    ++flaps;
+                }
+            }
+            if (kind == "fridge") {
+                EXPECT_EQ(flaps + drawers, 0);
+                ASSERT_GE(doors, 1);
+                ASSERT_LE(doors, 2);
+                // Two doors turn about one side.
+                if (doors == 2) {
+                    EXPECT_EQ(m.joints[0].axis.z(), m.joints[1].axis.z());
+                }
+                split_fridges += doors == 2;
+                tall_fridges += m.bounds.sizes().z() > 1.5f;
+            } else {
+                EXPECT_EQ(flaps, 1);
+                EXPECT_EQ(doors, 0);
+                EXPECT_LE(drawers, kind == "oven" ? 1 : 0);
+            }
+            if (kind == "oven") {
+                int knobs = 0;
+                for (const auto& p : m.links[0].mesh->part_names) knobs += p == "knob";
+                knobs_on_ovens += knobs > 0;
+            }
+        }
+    }
+    EXPECT_EQ(knobs_on_ovens, 20);
+    EXPECT_GE(split_fridges, 3);
+    EXPECT_GE(tall_fridges, 6);
+    EXPECT_LE(tall_fridges, 18);
+    // Appliances come after the cupboard kinds, whose entries stay the same.
+    const auto cupboards = sim::ProceduralKitchenEntries(2, 11);
+    const auto all = sim::ProceduralKitchenEntries(2, 11, true);
+    ASSERT_EQ(all.size(), cupboards.size() + 2 * sim::ProceduralApplianceKinds().size());
+    for (std::size_t i = 0; i < cupboards.size(); ++i) EXPECT_EQ(all[i].id, cupboards[i].id);
+    EXPECT_EQ(all.back().kind, "fridge");
 }
 
 TEST(ProceduralUnits, SomeDrawerUnitsHoldAPanDrawer) {
@@ -586,12 +643,13 @@ TEST(KitchenCli, ProceduralKitchensWithoutTheLibrary) {
     test::TempDir dir;
     const auto sim_dir = dir / "sim";
     auto r = test::RunCli(
-        "simulate kitchens --models none --procedural 3 --kitchens 1 --views 1 --laser-views 0 "
-        "--open-doors --open-count 1 -q --out " +
+        "simulate kitchens --models none --procedural 3 --procedural-appliances --kitchens 1 "
+        "--views 1 --laser-views 0 --open-doors --open-count 1 -q --out " +
         sim_dir.string());
     ASSERT_EQ(r.code, 0) << r.output;
     const auto manifest = nlohmann::json::parse(test::ReadTextFile(sim_dir / "manifest.json"));
     EXPECT_TRUE(manifest["complete"].get<bool>());
+    EXPECT_TRUE(manifest["procedural_appliances"].get<bool>());
     const auto& kitchen = manifest["kitchens"][0];
     for (const auto& m : kitchen["models"]) {
         EXPECT_EQ(m["model"].get<std::string>().rfind("procedural/", 0), 0u) << m["model"];
@@ -657,6 +715,10 @@ TEST(KitchenCli, BadInputWritesNothing) {
               2);
     EXPECT_EQ(test::RunCli("simulate kitchens --procedural -1 --out " + (dir / "d").string()).code,
               2);
+    EXPECT_EQ(
+        test::RunCli("simulate kitchens --procedural-appliances --out " + (dir / "d").string())
+            .code,
+        2);
     EXPECT_FALSE(std::filesystem::exists(dir / "d"));
     EXPECT_EQ(test::RunCli("map kitchen --out " + (dir / "e").string()).code, 2);
     EXPECT_FALSE(std::filesystem::exists(dir / "c"));

@@ -42,7 +42,8 @@ struct KitchenOptions {
     std::string mesh_split = "all";
     bool open_doors = false;
     int open_per_kitchen = 4;
-    int procedural = 0;  // procedural units per kind added to the library
+    int procedural = 0;       // procedural units per kind added to the library
+    bool appliances = false;  // procedural dishwashers, ovens and fridges too
     bool quiet = false;
 };
 
@@ -108,7 +109,8 @@ class KitchenSimulator {
                            ? std::vector<sim::KitchenModelEntry>{}
                            : sim::SelectKitchenSplit(sim::ReadKitchenLibrary(o_.models),
                                                      sim::ParseMeshSplit(o_.mesh_split));
-        for (auto& e : sim::ProceduralKitchenEntries(o_.procedural, sim::SubSeed(o_.seed, 97))) {
+        for (auto& e : sim::ProceduralKitchenEntries(o_.procedural, sim::SubSeed(o_.seed, 97),
+                                                     o_.appliances)) {
             library.push_back(std::move(e));
         }
         if (library.empty()) {
@@ -125,6 +127,7 @@ class KitchenSimulator {
                      {"models", o_.models},
                      {"mesh_split", o_.mesh_split},
                      {"procedural_per_kind", o_.procedural},
+                     {"procedural_appliances", o_.appliances},
                      {"classes", sim::KitchenClassNames()},
                      {"container_types", sim::ContainerTypes()},
                      {"frame", "world (z up, metres); the sensor pose is the PCD VIEWPOINT"},
@@ -319,6 +322,9 @@ void CheckOptions(const KitchenOptions& o) {
         throw InvalidArgument(fmt::format("--procedural must lie in [0, {}], got {}",
                                           sim::kMaxProceduralPerKind, o.procedural));
     }
+    if (o.appliances && o.procedural == 0) {
+        throw InvalidArgument("--procedural-appliances needs --procedural N (N > 0)");
+    }
     if (o.models == "none" && o.procedural == 0) {
         throw InvalidArgument("--models none needs --procedural N (N > 0)");
     }
@@ -370,6 +376,8 @@ void AddSimulateKitchensCommand(CLI::App& simulate, const GlobalOptions& global)
                     "also build kitchens from N procedural units of every cupboard kind "
                     "(cupboards, sink, wall and tall cupboards, drawer units) of random designs")
         ->capture_default_str();
+    cmd->add_flag("--procedural-appliances", o->appliances,
+                  "with --procedural: N procedural dishwashers, ovens and fridges too");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress and no summary");
     cmd->callback([o, &global] {
         CheckOptions(*o);

@@ -124,7 +124,9 @@ HandleDesign RandomHandle(StreamRng& rng) {
 
 /// A front's rectangle on the carcass's face (y0 < y1, z0 < z1) and how it moves.
 struct FrontRect {
-    enum class Type { kDrawer, kDoorHingeLow, kDoorHingeHigh, kFlap, kPanel } type;
+    /// kFlap: hinged at its top edge (wall cupboards); kFlapLow: at its bottom edge (ovens,
+    /// dishwashers)
+    enum class Type { kDrawer, kDoorHingeLow, kDoorHingeHigh, kFlap, kFlapLow, kPanel } type;
     float y0, y1, z0, z1;
 };
 
@@ -152,6 +154,12 @@ HandlePlace PlaceHandle(const FrontRect& f, const HandleDesign& h, bool wall_uni
             p.horizontal = true;
             p.y = (f.y0 + f.y1) / 2;
             p.z = f.z0 + inset;
+            p.max_length = w - 0.08f;
+            break;
+        case FrontRect::Type::kFlapLow:
+            p.horizontal = true;
+            p.y = (f.y0 + f.y1) / 2;
+            p.z = f.z1 - inset;
             p.max_length = w - 0.08f;
             break;
         case FrontRect::Type::kDoorHingeLow:
@@ -245,7 +253,59 @@ void AddRow(Layout& L, float y0, float y1, float z0, float z1, float gap, int co
     L.fronts.push_back({doors ? FrontRect::Type::kDoorHingeHigh : type, mid + gap / 2, y1, z0, z1});
 }
 
+bool IsAppliance(const std::string& kind) {
+    const auto& a = ProceduralApplianceKinds();
+    return std::find(a.begin(), a.end(), kind) != a.end();
+}
+
+/// Appliances: a dishwasher (a flap hinged at its bottom under a control strip), an oven (a flap
+/// under a panel of knobs, now and then over a storage drawer) and a fridge (tall, with or
+/// without a freezer door under it, or under the counter), in the sizes of built-in appliances.
+Layout RandomApplianceLayout(const std::string& kind, StreamRng& rng, float gap) {
+    Layout L;
+    auto U = [&rng](double a, double b) { return static_cast<float>(rng.Uniform(a, b)); };
+    using T = FrontRect::Type;
+    const bool tall_fridge = kind == "fridge" && rng.Uniform() < 0.6;
+    if (kind == "fridge") {
+        L.width = tall_fridge ? U(0.55, 0.72) : U(0.48, 0.6);
+        L.depth = tall_fridge ? U(0.6, 0.7) : U(0.55, 0.6);
+        L.height = tall_fridge ? U(1.6, 2.0) : U(0.8, 0.88);
+        L.plinth = U(0.0, 0.03);
+    } else {
+        L.width = kind == "dishwasher" && rng.Uniform() < 0.25 ? U(0.44, 0.46) : U(0.57, 0.6);
+        L.depth = U(0.55, 0.6);
+        L.height = U(0.8, 0.88);
+        L.plinth = U(0.08, 0.12);
+    }
+    const float y0 = -L.width / 2 + gap / 2, y1 = L.width / 2 - gap / 2;
+    const float z0 = L.plinth + gap / 2, z1 = L.height - gap / 2;
+    if (kind == "fridge") {
+        // Both doors hinged on one side.
+        const T side = rng.Uniform() < 0.5 ? T::kDoorHingeLow : T::kDoorHingeHigh;
+        if (tall_fridge && rng.Uniform() < 0.6) {
+            const float split = z0 + U(0.55, 0.9);
+            L.fronts.push_back({side, y0, y1, z0, split - gap / 2});
+            L.fronts.push_back({side, y0, y1, split + gap / 2, z1});
+        } else {
+            L.fronts.push_back({side, y0, y1, z0, z1});
+        }
+    } else if (kind == "dishwasher") {
+        const float strip = rng.Uniform() < 0.5 ? U(0.06, 0.11) : 0.0f;
+        if (strip > 0.0f) L.fronts.push_back({T::kPanel, y0, y1, z1 - strip, z1});
+        L.fronts.push_back({T::kFlapLow, y0, y1, z0, z1 - (strip > 0.0f ? strip + gap : 0.0f)});
+    } else {  // oven
+        const float panel = U(0.08, 0.13);
+        const float drawer = rng.Uniform() < 0.6 ? U(0.12, 0.2) : 0.0f;
+        L.fronts.push_back({T::kPanel, y0, y1, z1 - panel, z1});
+        L.fronts.push_back(
+            {T::kFlapLow, y0, y1, z0 + (drawer > 0.0f ? drawer + gap : 0.0f), z1 - panel - gap});
+        if (drawer > 0.0f) L.fronts.push_back({T::kDrawer, y0, y1, z0, z0 + drawer});
+    }
+    return L;
+}
+
 Layout RandomLayout(const std::string& kind, StreamRng& rng, float gap) {
+    if (IsAppliance(kind)) return RandomApplianceLayout(kind, rng, gap);
     Layout L;
     auto U = [&rng](double a, double b) { return static_cast<float>(rng.Uniform(a, b)); };
     const bool wall = kind == "wall_cupboard";
@@ -352,9 +412,14 @@ const std::vector<std::string>& ProceduralUnitKinds() {
     return kinds;
 }
 
+const std::vector<std::string>& ProceduralApplianceKinds() {
+    static const std::vector<std::string> kinds = {"dishwasher", "oven", "fridge"};
+    return kinds;
+}
+
 ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed) {
     const auto& kinds = ProceduralUnitKinds();
-    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) {
+    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end() && !IsAppliance(kind)) {
         throw InvalidArgument(fmt::format("procedural unit: unknown kind '{}'", kind));
     }
     StreamRng rng(seed, 0x70726f63ull);
@@ -369,12 +434,27 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
         StreamRng deep(seed, 0x64656570ull);
         if (deep.Uniform() < 0.25) L.depth = static_cast<float>(deep.Uniform(0.8, 1.0));
     }
-    const Paint front = RandomFinish(rng);
-    const Paint body = rng.Uniform() < 0.5 ? front : RandomFinish(rng);
+    Paint front = RandomFinish(rng);
+    Paint body = rng.Uniform() < 0.5 ? front : RandomFinish(rng);
     const Paint inside = MakePaint(226, 224, 218);
-    const bool framed = rng.Uniform() < 0.35;
-    const HandleDesign handle = RandomHandle(rng);
+    bool framed = rng.Uniform() < 0.35;
+    HandleDesign handle = RandomHandle(rng);
     const bool wall_unit = kind == "wall_cupboard";
+    // Appliances: white, steel or black, flat fronts, bars along the fronts; drawn from a stream
+    // of their own, after the draws every unit makes.
+    StreamRng extra(seed, 0x6170706cull);
+    if (IsAppliance(kind)) {
+        const double c = extra.Uniform();
+        const double j = extra.Uniform(-6, 6);
+        front = c < 0.45   ? MakePaint(240 + j, 240 + j, 236 + j)
+                : c < 0.85 ? MakePaint(182 + j, 184 + j, 188 + j, 0.75f)
+                           : MakePaint(36 + j, 36 + j, 40 + j);
+        body = front;
+        framed = false;
+        handle.kind = HandleDesign::Kind::kBar;
+        handle.sideways = false;
+        if (kind == "fridge") handle.length = static_cast<float>(extra.Uniform(0.2, 0.9));
+    }
 
     ArticulatedModel model;
     model.id = fmt::format("procedural/{}/{:016x}", kind, seed);
@@ -396,8 +476,20 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
         AddBlock(carcass, {-D + 0.05f, -W / 2, 0}, {-0.06f, W / 2, zb}, "furniture_body", body);
     }
     for (const FrontRect& f : L.fronts) {
-        if (f.type == FrontRect::Type::kPanel) {
-            BuildFront(carcass, f, thickness, framed, front, handle, wall_unit, H, rng);
+        if (f.type != FrontRect::Type::kPanel) continue;
+        BuildFront(carcass, f, thickness, framed, front, handle, wall_unit, H, rng);
+        // An oven's control knobs (two to six), a dishwasher's one or two now and then.
+        const int knobs = kind == "oven"         ? extra.UniformInt(2, 6)
+                          : kind == "dishwasher" ? extra.UniformInt(0, 2)
+                                                 : 0;
+        if (knobs == 0) continue;
+        const Paint knob = extra.Uniform() < 0.5 ? handle.paint : MakePaint(30, 30, 32);
+        const float radius = static_cast<float>(extra.Uniform(0.012, 0.02));
+        const float reach = static_cast<float>(extra.Uniform(0.015, 0.028));
+        for (int i = 0; i < knobs; ++i) {
+            const float y =
+                f.y0 + (f.y1 - f.y0) * (static_cast<float>(i) + 0.5f) / static_cast<float>(knobs);
+            AddKnob(carcass, thickness, y, (f.z0 + f.z1) / 2, reach, radius, knob);
         }
     }
     carcass.name = model.id + "/base";
@@ -412,6 +504,13 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
         if (f.type == FrontRect::Type::kPanel) continue;
         PartMesh m;
         BuildFront(m, f, thickness, framed, front, handle, wall_unit, H, rng);
+        if (kind == "oven" && f.type == FrontRect::Type::kFlapLow) {
+            // The door's window of dark glass, below the handle.
+            const float side = static_cast<float>(extra.Uniform(0.06, 0.1));
+            AddBlock(m, {thickness, f.y0 + side, f.z0 + side},
+                     {thickness + 0.002f, f.y1 - side, f.z1 - std::max(side, 0.1f)}, "door_surface",
+                     MakePaint(28, 28, 32, 0.3f));
+        }
         ArticulatedJoint j;
         j.parent = 0;
         j.child = static_cast<int>(model.links.size());
@@ -445,6 +544,11 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
             if (f.type == FrontRect::Type::kFlap) {
                 origin = Eigen::Vector3f(0, 0, f.z1);
                 j.axis = -Eigen::Vector3f::UnitY();
+            } else if (f.type == FrontRect::Type::kFlapLow) {
+                // Down to the floor side, no farther than level.
+                origin = Eigen::Vector3f(0, 0, f.z0);
+                j.axis = Eigen::Vector3f::UnitY();
+                j.upper = std::min(open, 1.55f);
             } else if (f.type == FrontRect::Type::kDoorHingeLow) {
                 origin = Eigen::Vector3f(0, f.y0, 0);
                 j.axis = -Eigen::Vector3f::UnitZ();
@@ -476,15 +580,21 @@ ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed)
     return model;
 }
 
-std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed) {
+std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed,
+                                                        bool appliances) {
     if (per_kind < 0 || per_kind > kMaxProceduralPerKind) {
         throw InvalidArgument(
             fmt::format("procedural units: the count per kind must lie in [0, {}], got {}",
                         kMaxProceduralPerKind, per_kind));
     }
+    std::vector<std::string> kinds = ProceduralUnitKinds();
+    if (appliances) {
+        kinds.insert(kinds.end(), ProceduralApplianceKinds().begin(),
+                     ProceduralApplianceKinds().end());
+    }
     std::vector<KitchenModelEntry> out;
-    for (std::size_t k = 0; k < ProceduralUnitKinds().size(); ++k) {
-        const std::string& kind = ProceduralUnitKinds()[k];
+    for (std::size_t k = 0; k < kinds.size(); ++k) {
+        const std::string& kind = kinds[k];
         for (int i = 0; i < per_kind; ++i) {
             KitchenModelEntry e;
             e.kind = kind;

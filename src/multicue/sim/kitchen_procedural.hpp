@@ -27,17 +27,27 @@ namespace multicue::sim {
 /// tall_cupboard.
 const std::vector<std::string>& ProceduralUnitKinds();
 
+/// The appliance kinds MakeProceduralUnit also builds: dishwasher (a flap hinged at its bottom,
+/// now and then under a control strip), oven (a flap with a window under a panel of knobs,
+/// now and then over a drawer), fridge (one or two doors hinged on one side, tall or under the
+/// counter).
+const std::vector<std::string>& ProceduralApplianceKinds();
+
 /// A random unit of `kind`, deterministic for a seed; its id is "procedural/<kind>/<seed in hex>".
-/// Throws InvalidArgument for a kind not in ProceduralUnitKinds().
+/// Throws InvalidArgument for a kind in neither ProceduralUnitKinds() nor
+/// ProceduralApplianceKinds().
 ArticulatedModel MakeProceduralUnit(const std::string& kind, std::uint64_t seed);
 
 /// The most procedural units of a kind a library may list (each is built when a kitchen of the
 /// library is made).
 inline constexpr int kMaxProceduralPerKind = 1000;
 
-/// `per_kind` library entries of every procedural kind (KitchenModelEntry::procedural set, ids
-/// "procedural/<kind>/<its seed in hex>"), their seeds drawn from `seed`. KitchenModelCache builds
-/// them on first use. Throws InvalidArgument for a count outside [0, kMaxProceduralPerKind].
-std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed);
+/// `per_kind` library entries of every procedural cupboard kind, and with `appliances` of every
+/// appliance kind too (KitchenModelEntry::procedural set, ids "procedural/<kind>/<its seed in
+/// hex>"), their seeds drawn from `seed` (a cupboard kind's are the same either way).
+/// KitchenModelCache builds them on first use. Throws InvalidArgument for a count outside
+/// [0, kMaxProceduralPerKind].
+std::vector<KitchenModelEntry> ProceduralKitchenEntries(int per_kind, std::uint64_t seed,
+                                                        bool appliances = false);
 
 }  // namespace multicue::sim
