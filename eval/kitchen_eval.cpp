@@ -450,8 +450,8 @@ class Evaluator {
                 }
             }
             const auto x = mapping::ContainerFeatures(r.map, static_cast<std::size_t>(furn));
-            data.AppendRow(x, sim::ContainerTypeOfKind(
-                                  k.instances[static_cast<std::size_t>(best)].model->kind));
+            data.AppendRow(
+                x, sim::ContainerTypeOfModel(*k.instances[static_cast<std::size_t>(best)].model));
         }
     }
 
@@ -835,9 +835,10 @@ class Evaluator {
                 }
             }
             if (best < 0) continue;
-            const int gt = TypeIndex(
-                sim::ContainerTypeOfKind(k.instances[static_cast<std::size_t>(inst)].model->kind));
-            const int pr = TypeIndex(map.furniture[static_cast<std::size_t>(best)].type);
+            const sim::ArticulatedModel& model = *k.instances[static_cast<std::size_t>(inst)].model;
+            const std::string truth = sim::ContainerTypeOfModel(model);
+            const std::string& type = map.furniture[static_cast<std::size_t>(best)].type;
+            const int gt = TypeIndex(truth), pr = TypeIndex(type);
             if (gt < 7 && pr < 7)
                 ++s.confusion[static_cast<std::size_t>(gt)][static_cast<std::size_t>(pr)];
             if (o_.verbose) {
@@ -848,12 +849,7 @@ class Evaluator {
                         fmt::format(" {}={:.2f}", mapping::ContainerFeatureNames()[c], x[c]);
                 }
                 std::fprintf(stderr, "container %s %s: %s -> %s;%s\n", f.laser ? "laser" : "kinect",
-                             k.instances[static_cast<std::size_t>(inst)].model->id.c_str(),
-                             sim::ContainerTypeOfKind(
-                                 k.instances[static_cast<std::size_t>(inst)].model->kind)
-                                 .c_str(),
-                             map.furniture[static_cast<std::size_t>(best)].type.c_str(),
-                             features.c_str());
+                             model.id.c_str(), truth.c_str(), type.c_str(), features.c_str());
             }
         }
         // Opened-front pairs: the robot opens matched fronts of this view one at a time.

@@ -319,6 +319,18 @@ TEST(KitchenLibrary, SplitIsStableAndKeepsDuplicatesInTraining) {
     EXPECT_EQ(a[3], sim::MeshSplit::kTune);
     EXPECT_EQ(a[6], sim::MeshSplit::kTune);
     EXPECT_EQ(sim::ContainerTypeOfKind("sink_cupboard"), "cupboard");
+    // A cupboard of drawers only is a drawer unit; one with a door stays a cupboard, and other
+    // kinds keep their type.
+    sim::ArticulatedModel drawers = sim::MakeProceduralUnit("drawer_unit", 3);
+    EXPECT_EQ(sim::ContainerTypeOfModel(drawers), "drawer_unit");
+    drawers.kind = "cupboard";
+    EXPECT_EQ(sim::ContainerTypeOfModel(drawers), "drawer_unit");
+    drawers.kind = "table";
+    EXPECT_EQ(sim::ContainerTypeOfModel(drawers), "table");
+    sim::ArticulatedModel doors = sim::MakeProceduralUnit("wall_cupboard", 3);
+    EXPECT_EQ(sim::ContainerTypeOfModel(doors), "cupboard");
+    doors.joints.clear();
+    EXPECT_EQ(sim::ContainerTypeOfModel(doors), "cupboard");
     test::TempDir dir;
     EXPECT_THROW(sim::ReadKitchenLibrary(dir.path()), IoError);
 }

@@ -58,7 +58,7 @@ Json KitchenJson(const sim::KitchenScene& k) {
         models.push_back({{"name", inst.name},
                           {"model", inst.model->id},
                           {"kind", inst.model->kind},
-                          {"container_type", sim::ContainerTypeOfKind(inst.model->kind)},
+                          {"container_type", sim::ContainerTypeOfModel(*inst.model)},
                           {"run", inst.run},
                           {"scale", inst.model->scale},
                           {"extent", Vec(inst.model->bounds.sizes())},

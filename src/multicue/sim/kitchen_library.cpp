@@ -32,6 +32,18 @@ std::string ContainerTypeOfKind(const std::string& kind) {
     return kind;
 }
 
+std::string ContainerTypeOfModel(const ArticulatedModel& model) {
+    const std::string type = ContainerTypeOfKind(model.kind);
+    if (type != "cupboard") return type;
+    int drawers = 0;
+    for (const ArticulatedJoint& j : model.joints) {
+        if (!j.Movable()) continue;
+        if (j.type != io::UrdfJointType::kPrismatic) return type;
+        ++drawers;
+    }
+    return drawers > 0 ? "drawer_unit" : type;
+}
+
 std::vector<KitchenModelEntry> ReadKitchenLibrary(const std::filesystem::path& root) {
     const std::filesystem::path labels = root / "labels.csv";
     std::ifstream in(labels);

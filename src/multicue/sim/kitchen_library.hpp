@@ -36,6 +36,11 @@ const std::vector<std::string>& KitchenModelKinds();
 /// cupboards), drawer_unit, oven, dishwasher, fridge, microwave, table.
 std::string ContainerTypeOfKind(const std::string& kind);
 
+/// The container type of a model: its kind's, except that a cupboard whose moving fronts are all
+/// drawers is a drawer unit. Every drawer unit of the library is such a unit, and two of its
+/// "cupboards" (MiniFridgeBase/45261 and 45746, stacks of drawers) are too.
+std::string ContainerTypeOfModel(const ArticulatedModel& model);
+
 /// The container types, in a fixed order: cupboard, drawer_unit, oven, dishwasher, fridge,
 /// microwave, table.
 const std::vector<std::string>& ContainerTypes();
