@@ -1304,6 +1304,24 @@ class Evaluator {
         std::printf("container type accuracy %.3f (%zu of %zu)\n", cacc, correct, total);
         j["container_accuracy"] = cacc;
         j["container_confusion"] = s.confusion;
+        // The worst case behind the pooled accuracy: each true type's share typed right.
+        std::printf("  right by true type:");
+        double worst = 2.0;
+        std::string worst_type;
+        for (std::size_t r = 0; r < 7; ++r) {
+            std::size_t row = 0;
+            for (std::size_t c = 0; c < 7; ++c) row += s.confusion[r][c];
+            if (row == 0) continue;
+            std::printf(" %s %zu/%zu", names[r].c_str(), s.confusion[r][r], row);
+            const double share = static_cast<double>(s.confusion[r][r]) / static_cast<double>(row);
+            j["container_right_by_type"][names[r]] = share;
+            if (share < worst) {
+                worst = share;
+                worst_type = names[r];
+            }
+        }
+        if (!worst_type.empty()) std::printf("; worst %s (%.2f)", worst_type.c_str(), worst);
+        std::printf("\n");
         const double oacc =
             ratio(static_cast<double>(s.open_correct), static_cast<double>(s.open_total));
         std::printf(
