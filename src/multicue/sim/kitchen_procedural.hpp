@@ -1,18 +1,20 @@
 #pragma once
 /// \file Procedural kitchen units: cupboards, sink cupboards, drawer units, wall and tall
 /// cupboards built from boards, with doors, drawers, flaps and fixed panels in random layouts,
-/// flat or framed fronts, and bar and knob handles of random size and placement.
+/// flat or framed fronts, and bar and knob handles of random size and placement; and appliances
+/// (dishwashers, ovens, fridges) built the same way.
 ///
-/// PartNet-Mobility holds few designs of each kind (three drawer counters in the tune half), so
-/// classifiers and rules trained or validated on one half of the library meet unit designs on the
-/// other half they never saw. Procedural units add as many designs as training wants; they never
+/// PartNet-Mobility holds few designs of each kind (three drawer counters and one oven in the
+/// tune half), so classifiers and rules trained or validated on one half of the library meet
+/// unit designs on the other half they never saw. Procedural units add as many designs as training wants; they never
 /// replace the library's held-out half for evaluation.
 ///
 /// The models follow the conventions of LoadArticulatedModel: z up, fronts facing +x, the closed
 /// model's bounding box centred on x = y = 0 with its bottom at z = 0; one root link (semantic
 /// "furniture_body") and one link per door ("rotation_door", revolute, opening towards +x) or
 /// drawer ("drawer", prismatic along +x, with its box); handles are parts named "handle" and
-/// knobs parts named "knob" of their front's link; vertex colours and laser reflectances are set.
+/// knobs parts named "knob" of their front's link (an oven's or dishwasher's control knobs of the
+/// root link); vertex colours and laser reflectances are set.
 
 #include <cstdint>
 #include <string>
