@@ -283,8 +283,8 @@ struct Scores {
     std::size_t joint_none = 0;  ///< matched fronts without a fixture (no joint)
     std::size_t sign_correct = 0;
     Stats axis_angle, axis_position;
-    /// Hinge positions of the fronts whose hinge edge the scan saw, and how many it did not
-    /// (the edge out of the view or hidden).
+    /// Hinge positions of the fronts whose hinge edge the scan saw (those it did not, the edge
+    /// out of the view or hidden, are hinge_seen_flag[0]).
     Stats axis_position_seen;
     /// The map's own word (Articulation::hinge_seen) against the truth's: [truth][map].
     std::array<std::array<std::size_t, 2>, 2> hinge_seen_flag{};
@@ -1287,6 +1287,7 @@ class Evaluator {
         j["hinge_position_flagged_seen_m"] = s.axis_position_flagged.Json();
         j["hinge_position_flagged_unseen_m"] = s.axis_position_flagged_unseen.Json();
         std::size_t correct = 0, total = 0;
+        std::array<std::size_t, 7> row_total{};  // pieces of each true type
         const auto& names = mapping::ContainerTypeNames();
         std::printf("container types (rows true, columns predicted):\n  %-12s", "");
         for (const auto& n : names) std::printf(" %6.6s", n.c_str());
@@ -1295,6 +1296,7 @@ class Evaluator {
             std::printf("  %-12s", names[r].c_str());
             for (std::size_t c = 0; c < 7; ++c) {
                 std::printf(" %6zu", s.confusion[r][c]);
+                row_total[r] += s.confusion[r][c];
                 total += s.confusion[r][c];
                 if (r == c) correct += s.confusion[r][c];
             }
@@ -1309,11 +1311,10 @@ class Evaluator {
         double worst = 2.0;
         std::string worst_type;
         for (std::size_t r = 0; r < 7; ++r) {
-            std::size_t row = 0;
-            for (std::size_t c = 0; c < 7; ++c) row += s.confusion[r][c];
-            if (row == 0) continue;
-            std::printf(" %s %zu/%zu", names[r].c_str(), s.confusion[r][r], row);
-            const double share = static_cast<double>(s.confusion[r][r]) / static_cast<double>(row);
+            if (row_total[r] == 0) continue;
+            std::printf(" %s %zu/%zu", names[r].c_str(), s.confusion[r][r], row_total[r]);
+            const double share =
+                static_cast<double>(s.confusion[r][r]) / static_cast<double>(row_total[r]);
             j["container_right_by_type"][names[r]] = share;
             if (share < worst) {
                 worst = share;

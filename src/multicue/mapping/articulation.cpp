@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -384,8 +385,11 @@ Articulation ArticulationFromFixtures(const std::vector<Front>& fronts, std::siz
     return a;
 }
 
-bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
-                   const std::vector<std::size_t>& scan_offsets, const ArticulationParams& p) {
+namespace {
+
+/// HingeEdgeSeen over scans given as spans (one cloud needs no copy into a vector).
+bool EdgeSeen(const Front& front, std::span<const PointCloud> scans,
+              std::span<const std::size_t> scan_offsets, const ArticulationParams& p) {
     p.Validate();
     const Articulation& a = front.articulation;
     if (a.type != JointType::kRevolute || front.indices.empty()) return true;
@@ -469,6 +473,13 @@ bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
         }
     }
     return !told;
+}
+
+}  // namespace
+
+bool HingeEdgeSeen(const Front& front, const std::vector<PointCloud>& scans,
+                   const std::vector<std::size_t>& scan_offsets, const ArticulationParams& p) {
+    return EdgeSeen(front, scans, scan_offsets, p);
 }
 
 MotionResult ArticulationFromMotion(const PointCloud& closed, const PointCloud& opened,
@@ -841,7 +852,7 @@ namespace {
 /// moved: the front keeps that part, and the strips of the rest below and above it, at least
 /// `min_size` tall, become fronts of their own. Points and fixtures go to the piece they lie on
 /// (fixtures off every piece to the nearest); a strip with a fixture is hinged by
-/// ArticulationFromFixtures.
+/// ArticulationFromFixtures, and `cloud` tells whether its hinge's edge was seen.
 void SplitAtMovedPart(KitchenMap& map, const PointCloud& cloud, std::size_t index,
                       const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, float min_size) {
     const Front whole = map.fronts[index];
@@ -896,6 +907,10 @@ void SplitAtMovedPart(KitchenMap& map, const PointCloud& cloud, std::size_t inde
         if (!pieces[k].fixtures.empty()) {
             pieces[k].articulation =
                 ArticulationFromFixtures(pieces[k], map.fixtures, map.frame, map.floor_height);
+            const std::size_t offset = 0;
+            pieces[k].articulation.hinge_seen =
+                EdgeSeen(pieces[k], std::span<const PointCloud>(&cloud, 1),
+                         std::span<const std::size_t>(&offset, 1), ArticulationParams{});
         }
     }
     map.fronts[index] = std::move(pieces.front());

@@ -252,9 +252,10 @@ MotionResult ArticulationFromMotion(const KdTree& closed, const PointCloud& open
 /// band of its rectangle moved (`MotionResult::front_min` / `front_max`), the front is cut down
 /// to that band, and the rest below and above it (strips at least two coverage cells tall) are
 /// appended as fronts of their own, with the points and fixtures on them (one with a fixture
-/// hinged by ArticulationFromFixtures); group and type the furniture again afterwards. Returns
-/// the front's index, or -1 when no front moved. `map` must have been built from `closed`: a
-/// front's point outside it throws InvalidArgument, before any change.
+/// hinged by ArticulationFromFixtures, its `hinge_seen` from `closed`); group and type the
+/// furniture again afterwards. Returns the front's index, or -1 when no front moved. `map` must
+/// have been built from `closed`: a front's point outside it throws InvalidArgument, before any
+/// change.
 int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
                                      const PointCloud& opened, const MotionParams& params = {});
 

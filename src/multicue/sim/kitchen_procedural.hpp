@@ -6,8 +6,8 @@
 ///
 /// PartNet-Mobility holds few designs of each kind (three drawer counters and one oven in the
 /// tune half), so classifiers and rules trained or validated on one half of the library meet
-/// unit designs on the other half they never saw. Procedural units add as many designs as training wants; they never
-/// replace the library's held-out half for evaluation.
+/// unit designs on the other half they never saw. Procedural units add as many designs as
+/// training wants; they never replace the library's held-out half for evaluation.
 ///
 /// The models follow the conventions of LoadArticulatedModel: z up, fronts facing +x, the closed
 /// model's bounding box centred on x = y = 0 with its bottom at z = 0; one root link (semantic
