@@ -13,10 +13,11 @@
 // scored kitchens (--scored-reach, --scored-thickness): a validation on handle designs the
 // classifier has not seen.
 //
-//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 12] [--fixture-kitchens 24]
+//   build/eval/kitchen_eval [--kitchens 10] [--train-kitchens 48] [--fixture-kitchens 24]
 //                           [--views 3] [--seed 1] [--sensor both|kinect|laser] [--split test]
 //                           [--train-split other|tune|test] [--rules] [--json F]
 //                           [--save-containers MODEL] [--save-fixtures PREFIX]
+//                           [--load-containers MODEL] [--load-fixtures PREFIX]
 
 #include <algorithm>
 #include <array>
@@ -97,6 +98,7 @@ struct Options {
     bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
     bool seen_coverage = mapping::MotionParams{}.seen_coverage;
     std::string load_fixtures;
+    std::string load_containers;  ///< a container classifier (`multicue train containers`)
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
     float vary_chance = sim::HandleVariation{}.chance;
@@ -321,50 +323,22 @@ int TypeIndex(const std::string& t) {
 }
 
 /// One scanned frame with its ground truth.
-struct Frame {
-    PointCloud cloud;
-    bool laser = false;
-    Eigen::Isometry3f pose;
-};
+using Frame = training::KitchenFrame;
 
 class Evaluator {
   public:
-    explicit Evaluator(const Options& o) : o_(o) {
-        kinect_.shading = 0.3f;
-        laser_.tilt_min_deg = -40.0f;
-        laser_.tilt_max_deg = 60.0f;
+    explicit Evaluator(const Options& o) : o_(o) {}
+
+    /// The scans of a kitchen by the chosen sensors, as `simulate kitchens` makes them.
+    std::vector<Frame> Frames(const sim::KitchenScene& k, std::uint64_t seed) const {
+        return training::ScanKitchen(k, o_.sensor != "laser" ? o_.views : 0,
+                                     o_.sensor != "kinect" ? o_.laser_views : 0, seed);
     }
 
-    /// Kitchens of `split` with their frames.
-    std::vector<Frame> Frames(sim::KitchenScene& k, std::uint64_t seed) const {
-        std::vector<Frame> out;
-        const sim::RayCaster caster(k.scene);
-        std::size_t v = 0;
-        if (o_.sensor != "kinect") {
-            for (const auto& pose : sim::KitchenLaserPoses(k, o_.laser_views, seed)) {
-                Frame f{sim::ScanLaser(caster, pose, laser_, sim::SubSeed(seed, 100 + v++)), true,
-                        pose};
-                sim::AddKitchenTruth(k, f.cloud);
-                sim::ScanToWorld(f.cloud, pose);
-                out.push_back(std::move(f));
-            }
-        }
-        if (o_.sensor != "laser") {
-            for (const auto& pose : sim::KitchenCameraPoses(k, o_.views, seed)) {
-                Frame f{sim::ScanKinect(caster, pose, kinect_, sim::SubSeed(seed, 100 + v++)),
-                        false, pose};
-                sim::AddKitchenTruth(k, f.cloud);
-                sim::ScanToWorld(f.cloud, pose);
-                out.push_back(std::move(f));
-            }
-        }
-        return out;
-    }
-
-    mapping::MapKitchenResult Map(const Frame& f, const ml::Classifier* classifier) const {
-        const auto sensor =
-            f.laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect;
-        mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
+    /// The map's parameters for one sensor, with the options that change them.
+    mapping::MapKitchenParams Params(bool laser) const {
+        mapping::MapKitchenParams params = mapping::KitchenParamsFor(
+            laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect);
         params.fixtures.min_confidence = o_.fixture_confidence;
         params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
                                                         : mapping::FrontSegmentation::kOutline;
@@ -378,8 +352,12 @@ class Evaluator {
         if (o_.stack_centre_share >= 0.0f) {
             params.articulation.stack_centre_share = o_.stack_centre_share;
         }
+        return params;
+    }
+
+    mapping::MapKitchenResult Map(const Frame& f, const ml::Classifier* classifier) const {
         const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
-        return mapping::MapKitchen({f.cloud}, params, classifier, fixtures.get());
+        return mapping::MapKitchen({f.cloud}, Params(f.laser), classifier, fixtures.get());
     }
 
     /// The fixture classifier of one sensor, trained on simulated kitchens (or loaded).
@@ -425,34 +403,6 @@ class Evaluator {
             c->Save(o_.save_fixtures + (laser ? "_laser.mcm" : "_kinect.mcm"));
         }
         return c;
-    }
-
-    /// Training rows: the features of predicted furniture labelled by the true model whose fronts
-    /// they hold most of.
-    void CollectTraining(const sim::KitchenScene& k, const Frame& f,
-                         const mapping::MapKitchenResult& r, ml::Dataset& data) const {
-        const ScanTruth t(f.cloud);
-        const auto fronts = TrueFronts(f.cloud, t);
-        const auto match = MatchFronts(r.map, t, fronts);
-        std::map<int, std::map<int, std::size_t>> votes;  // furniture -> instance -> points
-        for (const auto& [key, m] : match) {
-            if (m.second < 0.3f) continue;
-            const int furn = r.map.fronts[static_cast<std::size_t>(m.first)].furniture;
-            votes[furn][static_cast<int>(key >> 16) - 1] += fronts.at(key).points;
-        }
-        for (const auto& [furn, v] : votes) {
-            int best = -1;
-            std::size_t n = 0;
-            for (const auto& [inst, c] : v) {
-                if (c > n) {
-                    n = c;
-                    best = inst;
-                }
-            }
-            const auto x = mapping::ContainerFeatures(r.map, static_cast<std::size_t>(furn));
-            data.AppendRow(
-                x, sim::ContainerTypeOfModel(*k.instances[static_cast<std::size_t>(best)].model));
-        }
     }
 
     /// "kinect MODEL" or "laser MODEL" of a joint's model, for the -v lines.
@@ -504,7 +454,7 @@ class Evaluator {
                              "labelled, sensor %.2f m above the floor; true points labelled%s)\n",
                              f.laser ? "laser" : "kinect", static_cast<unsigned long long>(seed),
                              kIouClasses[c].c_str(), inter[c] / uni[c], truth, predicted,
-                             f.pose.translation().z(), labels.c_str());
+                             f.T_world_sensor.translation().z(), labels.c_str());
             }
         }
         // Fixtures: greedy 1:1 by distance from the detection's centre to the true points.
@@ -599,7 +549,7 @@ class Evaluator {
                                  f.laser ? "laser" : "kinect",
                                  ModelIdOf(k, t.model[fixtures[g].points.front()], "?").c_str(),
                                  why.c_str(), fixtures[g].points.size(),
-                                 (c - f.pose.translation()).norm(), detection.c_str());
+                                 (c - f.T_world_sensor.translation()).norm(), detection.c_str());
                 }
             }
             s.any_tp += tp;
@@ -887,9 +837,10 @@ class Evaluator {
             Frame opened;
             {
                 const sim::RayCaster caster(k.scene);
-                Eigen::Isometry3f pose = f.pose;
-                opened.cloud = f.laser ? sim::ScanLaser(caster, pose, laser_, rng())
-                                       : sim::ScanKinect(caster, pose, kinect_, rng());
+                Eigen::Isometry3f pose = f.T_world_sensor;
+                opened.cloud =
+                    f.laser ? sim::ScanLaser(caster, pose, training::KitchenLaserParams(), rng())
+                            : sim::ScanKinect(caster, pose, training::KitchenKinectParams(), rng());
                 sim::AddKitchenTruth(k, opened.cloud);
                 sim::ScanToWorld(opened.cloud, pose);
             }
@@ -1029,26 +980,23 @@ class Evaluator {
         }
         std::unique_ptr<ml::Classifier> classifier;
         std::size_t train_rows = 0;
-        if (!o_.rules && o_.train_kitchens > 0) {
-            ml::Dataset data =
-                ml::Dataset::WithBlocks({{"container", mapping::ContainerFeatureNames()}});
-            for (int i = 0; i < o_.train_kitchens; ++i) {
-                const std::uint64_t seed =
-                    sim::SubSeed(o_.seed ^ 0x7261696eull, static_cast<std::uint64_t>(i));
-                sim::KitchenScene k = sim::MakeKitchenScene(train_lib, cache, scene, seed);
-                for (const Frame& f : Frames(k, seed)) {
-                    try {
-                        CollectTraining(k, f, Map(f, nullptr), data);
-                    } catch (const DataError& e) {
-                        std::fprintf(stderr, "training kitchen %d, %s frame: %s\n", i,
-                                     f.laser ? "laser" : "kinect", e.what());
-                    }
-                }
-            }
+        if (!o_.load_containers.empty()) {
+            classifier = ml::LoadClassifier(o_.load_containers);
+        } else if (!o_.rules && o_.train_kitchens > 0) {
+            training::ContainerTrainingOptions t;
+            t.kitchens = o_.train_kitchens;
+            t.views = o_.sensor != "laser" ? o_.views : 0;
+            t.laser_views = o_.sensor != "kinect" ? o_.laser_views : 0;
+            t.seed = o_.seed ^ 0x7261696eull;
+            t.procedural_share = o_.procedural_share;
+            t.kinect_params = Params(false);
+            t.laser_params = Params(true);
+            t.kinect_fixtures = fixtures_kinect_.get();
+            t.laser_fixtures = fixtures_laser_.get();
+            const ml::Dataset data = training::CollectContainerRows(train_lib, cache, t);
             train_rows = data.rows();
             if (data.num_classes() >= 2) {
-                classifier = ml::CreateClassifier("rtrees:trees=100");
-                classifier->Fit(data);
+                classifier = training::TrainContainerClassifier(data, "rtrees:trees=100");
                 if (!o_.save_containers.empty()) classifier->Save(o_.save_containers);
             }
             std::vector<int> per_type(data.num_classes(), 0);
@@ -1096,7 +1044,9 @@ class Evaluator {
         nlohmann::json out = {{"split", o_.split},
                               {"kitchens", o_.kitchens},
                               {"seed", o_.seed},
-                              {"containers", o_.rules ? "rules" : "rtrees"},
+                              {"containers", !o_.load_containers.empty() ? o_.load_containers
+                                             : o_.rules                  ? "rules"
+                                                                         : "rtrees"},
                               {"fixtures", o_.fixture_kitchens > 0 ? o_.fixture_spec : "rules"},
                               {"fixture_kitchens", o_.fixture_kitchens},
                               {"vary_handles", o_.vary_handles},
@@ -1368,8 +1318,6 @@ class Evaluator {
   private:
     Options o_;
     std::unique_ptr<ml::Classifier> fixtures_kinect_, fixtures_laser_;
-    sim::KinectParams kinect_;
-    sim::LaserParams laser_;
 };
 
 }  // namespace
@@ -1525,6 +1473,8 @@ int main(int argc, char** argv) {
     app.add_option("--json", o.json, "also write the figures as JSON");
     app.add_option("--save-containers", o.save_containers,
                    "also save the container classifier (for map kitchen --containers)");
+    app.add_option("--load-containers", o.load_containers,
+                   "a container classifier (`multicue train containers`) instead of training one");
     if (auto code = eval::ParseDriverOptions(app, "kitchen_eval", [&] {
             app.parse(argc, argv);
             if (o.sensor != "both" && o.sensor != "kinect" && o.sensor != "laser") {

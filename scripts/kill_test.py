@@ -5,7 +5,7 @@
                          [--work DIR] [--json report.json] [--kitchen-models DIR]
 
 For each job (train, extract, simulate, import, run, classifier, convert, furniture, detect,
-fixtures) it prepares inputs, runs the job once to completion for the reference output and its
+fixtures, containers) it prepares inputs, runs the job once to completion for the reference output and its
 duration, then N times: puts the previous output (another complete output) in place, starts the
 job, kills its process with SIGKILL at a uniformly random moment within the reference duration,
 and checks
@@ -422,6 +422,17 @@ class Fixtures(SeededFileJob):
                 "--kitchens", "1", "--views", "1", "--kitchen", self.models, "--seed", seed, "-q"]
 
 
+class Containers(SeededFileJob):
+    """train containers on kitchens of procedural units only (no shared data needed)."""
+    name = "containers"
+    output = "containers.mcm"
+
+    def cmd(self, out, seed=1):
+        return [self.cli, "--threads", "2", "train", "containers", "--out", out / self.output,
+                "--kitchen", "none", "--procedural", "2", "--kitchens", "2", "--views", "1",
+                "--laser-views", "0", "--seed", seed, "-q"]
+
+
 class Detect(Job):
     """detect furniture: three outputs (result.json, models.ply, report.html), each written
     atomically; the previous outputs come from a model trained with another seed."""
@@ -489,7 +500,7 @@ class Detect(Job):
 
 
 JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier, Convert,
-                            Furniture, Detect, Fixtures]}
+                            Furniture, Detect, Fixtures, Containers]}
 
 
 def run_job(job, kills, rng, report):

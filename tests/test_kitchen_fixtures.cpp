@@ -25,7 +25,9 @@
 #include "multicue/mapping/kitchen_map.hpp"
 #include "multicue/mapping/room_structure.hpp"
 #include "multicue/ml/classifier.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
 #include "multicue/sim/kitchen_scene.hpp"
+#include "multicue/training/kitchen_scan_truth.hpp"
 #include "multicue/training/kitchen_training.hpp"
 
 namespace multicue {
@@ -1031,6 +1033,121 @@ TEST(FixtureParams, BadValuesNameTheField) {
     EXPECT_THROW(options([](Options& o) { o.handle_variation.max_length = 0.01f; }).Validate(),
                  InvalidArgument);
     EXPECT_THROW(training::SelectKitchenFold({}, 2), InvalidArgument);
+}
+
+/// Adds a ground-truth field of `T` values (as sim::AddKitchenTruth writes them) to `c`.
+template <typename T>
+void AddTruthField(PointCloud& c, const char* name, const std::vector<T>& values) {
+    ExtraField f{name, 'U', sizeof(T), 1, {}};
+    f.data.resize(values.size() * sizeof(T));
+    std::memcpy(f.data.data(), values.data(), f.data.size());
+    c.extra_fields.push_back(std::move(f));
+}
+
+TEST(ContainerTraining, PiecesBelongToTheModelHoldingMostOfTheirMatchedFronts) {
+    // 350 points: a door (model 1, link 1), a drawer (model 1, link 2), a door (model 2, link 1)
+    // of 100 points each, and 50 body points of model 2.
+    PointCloud c;
+    std::vector<std::uint8_t> semantic;
+    std::vector<std::uint16_t> model, link;
+    auto add = [&](int n, sim::KitchenClass cls, std::uint16_t m, std::uint16_t l) {
+        for (int i = 0; i < n; ++i) {
+            c.points.emplace_back(0.01f * static_cast<float>(c.size()), 0.0f, 0.0f);
+            semantic.push_back(static_cast<std::uint8_t>(cls));
+            model.push_back(m);
+            link.push_back(l);
+        }
+    };
+    add(100, sim::KitchenClass::kDoor, 1, 1);
+    add(100, sim::KitchenClass::kDrawer, 1, 2);
+    add(100, sim::KitchenClass::kDoor, 2, 1);
+    add(50, sim::KitchenClass::kBody, 2, 0);
+    c.width = static_cast<std::uint32_t>(c.size());
+    c.height = 1;
+    AddTruthField(c, "semantic", semantic);
+    AddTruthField(c, "model", model);
+    AddTruthField(c, "link", link);
+    auto range = [](Index a, Index b) {
+        Indices out;
+        for (Index i = a; i < b; ++i) out.push_back(i);
+        return out;
+    };
+    // Fronts: the first door exactly and the drawer with 20 points of the second door (piece
+    // 0), the rest of the second door (piece 1), the body (piece 2).
+    KitchenMap map;
+    map.fronts.resize(4);
+    map.fronts[0].indices = range(0, 100);
+    map.fronts[1].indices = range(100, 220);
+    map.fronts[2].indices = range(220, 300);
+    map.fronts[3].indices = range(300, 350);
+    for (const int f : {0, 1, 2, 3}) map.fronts[static_cast<std::size_t>(f)].furniture = f;
+    map.fronts[1].furniture = 0;
+    map.fronts[2].furniture = 1;
+    map.fronts[3].furniture = 2;
+
+    const training::ScanTruth truth(c);
+    const auto fronts = training::TrueFronts(c, truth);
+    ASSERT_EQ(fronts.size(), 3u);  // the body is no front
+    const auto match = training::MatchFronts(map, truth, fronts);
+    ASSERT_EQ(match.size(), 3u);
+    EXPECT_EQ(match.at((1u << 16) | 1u).first, 0);
+    EXPECT_FLOAT_EQ(match.at((1u << 16) | 1u).second, 1.0f);
+    EXPECT_EQ(match.at((1u << 16) | 2u).first, 1);
+    EXPECT_NEAR(match.at((1u << 16) | 2u).second, 100.0f / 120.0f, 1e-6f);
+    EXPECT_EQ(match.at((2u << 16) | 1u).first, 2);  // front 1 is taken by its better match
+    EXPECT_NEAR(match.at((2u << 16) | 1u).second, 0.8f, 1e-6f);
+
+    const auto pieces = training::FurnitureInstances(map, c);
+    EXPECT_EQ(pieces, (std::map<int, int>{{0, 0}, {1, 1}}));  // instances count from 0
+    EXPECT_EQ(training::FurnitureInstances(map, c, 0.9f), (std::map<int, int>{{0, 0}}));
+    // A scan without the ground-truth fields has no true fronts, hence no pieces.
+    PointCloud bare;
+    bare.points = c.points;
+    EXPECT_TRUE(training::FurnitureInstances(map, bare).empty());
+}
+
+TEST(ContainerTraining, RowsOfAProceduralKitchenAreLabelledAndReproducible) {
+    const auto models = sim::ProceduralKitchenEntries(2, 5, true);
+    training::ContainerTrainingOptions o;
+    o.kitchens = 1;
+    o.views = 1;
+    o.laser_views = 0;
+    sim::KitchenModelCache cache;
+    const ml::Dataset rows = training::CollectContainerRows(models, cache, o);
+    ASSERT_GT(rows.rows(), 2u);
+    EXPECT_EQ(rows.cols(), ContainerFeatureNames().size());
+    for (const auto& name : rows.class_names) {
+        EXPECT_NE(std::find(ContainerTypeNames().begin(), ContainerTypeNames().end(), name),
+                  ContainerTypeNames().end())
+            << name;
+    }
+    const ml::Dataset again = training::CollectContainerRows(models, cache, o);
+    EXPECT_EQ(again.values, rows.values);
+    EXPECT_EQ(again.labels, rows.labels);
+    EXPECT_EQ(again.class_names, rows.class_names);
+    ASSERT_GE(rows.num_classes(), 2u);  // appliances and cupboards in one kitchen
+    // The forest learns its own rows.
+    const auto classifier = training::TrainContainerClassifier(rows, "rtrees:trees=20");
+    const std::vector<int> predicted = classifier->Predict(rows);
+    std::size_t right = 0;
+    for (std::size_t r = 0; r < rows.rows(); ++r) right += predicted[r] == rows.labels[r];
+    EXPECT_GE(right * 10, rows.rows() * 8);
+    // One type cannot train; bad options are refused before any kitchen is built.
+    ml::Dataset one = training::EmptyContainerDataset();
+    one.AppendRow(std::vector<float>(ContainerFeatureNames().size(), 0.0f), "cupboard");
+    EXPECT_THROW(training::TrainContainerClassifier(one, "rtrees:trees=5"), DataError);
+    for (auto change : std::initializer_list<void (*)(training::ContainerTrainingOptions&)>{
+             [](training::ContainerTrainingOptions& b) { b.kitchens = 0; },
+             [](training::ContainerTrainingOptions& b) { b.views = b.laser_views = 0; },
+             [](training::ContainerTrainingOptions& b) { b.views = -1; },
+             [](training::ContainerTrainingOptions& b) { b.procedural_share = 2.0f; },
+             [](training::ContainerTrainingOptions& b) { b.num_threads = -1; }}) {
+        training::ContainerTrainingOptions bad = o;
+        change(bad);
+        EXPECT_THROW(training::CollectContainerRows(models, cache, bad), InvalidArgument);
+    }
+    // No models: no kitchen can be built.
+    EXPECT_THROW(training::CollectContainerRows({}, cache, o), DataError);
 }
 
 }  // namespace

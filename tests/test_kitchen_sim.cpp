@@ -678,11 +678,31 @@ TEST(KitchenCli, ProceduralKitchensWithoutTheLibrary) {
         opened =
             " --opened " + (sim_dir / kitchen["opened"][0]["file"].get<std::string>()).string();
     }
+    // The container classifier, on maps made with that fixture classifier.
+    const auto containers = dir / "containers.mcm";
+    const auto rows = dir / "pieces.csv";
+    r = test::RunCli(
+        "train containers --kitchen none --procedural 2 --kitchens 1 --views 1 --laser-views 0 "
+        "-q --kinect-fixtures " +
+        fixtures.string() + " --rows " + rows.string() + " --out " + containers.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string csv = test::ReadTextFile(rows);
+    EXPECT_NE(csv.find("container:drawers"), std::string::npos);
+    EXPECT_NE(csv.find("cupboard"), std::string::npos);
     r = test::RunCli("map kitchen " +
                      (sim_dir / kitchen["frames"][0]["file"].get<std::string>()).string() + opened +
-                     " -q --fixtures " + fixtures.string() + " --out " + map_dir.string());
+                     " -q --fixtures " + fixtures.string() + " --containers " +
+                     containers.string() + " --out " + map_dir.string());
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_FALSE(io::ReadUrdf(map_dir / "map.urdf").links.empty());
+    const auto map_json = nlohmann::json::parse(test::ReadTextFile(map_dir / "map.json"));
+    ASSERT_FALSE(map_json["furniture"].empty());
+    // A fixture classifier where the container one belongs is refused before any work.
+    r = test::RunCli("train containers --kitchen none --procedural 2 --kinect-fixtures " +
+                     containers.string() + " --out " + (dir / "y.mcm").string());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_EQ(r.output.find("kitchens:"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "y.mcm"));
     // Without procedural units there is nothing to build kitchens from.
     EXPECT_EQ(test::RunCli("simulate kitchens --models none --out " + (dir / "x").string()).code,
               2);
@@ -748,6 +768,19 @@ TEST(KitchenCli, BadInputWritesNothing) {
                   .code,
               2);
     EXPECT_FALSE(std::filesystem::exists(dir / "f.mcm"));
+    for (const std::string& bad : std::vector<std::string>{
+             "--sensor sonar", "--kitchens 0", "--views -1", "--sensor kinect --views 0",
+             "--fold 2", "--split half", "--procedural -1", "--procedural 100000",
+             "--procedural-share 1.5", "--classifier bogus", "--kitchen none --procedural 0",
+             "--rows " + (dir / "none" / "rows.csv").string()}) {
+        r = test::RunCli("train containers " + bad + " --out " + (dir / "g.mcm").string());
+        EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    }
+    EXPECT_EQ(test::RunCli("train containers --out " + (dir / "none" / "g.mcm").string()).code, 2);
+    r = test::RunCli("train containers --kinect-fixtures " + (dir / "missing.mcm").string() +
+                     " --out " + (dir / "g.mcm").string());
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "g.mcm"));
 }
 
 }  // namespace

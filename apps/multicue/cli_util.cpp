@@ -35,6 +35,13 @@ void CheckDistinctPaths(const std::filesystem::path& in, const std::filesystem::
     }
 }
 
+void CheckOutputFolder(const std::string& option, const std::filesystem::path& file) {
+    const std::filesystem::path folder = file.parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+        throw InvalidArgument(fmt::format("{}: no such folder '{}'", option, folder.string()));
+    }
+}
+
 Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option) {
     std::istringstream in(text);
     Eigen::Vector3f v;

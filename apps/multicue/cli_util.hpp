@@ -21,6 +21,10 @@ CLI::Option* AddFormatOption(CLI::App& cmd, std::string& format);
 /// Refuses to write the output over the input, which would lose the input on a failed run.
 void CheckDistinctPaths(const std::filesystem::path& in, const std::filesystem::path& out);
 
+/// Refuses an output file (given by `option`; empty: none) whose folder does not exist, before
+/// any work is done.
+void CheckOutputFolder(const std::string& option, const std::filesystem::path& file);
+
 /// Parses "x,y,z" into a vector; throws InvalidArgument naming the option otherwise.
 Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option);
 

@@ -3,7 +3,6 @@
 // articulated kitchen models scanned by one sensor (docs/kitchens.md).
 
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -70,12 +69,8 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
         throw InvalidArgument("--kitchen none needs --procedural N (N > 0)");
     }
     ml::CreateClassifier(o.spec);  // throws for a bad spec
-    for (const auto& [option, file] : {std::pair{"--out", &o.out}, std::pair{"--rows", &o.rows}}) {
-        const std::filesystem::path folder = std::filesystem::path(*file).parent_path();
-        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-            throw InvalidArgument(fmt::format("{}: no such folder '{}'", option, folder.string()));
-        }
-    }
+    CheckOutputFolder("--out", o.out);
+    CheckOutputFolder("--rows", o.rows);
     // "none": training kitchens of procedural units only.
     const auto library = o.kitchen == "none" ? std::vector<sim::KitchenModelEntry>{}
                                              : sim::ReadKitchenLibrary(o.kitchen);
@@ -154,7 +149,7 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
                     "chance that a unit of a kind with procedural and library models is "
                     "procedural")
         ->capture_default_str();
-    cmd->add_option("--classifier", o->spec, "classifier spec (`multicue ml classifier train`)")
+    cmd->add_option("--classifier", o->spec, "classifier spec (`multicue classifier train`)")
         ->capture_default_str();
     cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")
         ->capture_default_str();

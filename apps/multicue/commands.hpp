@@ -47,5 +47,7 @@ void AddDetectFurnitureCommand(CLI::App& app, const GlobalOptions& global);
 /// `train furniture` (cmd_map_furniture.cpp), attached to the `train` command.
 void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& global);
 void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& global);
+/// `train containers` (cmd_train_containers.cpp), attached to the `train` command.
+void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& global);
 
 }  // namespace multicue::cli

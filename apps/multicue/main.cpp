@@ -80,6 +80,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddMapFurnitureCommand(*map_command, global);
     multicue::cli::AddTrainFurnitureCommand(*app.get_subcommand("train"), global);
     multicue::cli::AddTrainFixturesCommand(*app.get_subcommand("train"), global);
+    multicue::cli::AddTrainContainersCommand(*app.get_subcommand("train"), global);
     multicue::cli::AddDetectFurnitureCommand(app, global);
 
     app.parse_complete_callback([&] {

@@ -12,6 +12,7 @@
 #include "multicue/sim/kitchen_procedural.hpp"
 #include "multicue/sim/raycaster.hpp"
 #include "multicue/sim/rng.hpp"
+#include "multicue/training/kitchen_scan_truth.hpp"
 
 namespace multicue::training {
 
@@ -209,6 +210,89 @@ std::unique_ptr<ml::Classifier> TrainFixtureClassifier(const ml::Dataset& rows,
             "train fixtures: the {} candidate rows hold fewer than two classes", rows.rows()));
     }
     // Classes without rows (no knob in view) are left out: the model predicts the others.
+    std::unique_ptr<ml::Classifier> c = ml::CreateClassifier(spec);
+    c->seed = seed;
+    c->Fit(rows);
+    return c;
+}
+
+void ContainerTrainingOptions::Validate() const {
+    if (kitchens < 1) {
+        throw InvalidArgument(
+            fmt::format("train containers: kitchens must be >= 1, got {}", kitchens));
+    }
+    if (views < 0 || laser_views < 0 || views + laser_views < 1) {
+        throw InvalidArgument(fmt::format(
+            "train containers: views and laser_views must be >= 0 and not both 0, got {} and {}",
+            views, laser_views));
+    }
+    if (num_threads < 0) {
+        throw InvalidArgument(
+            fmt::format("train containers: num_threads must be >= 0, got {}", num_threads));
+    }
+    if (!(procedural_share >= 0.0f && procedural_share <= 1.0f)) {
+        throw InvalidArgument(fmt::format(
+            "train containers: procedural_share must lie in [0, 1], got {}", procedural_share));
+    }
+    if (kinect_params) kinect_params->Validate();
+    if (laser_params) laser_params->Validate();
+}
+
+ml::Dataset EmptyContainerDataset() {
+    return ml::Dataset::WithBlocks({{"container", mapping::ContainerFeatureNames()}});
+}
+
+void AppendContainerRows(const sim::KitchenScene& kitchen, const PointCloud& scan,
+                         const mapping::KitchenMap& map, const std::string& source,
+                         ml::Dataset& data) {
+    for (const auto& [furniture, instance] : FurnitureInstances(map, scan)) {
+        const auto& model = kitchen.instances.at(static_cast<std::size_t>(instance)).model;
+        data.AppendRow(mapping::ContainerFeatures(map, static_cast<std::size_t>(furniture)),
+                       sim::ContainerTypeOfModel(*model), -1, -1, source);
+    }
+}
+
+ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& models,
+                                 sim::KitchenModelCache& cache, const ContainerTrainingOptions& o,
+                                 Progress* progress) {
+    o.Validate();
+    sim::KitchenSceneParams scene;
+    scene.procedural_share = o.procedural_share;
+    mapping::MapKitchenParams params[2] = {
+        o.kinect_params.value_or(mapping::KitchenParamsFor(mapping::KitchenSensor::kKinect)),
+        o.laser_params.value_or(mapping::KitchenParamsFor(mapping::KitchenSensor::kLaser))};
+    for (auto& p : params) p.num_threads = o.num_threads;
+    ml::Dataset data = EmptyContainerDataset();
+    for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
+        const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
+        const sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, scene, seed);
+        const auto frames = ScanKitchen(kitchen, o.views, o.laser_views, seed);
+        for (std::size_t f = 0; f < frames.size(); ++f) {
+            const bool laser = frames[f].laser;
+            try {
+                const auto r =
+                    mapping::MapKitchen({frames[f].cloud}, params[laser ? 1 : 0], nullptr,
+                                        laser ? o.laser_fixtures : o.kinect_fixtures);
+                AppendContainerRows(
+                    kitchen, frames[f].cloud, r.map,
+                    fmt::format("kitchen_{:04}_{}_{:02}", i, laser ? "laser" : "kinect", f), data);
+            } catch (const DataError& e) {
+                // A scan the map refuses (no vertical plane in view) has no furniture.
+                LogInfo("train containers: kitchen {} scan {}: {}", i, f, e.what());
+            }
+        }
+        if (progress != nullptr) progress->Advance();
+    }
+    return data;
+}
+
+std::unique_ptr<ml::Classifier> TrainContainerClassifier(const ml::Dataset& rows,
+                                                         const std::string& spec,
+                                                         std::uint32_t seed) {
+    if (rows.num_classes() < 2) {
+        throw DataError(fmt::format(
+            "train containers: the {} furniture rows hold fewer than two types", rows.rows()));
+    }
     std::unique_ptr<ml::Classifier> c = ml::CreateClassifier(spec);
     c->seed = seed;
     c->Fit(rows);

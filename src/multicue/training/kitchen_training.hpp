@@ -113,4 +113,50 @@ std::unique_ptr<ml::Classifier> TrainFixtureClassifier(const ml::Dataset& rows,
                                                        const std::string& spec,
                                                        std::uint32_t seed = 1);
 
+/// Training of the container classifier of `map kitchen --containers` (thesis section 4.1.3):
+/// simulated kitchens mapped scan by scan, every furniture piece labelled with the true type
+/// (sim::ContainerTypeOfModel) of the model holding most of its matched fronts.
+struct ContainerTrainingOptions {
+    int kitchens = 48;        ///< kitchens simulated
+    int views = 3;            ///< Kinect frames per kitchen
+    int laser_views = 1;      ///< laser sweeps per kitchen
+    std::uint64_t seed = 11;  ///< kitchen i uses sim::SubSeed(seed, i)
+    /// The chance that a unit of a kind with procedural and library models is procedural
+    float procedural_share = 0.5f;
+    /// The maps' parameters per sensor; unset: mapping::KitchenParamsFor(sensor)
+    std::optional<mapping::MapKitchenParams> kinect_params, laser_params;
+    /// The fixture classifiers the maps use (`map kitchen --fixtures`); null: fixtures by rules
+    const ml::Classifier* kinect_fixtures = nullptr;
+    const ml::Classifier* laser_fixtures = nullptr;
+    int num_threads = 0;  ///< 0 = all cores (per scan); overrides the params' own
+    /// Throws InvalidArgument naming the first out-of-range field.
+    void Validate() const;
+};
+
+/// An empty dataset with the container columns (block "container", mapping::
+/// ContainerFeatureNames) and no classes yet (they are added as rows name them).
+ml::Dataset EmptyContainerDataset();
+
+/// Appends one row per furniture piece of `map` (a map of `scan`, a scan of `kitchen` with its
+/// ground-truth fields) that holds fronts matched to a true model's (FurnitureInstances); the
+/// label is that model's container type. `source` names the scan in Dataset::sources.
+void AppendContainerRows(const sim::KitchenScene& kitchen, const PointCloud& scan,
+                         const mapping::KitchenMap& map, const std::string& source,
+                         ml::Dataset& data);
+
+/// Rows of the furniture of `options.kitchens` kitchens built from `models` (already the chosen
+/// half, fold and procedural units). A scan the map refuses is skipped. Stops early (rows so
+/// far) when an interruption is requested. Throws InvalidArgument for bad options, DataError
+/// when `models` lack what a kitchen needs.
+ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& models,
+                                 sim::KitchenModelCache& cache,
+                                 const ContainerTrainingOptions& options,
+                                 Progress* progress = nullptr);
+
+/// A classifier of spec `spec` trained on container rows. Throws DataError when the rows hold
+/// fewer than two types.
+std::unique_ptr<ml::Classifier> TrainContainerClassifier(const ml::Dataset& rows,
+                                                         const std::string& spec,
+                                                         std::uint32_t seed = 1);
+
 }  // namespace multicue::training

@@ -1,0 +1,162 @@
+// `multicue train containers --out MODEL`: the container classifier of `map kitchen
+// --containers` (thesis section 4.1.3: cupboards, drawer units, ovens, dishwashers, fridges,
+// microwaves, tables), trained on simulated kitchens of one half of the articulated kitchen
+// models with procedural units and appliances beside them (docs/kitchens.md).
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "default_paths.hpp"
+#include "multicue/core/exceptions.hpp"
+#include "multicue/core/progress.hpp"
+#include "multicue/mapping/fixtures.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
+#include "multicue/sim/kitchen_library.hpp"
+#include "multicue/sim/kitchen_procedural.hpp"
+#include "multicue/sim/rng.hpp"
+#include "multicue/training/kitchen_training.hpp"
+
+namespace multicue::cli {
+namespace {
+
+struct TrainContainersOptions {
+    std::string out;
+    std::string kitchen = DefaultKitchenDir();
+    std::string sensor = "both";
+    std::string split = "tune";
+    int fold = -1;
+    int procedural = 20;
+    std::string spec = "rtrees:trees=100";
+    std::string kinect_fixtures, laser_fixtures;
+    std::string rows;  // also write the labelled pieces (dataset) here
+    training::ContainerTrainingOptions t;
+    bool quiet = false;
+};
+
+void TrainContainers(TrainContainersOptions& o, int threads) {
+    // Everything checked before any kitchen is simulated.
+    if (o.sensor != "both" && o.sensor != "kinect" && o.sensor != "laser") {
+        throw InvalidArgument(
+            fmt::format("--sensor must be both, kinect or laser, got '{}'", o.sensor));
+    }
+    if (o.sensor == "laser") o.t.views = 0;
+    if (o.sensor == "kinect") o.t.laser_views = 0;
+    if (o.fold < -1 || o.fold > 1) {
+        throw InvalidArgument(fmt::format("--fold must be -1, 0 or 1, got {}", o.fold));
+    }
+    if (o.procedural < 0 || o.procedural > sim::kMaxProceduralPerKind) {
+        throw InvalidArgument(fmt::format("--procedural must lie in [0, {}], got {}",
+                                          sim::kMaxProceduralPerKind, o.procedural));
+    }
+    if (o.kitchen == "none" && o.procedural == 0) {
+        throw InvalidArgument("--kitchen none needs --procedural N (N > 0)");
+    }
+    const sim::MeshSplit split = sim::ParseMeshSplit(o.split);
+    o.t.num_threads = threads;
+    o.t.Validate();
+    ml::CreateClassifier(o.spec);  // throws for a bad spec
+    CheckOutputFolder("--out", o.out);
+    CheckOutputFolder("--rows", o.rows);
+    std::unique_ptr<ml::Classifier> kinect_fixtures, laser_fixtures;
+    for (auto [file, classifier] : {std::pair{&o.kinect_fixtures, &kinect_fixtures},
+                                    std::pair{&o.laser_fixtures, &laser_fixtures}}) {
+        if (file->empty()) continue;
+        *classifier = ml::LoadClassifier(*file);
+        mapping::CheckFixtureClassifier(**classifier);
+    }
+    o.t.kinect_fixtures = kinect_fixtures.get();
+    o.t.laser_fixtures = laser_fixtures.get();
+    // The models: one half of the library (or none), one fold of it, and procedural units of
+    // every cupboard and appliance kind.
+    std::vector<sim::KitchenModelEntry> models;
+    if (o.kitchen != "none") {
+        models = sim::SelectKitchenSplit(sim::ReadKitchenLibrary(o.kitchen), split);
+        if (o.fold >= 0) models = training::SelectKitchenFold(models, o.fold);
+    }
+    for (auto& e : sim::ProceduralKitchenEntries(o.procedural, sim::SubSeed(o.t.seed, 96), true)) {
+        models.push_back(std::move(e));
+    }
+    InstallInterruptHandler();
+    sim::KitchenModelCache cache;
+    Progress progress("kitchens", static_cast<std::size_t>(o.t.kitchens));
+    const ml::Dataset rows = training::CollectContainerRows(models, cache, o.t, &progress);
+    if (InterruptRequested()) throw Error("train containers: interrupted, no model written");
+    progress.Finish();
+    const auto classifier = training::TrainContainerClassifier(rows, o.spec);
+    classifier->Save(o.out);
+    if (!o.rows.empty()) ml::WriteDatasetFile(rows, o.rows);
+    if (!o.quiet) {
+        std::vector<std::size_t> per_type(rows.num_classes(), 0);
+        for (const int l : rows.labels) {
+            if (l >= 0) ++per_type[static_cast<std::size_t>(l)];
+        }
+        std::string types;
+        for (std::size_t c = 0; c < per_type.size(); ++c) {
+            types += fmt::format("{}{} {}", c > 0 ? ", " : "", rows.class_names[c], per_type[c]);
+        }
+        std::printf("multicue train containers: %s, %d kitchens of %s, %zu pieces (%s) -> %s\n",
+                    o.sensor.c_str(), o.t.kitchens,
+                    (o.kitchen == "none" ? std::string("procedural units")
+                                         : "the " + o.split + " half" +
+                                               (o.procedural > 0 ? " and procedural units" : ""))
+                        .c_str(),
+                    rows.rows(), types.c_str(), o.out.c_str());
+    }
+}
+
+}  // namespace
+
+void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& global) {
+    auto* cmd = train_command.add_subcommand(
+        "containers",
+        "Train the furniture type classifier of `map kitchen --containers` on simulated "
+        "kitchens");
+    auto o = std::make_shared<TrainContainersOptions>();
+    cmd->add_option("--out", o->out, "classifier file to write (.mcm)")->required();
+    cmd->add_option("--kitchen", o->kitchen,
+                    "kitchen library (PartNet-Mobility models); none: procedural units only")
+        ->capture_default_str();
+    cmd->add_option("--split", o->split,
+                    "library half trained on: tune (the other half stays held out), test, all")
+        ->capture_default_str();
+    cmd->add_option("--fold", o->fold,
+                    "-1: the whole --split half; 0 or 1: one fold of it (validation inside it)")
+        ->capture_default_str();
+    cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
+    cmd->add_option("--sensor", o->sensor,
+                    "both, kinect or laser: the scans whose maps the classifier will type")
+        ->capture_default_str();
+    cmd->add_option("--views", o->t.views, "Kinect frames per kitchen")->capture_default_str();
+    cmd->add_option("--laser-views", o->t.laser_views, "laser sweeps per kitchen")
+        ->capture_default_str();
+    cmd->add_option("--kinect-fixtures", o->kinect_fixtures,
+                    "fixture classifier the Kinect maps use (`train fixtures`); unset: rules");
+    cmd->add_option("--laser-fixtures", o->laser_fixtures,
+                    "fixture classifier the laser maps use (`train fixtures`); unset: rules");
+    cmd->add_option("--procedural", o->procedural,
+                    "procedural units per cupboard and appliance kind (dishwasher, oven, fridge) "
+                    "added to the models")
+        ->capture_default_str();
+    cmd->add_option("--procedural-share", o->t.procedural_share,
+                    "chance that a unit of a kind with procedural and library models is "
+                    "procedural")
+        ->capture_default_str();
+    cmd->add_option("--classifier", o->spec, "classifier spec (`multicue classifier train`)")
+        ->capture_default_str();
+    cmd->add_option("--rows", o->rows,
+                    "also write the labelled pieces as a dataset (.mcd, or .csv by extension) for "
+                    "`multicue classifier`");
+    cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")
+        ->capture_default_str();
+    cmd->add_flag("-q,--quiet", o->quiet, "no summary");
+    cmd->callback([o, &global] { TrainContainers(*o, global.threads); });
+}
+
+}  // namespace multicue::cli
