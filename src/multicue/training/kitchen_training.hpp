@@ -1,12 +1,15 @@
 #pragma once
-/// \file Training of the kitchen map's fixture classifier (thesis section 4.1.2) on simulated
-/// kitchens: kitchens built from one half of the kitchen models (the tune half by default, never
-/// the held-out test half), scanned as `multicue simulate kitchens` scans them, mapped by
-/// MapKitchen, and every fixture candidate in front of a furniture face labelled by the
-/// simulator's ground truth: "handle" or "knob" when it lies within match_distance of a true
-/// handle's or knob's points, else "none". The rows (FixtureFeatureNames columns) train any
-/// multicue classifier; `kitchen_eval --save-fixtures` saves one per sensor for `map kitchen
-/// --fixtures`.
+/// \file Training of the kitchen map's classifiers on simulated kitchens: kitchens built from
+/// one half of the kitchen models (the tune half by default, never the held-out test half),
+/// scanned as `multicue simulate kitchens` scans them and mapped by MapKitchen.
+/// - The fixture classifier (thesis section 4.1.2): every fixture candidate in front of a
+///   furniture face labelled by the simulator's ground truth, "handle" or "knob" when it lies
+///   within match_distance of a true handle's or knob's points, else "none"; rows of
+///   FixtureFeatureNames columns (`multicue train fixtures`, `map kitchen --fixtures`).
+/// - The container classifier (section 4.1.3): every furniture piece labelled with its model's
+///   container type; rows of ContainerFeatureNames columns (`multicue train containers`, `map
+///   kitchen --containers`).
+/// The rows train any multicue classifier.
 
 #include <cstdint>
 #include <filesystem>
