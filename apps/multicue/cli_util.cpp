@@ -42,6 +42,20 @@ void CheckOutputFolder(const std::string& option, const std::filesystem::path& f
     }
 }
 
+ml::Dataset CollectTrainAndSave(
+    const std::string& job, int kitchens, const std::function<ml::Dataset(Progress*)>& collect,
+    const std::function<std::unique_ptr<ml::Classifier>(const ml::Dataset&)>& train,
+    const std::string& out, const std::string& rows_file) {
+    InstallInterruptHandler();
+    Progress progress("kitchens", static_cast<std::size_t>(kitchens));
+    ml::Dataset rows = collect(&progress);
+    if (InterruptRequested()) throw Error(job + ": interrupted, no model written");
+    progress.Finish();
+    train(rows)->Save(out);
+    if (!rows_file.empty()) ml::WriteDatasetFile(rows, rows_file);
+    return rows;
+}
+
 Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option) {
     std::istringstream in(text);
     Eigen::Vector3f v;

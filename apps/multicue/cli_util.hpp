@@ -2,13 +2,18 @@
 // Small helpers shared by the subcommands.
 
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 
 #include "multicue/core/point_cloud.hpp"
+#include "multicue/core/progress.hpp"
 #include "multicue/io/point_cloud_io.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
 
 namespace multicue::cli {
 
@@ -24,6 +29,15 @@ void CheckDistinctPaths(const std::filesystem::path& in, const std::filesystem::
 /// Refuses an output file (given by `option`; empty: none) whose folder does not exist, before
 /// any work is done.
 void CheckOutputFolder(const std::string& option, const std::filesystem::path& file);
+
+/// The end of a training command on simulated kitchens: collects the rows with progress over
+/// `kitchens` kitchens and the interrupt handler installed, trains the classifier on them and
+/// saves it to `out` (atomically) and, when `rows_file` is set, the rows. Nothing is written when
+/// the job is interrupted (an Error naming `job`). Returns the rows.
+ml::Dataset CollectTrainAndSave(
+    const std::string& job, int kitchens, const std::function<ml::Dataset(Progress*)>& collect,
+    const std::function<std::unique_ptr<ml::Classifier>(const ml::Dataset&)>& train,
+    const std::string& out, const std::string& rows_file);
 
 /// Parses "x,y,z" into a vector; throws InvalidArgument naming the option otherwise.
 Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option);

@@ -83,15 +83,14 @@ void TrainContainers(TrainContainersOptions& o, int threads) {
     for (auto& e : sim::ProceduralKitchenEntries(o.procedural, sim::SubSeed(o.t.seed, 96), true)) {
         models.push_back(std::move(e));
     }
-    InstallInterruptHandler();
     sim::KitchenModelCache cache;
-    Progress progress("kitchens", static_cast<std::size_t>(o.t.kitchens));
-    const ml::Dataset rows = training::CollectContainerRows(models, cache, o.t, &progress);
-    if (InterruptRequested()) throw Error("train containers: interrupted, no model written");
-    progress.Finish();
-    const auto classifier = training::TrainContainerClassifier(rows, o.spec);
-    classifier->Save(o.out);
-    if (!o.rows.empty()) ml::WriteDatasetFile(rows, o.rows);
+    const ml::Dataset rows = CollectTrainAndSave(
+        "train containers", o.t.kitchens,
+        [&](Progress* progress) {
+            return training::CollectContainerRows(models, cache, o.t, progress);
+        },
+        [&](const ml::Dataset& r) { return training::TrainContainerClassifier(r, o.spec); }, o.out,
+        o.rows);
     if (!o.quiet) {
         std::vector<std::size_t> per_type(rows.num_classes(), 0);
         for (const int l : rows.labels) {

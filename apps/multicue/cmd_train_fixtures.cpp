@@ -74,15 +74,14 @@ void TrainFixtures(TrainFixturesOptions& o, int threads) {
     // "none": training kitchens of procedural units only.
     const auto library = o.kitchen == "none" ? std::vector<sim::KitchenModelEntry>{}
                                              : sim::ReadKitchenLibrary(o.kitchen);
-    InstallInterruptHandler();
     sim::KitchenModelCache cache;
-    Progress progress("kitchens", static_cast<std::size_t>(o.t.kitchens));
-    const ml::Dataset rows = training::CollectFixtureRows(library, cache, o.t, &progress);
-    if (InterruptRequested()) throw Error("train fixtures: interrupted, no model written");
-    progress.Finish();
-    const auto classifier = training::TrainFixtureClassifier(rows, o.spec);
-    classifier->Save(o.out);
-    if (!o.rows.empty()) ml::WriteDatasetFile(rows, o.rows);
+    const ml::Dataset rows = CollectTrainAndSave(
+        "train fixtures", o.t.kitchens,
+        [&](Progress* progress) {
+            return training::CollectFixtureRows(library, cache, o.t, progress);
+        },
+        [&](const ml::Dataset& r) { return training::TrainFixtureClassifier(r, o.spec); }, o.out,
+        o.rows);
     if (!o.quiet) {
         std::size_t fixtures = 0;
         for (const int l : rows.labels) fixtures += l > 0;

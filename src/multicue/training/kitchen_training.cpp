@@ -83,6 +83,41 @@ std::vector<sim::KitchenModelEntry> SelectKitchenFold(
     return out;
 }
 
+namespace {
+
+/// Builds `kitchens` kitchens of `models` (kitchen i from sim::SubSeed(seed, i), passed to
+/// `prepare` before it is scanned), scans each with `views` Kinect frames and `laser_views`
+/// laser sweeps, and calls `visit(kitchen, frame, source)` per scan, `source` naming it. A scan
+/// whose `visit` throws DataError (the map refuses it) is skipped; stops early when an
+/// interruption is requested.
+template <typename Prepare, typename Visit>
+void ForEachTrainingScan(const std::vector<sim::KitchenModelEntry>& models,
+                         sim::KitchenModelCache& cache, float procedural_share, int kitchens,
+                         std::uint64_t seed, int views, int laser_views, const char* what,
+                         Progress* progress, Prepare prepare, Visit visit) {
+    sim::KitchenSceneParams scene;
+    scene.procedural_share = procedural_share;
+    for (int i = 0; i < kitchens && !InterruptRequested(); ++i) {
+        const std::uint64_t s = sim::SubSeed(seed, static_cast<std::uint64_t>(i));
+        sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, scene, s);
+        prepare(kitchen, s);
+        const auto frames = ScanKitchen(kitchen, views, laser_views, s);
+        for (std::size_t f = 0; f < frames.size(); ++f) {
+            try {
+                visit(kitchen, frames[f],
+                      fmt::format("kitchen_{:04}_{}_{:02}", i, frames[f].laser ? "laser" : "kinect",
+                                  f));
+            } catch (const DataError& e) {
+                // A scan the map refuses (no vertical plane in view) gives no rows.
+                LogInfo("{}: kitchen {} scan {}: {}", what, i, f, e.what());
+            }
+        }
+        if (progress != nullptr) progress->Advance();
+    }
+}
+
+}  // namespace
+
 void FixtureTrainingOptions::Validate() const {
     if (kitchens < 1 || views < 1) {
         throw InvalidArgument(fmt::format(
@@ -167,32 +202,24 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
     for (auto& e : sim::ProceduralKitchenEntries(o.procedural, sim::SubSeed(o.seed, 97))) {
         models.push_back(std::move(e));
     }
-    sim::KitchenSceneParams scene;
-    scene.procedural_share = o.procedural_share;
     ml::Dataset data = EmptyFixtureDataset();
     const bool laser = o.sensor == mapping::KitchenSensor::kLaser;
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(o.sensor);
     if (o.fixture_params) params.fixtures = *o.fixture_params;
     params.num_threads = o.num_threads;
     params.gap_fronts.enabled = false;  // the rows are the candidates; fronts are not needed
-    for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
-        const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
-        sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, scene, seed);
-        if (o.vary_handles) sim::VaryHandles(kitchen, o.handle_variation, sim::SubSeed(seed, 41));
-        const auto frames = ScanKitchen(kitchen, laser ? 0 : o.views, laser ? o.views : 0, seed);
-        for (std::size_t f = 0; f < frames.size(); ++f) {
-            try {
-                const auto r = mapping::MapKitchen({frames[f].cloud}, params);
-                AppendFixtureRows(
-                    frames[f].cloud, r.fixture_candidates, o.match_distance,
-                    fmt::format("kitchen_{:04}_{}_{:02}", i, laser ? "laser" : "kinect", f), data);
-            } catch (const DataError& e) {
-                // A scan the map refuses (no vertical plane in view) has no candidates.
-                LogInfo("train fixtures: kitchen {} scan {}: {}", i, f, e.what());
+    ForEachTrainingScan(
+        models, cache, o.procedural_share, o.kitchens, o.seed, laser ? 0 : o.views,
+        laser ? o.views : 0, "train fixtures", progress,
+        [&](sim::KitchenScene& kitchen, std::uint64_t seed) {
+            if (o.vary_handles) {
+                sim::VaryHandles(kitchen, o.handle_variation, sim::SubSeed(seed, 41));
             }
-        }
-        if (progress != nullptr) progress->Advance();
-    }
+        },
+        [&](const sim::KitchenScene&, const KitchenFrame& frame, const std::string& source) {
+            const auto r = mapping::MapKitchen({frame.cloud}, params);
+            AppendFixtureRows(frame.cloud, r.fixture_candidates, o.match_distance, source, data);
+        });
     return data;
 }
 
@@ -256,33 +283,20 @@ ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& mode
                                  sim::KitchenModelCache& cache, const ContainerTrainingOptions& o,
                                  Progress* progress) {
     o.Validate();
-    sim::KitchenSceneParams scene;
-    scene.procedural_share = o.procedural_share;
     mapping::MapKitchenParams params[2] = {
         o.kinect_params.value_or(mapping::KitchenParamsFor(mapping::KitchenSensor::kKinect)),
         o.laser_params.value_or(mapping::KitchenParamsFor(mapping::KitchenSensor::kLaser))};
     for (auto& p : params) p.num_threads = o.num_threads;
     ml::Dataset data = EmptyContainerDataset();
-    for (int i = 0; i < o.kitchens && !InterruptRequested(); ++i) {
-        const std::uint64_t seed = sim::SubSeed(o.seed, static_cast<std::uint64_t>(i));
-        const sim::KitchenScene kitchen = sim::MakeKitchenScene(models, cache, scene, seed);
-        const auto frames = ScanKitchen(kitchen, o.views, o.laser_views, seed);
-        for (std::size_t f = 0; f < frames.size(); ++f) {
-            const bool laser = frames[f].laser;
-            try {
-                const auto r =
-                    mapping::MapKitchen({frames[f].cloud}, params[laser ? 1 : 0], nullptr,
-                                        laser ? o.laser_fixtures : o.kinect_fixtures);
-                AppendContainerRows(
-                    kitchen, frames[f].cloud, r.map,
-                    fmt::format("kitchen_{:04}_{}_{:02}", i, laser ? "laser" : "kinect", f), data);
-            } catch (const DataError& e) {
-                // A scan the map refuses (no vertical plane in view) has no furniture.
-                LogInfo("train containers: kitchen {} scan {}: {}", i, f, e.what());
-            }
-        }
-        if (progress != nullptr) progress->Advance();
-    }
+    ForEachTrainingScan(
+        models, cache, o.procedural_share, o.kitchens, o.seed, o.views, o.laser_views,
+        "train containers", progress, [](sim::KitchenScene&, std::uint64_t) {},
+        [&](const sim::KitchenScene& kitchen, const KitchenFrame& frame,
+            const std::string& source) {
+            const auto r = mapping::MapKitchen({frame.cloud}, params[frame.laser ? 1 : 0], nullptr,
+                                               frame.laser ? o.laser_fixtures : o.kinect_fixtures);
+            AppendContainerRows(kitchen, frame.cloud, r.map, source, data);
+        });
     return data;
 }
 
