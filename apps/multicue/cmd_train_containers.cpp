@@ -100,13 +100,15 @@ void TrainContainers(TrainContainersOptions& o, int threads) {
         for (std::size_t c = 0; c < per_type.size(); ++c) {
             types += fmt::format("{}{} {}", c > 0 ? ", " : "", rows.class_names[c], per_type[c]);
         }
-        std::printf("multicue train containers: %s, %d kitchens of %s, %zu pieces (%s) -> %s\n",
-                    o.sensor.c_str(), o.t.kitchens,
-                    (o.kitchen == "none" ? std::string("procedural units")
-                                         : "the " + o.split + " half" +
-                                               (o.procedural > 0 ? " and procedural units" : ""))
-                        .c_str(),
-                    rows.rows(), types.c_str(), o.out.c_str());
+        std::printf(
+            "multicue train containers: %s, %d kitchens of %s, %zu pieces (%s) -> %s\n",
+            o.sensor.c_str(), o.t.kitchens,
+            (o.kitchen == "none"
+                 ? std::string("procedural units")
+                 : (o.fold >= 0 ? fmt::format("fold {} of ", o.fold) : std::string()) + "the " +
+                       o.split + " half" + (o.procedural > 0 ? " and procedural units" : ""))
+                .c_str(),
+            rows.rows(), types.c_str(), o.out.c_str());
     }
 }
 
