@@ -982,6 +982,7 @@ class Evaluator {
         std::size_t train_rows = 0;
         if (!o_.load_containers.empty()) {
             classifier = ml::LoadClassifier(o_.load_containers);
+            mapping::CheckContainerClassifier(*classifier);
         } else if (!o_.rules && o_.train_kitchens > 0) {
             training::ContainerTrainingOptions t;
             t.kitchens = o_.train_kitchens;

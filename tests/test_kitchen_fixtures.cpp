@@ -1132,6 +1132,29 @@ TEST(ContainerTraining, RowsOfAProceduralKitchenAreLabelledAndReproducible) {
     std::size_t right = 0;
     for (std::size_t r = 0; r < rows.rows(); ++r) right += predicted[r] == rows.labels[r];
     EXPECT_GE(right * 10, rows.rows() * 8);
+    EXPECT_NO_THROW(CheckContainerClassifier(*classifier));
+    // A classifier of other columns, or of the right columns with a class that is no container
+    // type, is refused before it types anything.
+    ml::Dataset foreign_rows = training::EmptyContainerDataset();
+    for (std::size_t r = 0; r < rows.rows(); ++r) {
+        foreign_rows.AppendRow(rows.row(r), r % 2 == 0 ? "cupboard" : "wardrobe");
+    }
+    const auto foreign = training::TrainContainerClassifier(foreign_rows, "rtrees:trees=5");
+    EXPECT_THROW(CheckContainerClassifier(*foreign), InvalidArgument);
+    KitchenMap one_piece;
+    one_piece.furniture.resize(1);
+    EXPECT_THROW(TypeContainers(one_piece, foreign.get()), InvalidArgument);
+    EXPECT_NO_THROW(TypeContainers(one_piece, classifier.get()));
+    EXPECT_THROW(CheckContainerClassifier(*training::TrainFixtureClassifier(
+                     [] {
+                         ml::Dataset d = training::EmptyFixtureDataset();
+                         d.AppendRow(FixtureFeatureRow(FixtureEvidence{}), "none");
+                         d.AppendRow(std::vector<float>(FixtureFeatureNames().size(), 1.0f),
+                                     "handle");
+                         return d;
+                     }(),
+                     "rtrees:trees=5")),
+                 InvalidArgument);
     // One type cannot train; bad options are refused before any kitchen is built.
     ml::Dataset one = training::EmptyContainerDataset();
     one.AppendRow(std::vector<float>(ContainerFeatureNames().size(), 0.0f), "cupboard");

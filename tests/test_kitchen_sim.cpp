@@ -697,7 +697,14 @@ TEST(KitchenCli, ProceduralKitchensWithoutTheLibrary) {
     EXPECT_FALSE(io::ReadUrdf(map_dir / "map.urdf").links.empty());
     const auto map_json = nlohmann::json::parse(test::ReadTextFile(map_dir / "map.json"));
     ASSERT_FALSE(map_json["furniture"].empty());
-    // A fixture classifier where the container one belongs is refused before any work.
+    // A fixture classifier where the container one belongs is refused before any work, and
+    // the other way round.
+    r = test::RunCli("map kitchen " +
+                     (sim_dir / kitchen["frames"][0]["file"].get<std::string>()).string() +
+                     " -q --containers " + fixtures.string() + " --out " + (dir / "z").string());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("container features"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "z"));
     r = test::RunCli("train containers --kitchen none --procedural 2 --kinect-fixtures " +
                      containers.string() + " --out " + (dir / "y.mcm").string());
     EXPECT_EQ(r.code, 2) << r.output;

@@ -75,7 +75,10 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
     std::vector<PointCloud> opened;
     for (const auto& s : o.opened) opened.push_back(ReadNonEmptyCloud(s));
     std::unique_ptr<ml::Classifier> classifier;
-    if (!o.containers.empty()) classifier = ml::LoadClassifier(o.containers);
+    if (!o.containers.empty()) {
+        classifier = ml::LoadClassifier(o.containers);
+        mapping::CheckContainerClassifier(*classifier);
+    }
     std::unique_ptr<ml::Classifier> fixture_classifier;
     if (!o.fixtures.empty()) {
         fixture_classifier = ml::LoadClassifier(o.fixtures);

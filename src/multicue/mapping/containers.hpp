@@ -38,8 +38,13 @@ const std::vector<std::string>& ContainerFeatureNames();
 std::vector<float> ContainerFeatures(const KitchenMap& map, std::size_t index,
                                      const ContainerParams& params = {});
 
+/// Throws InvalidArgument unless `classifier` is trained, on ContainerFeatureNames columns, and
+/// predicts classes among ContainerTypeNames.
+void CheckContainerClassifier(const ml::Classifier& classifier);
+
 /// Types every piece: with `classifier` (trained on ContainerFeatures rows, classes among
-/// ContainerTypeNames()) its most confident class, else the rules of TypeByRules.
+/// ContainerTypeNames(); CheckContainerClassifier) its most confident class, else the rules of
+/// TypeByRules.
 void TypeContainers(KitchenMap& map, const ml::Classifier* classifier,
                     const ContainerParams& params = {});
 
