@@ -117,6 +117,8 @@ struct Options {
     int scored_procedural = 0;  ///< per kind, scored kitchens (tune half only)
     /// per cupboard and appliance kind, container training only (beside `procedural`)
     int container_procedural = 20;
+    /// Map each sensor's scans of a kitchen together (one merged map per kitchen and sensor)
+    bool merge = false;
 };
 
 /// The library id of a kitchen's model instance as the truth's `model` field numbers it (1 +
@@ -324,6 +326,31 @@ int TypeIndex(const std::string& t) {
 
 /// One scanned frame with its ground truth.
 using Frame = training::KitchenFrame;
+
+/// The scans of one sensor as one frame: their points and ground-truth fields in order, as
+/// MapKitchen merges them (mapping::MergeScansWithNormals), so that the merged map's point
+/// indices index it; the pose is the first scan's.
+Frame MergedFrame(const std::vector<const Frame*>& frames) {
+    Frame out;
+    out.laser = frames.front()->laser;
+    out.T_world_sensor = frames.front()->T_world_sensor;
+    out.cloud.extra_fields = frames.front()->cloud.extra_fields;
+    for (auto& field : out.cloud.extra_fields) field.data.clear();
+    for (const Frame* f : frames) {
+        out.cloud.points.insert(out.cloud.points.end(), f->cloud.points.begin(),
+                                f->cloud.points.end());
+        for (auto& field : out.cloud.extra_fields) {
+            const ExtraField* from = f->cloud.FindExtraField(field.name);
+            if (from == nullptr || from->BytesPerPoint() != field.BytesPerPoint()) {
+                throw DataError("merged frames differ in their ground-truth fields");
+            }
+            field.data.insert(field.data.end(), from->data.begin(), from->data.end());
+        }
+    }
+    out.cloud.width = static_cast<std::uint32_t>(out.cloud.points.size());
+    out.cloud.height = 1;
+    return out;
+}
 
 class Evaluator {
   public:
@@ -803,7 +830,7 @@ class Evaluator {
             }
         }
         // Opened-front pairs: the robot opens matched fronts of this view one at a time.
-        if (o_.open <= 0) return;
+        if (o_.open <= 0 || o_.merge) return;  // pairs are a single scan's
         std::vector<std::uint32_t> keys;
         for (const auto& [key, tf] : fronts) {
             const auto it = match.find(key);
@@ -1028,7 +1055,34 @@ class Evaluator {
             const io::UrdfModel gt = io::ParseUrdf(io::UrdfToXml(sim::KitchenGroundTruthUrdf(k)),
                                                    fmt::format("kitchen_{}.urdf", i));
             const auto axes = UrdfJointAxes(gt);
-            for (const Frame& f : Frames(k, seed)) {
+            const std::vector<Frame> frames = Frames(k, seed);
+            if (o_.merge) {
+                // One map per sensor of all its scans of the kitchen, scored as one frame.
+                for (const bool l : {false, true}) {
+                    std::vector<const Frame*> group;
+                    std::vector<PointCloud> clouds;
+                    for (const Frame& f : frames) {
+                        if (f.laser != l) continue;
+                        group.push_back(&f);
+                        clouds.push_back(f.cloud);
+                    }
+                    if (group.empty()) continue;
+                    Scores& s = l ? laser : kinect;
+                    try {
+                        const auto& fixtures = l ? fixtures_laser_ : fixtures_kinect_;
+                        const auto r = mapping::MapKitchen(clouds, Params(l), classifier.get(),
+                                                           fixtures.get());
+                        Score(k, axes, MergedFrame(group), r, s, seed ^ 0x5eedull);
+                    } catch (const DataError& e) {
+                        ++s.failed;
+                        std::fprintf(stderr, "kitchen %d, merged %s scans: %s\n", i,
+                                     l ? "laser" : "kinect", e.what());
+                    }
+                }
+                if (o_.verbose) std::fprintf(stderr, "kitchen %d done\n", i);
+                continue;
+            }
+            for (const Frame& f : frames) {
                 Scores& s = f.laser ? laser : kinect;
                 try {
                     const auto r = Map(f, classifier.get());
@@ -1060,6 +1114,7 @@ class Evaluator {
                               {"procedural_share", o_.procedural_share},
                               {"scored_procedural", o_.scored_procedural},
                               {"container_procedural", o_.container_procedural},
+                              {"merge", o_.merge},
                               {"fixture_confidence", o_.fixture_confidence},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
@@ -1335,6 +1390,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--open", o.open, "fronts opened per frame for the pair test")
         ->capture_default_str();
+    app.add_flag("--merge", o.merge,
+                 "map each sensor's scans of a kitchen together and score the merged maps (no "
+                 "opened pairs)");
     app.add_option("--seed", o.seed, "seed of the kitchens")->capture_default_str();
     app.add_option("--sensor", o.sensor, "both, kinect or laser")->capture_default_str();
     app.add_option("--split", o.split, "model half scored: test (default) or tune")
