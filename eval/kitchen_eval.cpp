@@ -382,9 +382,11 @@ class Evaluator {
         return params;
     }
 
-    mapping::MapKitchenResult Map(const Frame& f, const ml::Classifier* classifier) const {
-        const auto& fixtures = f.laser ? fixtures_laser_ : fixtures_kinect_;
-        return mapping::MapKitchen({f.cloud}, Params(f.laser), classifier, fixtures.get());
+    /// The map of scans of one sensor.
+    mapping::MapKitchenResult Map(const std::vector<PointCloud>& clouds, bool laser,
+                                  const ml::Classifier* classifier) const {
+        const auto& fixtures = laser ? fixtures_laser_ : fixtures_kinect_;
+        return mapping::MapKitchen(clouds, Params(laser), classifier, fixtures.get());
     }
 
     /// The fixture classifier of one sensor, trained on simulated kitchens (or loaded).
@@ -1069,9 +1071,7 @@ class Evaluator {
                     if (group.empty()) continue;
                     Scores& s = l ? laser : kinect;
                     try {
-                        const auto& fixtures = l ? fixtures_laser_ : fixtures_kinect_;
-                        const auto r = mapping::MapKitchen(clouds, Params(l), classifier.get(),
-                                                           fixtures.get());
+                        const auto r = Map(clouds, l, classifier.get());
                         Score(k, axes, MergedFrame(group), r, s, seed ^ 0x5eedull);
                     } catch (const DataError& e) {
                         ++s.failed;
@@ -1085,7 +1085,7 @@ class Evaluator {
             for (const Frame& f : frames) {
                 Scores& s = f.laser ? laser : kinect;
                 try {
-                    const auto r = Map(f, classifier.get());
+                    const auto r = Map({f.cloud}, f.laser, classifier.get());
                     Score(k, axes, f, r, s, seed ^ 0x5eedull);
                 } catch (const DataError& e) {
                     // A frame the map refuses (nothing in range, no vertical plane) counts.
