@@ -6,7 +6,6 @@
 #include <limits>
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include "multicue/core/disjoint_sets.hpp"
 #include "multicue/core/exceptions.hpp"
@@ -266,22 +265,8 @@ std::string TypeByRules(const std::vector<float>& x) {
 }
 
 void CheckContainerClassifier(const ml::Classifier& c) {
-    if (!c.fitted()) throw InvalidArgument("containers: the container classifier is not trained");
-    if (c.feature_names() != ContainerFeatureNames()) {
-        throw InvalidArgument(fmt::format(
-            "containers: the classifier was trained on {} columns (first '{}'), not on the {} "
-            "container features (first '{}')",
-            c.num_features(), c.feature_names().empty() ? "" : c.feature_names().front(),
-            ContainerFeatureNames().size(), ContainerFeatureNames().front()));
-    }
-    const auto& known = ContainerTypeNames();
-    for (const auto& name : c.class_names()) {
-        if (std::find(known.begin(), known.end(), name) == known.end()) {
-            throw InvalidArgument(
-                fmt::format("containers: the classifier predicts '{}', not a container type ({})",
-                            name, fmt::join(known, ", ")));
-        }
-    }
+    ml::CheckClassifierFor(c, ContainerFeatureNames(), ContainerTypeNames(), "containers",
+                           "container");
 }
 
 void TypeContainers(KitchenMap& map, const ml::Classifier* classifier, const ContainerParams& p) {

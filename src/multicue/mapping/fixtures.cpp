@@ -189,21 +189,9 @@ bool MeasureFixture(const PointCloud& cloud, const Indices& cluster, const Plana
 }
 
 void CheckFixtureClassifier(const ml::Classifier& c) {
-    if (!c.fitted()) throw InvalidArgument("fixtures: the fixture classifier is not trained");
-    if (c.feature_names() != FixtureFeatureNames()) {
-        throw InvalidArgument(fmt::format(
-            "fixtures: the classifier was trained on {} columns (first '{}'), not on the {} "
-            "fixture features (first '{}')",
-            c.num_features(), c.feature_names().empty() ? "" : c.feature_names().front(),
-            FixtureFeatureNames().size(), FixtureFeatureNames().front()));
-    }
-    const auto& known = FixtureClassNames();
+    ml::CheckClassifierFor(c, FixtureFeatureNames(), FixtureClassNames(), "fixtures", "fixture");
     bool none = false, fixture = false;
     for (const auto& name : c.class_names()) {
-        if (std::find(known.begin(), known.end(), name) == known.end()) {
-            throw InvalidArgument(fmt::format(
-                "fixtures: the classifier predicts '{}', not one of none, handle, knob", name));
-        }
         none = none || name == "none";
         fixture = fixture || name != "none";
     }

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "multicue/core/exceptions.hpp"
 #include "multicue/ml/boost.hpp"
 #include "multicue/ml/knn.hpp"
@@ -280,6 +283,27 @@ std::vector<int> ArgMaxRows(const FeatureMatrix& scores) {
         out[static_cast<std::size_t>(r)] = static_cast<int>(arg);
     }
     return out;
+}
+
+void CheckClassifierFor(const Classifier& c, const std::vector<std::string>& features,
+                        const std::vector<std::string>& classes, const std::string& what,
+                        const std::string& kind) {
+    if (!c.fitted()) {
+        throw InvalidArgument(fmt::format("{}: the {} classifier is not trained", what, kind));
+    }
+    if (c.feature_names() != features) {
+        throw InvalidArgument(fmt::format(
+            "{}: the classifier was trained on {} columns (first '{}'), not on the {} {} features "
+            "(first '{}')",
+            what, c.num_features(), c.feature_names().empty() ? "" : c.feature_names().front(),
+            features.size(), kind, features.empty() ? "" : features.front()));
+    }
+    for (const auto& name : c.class_names()) {
+        if (std::find(classes.begin(), classes.end(), name) == classes.end()) {
+            throw InvalidArgument(fmt::format("{}: the classifier predicts '{}', not one of {}",
+                                              what, name, fmt::join(classes, ", ")));
+        }
+    }
 }
 
 }  // namespace multicue::ml

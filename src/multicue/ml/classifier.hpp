@@ -113,6 +113,13 @@ std::unique_ptr<Classifier> LoadClassifier(const std::filesystem::path& path);
 std::unique_ptr<Classifier> DeserializeClassifier(const std::string& bytes,
                                                   const std::string& what);
 
+/// Throws InvalidArgument unless `classifier` is trained on exactly the columns `features`, in
+/// order, and predicts only classes among `classes`. `what` prefixes the message ("fixtures"),
+/// `kind` names the features in it ("fixture").
+void CheckClassifierFor(const Classifier& classifier, const std::vector<std::string>& features,
+                        const std::vector<std::string>& classes, const std::string& what,
+                        const std::string& kind);
+
 /// Key=value arguments of a spec; every key must be consumed (unknown keys are an error).
 class SpecArgs {
   public:
