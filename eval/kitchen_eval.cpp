@@ -1029,10 +1029,7 @@ class Evaluator {
                 classifier = training::TrainContainerClassifier(data, "rtrees:trees=100");
                 if (!o_.save_containers.empty()) classifier->Save(o_.save_containers);
             }
-            std::vector<int> per_type(data.num_classes(), 0);
-            for (const int l : data.labels) {
-                if (l != ml::kNoLabel) ++per_type[static_cast<std::size_t>(l)];
-            }
+            const std::vector<std::size_t> per_type = data.ClassCounts();
             std::string types;
             for (std::size_t c = 0; c < per_type.size(); ++c) {
                 types += fmt::format(" {} {}", data.class_names[c], per_type[c]);

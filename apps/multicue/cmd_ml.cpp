@@ -72,9 +72,9 @@ void AddDatasetInfo(CLI::App* ds) {
     cmd->add_flag("--json", *json, "print JSON");
     cmd->callback([in, json] {
         const Dataset d = ReadDatasetFile(*in);
-        std::vector<std::size_t> counts(d.num_classes(), 0);
-        std::size_t unlabelled = 0;
-        for (int l : d.labels) (l == kNoLabel ? unlabelled : counts[static_cast<std::size_t>(l)])++;
+        const std::vector<std::size_t> counts = d.ClassCounts();
+        const std::size_t unlabelled =
+            static_cast<std::size_t>(std::count(d.labels.begin(), d.labels.end(), kNoLabel));
         const auto keys = GroupKeys(d);
         const std::size_t instances = std::set<std::int64_t>(keys.begin(), keys.end()).size();
         nlohmann::json j = {{"rows", d.rows()},

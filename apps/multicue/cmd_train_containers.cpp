@@ -92,10 +92,7 @@ void TrainContainers(TrainContainersOptions& o, int threads) {
         [&](const ml::Dataset& r) { return training::TrainContainerClassifier(r, o.spec); }, o.out,
         o.rows);
     if (!o.quiet) {
-        std::vector<std::size_t> per_type(rows.num_classes(), 0);
-        for (const int l : rows.labels) {
-            if (l >= 0) ++per_type[static_cast<std::size_t>(l)];
-        }
+        const std::vector<std::size_t> per_type = rows.ClassCounts();
         std::string types;
         for (std::size_t c = 0; c < per_type.size(); ++c) {
             types += fmt::format("{}{} {}", c > 0 ? ", " : "", rows.class_names[c], per_type[c]);

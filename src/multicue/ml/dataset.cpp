@@ -69,6 +69,16 @@ void Dataset::AppendRow(std::span<const float> features, const std::string& labe
     sources.push_back(std::move(source));
 }
 
+std::vector<std::size_t> Dataset::ClassCounts() const {
+    std::vector<std::size_t> counts(num_classes(), 0);
+    for (const int l : labels) {
+        if (l >= 0 && static_cast<std::size_t>(l) < counts.size()) {
+            ++counts[static_cast<std::size_t>(l)];
+        }
+    }
+    return counts;
+}
+
 std::unordered_set<std::string> Dataset::Sources() const {
     return {sources.begin(), sources.end()};
 }

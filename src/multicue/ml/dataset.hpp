@@ -55,6 +55,8 @@ struct Dataset {
     std::size_t rows() const { return labels.size(); }
     std::size_t cols() const { return num_cols; }
     std::size_t num_classes() const { return class_names.size(); }
+    /// Labelled rows per class (index = class id); unlabelled rows are not counted.
+    std::vector<std::size_t> ClassCounts() const;
     bool empty() const { return rows() == 0; }
 
     /// The feature matrix as an Eigen view (no copy).

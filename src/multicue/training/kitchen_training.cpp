@@ -116,6 +116,21 @@ void ForEachTrainingScan(const std::vector<sim::KitchenModelEntry>& models,
     }
 }
 
+/// A classifier of `spec` fitted to `rows`; DataError (naming `job` and the rows' `noun`) when
+/// fewer than two classes have rows.
+std::unique_ptr<ml::Classifier> TrainOnRows(const ml::Dataset& rows, const std::string& spec,
+                                            std::uint32_t seed, const char* job, const char* noun) {
+    const auto counts = rows.ClassCounts();
+    if (std::count_if(counts.begin(), counts.end(), [](std::size_t n) { return n > 0; }) < 2) {
+        throw DataError(
+            fmt::format("{}: the {} {} rows hold fewer than two classes", job, rows.rows(), noun));
+    }
+    std::unique_ptr<ml::Classifier> c = ml::CreateClassifier(spec);
+    c->seed = seed;
+    c->Fit(rows);
+    return c;
+}
+
 }  // namespace
 
 void FixtureTrainingOptions::Validate() const {
@@ -226,21 +241,8 @@ ml::Dataset CollectFixtureRows(const std::vector<sim::KitchenModelEntry>& librar
 std::unique_ptr<ml::Classifier> TrainFixtureClassifier(const ml::Dataset& rows,
                                                        const std::string& spec,
                                                        std::uint32_t seed) {
-    std::size_t present = 0;
-    std::vector<std::size_t> count(rows.num_classes(), 0);
-    for (const int l : rows.labels) {
-        if (l >= 0) ++count[static_cast<std::size_t>(l)];
-    }
-    for (const std::size_t c : count) present += c > 0;
-    if (present < 2) {
-        throw DataError(fmt::format(
-            "train fixtures: the {} candidate rows hold fewer than two classes", rows.rows()));
-    }
     // Classes without rows (no knob in view) are left out: the model predicts the others.
-    std::unique_ptr<ml::Classifier> c = ml::CreateClassifier(spec);
-    c->seed = seed;
-    c->Fit(rows);
-    return c;
+    return TrainOnRows(rows, spec, seed, "train fixtures", "candidate");
 }
 
 void ContainerTrainingOptions::Validate() const {
@@ -303,14 +305,7 @@ ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& mode
 std::unique_ptr<ml::Classifier> TrainContainerClassifier(const ml::Dataset& rows,
                                                          const std::string& spec,
                                                          std::uint32_t seed) {
-    if (rows.num_classes() < 2) {
-        throw DataError(fmt::format(
-            "train containers: the {} furniture rows hold fewer than two types", rows.rows()));
-    }
-    std::unique_ptr<ml::Classifier> c = ml::CreateClassifier(spec);
-    c->seed = seed;
-    c->Fit(rows);
-    return c;
+    return TrainOnRows(rows, spec, seed, "train containers", "furniture");
 }
 
 }  // namespace multicue::training

@@ -157,7 +157,7 @@ ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& mode
                                  Progress* progress = nullptr);
 
 /// A classifier of spec `spec` trained on container rows. Throws DataError when the rows hold
-/// fewer than two types.
+/// fewer than two types (classes with rows).
 std::unique_ptr<ml::Classifier> TrainContainerClassifier(const ml::Dataset& rows,
                                                          const std::string& spec,
                                                          std::uint32_t seed = 1);
