@@ -745,6 +745,27 @@ TEST(KitchenCli, BadInputWritesNothing) {
     EXPECT_EQ(r.code, 1) << r.output;
     EXPECT_NE(r.output.find("vertical"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "b"));
+    // Scans that look like different sensors (a coloured one: a Kinect's; one of points alone,
+    // unorganized: a laser's) are refused, unless --sensor names the parameters.
+    {
+        std::ofstream o(dir / "floor_rgb.pcd");
+        o << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\n"
+             "COUNT 1 1 1 1\nWIDTH 441\nHEIGHT 1\nVIEWPOINT 1 1 1.4 1 0 0 0\nPOINTS 441\n"
+             "DATA ascii\n";
+        for (int i = 0; i <= 20; ++i) {
+            for (int j = 0; j <= 20; ++j) o << i * 0.04 << ' ' << j * 0.04 << " 0 8421504\n";
+        }
+    }
+    const std::string mixed =
+        "map kitchen " + (dir / "floor.pcd").string() + ' ' + (dir / "floor_rgb.pcd").string();
+    r = test::RunCli(mixed + " --out " + (dir / "b").string());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--sensor"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "b"));
+    r = test::RunCli(mixed + " --sensor laser --out " + (dir / "b").string());
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("vertical"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "b"));
     // Bad options: usage errors.
     EXPECT_EQ(test::RunCli("map kitchen " + (dir / "floor.pcd").string() +
                            " --sensor sonar --out " + (dir / "c").string())

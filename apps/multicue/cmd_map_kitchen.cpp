@@ -63,6 +63,30 @@ PointCloud ScanLabels(const PointCloud& scan, const mapping::KitchenMap& map, st
     return out;
 }
 
+const char* SensorName(mapping::KitchenSensor s) {
+    return s == mapping::KitchenSensor::kLaser ? "laser" : "kinect";
+}
+
+/// The sensor every scan (and opened scan) looks like. One map takes one sensor's parameters, and
+/// the other sensor's scans would be mapped with the wrong ones: scans that look like different
+/// sensors are refused unless --sensor names the parameters.
+mapping::KitchenSensor OneSensor(const MapKitchenOptions& o, const std::vector<PointCloud>& scans,
+                                 const std::vector<PointCloud>& opened) {
+    const mapping::KitchenSensor first = mapping::GuessKitchenSensor({scans.front()});
+    auto check = [&](const PointCloud& scan, const std::string& path) {
+        const mapping::KitchenSensor s = mapping::GuessKitchenSensor({scan});
+        if (s != first) {
+            throw InvalidArgument(fmt::format(
+                "map kitchen: {} looks like a {} scan and {} like a {} scan; one map takes one "
+                "sensor's parameters: map them apart, or choose the parameters with --sensor",
+                o.scans.front(), SensorName(first), path, SensorName(s)));
+        }
+    };
+    for (std::size_t k = 1; k < scans.size(); ++k) check(scans[k], o.scans[k]);
+    for (std::size_t k = 0; k < opened.size(); ++k) check(opened[k], o.opened[k]);
+    return first;
+}
+
 void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
     if (o.sensor != "auto" && o.sensor != "kinect" && o.sensor != "laser") {
         throw InvalidArgument(
@@ -84,10 +108,9 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
         fixture_classifier = ml::LoadClassifier(o.fixtures);
         mapping::CheckFixtureClassifier(*fixture_classifier);
     }
-    const mapping::KitchenSensor sensor = o.sensor == "kinect" ? mapping::KitchenSensor::kKinect
-                                          : o.sensor == "laser"
-                                              ? mapping::KitchenSensor::kLaser
-                                              : mapping::GuessKitchenSensor(scans);
+    const mapping::KitchenSensor sensor = o.sensor == "kinect"  ? mapping::KitchenSensor::kKinect
+                                          : o.sensor == "laser" ? mapping::KitchenSensor::kLaser
+                                                                : OneSensor(o, scans, opened);
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
     params.num_threads = global.threads;
     mapping::MapKitchenResult r =
@@ -128,8 +151,8 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
         std::printf(
             "multicue map kitchen: %zu scans (%s), %zu handles, %zu knobs, %zu fronts, %zu "
             "pieces in %.0f ms -> %s\n",
-            scans.size(), sensor == mapping::KitchenSensor::kLaser ? "laser" : "kinect", handles,
-            r.map.fixtures.size() - handles, r.map.fronts.size(), r.map.furniture.size(), r.time_ms,
+            scans.size(), SensorName(sensor), handles, r.map.fixtures.size() - handles,
+            r.map.fronts.size(), r.map.furniture.size(), r.time_ms,
             (dir / "map.json").string().c_str());
         for (std::size_t k = 0; k < moved.size(); ++k) {
             if (moved[k] < 0) {
@@ -170,7 +193,8 @@ void AddMapKitchenCommand(CLI::App& map_command, const GlobalOptions& global) {
                     "scans of the same views with one front opened (repeatable): joints from the "
                     "motion")
         ->check(CLI::ExistingFile);
-    cmd->add_option("--sensor", o->sensor, "auto, kinect or laser (parameters)")
+    cmd->add_option("--sensor", o->sensor,
+                    "auto, kinect or laser (parameters); auto refuses scans of both sensors")
         ->capture_default_str();
     cmd->add_option("--containers", o->containers,
                     "container classifier (multicue model file); default: rules");
