@@ -98,7 +98,9 @@ struct Options {
     bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
     bool seen_coverage = mapping::MotionParams{}.seen_coverage;
     std::string load_fixtures;
-    std::string load_containers;  ///< a container classifier (`multicue train containers`)
+    std::string load_containers;   ///< a container classifier (`multicue train containers`)
+    std::string joints = "rules";  ///< one-scan joints: rules, or learned (ClassifyJoints)
+    std::string load_joints;       ///< a joint classifier (`multicue train joints`)
     bool vary_handles = training::FixtureTrainingOptions{}.vary_handles;
     bool vary_scored_handles = false;
     float vary_chance = sim::HandleVariation{}.chance;
@@ -386,7 +388,8 @@ class Evaluator {
     mapping::MapKitchenResult Map(const std::vector<PointCloud>& clouds, bool laser,
                                   const ml::Classifier* classifier) const {
         const auto& fixtures = laser ? fixtures_laser_ : fixtures_kinect_;
-        return mapping::MapKitchen(clouds, Params(laser), classifier, fixtures.get());
+        return mapping::MapKitchen(clouds, Params(laser), classifier, fixtures.get(),
+                                   joints_.get());
     }
 
     /// The fixture classifier of one sensor, trained on simulated kitchens (or loaded).
@@ -1007,22 +1010,37 @@ class Evaluator {
             if (o_.sensor != "kinect")
                 fixtures_laser_ = TrainFixtures(library, train_split, cache, true);
         }
+        // The container and joint classifiers learn from maps of the same training kitchens.
+        training::ContainerTrainingOptions t;
+        t.kitchens = o_.train_kitchens;
+        t.views = o_.sensor != "laser" ? o_.views : 0;
+        t.laser_views = o_.sensor != "kinect" ? o_.laser_views : 0;
+        t.seed = o_.seed ^ 0x7261696eull;
+        t.procedural_share = o_.procedural_share;
+        t.kinect_params = Params(false);
+        t.laser_params = Params(true);
+        t.kinect_fixtures = fixtures_kinect_.get();
+        t.laser_fixtures = fixtures_laser_.get();
+        if (!o_.load_joints.empty()) {
+            joints_ = ml::LoadClassifier(o_.load_joints);
+            mapping::CheckJointClassifier(*joints_);
+        } else if (o_.joints == "learned" && o_.train_kitchens > 0) {
+            const ml::Dataset data = training::CollectJointRows(train_lib, cache, t);
+            joints_ = training::TrainJointClassifier(data, "rtrees:trees=100");
+            const std::vector<std::size_t> per_class = data.ClassCounts();
+            std::string classes;
+            for (std::size_t c = 0; c < per_class.size(); ++c) {
+                classes += fmt::format(" {} {}", data.class_names[c], per_class[c]);
+            }
+            std::printf("joint classifier: %zu training fronts from %d kitchens:%s\n", data.rows(),
+                        o_.train_kitchens, classes.c_str());
+        }
         std::unique_ptr<ml::Classifier> classifier;
         std::size_t train_rows = 0;
         if (!o_.load_containers.empty()) {
             classifier = ml::LoadClassifier(o_.load_containers);
             mapping::CheckContainerClassifier(*classifier);
         } else if (!o_.rules && o_.train_kitchens > 0) {
-            training::ContainerTrainingOptions t;
-            t.kitchens = o_.train_kitchens;
-            t.views = o_.sensor != "laser" ? o_.views : 0;
-            t.laser_views = o_.sensor != "kinect" ? o_.laser_views : 0;
-            t.seed = o_.seed ^ 0x7261696eull;
-            t.procedural_share = o_.procedural_share;
-            t.kinect_params = Params(false);
-            t.laser_params = Params(true);
-            t.kinect_fixtures = fixtures_kinect_.get();
-            t.laser_fixtures = fixtures_laser_.get();
             const ml::Dataset data = training::CollectContainerRows(train_lib, cache, t);
             train_rows = data.rows();
             if (data.num_classes() >= 2) {
@@ -1100,6 +1118,7 @@ class Evaluator {
                                              : o_.rules                  ? "rules"
                                                                          : "rtrees"},
                               {"fixtures", o_.fixture_kitchens > 0 ? o_.fixture_spec : "rules"},
+                              {"joints", !o_.load_joints.empty() ? o_.load_joints : o_.joints},
                               {"fixture_kitchens", o_.fixture_kitchens},
                               {"vary_handles", o_.vary_handles},
                               {"vary_scored_handles", o_.vary_scored_handles},
@@ -1371,6 +1390,7 @@ class Evaluator {
   private:
     Options o_;
     std::unique_ptr<ml::Classifier> fixtures_kinect_, fixtures_laser_;
+    std::unique_ptr<ml::Classifier> joints_;  ///< null: one-scan joints by the fixture rules
 };
 
 }  // namespace
@@ -1529,6 +1549,13 @@ int main(int argc, char** argv) {
     app.add_option("--json", o.json, "also write the figures as JSON");
     app.add_option("--save-containers", o.save_containers,
                    "also save the container classifier (for map kitchen --containers)");
+    app.add_option("--joints", o.joints,
+                   "one-scan joints: rules (the fixture rules), or learned (a joint classifier "
+                   "trained on the container training's kitchens)")
+        ->check(CLI::IsMember({"rules", "learned"}))
+        ->capture_default_str();
+    app.add_option("--load-joints", o.load_joints,
+                   "score with this joint classifier (`multicue train joints`) instead");
     app.add_option("--load-containers", o.load_containers,
                    "a container classifier (`multicue train containers`) instead of training one");
     if (auto code = eval::ParseDriverOptions(app, "kitchen_eval", [&] {

@@ -689,10 +689,19 @@ TEST(KitchenCli, ProceduralKitchensWithoutTheLibrary) {
     const std::string csv = test::ReadTextFile(rows);
     EXPECT_NE(csv.find("container:drawers"), std::string::npos);
     EXPECT_NE(csv.find("cupboard"), std::string::npos);
-    r = test::RunCli("map kitchen " +
-                     (sim_dir / kitchen["frames"][0]["file"].get<std::string>()).string() + opened +
-                     " -q --fixtures " + fixtures.string() + " --containers " +
-                     containers.string() + " --out " + map_dir.string());
+    // The joint classifier, on the same kind of maps.
+    const auto joints = dir / "joints.mcm";
+    const auto front_rows = dir / "fronts.csv";
+    r = test::RunCli(
+        "train joints --kitchen none --procedural 2 --kitchens 1 --views 1 --laser-views 0 -q "
+        "--kinect-fixtures " +
+        fixtures.string() + " --rows " + front_rows.string() + " --out " + joints.string());
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(test::ReadTextFile(front_rows).find("joint:length_share"), std::string::npos);
+    r = test::RunCli(
+        "map kitchen " + (sim_dir / kitchen["frames"][0]["file"].get<std::string>()).string() +
+        opened + " -q --fixtures " + fixtures.string() + " --containers " + containers.string() +
+        " --joints " + joints.string() + " --out " + map_dir.string());
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_FALSE(io::ReadUrdf(map_dir / "map.urdf").links.empty());
     const auto map_json = nlohmann::json::parse(test::ReadTextFile(map_dir / "map.json"));
@@ -704,6 +713,12 @@ TEST(KitchenCli, ProceduralKitchensWithoutTheLibrary) {
                      " -q --containers " + fixtures.string() + " --out " + (dir / "z").string());
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("container features"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "z"));
+    r = test::RunCli("map kitchen " +
+                     (sim_dir / kitchen["frames"][0]["file"].get<std::string>()).string() +
+                     " -q --joints " + containers.string() + " --out " + (dir / "z").string());
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("joint features"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "z"));
     r = test::RunCli("train containers --kitchen none --procedural 2 --kinect-fixtures " +
                      containers.string() + " --out " + (dir / "y.mcm").string());
@@ -801,8 +816,11 @@ TEST(KitchenCli, BadInputWritesNothing) {
              "--fold 2", "--split half", "--procedural -1", "--procedural 100000",
              "--procedural-share 1.5", "--classifier bogus", "--kitchen none --procedural 0",
              "--rows " + (dir / "none" / "rows.csv").string()}) {
-        r = test::RunCli("train containers " + bad + " --out " + (dir / "g.mcm").string());
-        EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+        for (const char* job : {"containers", "joints"}) {
+            r = test::RunCli(std::string("train ") + job + ' ' + bad + " --out " +
+                             (dir / "g.mcm").string());
+            EXPECT_EQ(r.code, 2) << job << ' ' << bad << ": " << r.output;
+        }
     }
     EXPECT_EQ(test::RunCli("train containers --out " + (dir / "none" / "g.mcm").string()).code, 2);
     r = test::RunCli("train containers --kinect-fixtures " + (dir / "missing.mcm").string() +

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <random>
 
 #include <tinyxml.h>
 
@@ -18,6 +19,8 @@
 #include "multicue/mapping/fronts.hpp"
 #include "multicue/mapping/kitchen_map.hpp"
 #include "multicue/mapping/map_export.hpp"
+#include "multicue/ml/classifier.hpp"
+#include "multicue/ml/dataset.hpp"
 #include "test_util.hpp"
 
 namespace multicue {
@@ -530,6 +533,94 @@ PointCloud DoorTurned(const PointCloud& closed, const Eigen::Vector3f& hinge,
                    Color{}, 0.001f, rng);
     for (const auto& x : door.points) opened.points.push_back(hinge + R * (x - hinge));
     return opened;
+}
+
+TEST(Articulation, LearnedJointsFromWhatTheFrontLooksLike) {
+    // Two fronts of one face, a 0.92 x 0.5 m one with a horizontal handle centred near its top
+    // and a 0.4 x 0.65 m door beside it with a vertical handle near its right edge.
+    KitchenMap map;
+    map.floor_height = 0.0f;
+    Front deep = FrontOfSize(0.92f, 0.5f);
+    deep.face = 0;
+    deep.fixtures = {0};
+    Front door = FrontOfSize(0.4f, 0.65f);
+    door.face = 0;
+    door.fixtures = {1};
+    door.min.x() += 1.0f;  // 1 m along the face
+    door.max.x() += 1.0f;
+    door.center += door.u_axis;
+    map.fronts = {deep, door};
+    map.fixtures = {
+        HandleAt(deep.center + Eigen::Vector3f(0, -0.035f, 0.2f), false),
+        HandleAt(door.center + door.u_axis * 0.15f - Eigen::Vector3f(0, 0.035f, 0), true)};
+    const std::vector<float> x = JointFeatures(map, 0);
+    ASSERT_EQ(x.size(), JointFeatureNames().size());
+    const auto at = [&](const std::vector<float>& v, const char* name) {
+        const auto& n = JointFeatureNames();
+        return v[static_cast<std::size_t>(std::find(n.begin(), n.end(), name) - n.begin())];
+    };
+    EXPECT_NEAR(at(x, "width"), 0.92f, 1e-4f);
+    EXPECT_NEAR(at(x, "height"), 0.5f, 1e-4f);
+    EXPECT_NEAR(at(x, "bottom"), 0.15f, 1e-4f);
+    EXPECT_NEAR(at(x, "top"), 0.65f, 1e-4f);
+    EXPECT_EQ(at(x, "horizontal"), 1.0f);
+    EXPECT_NEAR(at(x, "u"), 0.5f, 1e-4f);
+    EXPECT_NEAR(at(x, "v"), 0.9f, 1e-4f);
+    EXPECT_EQ(at(x, "piece_fronts"), 0.0f);  // no pieces grouped
+    const std::vector<float> y = JointFeatures(map, 1);
+    EXPECT_EQ(at(y, "horizontal"), 0.0f);
+    EXPECT_NEAR(at(y, "u"), 0.5f + 0.15f / 0.4f, 1e-4f);
+    EXPECT_THROW(JointFeatures(map, 2), std::out_of_range);
+    // The rules: the deep front alone is an oven's door hinged at its bottom, the door hinged at
+    // its left edge.
+    for (std::size_t i = 0; i < map.fronts.size(); ++i) {
+        map.fronts[i].articulation =
+            ArticulationFromFixtures(map.fronts, i, map.fixtures, map.frame, map.floor_height);
+    }
+    const auto class_of = [&](std::size_t i) {
+        const Articulation& a = map.fronts[i].articulation;
+        return JointClassOf(a.type, a.axis, a.origin, map.fronts[i], map.frame);
+    };
+    EXPECT_EQ(class_of(0), "revolute_bottom");
+    EXPECT_EQ(class_of(1), "revolute_side");
+    EXPECT_EQ(JointClassOf(JointType::kUnknown, {}, {}, deep, map.frame), "");
+    // A classifier taught that wide fronts with a horizontal handle are drawers (noisy synthetic
+    // rows) makes the deep front a drawer and leaves the door.
+    ml::Dataset rows = ml::Dataset::WithBlocks({{"joint", JointFeatureNames()}});
+    std::mt19937 rng(5);
+    std::normal_distribution<float> noise(0.0f, 0.01f);
+    for (int k = 0; k < 40; ++k) {
+        std::vector<float> a = x, b = y;
+        for (auto& v : a) v += noise(rng);
+        for (auto& v : b) v += noise(rng);
+        rows.AppendRow(a, "prismatic");
+        rows.AppendRow(b, "revolute_side");
+    }
+    auto classifier = ml::CreateClassifier("rtrees:trees=20");
+    classifier->Fit(rows);
+    KitchenMap learned = map;
+    const std::vector<std::size_t> changed = ClassifyJoints(learned, *classifier);
+    ASSERT_EQ(changed, std::vector<std::size_t>{0});
+    EXPECT_EQ(learned.fronts[0].articulation.type, JointType::kPrismatic);
+    EXPECT_EQ(learned.fronts[0].articulation.source, "classifier");
+    EXPECT_LT((learned.fronts[0].articulation.axis - deep.normal).norm(), 1e-5f);
+    EXPECT_EQ(learned.fronts[1].articulation.origin, map.fronts[1].articulation.origin);
+    // Deterministic; and a front whose joint came from motion is left alone.
+    KitchenMap again = map;
+    EXPECT_EQ(ClassifyJoints(again, *classifier), changed);
+    KitchenMap moved = map;
+    moved.fronts[0].articulation.source = "motion";
+    EXPECT_TRUE(ClassifyJoints(moved, *classifier).empty());
+    KitchenMap empty;
+    EXPECT_TRUE(ClassifyJoints(empty, *classifier).empty());
+    // Classifiers of another kind are refused.
+    ml::Dataset other = ml::Dataset::WithBlocks({{"other", {"a", "b"}}});
+    other.AppendRow(std::vector<float>{0, 1}, "prismatic");
+    other.AppendRow(std::vector<float>{1, 0}, "revolute_side");
+    auto foreign = ml::CreateClassifier("rtrees:trees=5");
+    foreign->Fit(other);
+    EXPECT_THROW(ClassifyJoints(again, *foreign), InvalidArgument);
+    EXPECT_THROW(CheckJointClassifier(*ml::CreateClassifier("rtrees:trees=5")), InvalidArgument);
 }
 
 TEST(Articulation, FromASyntheticOpenedDoorAndDrawer) {

@@ -33,6 +33,7 @@ struct MapKitchenOptions {
     std::string sensor = "auto";
     std::string containers;
     std::string fixtures;
+    std::string joints;
     std::string name = "kitchen_map";
     bool report = true;
     bool quiet = false;
@@ -108,13 +109,18 @@ void Run(const MapKitchenOptions& o, const GlobalOptions& global) {
         fixture_classifier = ml::LoadClassifier(o.fixtures);
         mapping::CheckFixtureClassifier(*fixture_classifier);
     }
+    std::unique_ptr<ml::Classifier> joint_classifier;
+    if (!o.joints.empty()) {
+        joint_classifier = ml::LoadClassifier(o.joints);
+        mapping::CheckJointClassifier(*joint_classifier);
+    }
     const mapping::KitchenSensor sensor = o.sensor == "kinect"  ? mapping::KitchenSensor::kKinect
                                           : o.sensor == "laser" ? mapping::KitchenSensor::kLaser
                                                                 : OneSensor(o, scans, opened);
     mapping::MapKitchenParams params = mapping::KitchenParamsFor(sensor);
     params.num_threads = global.threads;
-    mapping::MapKitchenResult r =
-        mapping::MapKitchen(scans, params, classifier.get(), fixture_classifier.get());
+    mapping::MapKitchenResult r = mapping::MapKitchen(
+        scans, params, classifier.get(), fixture_classifier.get(), joint_classifier.get());
     const mapping::MotionParams motion = mapping::MotionParamsFor(sensor);
     std::vector<int> moved;
     std::vector<std::size_t> split_off;  // fronts cut from the opened front's rectangle
@@ -200,6 +206,8 @@ void AddMapKitchenCommand(CLI::App& map_command, const GlobalOptions& global) {
                     "container classifier (multicue model file); default: rules");
     cmd->add_option("--fixtures", o->fixtures,
                     "fixture classifier of the sensor (`multicue train fixtures`); default: rules");
+    cmd->add_option("--joints", o->joints,
+                    "one-scan joint classifier (`multicue train joints`); default: rules");
     cmd->add_option("--name", o->name, "name of the map in the URDF and OWL files")
         ->capture_default_str();
     cmd->add_flag(

@@ -1,7 +1,9 @@
 // `multicue train containers --out MODEL`: the container classifier of `map kitchen
 // --containers` (thesis section 4.1.3: cupboards, drawer units, ovens, dishwashers, fridges,
-// microwaves, tables), trained on simulated kitchens of one half of the articulated kitchen
-// models with procedural units and appliances beside them (docs/kitchens.md).
+// microwaves, tables), and `multicue train joints --out MODEL`: the one-scan joint classifier of
+// `map kitchen --joints` (drawer, or door hinged at a side, the bottom or the top edge). Both are
+// trained on maps of simulated kitchens of one half of the articulated kitchen models with
+// procedural units and appliances beside them (docs/kitchens.md).
 
 #include <cstdio>
 #include <memory>
@@ -26,7 +28,11 @@
 namespace multicue::cli {
 namespace {
 
-struct TrainContainersOptions {
+/// What the maps teach: furniture types or one-scan joints.
+enum class Target { kContainers, kJoints };
+
+struct TrainOnMapsOptions {
+    Target target = Target::kContainers;
     std::string out;
     std::string kitchen = DefaultKitchenDir();
     std::string sensor = "both";
@@ -40,7 +46,7 @@ struct TrainContainersOptions {
     bool quiet = false;
 };
 
-void TrainContainers(TrainContainersOptions& o, int threads) {
+void TrainOnMaps(TrainOnMapsOptions& o, int threads) {
     // Everything checked before any kitchen is simulated.
     if (o.sensor != "both" && o.sensor != "kinect" && o.sensor != "laser") {
         throw InvalidArgument(
@@ -84,13 +90,19 @@ void TrainContainers(TrainContainersOptions& o, int threads) {
         models.push_back(std::move(e));
     }
     sim::KitchenModelCache cache;
+    const bool joints = o.target == Target::kJoints;
+    const char* job = joints ? "train joints" : "train containers";
     const ml::Dataset rows = CollectTrainAndSave(
-        "train containers", o.t.kitchens,
+        job, o.t.kitchens,
         [&](Progress* progress) {
-            return training::CollectContainerRows(models, cache, o.t, progress);
+            return joints ? training::CollectJointRows(models, cache, o.t, progress)
+                          : training::CollectContainerRows(models, cache, o.t, progress);
         },
-        [&](const ml::Dataset& r) { return training::TrainContainerClassifier(r, o.spec); }, o.out,
-        o.rows);
+        [&](const ml::Dataset& r) {
+            return joints ? training::TrainJointClassifier(r, o.spec)
+                          : training::TrainContainerClassifier(r, o.spec);
+        },
+        o.out, o.rows);
     if (!o.quiet) {
         const std::vector<std::size_t> per_type = rows.ClassCounts();
         std::string types;
@@ -98,25 +110,31 @@ void TrainContainers(TrainContainersOptions& o, int threads) {
             types += fmt::format("{}{} {}", c > 0 ? ", " : "", rows.class_names[c], per_type[c]);
         }
         std::printf(
-            "multicue train containers: %s, %d kitchens of %s, %zu pieces (%s) -> %s\n",
-            o.sensor.c_str(), o.t.kitchens,
+            "multicue %s: %s, %d kitchens of %s, %zu %s (%s) -> %s\n", job, o.sensor.c_str(),
+            o.t.kitchens,
             (o.kitchen == "none"
                  ? std::string("procedural units")
                  : (o.fold >= 0 ? fmt::format("fold {} of ", o.fold) : std::string()) + "the " +
                        o.split + " half" + (o.procedural > 0 ? " and procedural units" : ""))
                 .c_str(),
-            rows.rows(), types.c_str(), o.out.c_str());
+            rows.rows(), joints ? "fronts" : "pieces", types.c_str(), o.out.c_str());
     }
 }
 
 }  // namespace
 
-void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& global) {
+namespace {
+
+void AddTrainOnMapsCommand(CLI::App& train_command, const GlobalOptions& global, Target target) {
+    const bool joints = target == Target::kJoints;
     auto* cmd = train_command.add_subcommand(
-        "containers",
-        "Train the furniture type classifier of `map kitchen --containers` on simulated "
-        "kitchens");
-    auto o = std::make_shared<TrainContainersOptions>();
+        joints ? "joints" : "containers",
+        joints ? "Train the one-scan joint classifier of `map kitchen --joints` (drawer, or door "
+                 "hinged at a side, the bottom or the top) on simulated kitchens"
+               : "Train the furniture type classifier of `map kitchen --containers` on simulated "
+                 "kitchens");
+    auto o = std::make_shared<TrainOnMapsOptions>();
+    o->target = target;
     cmd->add_option("--out", o->out, "classifier file to write (.mcm)")->required();
     cmd->add_option("--kitchen", o->kitchen,
                     "kitchen library (PartNet-Mobility models); none: procedural units only")
@@ -129,7 +147,8 @@ void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& glo
         ->capture_default_str();
     cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
     cmd->add_option("--sensor", o->sensor,
-                    "both, kinect or laser: the scans whose maps the classifier will type")
+                    joints ? "both, kinect or laser: the scans whose maps the classifier will serve"
+                           : "both, kinect or laser: the scans whose maps the classifier will type")
         ->capture_default_str();
     cmd->add_option("--views", o->t.views, "Kinect frames per kitchen")->capture_default_str();
     cmd->add_option("--laser-views", o->t.laser_views, "laser sweeps per kitchen")
@@ -149,12 +168,22 @@ void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& glo
     cmd->add_option("--classifier", o->spec, "classifier spec (`multicue classifier train`)")
         ->capture_default_str();
     cmd->add_option("--rows", o->rows,
-                    "also write the labelled pieces as a dataset (.mcd, or .csv by extension) for "
-                    "`multicue classifier`");
+                    std::string("also write the labelled ") + (joints ? "fronts" : "pieces") +
+                        " as a dataset (.mcd, or .csv by extension) for `multicue classifier`");
     cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")
         ->capture_default_str();
     cmd->add_flag("-q,--quiet", o->quiet, "no summary");
-    cmd->callback([o, &global] { TrainContainers(*o, global.threads); });
+    cmd->callback([o, &global] { TrainOnMaps(*o, global.threads); });
+}
+
+}  // namespace
+
+void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& global) {
+    AddTrainOnMapsCommand(train_command, global, Target::kContainers);
+}
+
+void AddTrainJointsCommand(CLI::App& train_command, const GlobalOptions& global) {
+    AddTrainOnMapsCommand(train_command, global, Target::kJoints);
 }
 
 }  // namespace multicue::cli

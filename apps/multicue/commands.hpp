@@ -49,5 +49,6 @@ void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& glob
 void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& global);
 /// `train containers` (cmd_train_containers.cpp), attached to the `train` command.
 void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& global);
+void AddTrainJointsCommand(CLI::App& train_command, const GlobalOptions& global);
 
 }  // namespace multicue::cli

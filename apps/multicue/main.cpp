@@ -81,6 +81,7 @@ int main(int argc, char** argv) {
     multicue::cli::AddTrainFurnitureCommand(*app.get_subcommand("train"), global);
     multicue::cli::AddTrainFixturesCommand(*app.get_subcommand("train"), global);
     multicue::cli::AddTrainContainersCommand(*app.get_subcommand("train"), global);
+    multicue::cli::AddTrainJointsCommand(*app.get_subcommand("train"), global);
     multicue::cli::AddDetectFurnitureCommand(app, global);
 
     app.parse_complete_callback([&] {

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "multicue/core/exceptions.hpp"
+#include "multicue/ml/classifier.hpp"
 #include "multicue/search/kdtree.hpp"
 #include "multicue/segmentation/sac_plane.hpp"
 
@@ -957,6 +958,127 @@ int UpdateArticulationFromOpenedScan(KitchenMap& map, const PointCloud& closed,
                          2.0f * p.coverage_cell);
     }
     return best;
+}
+
+const std::vector<std::string>& JointClassNames() {
+    static const std::vector<std::string> names = {"prismatic", "revolute_side", "revolute_bottom",
+                                                   "revolute_top"};
+    return names;
+}
+
+const std::vector<std::string>& JointFeatureNames() {
+    static const std::vector<std::string> names = {
+        "width",    "height",       "aspect",      "bottom",       "top",
+        "fixtures", "horizontal",   "length",      "length_share", "u",
+        "v",        "u_off",        "knob",        "protrusion",   "above",
+        "below",    "piece_fronts", "piece_width", "piece_height"};
+    return names;
+}
+
+std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
+                                 const ArticulationParams& p) {
+    const Front& f = map.fronts.at(front);
+    const Eigen::Vector3f up = map.frame.Up();
+    const float base = std::isnan(map.floor_height) ? 0.0f : map.floor_height;
+    const float w = f.max.x() - f.min.x(), h = f.max.y() - f.min.y();
+    const float centre = up.dot(f.center) - base;
+    float horizontal = 0, length = 0, ru = 0.5f, rv = 0.5f, knob = 0, protrusion = 0;
+    if (const Fixture* fx = MainFixture(f, map.fixtures)) {
+        horizontal = IsHorizontalHandle(*fx, up, p) ? 1.0f : 0.0f;
+        length = fx->length;
+        knob = fx->type == FixtureType::kKnob ? 1.0f : 0.0f;
+        protrusion = fx->protrusion;
+        const Eigen::Vector3f d = fx->center - f.center;
+        ru = w > 0 ? d.dot(f.u_axis) / w + 0.5f : 0.5f;
+        rv = h > 0 ? d.dot(f.v_axis) / h + 0.5f : 0.5f;
+    }
+    float above = 0, below = 0, piece_fronts = 0;
+    for (std::size_t o = 0; o < map.fronts.size(); ++o) {
+        const Front& q = map.fronts[o];
+        if (o == front) continue;
+        piece_fronts += f.furniture >= 0 && q.furniture == f.furniture;
+        if (q.face != f.face) continue;
+        const float overlap = std::min(q.max.x(), f.max.x()) - std::max(q.min.x(), f.min.x());
+        if (overlap < 0.6f * w) continue;
+        above += std::abs(q.min.y() - f.max.y()) < 0.06f;
+        below += std::abs(q.max.y() - f.min.y()) < 0.06f;
+    }
+    Eigen::Vector3f piece = Eigen::Vector3f::Zero();
+    if (f.furniture >= 0) piece = map.furniture.at(static_cast<std::size_t>(f.furniture)).extents;
+    const float along = horizontal > 0 ? w : h;
+    return {w,
+            h,
+            h > 0 ? w / h : 0.0f,
+            centre - h / 2,
+            centre + h / 2,
+            static_cast<float>(f.fixtures.size()),
+            horizontal,
+            length,
+            along > 0 ? length / along : 0.0f,
+            ru,
+            rv,
+            std::abs(ru - 0.5f),
+            knob,
+            protrusion,
+            above,
+            below,
+            piece_fronts,
+            piece.x(),
+            piece.z()};
+}
+
+std::string JointClassOf(JointType type, const Eigen::Vector3f& axis, const Eigen::Vector3f& point,
+                         const Front& f, const RoomFrame& frame) {
+    if (type == JointType::kUnknown) return "";
+    if (type == JointType::kPrismatic) return "prismatic";
+    const Eigen::Vector3f up = frame.Up();
+    if (std::abs(axis.normalized().dot(up)) > 0.7f) return "revolute_side";
+    return up.dot(point) < up.dot(f.center) ? "revolute_bottom" : "revolute_top";
+}
+
+void CheckJointClassifier(const ml::Classifier& classifier) {
+    ml::CheckClassifierFor(classifier, JointFeatureNames(), JointClassNames(), "joints", "joint");
+}
+
+std::vector<std::size_t> ClassifyJoints(KitchenMap& map, const ml::Classifier& classifier,
+                                        const ArticulationParams& p) {
+    p.Validate();
+    CheckJointClassifier(classifier);
+    std::vector<std::size_t> changed;
+    for (std::size_t i = 0; i < map.fronts.size(); ++i) {
+        Front& f = map.fronts[i];
+        if (f.articulation.source != "fixture" || f.fixtures.empty()) continue;
+        const std::vector<float> x = JointFeatures(map, i, p);
+        const ml::FeatureMatrix row =
+            Eigen::Map<const ml::FeatureMatrix>(x.data(), 1, static_cast<Eigen::Index>(x.size()));
+        const std::string& name =
+            classifier.class_names()[static_cast<std::size_t>(classifier.Predict(row).front())];
+        const Articulation& a = f.articulation;
+        if (name == JointClassOf(a.type, a.axis, a.origin, f, map.frame)) continue;
+        const float plane_d = -f.normal.dot(f.center);
+        auto on_plane = [&](float u, float v) {
+            return Eigen::Vector3f(f.u_axis * u + f.v_axis * v - f.normal * plane_d);
+        };
+        Articulation next;
+        if (name == "prismatic") {
+            next = Drawer(f, p);
+        } else if (name == "revolute_bottom") {
+            next = Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
+        } else if (name == "revolute_top") {
+            next = Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
+        } else {
+            // Hinged at the vertical edge farther from the main fixture.
+            const Fixture* fx = MainFixture(f, map.fixtures);
+            const float u = fx ? fx->center.dot(f.u_axis) : 0.5f * (f.min.x() + f.max.x());
+            next = u >= 0.5f * (f.min.x() + f.max.x())
+                       ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
+                       : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
+        }
+        next.source = "classifier";
+        f.articulation = next;
+        changed.push_back(i);
+    }
+    return changed;
 }
 
 }  // namespace multicue::mapping

@@ -32,10 +32,16 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "multicue/core/point_cloud.hpp"
 #include "multicue/mapping/semantic_map.hpp"
 #include "multicue/search/kdtree.hpp"
+
+namespace multicue::ml {
+class Classifier;
+}
 
 namespace multicue::mapping {
 
@@ -103,6 +109,42 @@ Articulation ArticulationFromFixtures(const Front& front, const std::vector<Fixt
 Articulation ArticulationFromFixtures(const std::vector<Front>& fronts, std::size_t index,
                                       const std::vector<Fixture>& fixtures, const RoomFrame& frame,
                                       float floor_height, const ArticulationParams& params = {});
+
+/// Learned one-scan joints (`MapKitchen`'s joint classifier, `multicue train joints`): instead of
+/// the fixture rules above, a classifier trained on simulated kitchens names each front's joint:
+/// "prismatic", "revolute_side" (hinged at the vertical edge farther from its main fixture),
+/// "revolute_bottom" or "revolute_top" (a flap hinged at that edge).
+const std::vector<std::string>& JointClassNames();
+
+/// The columns of JointFeatures.
+const std::vector<std::string>& JointFeatureNames();
+
+/// What the joint classifier sees of front `front` of `map`: its rectangle's width, height and
+/// aspect, its bottom and top above the floor (map.floor_height; 0 when unknown), its fixtures'
+/// count and its main fixture's direction (horizontal within params.horizontal_handle_deg),
+/// length (also as a share of the front's extent along it), place on the front (0..1 across and
+/// up, and off the middle across), kind and protrusion, the fronts directly above and below it
+/// on its face (overlapping 60 % of its width, within 6 cm), and its furniture piece (the other
+/// fronts, width and height; zeros without a piece). Throws std::out_of_range for a bad index.
+std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
+                                 const ArticulationParams& params = {});
+
+/// The class (JointClassNames) of a joint of `type` along `axis` through `point` on front `f`;
+/// "" for JointType::kUnknown.
+std::string JointClassOf(JointType type, const Eigen::Vector3f& axis, const Eigen::Vector3f& point,
+                         const Front& f, const RoomFrame& frame);
+
+/// Throws InvalidArgument unless `classifier` is trained, on JointFeatureNames, with classes of
+/// JointClassNames only.
+void CheckJointClassifier(const ml::Classifier& classifier);
+
+/// Replaces the joint of every front of `map` whose articulation came from its fixture (source
+/// "fixture") by the one `classifier` names, hinged as the class says, with the limits of
+/// `params`; hinge_seen is left for the caller to recompute. Returns the indices of the fronts
+/// whose joint changed. The map's furniture pieces are read (JointFeatures), so group them first.
+/// Throws as CheckJointClassifier.
+std::vector<std::size_t> ClassifyJoints(KitchenMap& map, const ml::Classifier& classifier,
+                                        const ArticulationParams& params = {});
 
 /// Whether `scans` saw the edge that revolute front `front`'s hinge lies on (true for other
 /// joints). `front` indexes the scans merged in order, scan k starting at `scan_offsets[k]`.

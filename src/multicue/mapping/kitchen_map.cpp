@@ -214,8 +214,12 @@ void LabelMapPoints(KitchenMap& map, std::size_t n, const std::vector<std::int32
 
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& p,
                             const ml::Classifier* classifier,
-                            const ml::Classifier* fixture_classifier) {
+                            const ml::Classifier* fixture_classifier,
+                            const ml::Classifier* joint_classifier) {
     p.Validate();
+    if (classifier != nullptr) CheckContainerClassifier(*classifier);
+    if (fixture_classifier != nullptr) CheckFixtureClassifier(*fixture_classifier);
+    if (joint_classifier != nullptr) CheckJointClassifier(*joint_classifier);
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     auto last = t0;
@@ -315,6 +319,16 @@ MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitch
     // Furniture pieces, kitchenettes and container types.
     map.components = std::move(structure.components);
     GroupFurniture(map, p.containers);
+    if (joint_classifier != nullptr) {
+        // The learned joints read the pieces; a changed joint can change how fronts group.
+        const std::vector<std::size_t> changed =
+            ClassifyJoints(map, *joint_classifier, p.articulation);
+        for (const std::size_t i : changed) {
+            map.fronts[i].articulation.hinge_seen =
+                HingeEdgeSeen(map.fronts[i], scans, r.scan_offsets, p.articulation);
+        }
+        if (!changed.empty()) GroupFurniture(map, p.containers);
+    }
     TypeContainers(map, classifier, p.containers);
     LabelMapPoints(map, r.cloud.size(), structure.point_component);
     stage("containers");

@@ -92,14 +92,17 @@ struct MapKitchenResult {
 };
 
 /// Maps a kitchen from scans that share one frame (z up when they carry sensor positions, as
-/// `multicue simulate kitchens` writes them). `classifier` types the furniture, and
-/// `fixture_classifier` decides which fixture candidates are handles and knobs (nullptr: rules).
-/// Throws InvalidArgument for bad parameters or a fixture classifier trained on other features;
-/// DataError when there are no scans, no finite point, or no vertical plane to look for furniture
-/// on.
+/// `multicue simulate kitchens` writes them). `classifier` types the furniture,
+/// `fixture_classifier` decides which fixture candidates are handles and knobs, and
+/// `joint_classifier` names the joints of fronts with a fixture (ClassifyJoints, after the
+/// pieces are grouped; they are grouped again where a joint changed); nullptr: rules.
+/// Throws InvalidArgument for bad parameters or a classifier of another kind or trained on other
+/// features (before any work); DataError when there are no scans, no finite point, or no
+/// vertical plane to look for furniture on.
 MapKitchenResult MapKitchen(const std::vector<PointCloud>& scans, const MapKitchenParams& params,
                             const ml::Classifier* classifier = nullptr,
-                            const ml::Classifier* fixture_classifier = nullptr);
+                            const ml::Classifier* fixture_classifier = nullptr,
+                            const ml::Classifier* joint_classifier = nullptr);
 
 /// Merges scans into one cloud with normals (image-space normals for organized scans when
 /// `organized_normals`, else k-d tree normals): colours

@@ -84,7 +84,8 @@ struct Articulation {
     Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();   ///< unit
     float lower = 0.0f;
     float upper = 0.0f;
-    /// "fixture" (from the handle's orientation and place), "motion" (from two scans), "none".
+    /// "fixture" (from the handle's orientation and place), "classifier" (a joint classifier's
+    /// answer from the same, ClassifyJoints), "motion" (from two scans), "none".
     std::string source = "none";
     /// Whether the scans saw the edge a revolute front's hinge lies on. False when that edge
     /// lay at the border of the view, out of it or hidden: the front may run on beyond what was

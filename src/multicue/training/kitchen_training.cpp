@@ -281,31 +281,91 @@ void AppendContainerRows(const sim::KitchenScene& kitchen, const PointCloud& sca
     }
 }
 
-ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& models,
-                                 sim::KitchenModelCache& cache, const ContainerTrainingOptions& o,
-                                 Progress* progress) {
+namespace {
+
+/// Rows of every scan of `o.kitchens` kitchens of `models`, each scan mapped on its own with its
+/// sensor's parameters and fixture classifier: `append(kitchen, scan, map, params, source, rows)`.
+template <typename Append>
+ml::Dataset CollectMapRows(const std::vector<sim::KitchenModelEntry>& models,
+                           sim::KitchenModelCache& cache, const ContainerTrainingOptions& o,
+                           const char* what, ml::Dataset rows, Progress* progress, Append append) {
     o.Validate();
     mapping::MapKitchenParams params[2] = {
         o.kinect_params.value_or(mapping::KitchenParamsFor(mapping::KitchenSensor::kKinect)),
         o.laser_params.value_or(mapping::KitchenParamsFor(mapping::KitchenSensor::kLaser))};
     for (auto& p : params) p.num_threads = o.num_threads;
-    ml::Dataset data = EmptyContainerDataset();
     ForEachTrainingScan(
-        models, cache, o.procedural_share, o.kitchens, o.seed, o.views, o.laser_views,
-        "train containers", progress, [](sim::KitchenScene&, std::uint64_t) {},
+        models, cache, o.procedural_share, o.kitchens, o.seed, o.views, o.laser_views, what,
+        progress, [](sim::KitchenScene&, std::uint64_t) {},
         [&](const sim::KitchenScene& kitchen, const KitchenFrame& frame,
             const std::string& source) {
-            const auto r = mapping::MapKitchen({frame.cloud}, params[frame.laser ? 1 : 0], nullptr,
+            const mapping::MapKitchenParams& p = params[frame.laser ? 1 : 0];
+            const auto r = mapping::MapKitchen({frame.cloud}, p, nullptr,
                                                frame.laser ? o.laser_fixtures : o.kinect_fixtures);
-            AppendContainerRows(kitchen, frame.cloud, r.map, source, data);
+            append(kitchen, frame.cloud, r.map, p, source, rows);
         });
-    return data;
+    return rows;
+}
+
+}  // namespace
+
+ml::Dataset CollectContainerRows(const std::vector<sim::KitchenModelEntry>& models,
+                                 sim::KitchenModelCache& cache, const ContainerTrainingOptions& o,
+                                 Progress* progress) {
+    return CollectMapRows(
+        models, cache, o, "train containers", EmptyContainerDataset(), progress,
+        [](const sim::KitchenScene& kitchen, const PointCloud& scan, const mapping::KitchenMap& map,
+           const mapping::MapKitchenParams&, const std::string& source,
+           ml::Dataset& rows) { AppendContainerRows(kitchen, scan, map, source, rows); });
 }
 
 std::unique_ptr<ml::Classifier> TrainContainerClassifier(const ml::Dataset& rows,
                                                          const std::string& spec,
                                                          std::uint32_t seed) {
     return TrainOnRows(rows, spec, seed, "train containers", "furniture");
+}
+
+ml::Dataset EmptyJointDataset() {
+    return ml::Dataset::WithBlocks({{"joint", mapping::JointFeatureNames()}});
+}
+
+void AppendJointRows(const sim::KitchenScene& kitchen, const PointCloud& scan,
+                     const mapping::KitchenMap& map, const std::string& source, ml::Dataset& data,
+                     const mapping::ArticulationParams& params) {
+    const ScanTruth truth(scan);
+    const auto fronts = TrueFronts(scan, truth);
+    for (const auto& [key, match] : MatchFronts(map, truth, fronts)) {
+        const TrueFront& tf = fronts.at(key);
+        const auto index = static_cast<std::size_t>(match.first);
+        const mapping::Front& f = map.fronts[index];
+        if (match.second < 0.5f || tf.joint < 0 || f.fixtures.empty() ||
+            f.articulation.source != "fixture") {
+            continue;
+        }
+        const sim::KitchenJoint& j = kitchen.joints.at(static_cast<std::size_t>(tf.joint));
+        const mapping::JointType type = j.type == io::UrdfJointType::kPrismatic
+                                            ? mapping::JointType::kPrismatic
+                                            : mapping::JointType::kRevolute;
+        data.AppendRow(mapping::JointFeatures(map, index, params),
+                       mapping::JointClassOf(type, j.axis_direction, j.axis_point, f, map.frame),
+                       -1, -1, source);
+    }
+}
+
+ml::Dataset CollectJointRows(const std::vector<sim::KitchenModelEntry>& models,
+                             sim::KitchenModelCache& cache, const ContainerTrainingOptions& o,
+                             Progress* progress) {
+    return CollectMapRows(
+        models, cache, o, "train joints", EmptyJointDataset(), progress,
+        [](const sim::KitchenScene& kitchen, const PointCloud& scan, const mapping::KitchenMap& map,
+           const mapping::MapKitchenParams& p, const std::string& source, ml::Dataset& rows) {
+            AppendJointRows(kitchen, scan, map, source, rows, p.articulation);
+        });
+}
+
+std::unique_ptr<ml::Classifier> TrainJointClassifier(const ml::Dataset& rows,
+                                                     const std::string& spec, std::uint32_t seed) {
+    return TrainOnRows(rows, spec, seed, "train joints", "front");
 }
 
 }  // namespace multicue::training

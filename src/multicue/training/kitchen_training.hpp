@@ -162,4 +162,28 @@ std::unique_ptr<ml::Classifier> TrainContainerClassifier(const ml::Dataset& rows
                                                          const std::string& spec,
                                                          std::uint32_t seed = 1);
 
+/// Training of the joint classifier of `map kitchen --joints` (mapping::ClassifyJoints): the
+/// same maps as the container training's (ContainerTrainingOptions; joints by the fixture rules),
+/// every front with a fixture matched to a true front (IoU >= 0.5) labelled with its true joint
+/// and hinge edge (mapping::JointClassOf).
+ml::Dataset EmptyJointDataset();
+
+/// Appends one row per front of `map` (a map of `scan`, a scan of `kitchen` with its ground-truth
+/// fields) that has a fixture and a joint from it and is matched to a true front with a joint.
+void AppendJointRows(const sim::KitchenScene& kitchen, const PointCloud& scan,
+                     const mapping::KitchenMap& map, const std::string& source, ml::Dataset& data,
+                     const mapping::ArticulationParams& params = {});
+
+/// Rows of the fronts of `options.kitchens` kitchens built from `models`, as CollectContainerRows
+/// makes its maps. Throws as CollectContainerRows.
+ml::Dataset CollectJointRows(const std::vector<sim::KitchenModelEntry>& models,
+                             sim::KitchenModelCache& cache, const ContainerTrainingOptions& options,
+                             Progress* progress = nullptr);
+
+/// A classifier of spec `spec` trained on joint rows. Throws DataError when the rows hold fewer
+/// than two classes.
+std::unique_ptr<ml::Classifier> TrainJointClassifier(const ml::Dataset& rows,
+                                                     const std::string& spec,
+                                                     std::uint32_t seed = 1);
+
 }  // namespace multicue::training
