@@ -5,7 +5,7 @@
                          [--work DIR] [--json report.json] [--kitchen-models DIR]
 
 For each job (train, extract, simulate, import, run, classifier, convert, furniture, detect,
-fixtures, containers) it prepares inputs, runs the job once to completion for the reference output and its
+fixtures, containers, joints) it prepares inputs, runs the job once to completion for the reference output and its
 duration, then N times: puts the previous output (another complete output) in place, starts the
 job, kills its process with SIGKILL at a uniformly random moment within the reference duration,
 and checks
@@ -433,6 +433,17 @@ class Containers(SeededFileJob):
                 "--laser-views", "0", "--seed", seed, "-q"]
 
 
+class Joints(Containers):
+    """train joints: the same kitchens and maps as containers, another model file."""
+    name = "joints"
+    output = "joints.mcm"
+
+    def cmd(self, out, seed=1):
+        c = super().cmd(out, seed)
+        c[c.index("containers")] = "joints"
+        return c
+
+
 class Detect(Job):
     """detect furniture: three outputs (result.json, models.ply, report.html), each written
     atomically; the previous outputs come from a model trained with another seed."""
@@ -500,7 +511,7 @@ class Detect(Job):
 
 
 JOBS = {j.name: j for j in [Train, Extract, Simulate, Import, Run, Classifier, Convert,
-                            Furniture, Detect, Fixtures, Containers]}
+                            Furniture, Detect, Fixtures, Containers, Joints]}
 
 
 def run_job(job, kills, rng, report):
