@@ -553,6 +553,19 @@ TEST(Articulation, LearnedJointsFromWhatTheFrontLooksLike) {
     map.fixtures = {
         HandleAt(deep.center + Eigen::Vector3f(0, -0.035f, 0.2f), false),
         HandleAt(door.center + door.u_axis * 0.15f - Eigen::Vector3f(0, 0.035f, 0), true)};
+    // The rules: the deep front alone is an oven's door hinged at its bottom, the door hinged at
+    // its left edge.
+    for (std::size_t i = 0; i < map.fronts.size(); ++i) {
+        map.fronts[i].articulation =
+            ArticulationFromFixtures(map.fronts, i, map.fixtures, map.frame, map.floor_height);
+    }
+    const auto class_of = [&](std::size_t i) {
+        const Articulation& a = map.fronts[i].articulation;
+        return JointClassOf(a.type, a.axis, a.origin, map.fronts[i], map.frame);
+    };
+    EXPECT_EQ(class_of(0), "revolute_bottom");
+    EXPECT_EQ(class_of(1), "revolute_side");
+    EXPECT_EQ(JointClassOf(JointType::kUnknown, {}, {}, deep, map.frame), "");
     const std::vector<float> x = JointFeatures(map, 0);
     ASSERT_EQ(x.size(), JointFeatureNames().size());
     const auto at = [&](const std::vector<float>& v, const char* name) {
@@ -567,23 +580,13 @@ TEST(Articulation, LearnedJointsFromWhatTheFrontLooksLike) {
     EXPECT_NEAR(at(x, "u"), 0.5f, 1e-4f);
     EXPECT_NEAR(at(x, "v"), 0.9f, 1e-4f);
     EXPECT_EQ(at(x, "piece_fronts"), 0.0f);  // no pieces grouped
+    EXPECT_EQ(at(x, "rule_bottom"), 1.0f);   // the rules' answer
+    EXPECT_EQ(at(x, "rule_prismatic") + at(x, "rule_side") + at(x, "rule_top"), 0.0f);
     const std::vector<float> y = JointFeatures(map, 1);
     EXPECT_EQ(at(y, "horizontal"), 0.0f);
     EXPECT_NEAR(at(y, "u"), 0.5f + 0.15f / 0.4f, 1e-4f);
+    EXPECT_EQ(at(y, "rule_side"), 1.0f);
     EXPECT_THROW(JointFeatures(map, 2), std::out_of_range);
-    // The rules: the deep front alone is an oven's door hinged at its bottom, the door hinged at
-    // its left edge.
-    for (std::size_t i = 0; i < map.fronts.size(); ++i) {
-        map.fronts[i].articulation =
-            ArticulationFromFixtures(map.fronts, i, map.fixtures, map.frame, map.floor_height);
-    }
-    const auto class_of = [&](std::size_t i) {
-        const Articulation& a = map.fronts[i].articulation;
-        return JointClassOf(a.type, a.axis, a.origin, map.fronts[i], map.frame);
-    };
-    EXPECT_EQ(class_of(0), "revolute_bottom");
-    EXPECT_EQ(class_of(1), "revolute_side");
-    EXPECT_EQ(JointClassOf(JointType::kUnknown, {}, {}, deep, map.frame), "");
     // A classifier taught that wide fronts with a horizontal handle are drawers (noisy synthetic
     // rows) makes the deep front a drawer and leaves the door.
     ml::Dataset rows = ml::Dataset::WithBlocks({{"joint", JointFeatureNames()}});

@@ -968,10 +968,11 @@ const std::vector<std::string>& JointClassNames() {
 
 const std::vector<std::string>& JointFeatureNames() {
     static const std::vector<std::string> names = {
-        "width",    "height",       "aspect",      "bottom",       "top",
-        "fixtures", "horizontal",   "length",      "length_share", "u",
-        "v",        "u_off",        "knob",        "protrusion",   "above",
-        "below",    "piece_fronts", "piece_width", "piece_height"};
+        "width",     "height",       "aspect",      "bottom",       "top",
+        "fixtures",  "horizontal",   "length",      "length_share", "u",
+        "v",         "u_off",        "knob",        "protrusion",   "above",
+        "below",     "piece_fronts", "piece_width", "piece_height", "rule_prismatic",
+        "rule_side", "rule_bottom",  "rule_top"};
     return names;
 }
 
@@ -1006,6 +1007,8 @@ std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
     Eigen::Vector3f piece = Eigen::Vector3f::Zero();
     if (f.furniture >= 0) piece = map.furniture.at(static_cast<std::size_t>(f.furniture)).extents;
     const float along = horizontal > 0 ? w : h;
+    const std::string rule =
+        JointClassOf(f.articulation.type, f.articulation.axis, f.articulation.origin, f, map.frame);
     return {w,
             h,
             h > 0 ? w / h : 0.0f,
@@ -1024,7 +1027,11 @@ std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
             below,
             piece_fronts,
             piece.x(),
-            piece.z()};
+            piece.z(),
+            rule == "prismatic" ? 1.0f : 0.0f,
+            rule == "revolute_side" ? 1.0f : 0.0f,
+            rule == "revolute_bottom" ? 1.0f : 0.0f,
+            rule == "revolute_top" ? 1.0f : 0.0f};
 }
 
 std::string JointClassOf(JointType type, const Eigen::Vector3f& axis, const Eigen::Vector3f& point,

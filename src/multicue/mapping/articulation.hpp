@@ -124,8 +124,10 @@ const std::vector<std::string>& JointFeatureNames();
 /// count and its main fixture's direction (horizontal within params.horizontal_handle_deg),
 /// length (also as a share of the front's extent along it), place on the front (0..1 across and
 /// up, and off the middle across), kind and protrusion, the fronts directly above and below it
-/// on its face (overlapping 60 % of its width, within 6 cm), and its furniture piece (the other
-/// fronts, width and height; zeros without a piece). Throws std::out_of_range for a bad index.
+/// on its face (overlapping 60 % of its width, within 6 cm), its furniture piece (the other
+/// fronts, width and height; zeros without a piece), and the class of its present joint (the
+/// fixture rules' answer, one-hot; zeros without a joint). Throws std::out_of_range for a bad
+/// index.
 std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
                                  const ArticulationParams& params = {});
 
