@@ -121,10 +121,6 @@ void TrainOnMaps(TrainOnMapsOptions& o, int threads) {
     }
 }
 
-}  // namespace
-
-namespace {
-
 void AddTrainOnMapsCommand(CLI::App& train_command, const GlobalOptions& global, Target target) {
     const bool joints = target == Target::kJoints;
     auto* cmd = train_command.add_subcommand(

@@ -47,7 +47,8 @@ void AddDetectFurnitureCommand(CLI::App& app, const GlobalOptions& global);
 /// `train furniture` (cmd_map_furniture.cpp), attached to the `train` command.
 void AddTrainFurnitureCommand(CLI::App& train_command, const GlobalOptions& global);
 void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& global);
-/// `train containers` (cmd_train_containers.cpp), attached to the `train` command.
+/// `train containers` and `train joints` (cmd_train_containers.cpp), attached to the `train`
+/// command.
 void AddTrainContainersCommand(CLI::App& train_command, const GlobalOptions& global);
 void AddTrainJointsCommand(CLI::App& train_command, const GlobalOptions& global);
 
