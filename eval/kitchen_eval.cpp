@@ -808,14 +808,7 @@ class Evaluator {
         }
         // Container types: the piece holding most of a model's matched fronts.
         for (const auto& [inst, votes] : furniture_votes) {
-            int best = -1;
-            std::size_t n = 0;
-            for (const auto& [furn, c] : votes) {
-                if (c > n) {
-                    n = c;
-                    best = furn;
-                }
-            }
+            const int best = training::MostVoted(votes);
             if (best < 0) continue;
             const sim::ArticulatedModel& model = *k.instances[static_cast<std::size_t>(inst)].model;
             const std::string truth = sim::ContainerTypeOfModel(model);

@@ -42,6 +42,33 @@ void CheckOutputFolder(const std::string& option, const std::filesystem::path& f
     }
 }
 
+void AddKitchenTrainingOptions(CLI::App* cmd, const KitchenTrainingOptions& o,
+                               const std::string& what) {
+    cmd->add_option("--out", o.out, "classifier file to write (.mcm)")->required();
+    cmd->add_option("--kitchen", o.library,
+                    "kitchen library (PartNet-Mobility models); none: procedural units only "
+                    "(--procedural)")
+        ->capture_default_str();
+    cmd->add_option("--split", o.split,
+                    "library half trained on: tune (the other half stays held out), test, all")
+        ->capture_default_str();
+    cmd->add_option("--fold", o.fold,
+                    "-1: the whole --split half; 0 or 1: one fold of it (validation inside it)")
+        ->capture_default_str();
+    cmd->add_option("--kitchens", o.kitchens, "simulated kitchens")->capture_default_str();
+    cmd->add_option("--procedural-share", o.procedural_share,
+                    "chance that a unit of a kind with procedural and library models is "
+                    "procedural")
+        ->capture_default_str();
+    cmd->add_option("--classifier", o.spec, "classifier spec (`multicue classifier train`)")
+        ->capture_default_str();
+    cmd->add_option("--rows", o.rows,
+                    "also write the labelled " + what +
+                        " as a dataset (.mcd, or .csv by extension) for `multicue classifier`");
+    cmd->add_option("--seed", o.seed, "kitchen i uses a sub-seed of this")->capture_default_str();
+    cmd->add_flag("-q,--quiet", o.quiet, "no summary");
+}
+
 ml::Dataset CollectTrainAndSave(
     const std::string& job, int kitchens, const std::function<ml::Dataset(Progress*)>& collect,
     const std::function<std::unique_ptr<ml::Classifier>(const ml::Dataset&)>& train,

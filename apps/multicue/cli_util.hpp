@@ -1,6 +1,7 @@
 #pragma once
 // Small helpers shared by the subcommands.
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -38,6 +39,24 @@ ml::Dataset CollectTrainAndSave(
     const std::string& job, int kitchens, const std::function<ml::Dataset(Progress*)>& collect,
     const std::function<std::unique_ptr<ml::Classifier>(const ml::Dataset&)>& train,
     const std::string& out, const std::string& rows_file);
+
+/// The options every training on simulated kitchens takes, bound to the command's fields.
+struct KitchenTrainingOptions {
+    std::string& out;         ///< --out: the model file
+    std::string& library;     ///< --kitchen: the kitchen model library, or none
+    std::string& split;       ///< --split: the library half
+    int& fold;                ///< --fold: -1, or one fold of the half
+    int& kitchens;            ///< --kitchens
+    float& procedural_share;  ///< --procedural-share
+    std::string& spec;        ///< --classifier
+    std::string& rows;        ///< --rows: the labelled rows too (`what` names them in the help)
+    std::uint64_t& seed;      ///< --seed
+    bool& quiet;              ///< -q
+};
+
+/// Adds the options of `o` to `cmd`; `what` names the rows ("candidate rows", "pieces").
+void AddKitchenTrainingOptions(CLI::App* cmd, const KitchenTrainingOptions& o,
+                               const std::string& what);
 
 /// Parses "x,y,z" into a vector; throws InvalidArgument naming the option otherwise.
 Eigen::Vector3f ParseVector3(const std::string& text, const std::string& option);

@@ -131,20 +131,20 @@ void AddTrainOnMapsCommand(CLI::App& train_command, const GlobalOptions& global,
                  "kitchens");
     auto o = std::make_shared<TrainOnMapsOptions>();
     o->target = target;
-    cmd->add_option("--out", o->out, "classifier file to write (.mcm)")->required();
-    cmd->add_option("--kitchen", o->kitchen,
-                    "kitchen library (PartNet-Mobility models); none: procedural units only")
-        ->capture_default_str();
-    cmd->add_option("--split", o->split,
-                    "library half trained on: tune (the other half stays held out), test, all")
-        ->capture_default_str();
-    cmd->add_option("--fold", o->fold,
-                    "-1: the whole --split half; 0 or 1: one fold of it (validation inside it)")
-        ->capture_default_str();
-    cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
+    AddKitchenTrainingOptions(cmd,
+                              {.out = o->out,
+                               .library = o->kitchen,
+                               .split = o->split,
+                               .fold = o->fold,
+                               .kitchens = o->t.kitchens,
+                               .procedural_share = o->t.procedural_share,
+                               .spec = o->spec,
+                               .rows = o->rows,
+                               .seed = o->t.seed,
+                               .quiet = o->quiet},
+                              joints ? "fronts" : "pieces");
     cmd->add_option("--sensor", o->sensor,
-                    joints ? "both, kinect or laser: the scans whose maps the classifier will serve"
-                           : "both, kinect or laser: the scans whose maps the classifier will type")
+                    "both, kinect or laser: the scans whose maps the classifier will serve")
         ->capture_default_str();
     cmd->add_option("--views", o->t.views, "Kinect frames per kitchen")->capture_default_str();
     cmd->add_option("--laser-views", o->t.laser_views, "laser sweeps per kitchen")
@@ -157,18 +157,6 @@ void AddTrainOnMapsCommand(CLI::App& train_command, const GlobalOptions& global,
                     "procedural units per cupboard and appliance kind (dishwasher, oven, fridge) "
                     "added to the models")
         ->capture_default_str();
-    cmd->add_option("--procedural-share", o->t.procedural_share,
-                    "chance that a unit of a kind with procedural and library models is "
-                    "procedural")
-        ->capture_default_str();
-    cmd->add_option("--classifier", o->spec, "classifier spec (`multicue classifier train`)")
-        ->capture_default_str();
-    cmd->add_option("--rows", o->rows,
-                    std::string("also write the labelled ") + (joints ? "fronts" : "pieces") +
-                        " as a dataset (.mcd, or .csv by extension) for `multicue classifier`");
-    cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")
-        ->capture_default_str();
-    cmd->add_flag("-q,--quiet", o->quiet, "no summary");
     cmd->callback([o, &global] { TrainOnMaps(*o, global.threads); });
 }
 

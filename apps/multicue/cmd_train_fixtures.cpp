@@ -105,17 +105,20 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
         "Train the handle and knob classifier of `map kitchen --fixtures` on simulated kitchens "
         "of one sensor");
     auto o = std::make_shared<TrainFixturesOptions>();
-    cmd->add_option("--out", o->out, "classifier file to write (.mcm)")->required();
+    AddKitchenTrainingOptions(cmd,
+                              {.out = o->out,
+                               .library = o->kitchen,
+                               .split = o->split,
+                               .fold = o->t.fold,
+                               .kitchens = o->t.kitchens,
+                               .procedural_share = o->t.procedural_share,
+                               .spec = o->spec,
+                               .rows = o->rows,
+                               .seed = o->t.seed,
+                               .quiet = o->quiet},
+                              "candidate rows");
     cmd->add_option("--sensor", o->sensor, "kinect or laser: the scans the classifier will see")
         ->capture_default_str();
-    cmd->add_option("--kitchen", o->kitchen,
-                    "kitchen library (PartNet-Mobility models); none: procedural units only "
-                    "(--procedural)")
-        ->capture_default_str();
-    cmd->add_option("--split", o->split,
-                    "library half trained on: tune (the other half stays held out), test, all")
-        ->capture_default_str();
-    cmd->add_option("--kitchens", o->t.kitchens, "simulated kitchens")->capture_default_str();
     cmd->add_option("--views", o->views,
                     "scans per kitchen (default: 3 Kinect frames or 1 laser sweep)");
     cmd->add_flag("--vary-handles,!--no-vary-handles", o->t.vary_handles,
@@ -134,25 +137,10 @@ void AddTrainFixturesCommand(CLI::App& train_command, const GlobalOptions& globa
                     "MIN,MAX: scale of a varied handle's thickness with --vary-handles")
         ->delimiter(',')
         ->capture_default_str();
-    cmd->add_option("--fold", o->t.fold,
-                    "-1: the whole --split half; 0 or 1: one fold of it (validation inside it)")
-        ->capture_default_str();
-    cmd->add_option("--rows", o->rows,
-                    "also write the labelled candidate rows as a dataset (.mcd, or .csv by "
-                    "extension) for `multicue classifier`");
     cmd->add_option("--procedural", o->t.procedural,
                     "procedural units of random designs per cupboard kind added to the "
                     "training kitchens' models")
         ->capture_default_str();
-    cmd->add_option("--procedural-share", o->t.procedural_share,
-                    "chance that a unit of a kind with procedural and library models is "
-                    "procedural")
-        ->capture_default_str();
-    cmd->add_option("--classifier", o->spec, "classifier spec (`multicue classifier train`)")
-        ->capture_default_str();
-    cmd->add_option("--seed", o->t.seed, "kitchen i uses a sub-seed of this")
-        ->capture_default_str();
-    cmd->add_flag("-q,--quiet", o->quiet, "no summary");
     cmd->callback([o, &global] { TrainFixtures(*o, global.threads); });
 }
 

@@ -261,6 +261,35 @@ bool IsHorizontalHandle(const Fixture& fx, const Eigen::Vector3f& up, const Arti
                std::sin(p.horizontal_handle_deg * kArticulationDegToRad);
 }
 
+/// Where fixture `fx` sits on front `f`: 0 at its left .. 1 at its right edge, 0 at its bottom ..
+/// 1 at its top (0.5 across a side of no extent).
+Eigen::Vector2f FixturePlace(const Front& f, const Fixture& fx) {
+    const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
+    return {width > 0 ? (fx.center.dot(f.u_axis) - f.min.x()) / width : 0.5f,
+            height > 0 ? (fx.center.dot(f.v_axis) - f.min.y()) / height : 0.5f};
+}
+
+/// The point (u, v) (face coordinates) of front `f`'s plane.
+Eigen::Vector3f OnFrontPlane(const Front& f, float u, float v) {
+    return f.u_axis * u + f.v_axis * v + f.normal * f.normal.dot(f.center);
+}
+
+/// A door hinged at the vertical edge farther from a fixture at `ru` (FixturePlace).
+Articulation HingedAtSide(const Front& f, float ru, const ArticulationParams& p) {
+    return ru >= 0.5f ? Hinge(f, OnFrontPlane(f, f.min.x(), f.min.y()), f.u_axis, p)
+                      : Hinge(f, OnFrontPlane(f, f.max.x(), f.min.y()), -f.u_axis, p);
+}
+
+/// A flap hinged at its bottom edge.
+Articulation HingedAtBottom(const Front& f, const ArticulationParams& p) {
+    return Hinge(f, OnFrontPlane(f, f.min.x(), f.min.y()), f.v_axis, p);
+}
+
+/// A flap hinged at its top edge.
+Articulation HingedAtTop(const Front& f, const ArticulationParams& p) {
+    return Hinge(f, OnFrontPlane(f, f.min.x(), f.max.y()), -f.v_axis, p);
+}
+
 /// ArticulationFromFixtures; `bottom_hinged` (if not null) tells whether the front was hinged at
 /// its bottom edge for a horizontal handle near its top.
 Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtures,
@@ -273,22 +302,14 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
     if (!fx) return none;
     const Eigen::Vector3f up = frame.Up();
     const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
-    const Eigen::Vector2f at(fx->center.dot(f.u_axis), fx->center.dot(f.v_axis));
-    const float ru = width > 0 ? (at.x() - f.min.x()) / width : 0.5f;    // 0 left .. 1 right
-    const float rv = height > 0 ? (at.y() - f.min.y()) / height : 0.5f;  // 0 bottom .. 1 top
-    const float plane_d = -f.normal.dot(f.center);
-    auto on_plane = [&](float u, float v) {
-        return Eigen::Vector3f(f.u_axis * u + f.v_axis * v - f.normal * plane_d);
-    };
+    const Eigen::Vector2f place = FixturePlace(f, *fx);
+    const float ru = place.x(), rv = place.y();
     const float base = std::isnan(floor_height) ? 0.0f : floor_height;
     const bool handle = fx->type == FixtureType::kHandle;
     const bool horizontal = IsHorizontalHandle(*fx, up, p);
     const bool side = ru < p.top_share || ru > 1.0f - p.top_share;
     // A door hinged at the vertical edge farther from the fixture.
-    auto side_door = [&]() {
-        return ru >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
-                          : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
-    };
+    auto side_door = [&]() { return HingedAtSide(f, ru, p); };
     const bool wall = f.min.y() - base > p.flap_min_bottom;
     // A horizontal handle at a side edge: a door's free edge (flaps, drawers and appliance doors
     // carry theirs centred, or are wide).
@@ -299,7 +320,7 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
             // hinged at the vertical edge farther from the fixture.
             if (width >= p.flap_min_width && (!edge_handle || width >= p.edge_flap_min_width)) {
                 if (bottom_hinged) *bottom_hinged = true;
-                return Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
+                return HingedAtBottom(f, p);
             }
             return side_door();
         }
@@ -310,7 +331,7 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
         }
         if (wall && rv < p.top_share && height >= 0.6f * p.door_min_height) {
             // A flap hinged at the top edge (wall cupboards).
-            return Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
+            return HingedAtTop(f, p);
         }
         if (height > p.drawer_max_height) {
             // No drawer is that tall (a fridge's door with a horizontal handle): a door, hinged
@@ -320,8 +341,7 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
         if (!p.wall_drawers && wall) {
             // No drawers hang on the wall: a flap, hinged at the horizontal edge farther from
             // the fixture.
-            return rv >= 0.5f ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p)
-                              : Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
+            return rv >= 0.5f ? HingedAtBottom(f, p) : HingedAtTop(f, p);
         }
         return Drawer(f, p);
     }
@@ -800,7 +820,7 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
     float reach_out = 0.0f;
     for (const float u : {f.min.x(), f.max.x()}) {
         for (const float v : {f.min.y(), f.max.y()}) {
-            const Eigen::Vector3f c = f.u_axis * u + f.v_axis * v - f.normal * plane_d;
+            const Eigen::Vector3f c = OnFrontPlane(f, u, v);
             const Eigen::Vector3f d = c - a.origin;
             reach_out = std::max(reach_out, (d - d.dot(a.axis) * a.axis).norm());
         }
@@ -989,9 +1009,9 @@ std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
         length = fx->length;
         knob = fx->type == FixtureType::kKnob ? 1.0f : 0.0f;
         protrusion = fx->protrusion;
-        const Eigen::Vector3f d = fx->center - f.center;
-        ru = w > 0 ? d.dot(f.u_axis) / w + 0.5f : 0.5f;
-        rv = h > 0 ? d.dot(f.v_axis) / h + 0.5f : 0.5f;
+        const Eigen::Vector2f place = FixturePlace(f, *fx);
+        ru = place.x();
+        rv = place.y();
     }
     float above = 0, below = 0, piece_fronts = 0;
     for (std::size_t o = 0; o < map.fronts.size(); ++o) {
@@ -1062,25 +1082,12 @@ std::vector<std::size_t> ClassifyJoints(KitchenMap& map, const ml::Classifier& c
             classifier.class_names()[static_cast<std::size_t>(classifier.Predict(row).front())];
         const Articulation& a = f.articulation;
         if (name == JointClassOf(a.type, a.axis, a.origin, f, map.frame)) continue;
-        const float plane_d = -f.normal.dot(f.center);
-        auto on_plane = [&](float u, float v) {
-            return Eigen::Vector3f(f.u_axis * u + f.v_axis * v - f.normal * plane_d);
-        };
-        Articulation next;
-        if (name == "prismatic") {
-            next = Drawer(f, p);
-        } else if (name == "revolute_bottom") {
-            next = Hinge(f, on_plane(f.min.x(), f.min.y()), f.v_axis, p);
-        } else if (name == "revolute_top") {
-            next = Hinge(f, on_plane(f.min.x(), f.max.y()), -f.v_axis, p);
-        } else {
-            // Hinged at the vertical edge farther from the main fixture.
-            const Fixture* fx = MainFixture(f, map.fixtures);
-            const float u = fx ? fx->center.dot(f.u_axis) : 0.5f * (f.min.x() + f.max.x());
-            next = u >= 0.5f * (f.min.x() + f.max.x())
-                       ? Hinge(f, on_plane(f.min.x(), f.min.y()), f.u_axis, p)
-                       : Hinge(f, on_plane(f.max.x(), f.min.y()), -f.u_axis, p);
-        }
+        Articulation next =
+            name == "prismatic"         ? Drawer(f, p)
+            : name == "revolute_bottom" ? HingedAtBottom(f, p)
+            : name == "revolute_top"
+                ? HingedAtTop(f, p)
+                : HingedAtSide(f, FixturePlace(f, *MainFixture(f, map.fixtures)).x(), p);
         next.source = "classifier";
         f.articulation = next;
         changed.push_back(i);

@@ -103,18 +103,20 @@ std::map<int, int> FurnitureInstances(const mapping::KitchenMap& map, const Poin
         votes[furniture][static_cast<int>(key >> 16) - 1] += fronts.at(key).points;
     }
     std::map<int, int> out;
-    for (const auto& [furniture, v] : votes) {
-        int best = -1;
-        std::size_t n = 0;
-        for (const auto& [instance, c] : v) {
-            if (c > n) {
-                n = c;
-                best = instance;
-            }
-        }
-        out[furniture] = best;
-    }
+    for (const auto& [furniture, v] : votes) out[furniture] = MostVoted(v);
     return out;
+}
+
+int MostVoted(const std::map<int, std::size_t>& votes) {
+    int best = -1;
+    std::size_t n = 0;
+    for (const auto& [key, c] : votes) {
+        if (c > n) {
+            n = c;
+            best = key;
+        }
+    }
+    return best;
 }
 
 }  // namespace multicue::training

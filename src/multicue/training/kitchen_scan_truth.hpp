@@ -58,4 +58,8 @@ std::map<std::uint32_t, std::pair<int, float>> MatchFronts(
 std::map<int, int> FurnitureInstances(const mapping::KitchenMap& map, const PointCloud& scan,
                                       float min_iou = 0.3f);
 
+/// The key of `votes` with the largest count (the first in key order on ties); -1 when no count
+/// is above zero.
+int MostVoted(const std::map<int, std::size_t>& votes);
+
 }  // namespace multicue::training
