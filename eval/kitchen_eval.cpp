@@ -95,6 +95,7 @@ struct Options {
     float vacated_max_share = -1.0f;      ///< < 0: the library's MotionParams default
     float max_beyond_turn_share = -1.0f;  ///< < 0: the library's MotionParams default
     float min_through_share = -1.0f;      ///< < 0: the library's MotionParams default
+    float drawer_turn_coverage = -1.0f;   ///< < 0: the library's MotionParams default
     bool select_by_vacated = mapping::MotionParams{}.select_by_vacated;
     bool seen_coverage = mapping::MotionParams{}.seen_coverage;
     std::string load_fixtures;
@@ -882,6 +883,8 @@ class Evaluator {
             if (o_.max_beyond_turn_share >= 0.0f)
                 mp.max_beyond_turn_share = o_.max_beyond_turn_share;
             if (o_.min_through_share >= 0.0f) mp.min_through_share = o_.min_through_share;
+            if (o_.drawer_turn_coverage >= 0.0f)
+                mp.min_turn_coverage_for_drawer = o_.drawer_turn_coverage;
             mp.select_by_vacated = o_.select_by_vacated;
             mp.seen_coverage = o_.seen_coverage;
             // The front's points in the opened scan, and those behind the matched front's face.
@@ -1527,6 +1530,10 @@ int main(int argc, char** argv) {
              "opened pairs: a flap's turn is taken for a slide when the new points behind the "
              "face on its plane number this share of its points out of the face (0: off)",
              100.0);
+    override("--drawer-turn-coverage", o.drawer_turn_coverage,
+             "opened pairs: a front held for a drawer from one scan is taken for a turn only when "
+             "the turn covers this share of the cells the opened scan could see (0: off)",
+             1.0);
     app.add_flag("--select-by-vacated,!--select-by-moved", o.select_by_vacated,
                  "opened pairs: the map takes the front that lost the most of its own points for "
                  "the opened one (default), or the one with the most moved points");

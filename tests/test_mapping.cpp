@@ -1193,6 +1193,55 @@ TEST(Articulation, ADeepDrawersBoxRunningOnBehindTheFaceSlides) {
     EXPECT_THROW(ArticulationFromMotion(closed, opened, f, off), InvalidArgument);
 }
 
+// A deep drawer pulled out towards the sensor may leave the view with its front; what is seen of
+// its box then passes for a door turned a little. A front the map holds for a drawer from its
+// fixture stays a drawer unless the turn covers enough of it.
+TEST(Articulation, AWeaklySeenTurnOfAFrontHeldForADrawerIsASlide) {
+    const Front f = DrawerFrontBetween(0.45f, 0.85f);
+    const PointCloud closed = DeepDrawerScan(0.0f, 0.0f);
+    const PointCloud opened = DeepDrawerScan(0.3f, 0.3f);  // a box as deep as its pull
+    const MotionResult turn = ArticulationFromMotion(closed, opened, f);  // no joint before
+    ASSERT_TRUE(IsFlapTurn(turn));
+    const float cover =
+        turn.turn_seen_coverage >= 0.0f ? turn.turn_seen_coverage : turn.turn_coverage;
+    ASSERT_GT(cover, 0.05f);
+    ASSERT_LT(cover, 0.95f);
+    MotionParams p;
+    p.min_turn_coverage_for_drawer = cover + 0.05f;
+    // A front with no joint before: the turn, whatever its coverage.
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, f, p).articulation.type, JointType::kRevolute);
+    Front drawer = f;
+    drawer.articulation.type = JointType::kPrismatic;
+    drawer.articulation.axis = f.normal;
+    drawer.articulation.source = "fixture";
+    const MotionResult m = ArticulationFromMotion(closed, opened, drawer, p);
+    ASSERT_TRUE(m.found);
+    EXPECT_EQ(m.articulation.type, JointType::kPrismatic);
+    EXPECT_EQ(m.articulation.source, "motion");
+    EXPECT_LT(m.articulation.axis.y(), -0.99f);
+    EXPECT_NEAR(m.opening, 0.3f, 0.03f);
+    // A turn that covers enough stays a turn; off (0), the turn too.
+    p.min_turn_coverage_for_drawer = cover - 0.05f;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, drawer, p).articulation.type,
+              JointType::kRevolute);
+    p.min_turn_coverage_for_drawer = 0.0f;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, drawer, p).articulation.type,
+              JointType::kRevolute);
+    // A door held for a drawer but clearly turned stays a door.
+    Front door = DoorFront();
+    door.articulation = drawer.articulation;
+    p.min_turn_coverage_for_drawer = 0.4f;
+    const MotionResult d =
+        ArticulationFromMotion(DoorScan(0.0f, 0.0f), DoorScan(60.0f * kDeg, 0.0f), door, p);
+    ASSERT_TRUE(d.found);
+    EXPECT_EQ(d.articulation.type, JointType::kRevolute);
+    // Deterministic; a bad share is refused.
+    p.min_turn_coverage_for_drawer = cover + 0.05f;
+    EXPECT_EQ(ArticulationFromMotion(closed, opened, drawer, p).opening, m.opening);
+    p.min_turn_coverage_for_drawer = 1.5f;
+    EXPECT_THROW(ArticulationFromMotion(closed, opened, drawer, p), InvalidArgument);
+}
+
 TEST(Articulation, AFlapOpenedDownwardsStaysAFlap) {
     // The door of DoorScan hinged at its bottom edge (z = 0.15) and opened downwards by 80 deg:
     // nothing of it lies beyond its height out of the face. Found shorter than it is (its lower

@@ -226,17 +226,19 @@ void MotionParams::Validate() const {
         !(turn_reach_margin >= 0.0f && turn_reach_margin <= 1.0f) ||
         !(max_beyond_turn_share >= 0.0f && max_beyond_turn_share <= 1.0f) ||
         !(min_beyond_off_plane >= 0.0f && min_beyond_off_plane <= 1.0f) ||
-        !(min_through_share >= 0.0f && min_through_share <= 100.0f)) {
+        !(min_through_share >= 0.0f && min_through_share <= 100.0f) ||
+        !(min_turn_coverage_for_drawer >= 0.0f && min_turn_coverage_for_drawer <= 1.0f)) {
         throw InvalidArgument(fmt::format(
             "motion: need min_slide_coverage and min_seen_slide_coverage in [0, 1], "
             "coverage_cell in (0, 0.5] m, "
             "axis_snap_deg in [0, 45), max_hinge_gap in [0, 10] m, vacated_max_share in "
             "[0, 1], turn_reach_margin in [0, 1] m, max_beyond_turn_share and "
-            "min_beyond_off_plane in [0, 1], min_through_share in [0, 100] (got {}, {}, {}, {}, "
-            "{}, {}, {}, {}, {}, {})",
+            "min_beyond_off_plane in [0, 1], min_through_share in [0, 100], "
+            "min_turn_coverage_for_drawer in [0, 1] (got {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, "
+            "{})",
             min_slide_coverage, min_seen_slide_coverage, coverage_cell, axis_snap_deg,
             max_hinge_gap, vacated_max_share, turn_reach_margin, max_beyond_turn_share,
-            min_beyond_off_plane, min_through_share));
+            min_beyond_off_plane, min_through_share, min_turn_coverage_for_drawer));
     }
 }
 
@@ -858,7 +860,14 @@ MotionResult ArticulationFromMotion(const KdTree& before, const PointCloud& open
                          out.through_points >= p.min_points &&
                          static_cast<float>(out.through_points) >=
                              p.min_through_share * static_cast<float>(out.turned_points);
-    if (!out.turn_flap || (!beyond && !through)) return out;
+    // A front held for a drawer before stays one unless the turn is clearly seen: its tilted
+    // plane covers enough of the front turned (none: the turn is a guess about an edge).
+    const float turn_cover =
+        out.turn_seen_coverage >= 0.0f ? out.turn_seen_coverage : out.turn_coverage;
+    const bool weak_turn_of_drawer = p.min_turn_coverage_for_drawer > 0.0f &&
+                                     f.articulation.type == JointType::kPrismatic &&
+                                     turn_cover < p.min_turn_coverage_for_drawer;
+    if (!weak_turn_of_drawer && (!out.turn_flap || (!beyond && !through))) return out;
     // A slide, at least as far as the box is seen out of the face (98 % of the moved points
     // within the outline; the parallel plane may be a panel inside the box).
     out.opening = outline_out.empty() ? travel : std::max(travel, Quantile(outline_out, 0.98f));
