@@ -199,9 +199,9 @@ struct MotionParams {
     /// only when the turn's plane covers at least this share of the cells the opened scan could
     /// see (of all cells without a sensor position); else it slid. A deep drawer pulled out
     /// towards the sensor may leave the view with its front, and what is seen of its box then
-    /// passes for a door turned a little. Chosen on simulated kitchens of the tune half (2002
-    /// pairs, both sensors): 0.44-0.55 turned five drawers right and one door wrong; from 0.6 more
-    /// doors went wrong. 0: off [-]
+    /// passes for a door turned a little. Chosen on simulated kitchens of the tune half (2001
+    /// pairs, both sensors): 0.44-0.5 turned five drawers right and one door wrong, 0.55 a
+    /// second door (a mini fridge's, at 0.51), 0.7 as many doors as drawers. 0: off [-]
     float min_turn_coverage_for_drawer = 0.5f;
     float plane_threshold = 0.015f;  ///< RANSAC plane inlier distance for the moved front [m]
     std::size_t min_points = 40;     ///< fewer moved points: no motion seen [points]
