@@ -1227,14 +1227,15 @@ TEST(Articulation, AWeaklySeenTurnOfAFrontHeldForADrawerIsASlide) {
     p.min_turn_coverage_for_drawer = 0.0f;
     EXPECT_EQ(ArticulationFromMotion(closed, opened, drawer, p).articulation.type,
               JointType::kRevolute);
-    // A door held for a drawer but clearly turned stays a door.
+    // A door held for a drawer but clearly turned stays a door (the default share).
     Front door = DoorFront();
     door.articulation = drawer.articulation;
-    p.min_turn_coverage_for_drawer = 0.4f;
     const MotionResult d =
-        ArticulationFromMotion(DoorScan(0.0f, 0.0f), DoorScan(60.0f * kDeg, 0.0f), door, p);
+        ArticulationFromMotion(DoorScan(0.0f, 0.0f), DoorScan(60.0f * kDeg, 0.0f), door);
     ASSERT_TRUE(d.found);
     EXPECT_EQ(d.articulation.type, JointType::kRevolute);
+    EXPECT_GE(d.turn_seen_coverage >= 0.0f ? d.turn_seen_coverage : d.turn_coverage,
+              MotionParams{}.min_turn_coverage_for_drawer);
     // Deterministic; a bad share is refused.
     p.min_turn_coverage_for_drawer = cover + 0.05f;
     EXPECT_EQ(ArticulationFromMotion(closed, opened, drawer, p).opening, m.opening);
