@@ -78,7 +78,7 @@ struct Options {
     int fixture_views = 0;  ///< scans per training kitchen (0: --views / --laser-views)
     std::uint64_t fixture_seed = 7;
     std::string fixture_spec = "rtrees:trees=100";
-    float fixture_confidence = mapping::FixtureParams{}.min_confidence;
+    float fixture_confidence = -1.0f;  ///< < 0: the sensor's default (KitchenParamsFor)
     std::string save_fixtures;
     std::string fronts = "grow";
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
@@ -369,7 +369,7 @@ class Evaluator {
     mapping::MapKitchenParams Params(bool laser) const {
         mapping::MapKitchenParams params = mapping::KitchenParamsFor(
             laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect);
-        params.fixtures.min_confidence = o_.fixture_confidence;
+        if (o_.fixture_confidence >= 0.0f) params.fixtures.min_confidence = o_.fixture_confidence;
         params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
                                                         : mapping::FrontSegmentation::kOutline;
         for (const auto& a : o_.front_params) SetMapParam(params, a);
@@ -1430,7 +1430,8 @@ int main(int argc, char** argv) {
     app.add_option("--fixture-classifier", o.fixture_spec, "classifier spec of the fixtures")
         ->capture_default_str();
     app.add_option("--fixture-confidence", o.fixture_confidence,
-                   "P(handle) + P(knob) a fixture needs")
+                   "P(handle) + P(knob) a fixture needs (< 0: the sensor's default, 0.5 for the "
+                   "Kinect and 0.35 for the laser)")
         ->capture_default_str();
     app.add_flag("--vary-handles,!--no-vary-handles", o.vary_handles,
                  "vary the handles of the fixture training kitchens (on by default)");

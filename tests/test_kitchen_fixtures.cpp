@@ -273,6 +273,16 @@ TEST(FixtureClassifier, TrainedOnSyntheticRowsDecidesWhatIsAFixture) {
     for (const FixtureCandidate& c : learned.candidates) {
         EXPECT_EQ(c.accepted, c.confidence >= FixtureParams{}.min_confidence);
     }
+    // The laser's lower cut accepts what the default does and every candidate above it.
+    const FixtureParams laser = KitchenParamsFor(KitchenSensor::kLaser).fixtures;
+    EXPECT_LT(laser.min_confidence, FixtureParams{}.min_confidence);
+    FixtureParams lower;
+    lower.min_confidence = laser.min_confidence;
+    const FixtureResult low = DetectFixtures(k.cloud, RoomFrame{}, s, lower, {}, good.get());
+    EXPECT_GE(low.fixtures.size(), learned.fixtures.size());
+    for (const FixtureCandidate& c : low.candidates) {
+        EXPECT_EQ(c.accepted, c.confidence >= laser.min_confidence);
+    }
     // Taught that protruding bars are nothing and flat patches are handles, it finds none.
     const auto wrong = training::TrainFixtureClassifier(
         SyntheticRows(rules, k.cloud, "none", "handle"), "rtrees:trees=20");

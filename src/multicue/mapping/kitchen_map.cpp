@@ -103,6 +103,9 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.fixtures.min_contrast = 30.0f;  // remission (scaled to 0-255) of a handle's material
         p.fixtures.line_threshold = 0.015f;
         p.fixtures.circle_threshold = 0.01f;
+        // The laser's classifier finds fewer handles than the Kinect's; a lower cut finds more,
+        // and their fronts with them (chosen on the tune half, docs/kitchens.md).
+        p.fixtures.min_confidence = 0.35f;
         p.outline.cell = 0.025f;
         p.outline.recess = 0.015f;
         p.outline.step = 0.03f;
