@@ -1127,7 +1127,9 @@ class Evaluator {
                               {"scored_procedural", o_.scored_procedural},
                               {"container_procedural", o_.container_procedural},
                               {"merge", o_.merge},
-                              {"fixture_confidence", o_.fixture_confidence},
+                              {"fixture_confidence",
+                               {{"kinect", Params(false).fixtures.min_confidence},
+                                {"laser", Params(true).fixtures.min_confidence}}},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
                               {"train_rows", train_rows}};
@@ -1429,9 +1431,13 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--fixture-classifier", o.fixture_spec, "classifier spec of the fixtures")
         ->capture_default_str();
-    app.add_option("--fixture-confidence", o.fixture_confidence,
-                   "P(handle) + P(knob) a fixture needs (< 0: the sensor's default, 0.5 for the "
-                   "Kinect and 0.35 for the laser)")
+    app.add_option(
+           "--fixture-confidence", o.fixture_confidence,
+           fmt::format(
+               "P(handle) + P(knob) a fixture needs (< 0: the sensor's "
+               "default, {} for the Kinect and {} for the laser)",
+               mapping::KitchenParamsFor(mapping::KitchenSensor::kKinect).fixtures.min_confidence,
+               mapping::KitchenParamsFor(mapping::KitchenSensor::kLaser).fixtures.min_confidence))
         ->capture_default_str();
     app.add_flag("--vary-handles,!--no-vary-handles", o.vary_handles,
                  "vary the handles of the fixture training kitchens (on by default)");
