@@ -149,17 +149,20 @@ TEST(Fixtures, TheSameOnAnyThreadCount) {
 }
 
 TEST(Fixtures, AThinHandleOfAnotherColourIsACandidateByItsContrast) {
-    // Two flat bars 7 mm out of the dark door (less than the 12 mm a depth candidate needs): a
-    // light one at z 0.5 and one of the door's colour at z 0.3.
+    // Three flat bars 7 mm out of the brown door (less than the 12 mm a depth candidate needs):
+    // a light one at z 0.5, one of the door's colour at z 0.3 and a blue one of the door's grey
+    // level at z 0.7.
     test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
     std::mt19937 rng(5);
     const float y = k.face_y - 0.007f;
-    const Eigen::Vector3f light(0.8f, y, 0.5f), dark(0.8f, y, 0.3f);
+    const Eigen::Vector3f light(0.8f, y, 0.5f), dark(0.8f, y, 0.3f), hue(0.8f, y, 0.7f);
     test::AddPatch(k.cloud, light - Eigen::Vector3f(0.075f, 0, 0.005f), {0.15f, 0, 0},
                    {0, 0, 0.01f}, 0.003f, -Eigen::Vector3f::UnitY(), Color{185, 185, 190, 255},
                    0.0f, rng);
     test::AddPatch(k.cloud, dark - Eigen::Vector3f(0.075f, 0, 0.005f), {0.15f, 0, 0}, {0, 0, 0.01f},
                    0.003f, -Eigen::Vector3f::UnitY(), Color{90, 60, 40, 255}, 0.0f, rng);
+    test::AddPatch(k.cloud, hue - Eigen::Vector3f(0.075f, 0, 0.005f), {0.15f, 0, 0}, {0, 0, 0.01f},
+                   0.003f, -Eigen::Vector3f::UnitY(), Color{40, 70, 110, 255}, 0.0f, rng);
     k.cloud.width = static_cast<std::uint32_t>(k.cloud.size());
     const RoomStructure s = SegmentRoomStructure(k.cloud, RoomFrame{}, {});
     auto near = [](const FixtureResult& r, const Eigen::Vector3f& at) {
@@ -170,10 +173,18 @@ TEST(Fixtures, AThinHandleOfAnotherColourIsACandidateByItsContrast) {
     const FixtureResult depth = DetectFixtures(k.cloud, RoomFrame{}, s, p);
     EXPECT_EQ(near(depth, light), 0);
     EXPECT_EQ(near(depth, dark), 0);
+    EXPECT_EQ(near(depth, hue), 0);
     p.min_contrast = 40.0f;
     const FixtureResult both = DetectFixtures(k.cloud, RoomFrame{}, s, p);
     EXPECT_EQ(near(both, light), 1);
     EXPECT_EQ(near(both, dark), 0);
+    // Grey levels 66 and 67: the blue bar stands out of the brown door by its colour alone.
+    EXPECT_EQ(near(both, hue), 1);
+    for (const auto& c : both.candidates) {
+        if ((c.fixture.center - hue).norm() < 0.03f) {
+            EXPECT_GT(c.evidence.contrast, 40.0f);
+        }
+    }
     // The depth candidates (the two handles) stay exactly as they were.
     ASSERT_GE(depth.candidates.size(), 2u);
     for (const auto& c : depth.candidates) {
@@ -189,6 +200,7 @@ TEST(Fixtures, AThinHandleOfAnotherColourIsACandidateByItsContrast) {
     PointCloud grey = k.cloud;
     grey.colors.clear();
     EXPECT_EQ(near(DetectFixtures(grey, RoomFrame{}, s, p), light), 0);
+    EXPECT_EQ(near(DetectFixtures(grey, RoomFrame{}, s, p), hue), 0);
     p.min_contrast = -1.0f;
     EXPECT_THROW(DetectFixtures(k.cloud, RoomFrame{}, s, p), InvalidArgument);
 }

@@ -31,6 +31,39 @@ float QuantileOf(std::vector<float>& v, float q) {
     return v[static_cast<std::size_t>(k)];
 }
 
+/// The local background of per-sample values over the grid of s: per cell the median of the
+/// values of the samples `use` admits, then per cell the median of those medians over the
+/// (2 radius + 1)^2 cells around it (NaN where none).
+template <typename Use>
+std::vector<float> LocalBackground(const FaceSamples& s, const std::vector<float>& values,
+                                   int radius, Use&& use) {
+    const std::size_t ncells = static_cast<std::size_t>(s.nu) * static_cast<std::size_t>(s.nv);
+    std::vector<float> median(ncells, kNoEvidence), background(ncells, kNoEvidence), buffer;
+    for (std::size_t c = 0; c < ncells; ++c) {
+        buffer.clear();
+        for (std::uint32_t k = s.start[c]; k < s.start[c + 1]; ++k) {
+            const std::uint32_t j = s.order[k];
+            if (use(j)) buffer.push_back(values[j]);
+        }
+        median[c] = MedianOf(buffer);
+    }
+    for (int v = 0; v < s.nv; ++v) {
+        for (int u = 0; u < s.nu; ++u) {
+            buffer.clear();
+            for (int dv = -radius; dv <= radius; ++dv) {
+                for (int du = -radius; du <= radius; ++du) {
+                    const int uu = u + du, vv = v + dv;
+                    if (uu < 0 || vv < 0 || uu >= s.nu || vv >= s.nv) continue;
+                    const float m = median[static_cast<std::size_t>(vv * s.nu + uu)];
+                    if (!std::isnan(m)) buffer.push_back(m);
+                }
+            }
+            background[static_cast<std::size_t>(v * s.nu + u)] = MedianOf(buffer);
+        }
+    }
+    return background;
+}
+
 }  // namespace
 
 std::uint32_t FaceSamples::CellOf(const Eigen::Vector2f& x) const {
@@ -76,38 +109,44 @@ void ComputeFaceResiduals(FaceSamples& s, float cell, int radius, int passes, fl
     // Median height per cell, then the median of the medians around each cell. Later passes
     // leave out the samples that stood out of the previous background: a wide handle bar, which
     // fills much of a window, no longer lifts the background of its own cells.
-    std::vector<float> median(ncells, kNoEvidence), background(ncells, kNoEvidence), buffer;
     for (int pass = 0; pass < std::max(1, passes); ++pass) {
-        for (std::size_t c = 0; c < ncells; ++c) {
-            buffer.clear();
-            for (std::uint32_t k = s.start[c]; k < s.start[c + 1]; ++k) {
-                const std::uint32_t j = s.order[k];
-                if (pass == 0 || s.residual[j] <= std::max(exclude, 2.0f * s.sigma[j])) {
-                    buffer.push_back(s.height[j]);
-                }
-            }
-            median[c] = MedianOf(buffer);
-        }
-        for (int v = 0; v < s.nv; ++v) {
-            for (int u = 0; u < s.nu; ++u) {
-                buffer.clear();
-                for (int dv = -radius; dv <= radius; ++dv) {
-                    for (int du = -radius; du <= radius; ++du) {
-                        const int uu = u + du, vv = v + dv;
-                        if (uu < 0 || vv < 0 || uu >= s.nu || vv >= s.nv) continue;
-                        const float m = median[static_cast<std::size_t>(vv * s.nu + uu)];
-                        if (!std::isnan(m)) buffer.push_back(m);
-                    }
-                }
-                background[static_cast<std::size_t>(v * s.nu + u)] = MedianOf(buffer);
-            }
-        }
+        const std::vector<float> background =
+            LocalBackground(s, s.height, radius, [&](std::uint32_t j) {
+                return pass == 0 || s.residual[j] <= std::max(exclude, 2.0f * s.sigma[j]);
+            });
         for (std::size_t k = 0; k < s.size(); ++k) {
             const float b = background[cell_of[k]];
             // A cell whose every sample stood out keeps its previous residual.
             if (!std::isnan(b)) s.residual[k] = s.height[k] - b;
         }
     }
+}
+
+std::vector<float> AppearanceContrast(const FaceSamples& s, int radius) {
+    std::vector<float> contrast(s.size(), kNoEvidence);
+    if (s.size() == 0 || s.start.size() != static_cast<std::size_t>(s.nu) * s.nv + 1) {
+        return contrast;
+    }
+    std::vector<std::vector<float>> channels(1, s.appearance);
+    if (!s.chroma.empty()) {
+        for (int c = 0; c < 2; ++c) {
+            channels.emplace_back(s.size());
+            for (std::size_t k = 0; k < s.size(); ++k) channels.back()[k] = s.chroma[k][c];
+        }
+    }
+    std::vector<std::uint32_t> cell_of(s.size());
+    for (std::size_t k = 0; k < s.size(); ++k) cell_of[k] = s.CellOf(s.q[k]);
+    std::vector<float> sum(s.size(), 0.0f);
+    for (const auto& values : channels) {
+        const std::vector<float> background = LocalBackground(
+            s, values, radius, [&](std::uint32_t j) { return !std::isnan(values[j]); });
+        for (std::size_t k = 0; k < s.size(); ++k) {
+            const float d = values[k] - background[cell_of[k]];
+            sum[k] += d * d;  // NaN where the sample or its background has no appearance
+        }
+    }
+    for (std::size_t k = 0; k < s.size(); ++k) contrast[k] = std::sqrt(sum[k]);
+    return contrast;
 }
 
 const std::vector<std::string>& FixtureFeatureNames() {
@@ -182,7 +221,13 @@ FixtureEvidence MeasureFixtureEvidence(const FaceSamples& s,
     FixtureEvidence e;
     if (members.empty()) return e;
     Eigen::Vector2f lo = s.q[members.front()], hi = lo;
-    std::vector<float> heights, residuals, looks;
+    std::vector<float> heights, residuals;
+    // Appearance channels: grey, then the two chroma channels where the samples have colour.
+    const int channels = s.chroma.empty() ? 1 : 3;
+    auto channel = [&](std::uint32_t k, int c) {
+        return c == 0 ? s.appearance[k] : s.chroma[k][c - 1];
+    };
+    std::vector<float> looks[3];
     float sigma = 0.0f;
     std::unordered_set<std::uint64_t> cells;
     constexpr float kFillCell = 0.01f;
@@ -191,7 +236,9 @@ FixtureEvidence MeasureFixtureEvidence(const FaceSamples& s,
         hi = hi.cwiseMax(s.q[k]);
         heights.push_back(s.height[k]);
         residuals.push_back(s.residual[k]);
-        if (!std::isnan(s.appearance[k])) looks.push_back(s.appearance[k]);
+        if (!std::isnan(s.appearance[k])) {
+            for (int c = 0; c < channels; ++c) looks[c].push_back(channel(k, c));
+        }
         sigma += s.sigma[k];
         const auto cu = static_cast<std::int64_t>(std::floor(s.q[k].x() / kFillCell));
         const auto cv = static_cast<std::int64_t>(std::floor(s.q[k].y() / kFillCell));
@@ -203,7 +250,8 @@ FixtureEvidence MeasureFixtureEvidence(const FaceSamples& s,
     const float top = QuantileOf(heights, 0.9f);
     // The surround: samples in a ring around the footprint's box that are not candidates.
     const float in = p.surround_inner, out = p.surround_outer;
-    std::vector<float> ring_h, ring_a, side_h[4];
+    std::vector<float> ring_h, ring_a[3], side_h[4];
+    std::vector<std::uint32_t> ring_looks;
     std::size_t ring = 0, recessed = 0;
     s.ForEachIn(lo - Eigen::Vector2f::Constant(out), hi + Eigen::Vector2f::Constant(out),
                 [&](std::uint32_t k) {
@@ -217,7 +265,10 @@ FixtureEvidence MeasureFixtureEvidence(const FaceSamples& s,
                     if (s.residual[k] < -tol) ++recessed;
                     if (std::abs(s.residual[k]) > tol) return;
                     ring_h.push_back(s.height[k]);
-                    if (!std::isnan(s.appearance[k])) ring_a.push_back(s.appearance[k]);
+                    if (!std::isnan(s.appearance[k])) {
+                        ring_looks.push_back(k);
+                        for (int c = 0; c < channels; ++c) ring_a[c].push_back(channel(k, c));
+                    }
                     // Left, right, below, above: the side the sample lies farthest beyond.
                     if (d.x() >= d.y()) {
                         side_h[x.x() < lo.x() ? 0 : 1].push_back(s.height[k]);
@@ -252,11 +303,25 @@ FixtureEvidence MeasureFixtureEvidence(const FaceSamples& s,
     e.verticality = std::abs(shape.direction.dot(frame.Up()));
     e.min_side_drop = std::isfinite(highest_side) ? top - highest_side : 0.0f;
     e.contrast = 0.0f;
-    if (!looks.empty() && !ring_a.empty()) {
-        const float mine = MedianOf(looks), theirs = MedianOf(ring_a);
-        e.contrast = std::abs(mine - theirs);
-        for (auto& a : ring_a) a = std::abs(a - theirs);
-        e.surround_spread = MedianOf(ring_a);
+    if (!looks[0].empty() && !ring_looks.empty()) {
+        // Per channel medians; the distances between them (and of the surround's samples from
+        // its median) in grey and chroma together.
+        float mine[3] = {}, theirs[3] = {}, d2 = 0.0f;
+        for (int c = 0; c < channels; ++c) {
+            mine[c] = MedianOf(looks[c]);
+            theirs[c] = MedianOf(ring_a[c]);
+            d2 += (mine[c] - theirs[c]) * (mine[c] - theirs[c]);
+        }
+        e.contrast = std::sqrt(d2);
+        std::vector<float> spread;
+        for (const std::uint32_t k : ring_looks) {
+            float r2 = 0.0f;
+            for (int c = 0; c < channels; ++c) {
+                r2 += (channel(k, c) - theirs[c]) * (channel(k, c) - theirs[c]);
+            }
+            spread.push_back(std::sqrt(r2));
+        }
+        e.surround_spread = MedianOf(spread);
     }
     const Eigen::Vector2f c = (lo + hi) / 2;
     e.edge_distance = std::min(

@@ -28,8 +28,12 @@ struct FaceSamples {
     std::vector<float> height;       ///< offset from the face plane, along its normal [m]
     std::vector<float> residual;     ///< height above the local background [m]
     std::vector<float> appearance;   ///< grey level or scaled intensity; NaN when unknown
-    std::vector<float> sigma;        ///< height noise of the point at its range [m]
-    std::vector<float> range;        ///< distance to the sensor [m]
+    /// Colour beside the grey level: two opponent channels, (R - G) / sqrt(2) and
+    /// (R + G - 2 B) / sqrt(6), in the grey level's units (orthogonal to grey in RGB); empty
+    /// without colours, NaN where a sample has none
+    std::vector<Eigen::Vector2f> chroma;
+    std::vector<float> sigma;  ///< height noise of the point at its range [m]
+    std::vector<float> range;  ///< distance to the sensor [m]
     /// Buckets: samples of cell (iu, iv) are order[start[c] .. start[c + 1]), c = iv * nu + iu.
     Eigen::Vector2f origin = Eigen::Vector2f::Zero();
     float cell = 0.03f;
@@ -62,6 +66,13 @@ struct FaceSamples {
 void ComputeFaceResiduals(FaceSamples& s, float cell, int radius, int passes = 2,
                           float exclude = 0.01f);
 
+/// How far each sample's appearance lies from its local background (computed over the grid that
+/// ComputeFaceResiduals filled, with the same window): the distance in grey level and, where
+/// the samples have colour, the two chroma channels (a steel handle on a door of its grey level
+/// but another hue stands out). NaN where the sample or its background has no appearance; all
+/// NaN before ComputeFaceResiduals.
+std::vector<float> AppearanceContrast(const FaceSamples& s, int radius);
+
 /// The measurements of one fixture candidate (one feature row; FixtureFeatureNames).
 struct FixtureEvidence {
     float length = 0.0f;            ///< footprint extent along its main axis [m]
@@ -82,8 +93,10 @@ struct FixtureEvidence {
     float min_side_drop = 0.0f;     ///< 90th percentile height minus the highest side's median [m]
     float attached_share = 0.0f;    ///< share of points next to a plane of another orientation
     float border = 0.0f;            ///< 1 when cut by the image border (organized clouds)
-    float contrast = 0.0f;  ///< |median appearance - surround's median| (0 when unknown) [units]
-    float surround_spread = 0.0f;  ///< MAD of the surround's appearance [units]
+    /// Distance of the median appearance (grey and, with colours, chroma) from the surround's
+    /// (0 when unknown) [units]
+    float contrast = 0.0f;
+    float surround_spread = 0.0f;  ///< median distance of the surround from its median [units]
     float edge_distance = 0.0f;    ///< from the centre to the nearest face edge [m]
     float height = 0.0f;           ///< centre above the floor (0 when no floor) [m]
     float fill = 0.0f;             ///< footprint cells occupied / cells of its box [-]

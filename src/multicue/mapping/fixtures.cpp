@@ -318,6 +318,18 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         cloud.HasColors() || cloud.HasIntensity()
             ? AppearanceValues(cloud, AppearanceCue::kAuto, 255.0f)
             : std::vector<float>(cloud.size(), std::numeric_limits<float>::quiet_NaN());
+    // Colour beside the grey level: two opponent channels (FaceSamples::chroma).
+    std::vector<Eigen::Vector2f> chroma;
+    if (cloud.HasColors()) {
+        chroma.assign(cloud.size(),
+                      Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN()));
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            const Color& c = cloud.colors[i];
+            if (std::isnan(look[i])) continue;
+            const float r = c.r, g = c.g, b = c.b;
+            chroma[i] = {(r - g) / std::sqrt(2.0f), (r + g - 2.0f * b) / std::sqrt(6.0f)};
+        }
+    }
     // Every point on a face or in front of one is a sample of that face.
     // The face of every point in parallel, then the samples in point order.
     std::vector<std::int32_t> face_of(cloud.size(), -1);
@@ -366,6 +378,7 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         fs.q.push_back(PlaneCoordinates(c, frame, x));
         fs.height.push_back(c.plane.head<3>().dot(x) + c.plane.w());
         fs.appearance.push_back(look[i]);
+        if (!chroma.empty()) fs.chroma.push_back(chroma[i]);
         fs.sigma.push_back(std::max(p.noise_floor, p.range_noise * r * r));
         fs.range.push_back(r);
     }
@@ -410,24 +423,19 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 c.sigma += fs.sigma[j];
                 ++c.n;
             }
-            // Appearance residuals: the grey level above its local background, the same cells'
-            // median of medians (one pass: a handle may be darker or brighter than its front).
+            // Appearance residuals: the distance of a point's grey level and colour from their
+            // local background, the same cells' median of medians (one pass: a handle may be
+            // darker or brighter than its front, or of its grey level and another hue).
             std::vector<float> contrast;
             if (p.min_contrast > 0.0f && std::all_of(fs.appearance.begin(), fs.appearance.end(),
                                                      [](float a) { return std::isfinite(a); })) {
-                FaceSamples grey;
-                grey.points = fs.points;
-                grey.q = fs.q;
-                grey.height = fs.appearance;
-                grey.sigma.assign(fs.size(), 0.0f);
-                ComputeFaceResiduals(grey, p.background_cell, p.background_radius, 1);
-                contrast = std::move(grey.residual);
+                contrast = AppearanceContrast(fs, p.background_radius);
             }
             Indices candidates, by_contrast;
             for (std::size_t j = 0; j < fs.size(); ++j) {
                 const bool contrasting = !contrast.empty() &&
                                          fs.residual[j] >= p.contrast_min_residual &&
-                                         std::abs(contrast[j]) >= p.min_contrast;
+                                         contrast[j] >= p.min_contrast;
                 if (contrasting) by_contrast.push_back(fs.points[j]);
                 if (fs.residual[j] <= 0.0f) continue;
                 const Cell& c = cells[key(fs.q[j])];

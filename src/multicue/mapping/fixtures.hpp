@@ -42,9 +42,10 @@ struct FixtureParams {
     float surround_inner = 0.01f;
     float surround_outer = 0.05f;         ///< [m]
     float background_tolerance = 0.008f;  ///< at least twice the height noise [m]
-    /// Appearance cue: a point whose grey level (or scaled intensity) differs from its face's
-    /// local background (the median over the same cells as the heights) by at least this is a
-    /// candidate when it also stands contrast_min_residual out of the face; 0: off [0..255]
+    /// Appearance cue: a point whose colour (distance in grey level and chroma,
+    /// AppearanceContrast) or scaled intensity differs from its face's local background (the
+    /// median over the same cells as the heights) by at least this is a candidate when it also
+    /// stands contrast_min_residual out of the face; 0: off [0..255]
     float min_contrast = 0.0f;
     float contrast_min_residual = 0.004f;  ///< [m]
     /// With a classifier: a candidate is a fixture when P(handle) + P(knob) reaches this [-]
