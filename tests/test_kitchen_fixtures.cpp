@@ -89,6 +89,40 @@ TEST(FixtureEvidence, LocalBackgroundOfAFaceWithAProudDoor) {
     EXPECT_TRUE(empty.residual.empty());
 }
 
+TEST(FixtureEvidence, AppearanceContrastMeasuresGreyAndChroma) {
+    // A flat face of grey level 100 and chroma (10, 10) with a 4 x 4 cm patch of the same grey
+    // level and chroma (60, -40) at its middle.
+    FaceSamples s;
+    for (int i = 0; i < 60; ++i) {
+        for (int j = 0; j < 60; ++j) {
+            const Eigen::Vector2f q(0.01f * static_cast<float>(i), 0.01f * static_cast<float>(j));
+            const bool patch = (q - Eigen::Vector2f(0.3f, 0.3f)).cwiseAbs().maxCoeff() < 0.02f;
+            s.points.push_back(static_cast<Index>(s.q.size()));
+            s.q.push_back(q);
+            s.height.push_back(0.0f);
+            s.appearance.push_back(100.0f);
+            s.chroma.push_back(patch ? Eigen::Vector2f(60, -40) : Eigen::Vector2f(10, 10));
+            s.sigma.push_back(0.002f);
+            s.range.push_back(1.5f);
+        }
+    }
+    EXPECT_TRUE(std::isnan(AppearanceContrast(s, 3).front()));  // no grid yet
+    ComputeFaceResiduals(s, 0.03f, 3, 2);
+    const std::vector<float> colour = AppearanceContrast(s, 3);
+    ASSERT_EQ(colour.size(), s.size());
+    for (std::size_t k = 0; k < s.size(); ++k) {
+        const bool patch = (s.q[k] - Eigen::Vector2f(0.3f, 0.3f)).cwiseAbs().maxCoeff() < 0.02f;
+        EXPECT_NEAR(colour[k], patch ? std::hypot(50.0f, 50.0f) : 0.0f, 1e-3f);
+    }
+    // Grey alone does not see it; a sample without appearance has no contrast.
+    FaceSamples grey = s;
+    grey.chroma.clear();
+    grey.appearance[0] = std::numeric_limits<float>::quiet_NaN();
+    const std::vector<float> level = AppearanceContrast(grey, 3);
+    EXPECT_TRUE(std::isnan(level[0]));
+    for (std::size_t k = 1; k < s.size(); ++k) EXPECT_NEAR(level[k], 0.0f, 1e-3f);
+}
+
 TEST(RoomStructure, TheSameOnAnyThreadCount) {
     const test::SyntheticKitchen k = test::MakeSyntheticKitchen(1);
     RoomStructureParams p;
