@@ -318,18 +318,6 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         cloud.HasColors() || cloud.HasIntensity()
             ? AppearanceValues(cloud, AppearanceCue::kAuto, 255.0f)
             : std::vector<float>(cloud.size(), std::numeric_limits<float>::quiet_NaN());
-    // Colour beside the grey level: two opponent channels (FaceSamples::chroma).
-    std::vector<Eigen::Vector2f> chroma;
-    if (cloud.HasColors()) {
-        chroma.assign(cloud.size(),
-                      Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN()));
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            const Color& c = cloud.colors[i];
-            if (std::isnan(look[i])) continue;
-            const float r = c.r, g = c.g, b = c.b;
-            chroma[i] = {(r - g) / std::sqrt(2.0f), (r + g - 2.0f * b) / std::sqrt(6.0f)};
-        }
-    }
     // Every point on a face or in front of one is a sample of that face.
     // The face of every point in parallel, then the samples in point order.
     std::vector<std::int32_t> face_of(cloud.size(), -1);
@@ -378,7 +366,16 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
         fs.q.push_back(PlaneCoordinates(c, frame, x));
         fs.height.push_back(c.plane.head<3>().dot(x) + c.plane.w());
         fs.appearance.push_back(look[i]);
-        if (!chroma.empty()) fs.chroma.push_back(chroma[i]);
+        if (cloud.HasColors()) {
+            // Colour beside the grey level: two opponent channels (FaceSamples::chroma).
+            const Color& rgb = cloud.colors[i];
+            const float red = rgb.r, green = rgb.g, blue = rgb.b;
+            fs.chroma.push_back(
+                std::isnan(look[i])
+                    ? Eigen::Vector2f::Constant(look[i])
+                    : Eigen::Vector2f((red - green) / std::sqrt(2.0f),
+                                      (red + green - 2.0f * blue) / std::sqrt(6.0f)));
+        }
         fs.sigma.push_back(std::max(p.noise_floor, p.range_noise * r * r));
         fs.range.push_back(r);
     }
