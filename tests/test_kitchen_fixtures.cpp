@@ -654,6 +654,50 @@ TEST(SegmentFronts, TwoKnobsNearTheEndsOfOneFrontStayOneFront) {
                  InvalidArgument);
 }
 
+TEST(SegmentFronts, TheTwoMountsOfEachDrawersBarInAStackAreOneFront) {
+    // Three drawers stacked across the face (1.3 m wide), each with only the two mounts of its
+    // bar found (knobs 8 cm from its ends): the regions of all six cover the face, the gaps
+    // between the drawers part the rows, and nothing parts the two mounts of a drawer. Each
+    // drawer is one front with both mounts (fronts up to 1.4 m wide allowed).
+    const std::vector<DoorRect> drawers = {
+        {0.3f, 1.6f, 0.1f, 0.33f}, {0.3f, 1.6f, 0.35f, 0.58f}, {0.3f, 1.6f, 0.6f, 0.85f}};
+    PointCloud c = DoorsInGaps(drawers, 7, false, Color{230, 230, 230, 255});
+    std::mt19937 rng(6);
+    for (const DoorRect& d : drawers) {
+        for (const float x : {0.38f, 1.52f}) test::AddKnob(c, {x, 2.4f, d.z1 - 0.06f}, rng);
+    }
+    c.width = static_cast<std::uint32_t>(c.size());
+    const FaceScene sc = SceneOf(c);
+    ASSERT_EQ(sc.fx.fixtures.size(), 6u);
+    const FrontParams wide{.pair_max_width = 1.4f};
+    auto by_z = [](std::vector<Front> f) {
+        std::sort(f.begin(), f.end(),
+                  [](const Front& a, const Front& b) { return a.center.z() < b.center.z(); });
+        return f;
+    };
+    const std::vector<Front> rows =
+        by_z(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, wide, &sc.ev));
+    ASSERT_EQ(rows.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(rows[k].fixtures.size(), 2u) << k;
+        EXPECT_NEAR(FrontXRange(rows[k]).first, 0.3f, 0.025f) << k;
+        EXPECT_NEAR(FrontXRange(rows[k]).second, 1.6f, 0.025f) << k;
+        for (const Index i : rows[k].indices) {
+            ASSERT_GT(c.points[i].z(), drawers[k].z0 - 0.025f) << k;
+            ASSERT_LT(c.points[i].z(), drawers[k].z1 + 0.025f) << k;
+        }
+    }
+    // The same input gives the same fronts.
+    const std::vector<Front> again =
+        by_z(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, wide, &sc.ev));
+    ASSERT_EQ(again.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(again[k].indices, rows[k].indices);
+    // Narrower fronts only, or pairs off: each mount keeps its half of its drawer.
+    EXPECT_EQ(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, {}, &sc.ev).size(), 6u);
+    const FrontParams off{.pair_end_reach = 0.0f, .pair_max_width = 1.4f};
+    EXPECT_EQ(SegmentFronts(c, RoomFrame{}, sc.s, sc.fx.fixtures, off, &sc.ev).size(), 6u);
+}
+
 TEST(MergeNestedFronts, APanelInsideADoorJoinsItAndNeighboursStay) {
     // Faces facing -y: the doors' plane y = 2.4, a recessed panel's plane 2 cm behind it and a
     // carcass' back 20 cm behind it.

@@ -197,6 +197,60 @@ bool OneFrontsPair(const PointCloud& cloud, const RoomFrame& frame, const Planar
            rhi[axis] - bhi[axis] <= p.pair_end_reach;
 }
 
+/// Within a group of overlapping regions split between `members`: two members that no
+/// separator parts and whose points make one front's pair (OneFrontsPair) become one front, the
+/// first keeping both fixtures. In a group of more than two, the two must also stand side by
+/// side in one row (their footprints, grown by the seed radius, overlap in height), be small in
+/// height, and lie at least half their front's width apart: the two mounts of a long bar across
+/// a drawer in a stack of drawers, found without the bar, while the mounts of the drawers above
+/// and below are parted by their gaps. The handles of drawers in one column, vertical handles
+/// of narrow doors side by side, and the centred handles of flaps side by side, whose gaps no
+/// line shows, are no such pair.
+void PairMembers(const PointCloud& cloud, const RoomFrame& frame, const PlanarComponent& face,
+                 const std::vector<std::vector<Eigen::Vector2f>>& footprints,
+                 const std::vector<Separator>& seps, const std::vector<std::size_t>& members,
+                 const FrontParams& p, std::vector<Front>& grown) {
+    std::vector<char> paired(members.size(), 0);
+    for (std::size_t a = 0; a < members.size(); ++a) {
+        for (std::size_t b = a + 1; b < members.size() && !paired[a]; ++b) {
+            if (paired[b]) continue;
+            const bool parted = std::any_of(seps.begin(), seps.end(), [&](const Separator& sp) {
+                return (sp.a == a && sp.b == b) || (sp.a == b && sp.b == a);
+            });
+            if (parted) continue;
+            Front& fa = grown[members[a]];
+            Front& fb = grown[members[b]];
+            Indices both;
+            std::merge(fa.indices.begin(), fa.indices.end(), fb.indices.begin(), fb.indices.end(),
+                       std::back_inserter(both));
+            if (members.size() > 2) {
+                const auto [alo, ahi] = Box(footprints[members[a]]);
+                const auto [blo, bhi] = Box(footprints[members[b]]);
+                const Eigen::Vector2f space = (blo - ahi).cwiseMax(alo - bhi);
+                const int along = space.x() >= space.y() ? 0 : 1;
+                const float reach = 2.0f * p.seed_max;
+                if (along != 0 || space[1] > reach || (ahi - alo)[1] > reach ||
+                    (bhi - blo)[1] > reach) {
+                    continue;
+                }
+                const auto [rlo, rhi] =
+                    PointsRectangle(cloud, frame, face, both, p.rect_percentile);
+                if (space[along] < 0.5f * (rhi[along] - rlo[along])) continue;
+            }
+            if (!OneFrontsPair(cloud, frame, face, both, footprints[members[a]],
+                               footprints[members[b]], p)) {
+                continue;
+            }
+            fa.indices = std::move(both);
+            fa.fixtures.insert(fa.fixtures.end(), fb.fixtures.begin(), fb.fixtures.end());
+            std::sort(fa.fixtures.begin(), fa.fixtures.end());
+            fb.fixtures.clear();
+            fb.indices.clear();
+            paired[a] = paired[b] = 1;
+        }
+    }
+}
+
 }  // namespace
 
 std::pair<Eigen::Vector2f, Eigen::Vector2f> PointsRectangle(const PointCloud& cloud,
@@ -531,46 +585,35 @@ std::vector<Front> SegmentFronts(const PointCloud& cloud, const RoomFrame& frame
                         ? OutlineSeparators(cloud, frame, face, all, grid(), footprints, members,
                                             outline, p.split_support)
                         : std::vector<Separator>{};
-                if (members.size() == 2 && seps.empty() && p.pair_end_reach > 0.0f &&
-                    OneFrontsPair(cloud, frame, face, all, footprints[members[0]],
-                                  footprints[members[1]], p)) {
-                    Front& one = grown[members[0]];
-                    one.indices = std::move(all);
-                    one.fixtures.insert(one.fixtures.end(), grown[members[1]].fixtures.begin(),
-                                        grown[members[1]].fixtures.end());
-                    std::sort(one.fixtures.begin(), one.fixtures.end());
-                    grown[members[1]].fixtures.clear();
-                    continue;
-                }
                 for (const Index pt : all) {
                     const Eigen::Vector2f q = PlaneCoordinates(face, frame, cloud.points[pt]);
-                    std::size_t best = members[0];
-                    float bd = std::numeric_limits<float>::infinity();
-                    for (const std::size_t i : members) {
-                        const float d = FootprintDistance2(footprints[i], q);
+                    // The nearest of the members on whose side of every outline the point lies,
+                    // or of all members where it lies on no one's side.
+                    std::size_t best = members[0], best_sided = members[0];
+                    float bd = std::numeric_limits<float>::infinity(), bd_sided = bd;
+                    for (std::size_t m = 0; m < members.size(); ++m) {
+                        const float d = FootprintDistance2(footprints[members[m]], q);
                         if (d < bd) {
                             bd = d;
-                            best = i;
+                            best = members[m];
                         }
-                    }
-                    // The one member on whose side of every outline the point lies, if any.
-                    std::size_t sided = members.size(), n_sided = 0;
-                    for (std::size_t m = 0; m < members.size() && !seps.empty(); ++m) {
-                        bool ok = true;
+                        bool sided = true;
                         for (const Separator& sp : seps) {
                             if (sp.a != m && sp.b != m) continue;
                             const float x = sp.columns ? q.x() : q.y();
                             // Member a lies below the line, b above it.
-                            ok = ok && (sp.a == m ? x <= sp.at : x >= sp.at);
+                            sided = sided && (sp.a == m ? x <= sp.at : x >= sp.at);
                         }
-                        if (ok) {
-                            sided = m;
-                            ++n_sided;
+                        if (sided && d < bd_sided) {
+                            bd_sided = d;
+                            best_sided = members[m];
                         }
                     }
-                    if (n_sided == 1) best = members[sided];
+                    if (bd_sided < std::numeric_limits<float>::infinity()) best = best_sided;
                     grown[best].indices.push_back(pt);
                 }
+                if (p.pair_end_reach > 0.0f)
+                    PairMembers(cloud, frame, face, footprints, seps, members, p, grown);
             }
         }
         // Rectangles on the face plane.

@@ -69,7 +69,8 @@ struct FrontParams {
     /// Overlapping regions of two fixtures side by side (or one above the other) are split at
     /// the line between them that is outline (FrontEvidence, as ExtendFrontsToOutlines reads
     /// it) in the largest share of its cells with points, when that share reaches
-    /// split_support; otherwise, or without evidence, each point goes to the nearest fixture.
+    /// split_support; otherwise, or without evidence, each point goes to the nearest fixture
+    /// (with several lines, the nearest of those on whose side of all their lines it lies).
     /// Handles sit near a front's free edge, so halfway between two fixtures is rarely where
     /// one front ends. Off: always the nearest fixture
     bool split_at_outlines = true;
@@ -78,8 +79,10 @@ struct FrontParams {
     /// Two fixtures whose overlapping regions no outline parts, each within this of its own end
     /// of their common region (along the axis that parts them), are one front's: the two knobs
     /// of a wide drawer, the handle and button of a dishwasher. Doors side by side carry their
-    /// handles at their free edges, which meet in the middle, or both on the same side; 0: off
-    /// (split as above) [m]
+    /// handles at their free edges, which meet in the middle, or both on the same side. Where
+    /// more than two regions overlap, only two side by side in one row, at most 2 seed_max tall
+    /// and half their front's width apart (the mounts of a drawer's long bar); 0: off (split as
+    /// above) [m]
     float pair_end_reach = 0.15f;
     /// ... as long as that region is no wider than this (one front) [m]
     float pair_max_width = 1.2f;
