@@ -306,6 +306,49 @@ TEST(Articulation, AWallCupboardsFrontIsNoDrawer) {
               JointType::kPrismatic);
 }
 
+TEST(Articulation, TwoMountsSideBySideAreOneHorizontalHandle) {
+    // A low front (z 0.45 .. 0.7) with only the two mounts of its bar found, 5 cm from either
+    // end, each 2 cm long and pointing anywhere: one horizontal handle centred across it, a
+    // drawer. Either mount alone, near a side edge, makes a door hinged at the other edge.
+    Front f = DoorFront();
+    f.min.y() = 0.45f;
+    f.max.y() = 0.7f;
+    f.center.z() = 0.575f;
+    f.fixtures = {0, 1};
+    Fixture left = HandleAt({0.65f, 2.365f, 0.62f}, true), right = left;
+    left.length = right.length = 0.02f;
+    right.center.x() = 1.05f;
+    right.center.z() = 0.625f;
+    right.direction = Eigen::Vector3f(0.6f, 0.0f, 0.8f);
+    const Articulation a = ArticulationFromFixtures(f, {left, right}, RoomFrame{}, 0.0f);
+    EXPECT_EQ(a.type, JointType::kPrismatic);
+    EXPECT_TRUE(a.axis.isApprox(-Eigen::Vector3f::UnitY()));
+    Front one = f;
+    one.fixtures = {0};
+    EXPECT_EQ(ArticulationFromFixtures(one, {left}, RoomFrame{}, 0.0f).type, JointType::kRevolute);
+    // One above the other they are no horizontal handle: the main one (vertical) makes a door.
+    right.center = Eigen::Vector3f(0.65f, 2.365f, 0.5f);
+    EXPECT_EQ(ArticulationFromFixtures(f, {left, right}, RoomFrame{}, 0.0f).type,
+              JointType::kRevolute);
+    // Off, the first mount decides: a door.
+    right = left;
+    right.center.x() = 1.05f;
+    EXPECT_EQ(ArticulationFromFixtures(f, {left, right}, RoomFrame{}, 0.0f,
+                                       {.pair_fixture_max_length = 0.0f})
+                  .type,
+              JointType::kRevolute);
+    EXPECT_THROW(ArticulationFromFixtures(f, {left, right}, RoomFrame{}, 0.0f,
+                                          {.pair_fixture_max_length = -1.0f}),
+                 InvalidArgument);
+    // A door's vertical handle near its right edge with a small stray fixture near its left edge
+    // is no pair: the handle stays the main fixture.
+    Fixture handle = HandleAt({1.05f, 2.365f, 0.6f}, true);
+    handle.length = 0.2f;
+    const Articulation door = ArticulationFromFixtures(f, {handle, left}, RoomFrame{}, 0.0f);
+    ASSERT_EQ(door.type, JointType::kRevolute);
+    EXPECT_NEAR(door.origin.x(), 0.6f, 0.01f);
+}
+
 TEST(Articulation, AFrontTallerThanAnyDrawerIsADoor) {
     // DoorFront is 0.65 m tall; a horizontal handle in its middle, off to the right.
     const Front f = DoorFront();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -182,6 +183,11 @@ void ArticulationParams::Validate() const {
             fmt::format("articulation: horizontal_handle_deg must be in (0, 90), got {}",
                         horizontal_handle_deg));
     }
+    if (!(pair_fixture_max_length >= 0.0f && pair_fixture_max_length <= 1.0f)) {
+        throw InvalidArgument(
+            fmt::format("articulation: pair_fixture_max_length must be in [0, 1] m, got {}",
+                        pair_fixture_max_length));
+    }
     if (!(edge_band > 0.0f && edge_band < 0.5f) || !(edge_border >= 0 && edge_border < 100)) {
         throw InvalidArgument(fmt::format(
             "articulation: need edge_band in (0, 0.5) m and edge_border in [0, 100) pixels, got "
@@ -244,8 +250,11 @@ void MotionParams::Validate() const {
 
 namespace {
 
-/// The front's main fixture: its longest handle, else its first knob (null without fixtures).
-const Fixture* MainFixture(const Front& f, const std::vector<Fixture>& fixtures) {
+/// The front's main fixture: its longest handle, else its first knob (none without fixtures),
+/// or one horizontal handle between two small fixtures side by side
+/// (ArticulationParams::pair_fixture_max_length).
+std::optional<Fixture> MainFixture(const Front& f, const std::vector<Fixture>& fixtures,
+                                   const Eigen::Vector3f& up, const ArticulationParams& p) {
     const Fixture* fx = nullptr;
     for (const int i : f.fixtures) {
         const Fixture& c = fixtures.at(static_cast<std::size_t>(i));
@@ -254,7 +263,37 @@ const Fixture* MainFixture(const Front& f, const std::vector<Fixture>& fixtures)
             fx = &c;
         }
     }
-    return fx;
+    if (!fx || p.pair_fixture_max_length <= 0.0f)
+        return fx ? std::optional<Fixture>(*fx) : std::nullopt;
+    const Fixture* a = nullptr;
+    const Fixture* b = nullptr;
+    float apart = fx->type == FixtureType::kHandle ? fx->length : 0.0f;
+    const float max_rise = std::sin(p.horizontal_handle_deg * kArticulationDegToRad);
+    for (std::size_t i = 0; i < f.fixtures.size(); ++i) {
+        for (std::size_t j = i + 1; j < f.fixtures.size(); ++j) {
+            const Fixture& c = fixtures.at(static_cast<std::size_t>(f.fixtures[i]));
+            const Fixture& d = fixtures.at(static_cast<std::size_t>(f.fixtures[j]));
+            if (c.length > p.pair_fixture_max_length || d.length > p.pair_fixture_max_length) {
+                continue;
+            }
+            const Eigen::Vector3f between = d.center - c.center;
+            const float n = between.norm();
+            if (n > apart && std::abs(between.dot(up)) < max_rise * n) {
+                apart = n;
+                a = &c;
+                b = &d;
+            }
+        }
+    }
+    if (!a) return *fx;
+    Fixture bar = *fx;
+    bar.type = FixtureType::kHandle;
+    bar.center = 0.5f * (a->center + b->center);
+    bar.direction = (b->center - a->center) / apart;
+    bar.length = apart + 0.5f * (a->length + b->length);
+    bar.width = std::max(a->width, b->width);
+    bar.protrusion = std::max(a->protrusion, b->protrusion);
+    return bar;
 }
 
 bool IsHorizontalHandle(const Fixture& fx, const Eigen::Vector3f& up, const ArticulationParams& p) {
@@ -300,9 +339,9 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
     p.Validate();
     if (bottom_hinged) *bottom_hinged = false;
     Articulation none;
-    const Fixture* fx = MainFixture(f, fixtures);
-    if (!fx) return none;
     const Eigen::Vector3f up = frame.Up();
+    const std::optional<Fixture> fx = MainFixture(f, fixtures, up, p);
+    if (!fx) return none;
     const float width = f.max.x() - f.min.x(), height = f.max.y() - f.min.y();
     const Eigen::Vector2f place = FixturePlace(f, *fx);
     const float ru = place.x(), rv = place.y();
@@ -355,7 +394,7 @@ Articulation JointFromFixtures(const Front& f, const std::vector<Fixture>& fixtu
 /// `stack_centre_share` of f's width of its middle).
 bool HandleCentredOn(const Front& g, const Front& f, const std::vector<Fixture>& fixtures,
                      const Eigen::Vector3f& up, const ArticulationParams& p) {
-    const Fixture* fx = MainFixture(g, fixtures);
+    const std::optional<Fixture> fx = MainFixture(g, fixtures, up, p);
     if (!fx || !IsHorizontalHandle(*fx, up, p)) return false;
     const float width = f.max.x() - f.min.x();
     return std::abs(fx->center.dot(f.u_axis) - 0.5f * (f.min.x() + f.max.x())) <=
@@ -1013,7 +1052,7 @@ std::vector<float> JointFeatures(const KitchenMap& map, std::size_t front,
     const float w = f.max.x() - f.min.x(), h = f.max.y() - f.min.y();
     const float centre = up.dot(f.center) - base;
     float horizontal = 0, length = 0, ru = 0.5f, rv = 0.5f, knob = 0, protrusion = 0;
-    if (const Fixture* fx = MainFixture(f, map.fixtures)) {
+    if (const std::optional<Fixture> fx = MainFixture(f, map.fixtures, up, p)) {
         horizontal = IsHorizontalHandle(*fx, up, p) ? 1.0f : 0.0f;
         length = fx->length;
         knob = fx->type == FixtureType::kKnob ? 1.0f : 0.0f;
@@ -1096,7 +1135,8 @@ std::vector<std::size_t> ClassifyJoints(KitchenMap& map, const ml::Classifier& c
             : name == "revolute_bottom" ? HingedAtBottom(f, p)
             : name == "revolute_top"
                 ? HingedAtTop(f, p)
-                : HingedAtSide(f, FixturePlace(f, *MainFixture(f, map.fixtures)).x(), p);
+                : HingedAtSide(
+                      f, FixturePlace(f, *MainFixture(f, map.fixtures, map.frame.Up(), p)).x(), p);
         next.source = "classifier";
         f.articulation = next;
         changed.push_back(i);

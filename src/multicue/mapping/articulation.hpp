@@ -47,6 +47,12 @@ namespace multicue::mapping {
 
 struct ArticulationParams {
     float horizontal_handle_deg = 30.0f;  ///< a handle this close to horizontal is horizontal
+    /// Two fixtures of a front at most this long, side by side (the line between them within
+    /// horizontal_handle_deg of horizontal) and farther apart than its longest handle is long,
+    /// are one horizontal handle between them: the two mounts of a long bar found without the
+    /// bar, the two knobs of a wide drawer (a door's handle beside a stray fixture is not). 0:
+    /// off [m]
+    float pair_fixture_max_length = 0.05f;
     float door_min_height = 0.45f;  ///< a front with a horizontal handle this tall is a door [m]
     /// Doors hinged at their bottom edge (ovens, dishwashers: 0.56-0.85 m in the model library)
     /// are at least this wide; a narrower front with a handle near its top is hinged at a
@@ -99,8 +105,10 @@ struct ArticulationParams {
     void Validate() const;
 };
 
-/// The articulation of `front` from its fixtures' orientation and place. `floor_height` (NaN if
-/// unknown) is along frame up. Fronts without fixtures get JointType::kUnknown.
+/// The articulation of `front` from its fixtures' orientation and place: its longest handle's,
+/// or one horizontal handle between two small fixtures side by side
+/// (ArticulationParams::pair_fixture_max_length). `floor_height` (NaN if unknown) is along frame
+/// up. Fronts without fixtures get JointType::kUnknown.
 Articulation ArticulationFromFixtures(const Front& front, const std::vector<Fixture>& fixtures,
                                       const RoomFrame& frame, float floor_height,
                                       const ArticulationParams& params = {});
