@@ -286,13 +286,15 @@ std::optional<Fixture> MainFixture(const Front& f, const std::vector<Fixture>& f
         }
     }
     if (!a) return *fx;
-    Fixture bar = *fx;
+    Fixture bar;  // no points of its own
     bar.type = FixtureType::kHandle;
+    bar.face = a->face;
     bar.center = 0.5f * (a->center + b->center);
     bar.direction = (b->center - a->center) / apart;
     bar.length = apart + 0.5f * (a->length + b->length);
     bar.width = std::max(a->width, b->width);
     bar.protrusion = std::max(a->protrusion, b->protrusion);
+    bar.depth_extent = std::max(a->depth_extent, b->depth_extent);
     return bar;
 }
 
