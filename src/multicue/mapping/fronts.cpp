@@ -218,24 +218,24 @@ void PairMembers(const PointCloud& cloud, const RoomFrame& frame, const PlanarCo
                 return (sp.a == a && sp.b == b) || (sp.a == b && sp.b == a);
             });
             if (parted) continue;
+            const bool in_row = members.size() > 2;
+            const auto [alo, ahi] = Box(footprints[members[a]]);
+            const auto [blo, bhi] = Box(footprints[members[b]]);
+            const Eigen::Vector2f space = (blo - ahi).cwiseMax(alo - bhi);
+            const float reach = 2.0f * p.seed_max;
+            if (in_row && (space.x() < space.y() || space.y() > reach ||
+                           ahi.y() - alo.y() > reach || bhi.y() - blo.y() > reach)) {
+                continue;
+            }
             Front& fa = grown[members[a]];
             Front& fb = grown[members[b]];
             Indices both;
             std::merge(fa.indices.begin(), fa.indices.end(), fb.indices.begin(), fb.indices.end(),
                        std::back_inserter(both));
-            if (members.size() > 2) {
-                const auto [alo, ahi] = Box(footprints[members[a]]);
-                const auto [blo, bhi] = Box(footprints[members[b]]);
-                const Eigen::Vector2f space = (blo - ahi).cwiseMax(alo - bhi);
-                const int along = space.x() >= space.y() ? 0 : 1;
-                const float reach = 2.0f * p.seed_max;
-                if (along != 0 || space[1] > reach || (ahi - alo)[1] > reach ||
-                    (bhi - blo)[1] > reach) {
-                    continue;
-                }
+            if (in_row) {
                 const auto [rlo, rhi] =
                     PointsRectangle(cloud, frame, face, both, p.rect_percentile);
-                if (space[along] < 0.5f * (rhi[along] - rlo[along])) continue;
+                if (space.x() < 0.5f * (rhi.x() - rlo.x())) continue;
             }
             if (!OneFrontsPair(cloud, frame, face, both, footprints[members[a]],
                                footprints[members[b]], p)) {
