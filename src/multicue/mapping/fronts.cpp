@@ -177,16 +177,26 @@ std::vector<Separator> OutlineSeparators(
 
 /// FrontParams::pair_end_reach: whether two fixtures (footprints `fa`, `fb`) whose overlapping
 /// regions cover `region` each lie within the reach of opposite ends of it, along the axis of the
-/// wider space between them, and the region is no wider than one front.
+/// wider space between them, and the region is no wider than one front. `in_row` (a group of
+/// more than two regions): the two must also stand side by side in one row (their footprints,
+/// grown by the seed radius, overlap in height), each be at most twice the seed radius tall, and
+/// lie at least half the region's width apart.
 bool OneFrontsPair(const PointCloud& cloud, const RoomFrame& frame, const PlanarComponent& face,
                    const Indices& region, const std::vector<Eigen::Vector2f>& fa,
-                   const std::vector<Eigen::Vector2f>& fb, const FrontParams& p) {
+                   const std::vector<Eigen::Vector2f>& fb, const FrontParams& p, bool in_row) {
     if (region.empty()) return false;
-    const auto [rlo, rhi] = PointsRectangle(cloud, frame, face, region, p.rect_percentile);
     auto [alo, ahi] = Box(fa);
     auto [blo, bhi] = Box(fb);
     const Eigen::Vector2f ab = blo - ahi, ba = alo - bhi;
     if (std::max(ab.maxCoeff(), ba.maxCoeff()) <= 0.0f) return false;  // they overlap
+    const Eigen::Vector2f gap = ab.cwiseMax(ba);
+    const float reach = 2.0f * p.seed_max;
+    if (in_row && (gap.x() < gap.y() || gap.y() > reach || ahi.y() - alo.y() > reach ||
+                   bhi.y() - blo.y() > reach)) {
+        return false;
+    }
+    const auto [rlo, rhi] = PointsRectangle(cloud, frame, face, region, p.rect_percentile);
+    if (in_row && gap.x() < 0.5f * (rhi.x() - rlo.x())) return false;
     if (ba.maxCoeff() > ab.maxCoeff()) {  // a is the lower one along the axis
         std::swap(alo, blo);
         std::swap(ahi, bhi);
@@ -198,14 +208,12 @@ bool OneFrontsPair(const PointCloud& cloud, const RoomFrame& frame, const Planar
 }
 
 /// Within a group of overlapping regions split between `members`: two members that no
-/// separator parts and whose points make one front's pair (OneFrontsPair) become one front, the
-/// first keeping both fixtures. In a group of more than two, the two must also stand side by
-/// side in one row (their footprints, grown by the seed radius, overlap in height), be small in
-/// height, and lie at least half their front's width apart: the two mounts of a long bar across
-/// a drawer in a stack of drawers, found without the bar, while the mounts of the drawers above
-/// and below are parted by their gaps. The handles of drawers in one column, vertical handles
-/// of narrow doors side by side, and the centred handles of flaps side by side, whose gaps no
-/// line shows, are no such pair.
+/// separator parts and whose points make one front's pair (OneFrontsPair, in a row where the
+/// group has more than two) become one front, the first keeping both fixtures: the two mounts
+/// of a long bar across a drawer in a stack of drawers, found without the bar, while the mounts
+/// of the drawers above and below are parted by their gaps. The handles of drawers in one
+/// column, vertical handles of narrow doors side by side, and the centred handles of flaps side
+/// by side, whose gaps no line shows, are no such pair.
 void PairMembers(const PointCloud& cloud, const RoomFrame& frame, const PlanarComponent& face,
                  const std::vector<std::vector<Eigen::Vector2f>>& footprints,
                  const std::vector<Separator>& seps, const std::vector<std::size_t>& members,
@@ -218,27 +226,13 @@ void PairMembers(const PointCloud& cloud, const RoomFrame& frame, const PlanarCo
                 return (sp.a == a && sp.b == b) || (sp.a == b && sp.b == a);
             });
             if (parted) continue;
-            const bool in_row = members.size() > 2;
-            const auto [alo, ahi] = Box(footprints[members[a]]);
-            const auto [blo, bhi] = Box(footprints[members[b]]);
-            const Eigen::Vector2f space = (blo - ahi).cwiseMax(alo - bhi);
-            const float reach = 2.0f * p.seed_max;
-            if (in_row && (space.x() < space.y() || space.y() > reach ||
-                           ahi.y() - alo.y() > reach || bhi.y() - blo.y() > reach)) {
-                continue;
-            }
             Front& fa = grown[members[a]];
             Front& fb = grown[members[b]];
             Indices both;
             std::merge(fa.indices.begin(), fa.indices.end(), fb.indices.begin(), fb.indices.end(),
                        std::back_inserter(both));
-            if (in_row) {
-                const auto [rlo, rhi] =
-                    PointsRectangle(cloud, frame, face, both, p.rect_percentile);
-                if (space.x() < 0.5f * (rhi.x() - rlo.x())) continue;
-            }
             if (!OneFrontsPair(cloud, frame, face, both, footprints[members[a]],
-                               footprints[members[b]], p)) {
+                               footprints[members[b]], p, members.size() > 2)) {
                 continue;
             }
             fa.indices = std::move(both);
