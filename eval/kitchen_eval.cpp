@@ -79,6 +79,8 @@ struct Options {
     std::uint64_t fixture_seed = 7;
     std::string fixture_spec = "rtrees:trees=100";
     float fixture_confidence = -1.0f;  ///< < 0: the sensor's default (KitchenParamsFor)
+    float lone_confidence = -1.0f;     ///< < 0: the sensor's default (KitchenParamsFor)
+    float lone_clearance = -1.0f;      ///< < 0: the default
     std::string save_fixtures;
     std::string fronts = "grow";
     std::vector<std::string> front_params;  ///< NAME=VALUE of mapping::FrontParams
@@ -370,6 +372,8 @@ class Evaluator {
         mapping::MapKitchenParams params = mapping::KitchenParamsFor(
             laser ? mapping::KitchenSensor::kLaser : mapping::KitchenSensor::kKinect);
         if (o_.fixture_confidence >= 0.0f) params.fixtures.min_confidence = o_.fixture_confidence;
+        if (o_.lone_confidence >= 0.0f) params.fixtures.lone_min_confidence = o_.lone_confidence;
+        if (o_.lone_clearance >= 0.0f) params.fixtures.lone_clearance = o_.lone_clearance;
         params.front_segmentation = o_.fronts == "grow" ? mapping::FrontSegmentation::kRegionGrowing
                                                         : mapping::FrontSegmentation::kOutline;
         for (const auto& a : o_.front_params) SetMapParam(params, a);
@@ -1130,6 +1134,10 @@ class Evaluator {
                               {"fixture_confidence",
                                {{"kinect", Params(false).fixtures.min_confidence},
                                 {"laser", Params(true).fixtures.min_confidence}}},
+                              {"lone_confidence",
+                               {{"kinect", Params(false).fixtures.lone_min_confidence},
+                                {"laser", Params(true).fixtures.lone_min_confidence}}},
+                              {"lone_clearance", Params(false).fixtures.lone_clearance},
                               {"train_split", std::string(sim::MeshSplitName(train_split))},
                               {"tune_fold", o_.tune_fold},
                               {"train_rows", train_rows}};
@@ -1438,6 +1446,13 @@ int main(int argc, char** argv) {
                "default, {} for the Kinect and {} for the laser)",
                mapping::KitchenParamsFor(mapping::KitchenSensor::kKinect).fixtures.min_confidence,
                mapping::KitchenParamsFor(mapping::KitchenSensor::kLaser).fixtures.min_confidence))
+        ->capture_default_str();
+    app.add_option("--lone-confidence", o.lone_confidence,
+                   "confidence a candidate with no fixture near it needs (< 0: the sensor's "
+                   "default; FixtureParams::lone_min_confidence)")
+        ->capture_default_str();
+    app.add_option("--lone-clearance", o.lone_clearance,
+                   "no fixture within this of such a candidate [m] (< 0: the default)")
         ->capture_default_str();
     app.add_flag("--vary-handles,!--no-vary-handles", o.vary_handles,
                  "vary the handles of the fixture training kitchens (on by default)");

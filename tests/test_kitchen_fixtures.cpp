@@ -351,6 +351,76 @@ TEST(FixtureClassifier, TrainedOnSyntheticRowsDecidesWhatIsAFixture) {
     EXPECT_THROW(training::LabelFixtureCandidates(bare.cloud, rules.candidates, 0.03f), DataError);
 }
 
+/// A candidate with a fixture of `type` centred at `c`, along `dir`, `length` long.
+FixtureCandidate LoneCandidate(FixtureType type, const Eigen::Vector3f& c,
+                               const Eigen::Vector3f& dir, float length, float confidence) {
+    FixtureCandidate k;
+    k.fixture.type = type;
+    k.fixture.center = c;
+    k.fixture.direction = dir;
+    k.fixture.length = length;
+    k.confidence = confidence;
+    k.reason = "classifier";
+    return k;
+}
+
+TEST(FixtureClassifier, LoneCandidatesBelowTheCutAreFixturesWhereNoneIsNear) {
+    const Eigen::Vector3f up = Eigen::Vector3f::UnitZ(), side = Eigen::Vector3f::UnitX();
+    // A: a vertical handle accepted by the cut, 0.9-1.1 m high.
+    // F: a vertical handle above it, its centre 25 cm from A's but its end 5 cm from A's.
+    // B: parallel to A, 10 cm beside it. C: a knob 60 cm away. D: a handle 5 cm beside C.
+    // E: far from all, below the lone cut.
+    std::vector<FixtureCandidate> c = {
+        LoneCandidate(FixtureType::kHandle, {0, 0, 1}, up, 0.2f, 0.9f),
+        LoneCandidate(FixtureType::kHandle, {0, 0, 1.25f}, up, 0.2f, 0.45f),
+        LoneCandidate(FixtureType::kHandle, {0.1f, 0, 1}, up, 0.2f, 0.4f),
+        LoneCandidate(FixtureType::kKnob, {0.6f, 0, 1}, -Eigen::Vector3f::UnitY(), 0.03f, 0.35f),
+        LoneCandidate(FixtureType::kHandle, {0.7f, 0, 1}, side, 0.1f, 0.3f),
+        LoneCandidate(FixtureType::kHandle, {2, 0, 1}, side, 0.1f, 0.1f)};
+    c[0].accepted = true;
+    c[0].reason = "";
+    FixtureParams p;
+    p.lone_min_confidence = 0.25f;
+    p.lone_clearance = 0.2f;
+    auto run = [&](std::vector<FixtureCandidate> cands) {
+        std::vector<FixtureCandidate*> ptr;
+        for (auto& k : cands) ptr.push_back(&k);
+        AcceptLoneCandidates(ptr, p);
+        std::vector<bool> accepted;
+        for (const auto& k : cands) {
+            accepted.push_back(k.accepted);
+            EXPECT_STREQ(k.reason, k.accepted ? "" : "classifier");
+        }
+        return accepted;
+    };
+    EXPECT_EQ(run(c), (std::vector<bool>{true, false, false, true, false, false}));
+    // The more confident of two near candidates wins; a second run gives the same.
+    std::swap(c[3].confidence, c[4].confidence);
+    EXPECT_EQ(run(c), (std::vector<bool>{true, false, false, false, true, false}));
+    EXPECT_EQ(run(c), run(c));
+    // Without the accepted handle, the most confident one near it takes its place.
+    c[0].accepted = false;
+    c[0].reason = "classifier";
+    c[0].confidence = 0.2f;
+    EXPECT_EQ(run(c), (std::vector<bool>{false, true, false, false, true, false}));
+    // No clearance: every candidate at the lone cut; an empty list is no error.
+    p.lone_clearance = 0.0f;
+    EXPECT_EQ(run(c), (std::vector<bool>{false, true, true, true, true, false}));
+    EXPECT_NO_THROW(AcceptLoneCandidates({}, p));
+    // Bad parameters are refused before any candidate changes.
+    for (const FixtureParams& bad :
+         {FixtureParams{.lone_min_confidence = 1.5f}, FixtureParams{.lone_min_confidence = -0.1f},
+          FixtureParams{.lone_clearance = -1.0f}}) {
+        std::vector<FixtureCandidate> copy = c;
+        std::vector<FixtureCandidate*> ptr;
+        for (auto& k : copy) ptr.push_back(&k);
+        EXPECT_THROW(AcceptLoneCandidates(ptr, bad), InvalidArgument);
+        for (const auto& k : copy) EXPECT_FALSE(k.accepted);
+    }
+    // The defaults leave it off: nothing below the cut passes.
+    EXPECT_GE(FixtureParams{}.lone_min_confidence, FixtureParams{}.min_confidence);
+}
+
 /// A door front of DoorsInGaps: x and z ranges on the face y = 2.4.
 struct DoorRect {
     float x0, x1, z0, z1;

@@ -64,6 +64,12 @@ void FixtureParams::Validate() const {
             residual_sigmas, background_radius, background_passes, surround_inner, surround_outer,
             min_confidence, min_sides));
     }
+    if (!(lone_min_confidence >= 0.0f && lone_min_confidence <= 1.0f) ||
+        !(lone_clearance >= 0.0f) || !std::isfinite(lone_clearance)) {
+        throw InvalidArgument(fmt::format(
+            "fixtures: need lone_min_confidence in [0, 1] and lone_clearance >= 0 (got {} and {})",
+            lone_min_confidence, lone_clearance));
+    }
     positive("attach_cell", attach_cell);
     positive("min_blocking_area", min_blocking_area);
     if (!(max_attached_share >= 0.0f && max_attached_share <= 1.0f)) {
@@ -287,7 +293,70 @@ class PlaneCells {
     std::unordered_map<std::uint64_t, std::uint8_t> cells_;
 };
 
+/// Closest distance between the axes of two fixtures: a handle's segment along its direction, a
+/// knob's centre.
+float FixtureAxisDistance(const Fixture& a, const Fixture& b) {
+    auto half = [](const Fixture& f) {
+        return f.type == FixtureType::kHandle ? 0.5f * f.length * f.direction
+                                              : Eigen::Vector3f::Zero().eval();
+    };
+    const Eigen::Vector3f p0 = a.center - half(a), d0 = 2.0f * half(a);
+    const Eigen::Vector3f p1 = b.center - half(b), d1 = 2.0f * half(b);
+    // Closest points of segments p0 + s d0 and p1 + t d1, s and t in [0, 1].
+    const Eigen::Vector3f r = p0 - p1;
+    const float a00 = d0.squaredNorm(), a11 = d1.squaredNorm(), a01 = d0.dot(d1);
+    const float b0 = d0.dot(r), b1 = d1.dot(r);
+    constexpr float kTiny = 1e-12f;
+    float s = 0.0f, t = 0.0f;
+    if (a00 <= kTiny && a11 <= kTiny) return r.norm();
+    if (a00 <= kTiny) {
+        t = std::clamp(b1 / a11, 0.0f, 1.0f);
+    } else if (a11 <= kTiny) {
+        s = std::clamp(-b0 / a00, 0.0f, 1.0f);
+    } else {
+        const float det = a00 * a11 - a01 * a01;
+        s = det > kTiny ? std::clamp((a01 * b1 - a11 * b0) / det, 0.0f, 1.0f) : 0.0f;
+        t = (a01 * s + b1) / a11;
+        if (t < 0.0f) {
+            t = 0.0f;
+            s = std::clamp(-b0 / a00, 0.0f, 1.0f);
+        } else if (t > 1.0f) {
+            t = 1.0f;
+            s = std::clamp((a01 - b0) / a00, 0.0f, 1.0f);
+        }
+    }
+    return (p0 + s * d0 - p1 - t * d1).norm();
+}
+
 }  // namespace
+
+void AcceptLoneCandidates(const std::vector<FixtureCandidate*>& candidates,
+                          const FixtureParams& p) {
+    p.Validate();
+    std::vector<const Fixture*> accepted;
+    std::vector<FixtureCandidate*> low;
+    for (FixtureCandidate* c : candidates) {
+        if (c->accepted) {
+            accepted.push_back(&c->fixture);
+        } else if (c->confidence >= p.lone_min_confidence) {
+            low.push_back(c);
+        }
+    }
+    std::stable_sort(low.begin(), low.end(),
+                     [](const FixtureCandidate* a, const FixtureCandidate* b) {
+                         return a->confidence > b->confidence;
+                     });
+    for (FixtureCandidate* c : low) {
+        if (std::any_of(accepted.begin(), accepted.end(), [&](const Fixture* f) {
+                return FixtureAxisDistance(*f, c->fixture) < p.lone_clearance;
+            })) {
+            continue;
+        }
+        c->accepted = true;
+        c->reason = "";
+        accepted.push_back(&c->fixture);
+    }
+}
 
 FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                              const RoomStructure& s, const FixtureParams& p,
@@ -528,11 +597,7 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                                        face_candidates[k].end());
         const PlanarComponent& face = s.components[static_cast<std::size_t>(faces[k])];
         for (Measured& m : measured[k]) {
-            if (m.too_large) {
-                ++result.too_large;
-                result.rejected.push_back({m.center, m.points, "too large"});
-                continue;
-            }
+            if (m.too_large) continue;
             FixtureCandidate& cand = m.candidate;
             if (classifier != nullptr) {
                 const std::vector<float> row = FixtureFeatureRow(cand.evidence);
@@ -558,6 +623,25 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                 cand.accepted = cand.reason[0] == '\0';
                 cand.confidence = cand.accepted ? 1.0f : 0.0f;
             }
+        }
+    }
+    if (classifier != nullptr && p.lone_min_confidence < p.min_confidence) {
+        std::vector<FixtureCandidate*> all;
+        for (auto& face_measured : measured) {
+            for (Measured& m : face_measured) {
+                if (!m.too_large) all.push_back(&m.candidate);
+            }
+        }
+        AcceptLoneCandidates(all, p);
+    }
+    for (std::size_t k = 0; k < faces.size(); ++k) {
+        for (Measured& m : measured[k]) {
+            if (m.too_large) {
+                ++result.too_large;
+                result.rejected.push_back({m.center, m.points, "too large"});
+                continue;
+            }
+            FixtureCandidate& cand = m.candidate;
             if (cand.accepted) {
                 result.fixtures.push_back(cand.fixture);
             } else {

@@ -50,6 +50,12 @@ struct FixtureParams {
     float contrast_min_residual = 0.004f;  ///< [m]
     /// With a classifier: a candidate is a fixture when P(handle) + P(knob) reaches this [-]
     float min_confidence = 0.5f;
+    /// With a classifier: a candidate below min_confidence but with at least this confidence is
+    /// a fixture too when no fixture lies within lone_clearance of it (a handle of a design the
+    /// classifier has not seen, on a front that would otherwise have none); candidates are taken
+    /// in order of confidence, each counting for the next. At min_confidence or above: off [-]
+    float lone_min_confidence = 1.0f;
+    float lone_clearance = 0.3f;       ///< between the axes of two fixtures (segments) [m]
     float face_margin = 0.02f;         ///< fixtures may reach this far beyond the face's extent [m]
     float cluster_tolerance = 0.015f;  ///< Euclidean clustering tolerance [m]
     float merge_gap = 0.025f;          ///< clusters whose boxes lie closer are one fixture [m]
@@ -126,6 +132,15 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
                              const RoomStructure& structure, const FixtureParams& params = {},
                              const std::vector<float>& ranges = {},
                              const ml::Classifier* classifier = nullptr);
+
+/// The lone candidates of FixtureParams::lone_min_confidence: every candidate not yet accepted
+/// whose confidence reaches lone_min_confidence is accepted (reason cleared), most confident
+/// first, when no accepted candidate's fixture (those accepted here included) lies within
+/// lone_clearance of its fixture: the closest distance between a handle's axis (a segment of its
+/// length) or a knob's centre. DetectFixtures calls it with a classifier when
+/// lone_min_confidence < min_confidence. Throws InvalidArgument for bad parameters.
+void AcceptLoneCandidates(const std::vector<FixtureCandidate*>& candidates,
+                          const FixtureParams& params);
 
 /// Throws InvalidArgument unless `classifier` was trained on FixtureFeatureNames columns and
 /// predicts classes among FixtureClassNames, including "none" and one fixture class.

@@ -79,6 +79,9 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         // A front grown over a gap into the next door, whose handle was missed, is cut at the
         // gap (the laser's coarser outlines cut through doors as often).
         p.gap_fronts.split_fixture_fronts = true;
+        // A candidate the classifier doubts, with no fixture near it, is most often the handle
+        // of a design it has not seen (chosen on the tune half, docs/kitchens.md).
+        p.fixtures.lone_min_confidence = 0.3f;
     }
     if (sensor == KitchenSensor::kLaser) {
         // Centimetre range noise and sparse rows: thicker planes, looser clusters; normals from
@@ -106,6 +109,7 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         // The laser's classifier finds fewer handles than the Kinect's; a lower cut finds more,
         // and their fronts with them (chosen on the tune half, docs/kitchens.md).
         p.fixtures.min_confidence = 0.35f;
+        p.fixtures.lone_min_confidence = 0.25f;
         p.outline.cell = 0.025f;
         p.outline.recess = 0.015f;
         p.outline.step = 0.03f;
