@@ -80,7 +80,8 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         // gap (the laser's coarser outlines cut through doors as often).
         p.gap_fronts.split_fixture_fronts = true;
         // A candidate the classifier doubts, with no fixture near it, is most often the handle
-        // of a design it has not seen (chosen on the tune half, docs/kitchens.md).
+        // of a design it has not seen (chosen on the tune half; off for the laser, whose fronts
+        // gained little and whose hinges lost to the added false fixtures: docs/kitchens.md).
         p.fixtures.lone_min_confidence = 0.3f;
     }
     if (sensor == KitchenSensor::kLaser) {
@@ -109,7 +110,6 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         // The laser's classifier finds fewer handles than the Kinect's; a lower cut finds more,
         // and their fronts with them (chosen on the tune half, docs/kitchens.md).
         p.fixtures.min_confidence = 0.35f;
-        p.fixtures.lone_min_confidence = 0.25f;
         p.outline.cell = 0.025f;
         p.outline.recess = 0.015f;
         p.outline.step = 0.03f;
