@@ -625,6 +625,8 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
             }
         }
     }
+    // Lone candidates are judged against the fixtures of every face (a handle near a face's
+    // edge may stand beside one on the next face), then all are joined in face order.
     if (classifier != nullptr && p.lone_min_confidence < p.min_confidence) {
         std::vector<FixtureCandidate*> all;
         for (auto& face_measured : measured) {

@@ -136,8 +136,8 @@ FixtureResult DetectFixtures(const PointCloud& cloud, const RoomFrame& frame,
 /// The lone candidates of FixtureParams::lone_min_confidence: every candidate not yet accepted
 /// whose confidence reaches lone_min_confidence is accepted (reason cleared), most confident
 /// first, when no accepted candidate's fixture (those accepted here included) lies within
-/// lone_clearance of its fixture: the closest distance between a handle's axis (a segment of its
-/// length) or a knob's centre. DetectFixtures calls it with a classifier when
+/// lone_clearance of its fixture, measured between their axes (a handle's segment along its
+/// length, a knob's centre). DetectFixtures calls it with a classifier when
 /// lone_min_confidence < min_confidence. Throws InvalidArgument for bad parameters.
 void AcceptLoneCandidates(const std::vector<FixtureCandidate*>& candidates,
                           const FixtureParams& params);

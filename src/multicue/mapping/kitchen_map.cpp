@@ -81,7 +81,7 @@ MapKitchenParams KitchenParamsFor(KitchenSensor sensor) {
         p.gap_fronts.split_fixture_fronts = true;
         // A candidate the classifier doubts, with no fixture near it, is most often the handle
         // of a design it has not seen (chosen on the tune half; off for the laser, whose fronts
-        // gained little and whose hinges lost to the added false fixtures: docs/kitchens.md).
+        // gained little there and whose hinges lost on held-out kitchens: docs/kitchens.md).
         p.fixtures.lone_min_confidence = 0.3f;
     }
     if (sensor == KitchenSensor::kLaser) {
